@@ -1,0 +1,227 @@
+"""The compiled plan interpreter: one crank position, then a revolution.
+
+A mechanism is compiled (``pipeline.model``) into flat arrays:
+
+* ``codes[g]``     group code (config.G_*), in solve order;
+* ``gidx[g, :]``   point indices the group reads and writes;
+* ``goff[g]``      offset of the group's parameters in ``par``;
+* ``fixed_idx[k]`` index of fixed point k, its coordinates at
+  ``par[fixed_off[k]]``, ``par[fixed_off[k] + 1]``;
+* ``par``          every dimension of the mechanism: one row per candidate.
+
+Group layouts (gidx / par from goff):
+  crank : [pivot, tip]                        / [L, phiM0]
+  RRR   : [A, C, B]                           / [L_AB, L_CB, W]
+  RRP   : [A, G, B, guide_a, guide_b]         / [L_AB, angle, W]
+  RPR   : [A (block), C (pivot), B (guide end)] / [offset, guide_length, W]
+  class3: [P2, P6, P7, P3, P4, P5]            / [L23, L34, L45, L35, L46, L57, orientation, a0, b0, phi_start]
+  attach: [base, a, b, out]                   / [angle, length]
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .config import (JIT, OK, G_CRANK, G_RRR, G_RRP, G_RPR, G_CLASS3, G_ATTACH,
+                     S_A, S_B, S_ITERS, N_STATE,
+                     T_SINGULAR, T_ASSEMBLY_SLACK, T_SUBSTEP, T_CLOSE,
+                     BRANCH_JUMP)
+from .geometry import angle_analogs
+from .groups import attach, crank, rpr, rrp, rrr
+from .triad import class3, _wrap
+
+
+@njit(**JIT)
+def place_fixed(par, fixed_idx, fixed_off, pos, d1, d2):
+    """Fixed pivots: positions from the parameter vector, zero analogs."""
+    for k in range(fixed_idx.shape[0]):
+        i = fixed_idx[k]
+        pos[i, 0] = par[fixed_off[k]]
+        pos[i, 1] = par[fixed_off[k] + 1]
+        d1[i, 0] = 0.0
+        d1[i, 1] = 0.0
+        d2[i, 0] = 0.0
+        d2[i, 1] = 0.0
+
+
+@njit(**JIT)
+def init_state(codes, goff, par, state):
+    """Start every class III group from its declared guess (a0, b0)."""
+    for g in range(codes.shape[0]):
+        for k in range(N_STATE):
+            state[g, k] = 0.0
+        if codes[g] == G_CLASS3:
+            state[g, S_A] = par[goff[g] + 7]
+            state[g, S_B] = par[goff[g] + 8]
+
+
+@njit(**JIT)
+def has_newton(codes):
+    for g in range(codes.shape[0]):
+        if codes[g] == G_CLASS3:
+            return True
+    return False
+
+
+@njit(**JIT)
+def start_angle(codes, goff, par):
+    """Crank angle at which the class III guesses apply (0 if none)."""
+    for g in range(codes.shape[0]):
+        if codes[g] == G_CLASS3:
+            return par[goff[g] + 9]
+    return 0.0
+
+
+@njit(**JIT)
+def solve_position(codes, gidx, goff, par, fixed_idx, fixed_off, phi1, order, tols, state,
+                   pos, d1, d2, margins):
+    """Solve every group at crank angle ``phi1`` (rad), in plan order.
+
+    Writes pos/d1/d2 (n_points, 2) and margins[g]; returns the first non-OK
+    status (groups after a failed one still run and give NaN).
+    """
+    place_fixed(par, fixed_idx, fixed_off, pos, d1, d2)
+    sing = tols[T_SINGULAR]
+    slack = tols[T_ASSEMBLY_SLACK]
+    status = OK
+    for g in range(codes.shape[0]):
+        c = codes[g]
+        o = goff[g]
+        ix = gidx[g]
+        if c == G_CRANK:
+            st, m = crank(pos, d1, d2, ix[0], ix[1], par[o], par[o + 1], phi1, order)
+        elif c == G_RRR:
+            st, m = rrr(pos, d1, d2, ix[0], ix[1], ix[2], par[o], par[o + 1], par[o + 2],
+                        order, sing, slack)
+        elif c == G_RRP:
+            st, m = rrp(pos, d1, d2, ix[0], ix[1], ix[2], ix[3], ix[4], par[o], par[o + 1],
+                        par[o + 2], order, sing, slack)
+        elif c == G_RPR:
+            st, m = rpr(pos, d1, d2, ix[0], ix[1], ix[2], par[o], par[o + 1], par[o + 2],
+                        order, sing)
+        elif c == G_CLASS3:
+            st, m = class3(pos, d1, d2, ix[0], ix[1], ix[2], ix[3], ix[4], ix[5],
+                           par[o], par[o + 1], par[o + 2], par[o + 3], par[o + 4], par[o + 5],
+                           par[o + 6], state, g, order, tols)
+        else:  # G_ATTACH
+            st, m = attach(pos, d1, d2, ix[0], ix[1], ix[2], ix[3], par[o], par[o + 1], order)
+        margins[g] = m
+        if status == OK and st != OK:
+            status = st
+    return status
+
+
+@njit(**JIT)
+def advance(codes, gidx, goff, par, fixed_idx, fixed_off, phi_from, phi_to, order, tols,
+            state, newton, pos, d1, d2, margins):
+    """Continuation: walk from ``phi_from`` to ``phi_to`` in crank steps of at
+    most tols[T_SUBSTEP] (positions only), then solve at ``phi_to`` to
+    ``order``.  Dyad-only plans are closed form and need no substeps.
+    Returns the worst status met on the way (a branch jump or a failure in a
+    substep counts)."""
+    status = OK
+    if newton:
+        n_sub = int(math.ceil(abs(phi_to - phi_from) / tols[T_SUBSTEP]))
+        for i in range(1, n_sub):
+            phi = phi_from + (phi_to - phi_from) * i / n_sub
+            st = solve_position(codes, gidx, goff, par, fixed_idx, fixed_off, phi, 0, tols,
+                                state, pos, d1, d2, margins)
+            if status == OK and st != OK:
+                status = st
+    st = solve_position(codes, gidx, goff, par, fixed_idx, fixed_off, phi_to, order, tols,
+                        state, pos, d1, d2, margins)
+    if status == OK and st != OK:
+        status = st
+    return status
+
+
+@njit(**JIT)
+def closes(codes, state, start_state, tols):
+    """True when every class III group is back on its starting (a, b)."""
+    for g in range(codes.shape[0]):
+        if codes[g] == G_CLASS3:
+            if (abs(_wrap(state[g, S_A] - start_state[g, S_A])) > tols[T_CLOSE]
+                    or abs(_wrap(state[g, S_B] - start_state[g, S_B])) > tols[T_CLOSE]):
+                return False
+    return True
+
+
+@njit(**JIT)
+def solve_revolution(codes, gidx, goff, par, fixed_idx, fixed_off, phis, phi_close, order,
+                     tols, pos_out, d1_out, d2_out, status_out, margin_out, iters_out):
+    """Solve the mechanism at the crank angles ``phis`` (rad) by continuation.
+
+    Outputs per position: pos_out/d1_out/d2_out (n_phi, n_points, 2),
+    status_out (n_phi) int8, margin_out (n_phi, n_groups), iters_out (n_phi)
+    Newton iterations summed over class III groups.  If ``phi_close`` is
+    finite, the continuation goes on to it and the revolution must close on
+    the state at phis[0]; otherwise it returns BRANCH_JUMP.
+    Returns the overall status: the first non-OK position status, or
+    BRANCH_JUMP if the revolution does not close.
+    """
+    n_groups = codes.shape[0]
+    n_points = pos_out.shape[1]
+    pos = np.empty((n_points, 2))
+    d1 = np.empty((n_points, 2))
+    d2 = np.empty((n_points, 2))
+    margins = np.empty(n_groups)
+    state = np.empty((n_groups, N_STATE))
+    start_state = np.empty((n_groups, N_STATE))
+    init_state(codes, goff, par, state)
+    newton = has_newton(codes)
+    phi_prev = start_angle(codes, goff, par) if newton else phis[0]
+    overall = OK
+    for k in range(phis.shape[0]):
+        st = advance(codes, gidx, goff, par, fixed_idx, fixed_off, phi_prev, phis[k], order,
+                     tols, state, newton, pos, d1, d2, margins)
+        phi_prev = phis[k]
+        if k == 0:
+            start_state[:, :] = state
+        status_out[k] = st
+        it = 0.0
+        for g in range(n_groups):
+            margin_out[k, g] = margins[g]
+            if codes[g] == G_CLASS3:
+                it += state[g, S_ITERS]
+        iters_out[k] = it
+        pos_out[k] = pos
+        if order >= 1:
+            d1_out[k] = d1
+        if order >= 2:
+            d2_out[k] = d2
+        if overall == OK and st != OK:
+            overall = st
+    if newton and math.isfinite(phi_close):
+        st = advance(codes, gidx, goff, par, fixed_idx, fixed_off, phi_prev, phi_close, 0,
+                     tols, state, newton, pos, d1, d2, margins)
+        if overall == OK and (st != OK or not closes(codes, state, start_state, tols)):
+            overall = BRANCH_JUMP if st == OK else st
+    return overall
+
+
+@njit(**JIT)
+def link_angles(pos, d1, d2, ia, ib, order, out):
+    """Angle of every link ia[j] -> ib[j] and its analogs, for every position.
+
+    pos/d1/d2: (n_phi, n_points, 2); out: (n_phi, n_links, 3) = (phi, phi', phi'').
+    """
+    for k in range(pos.shape[0]):
+        for j in range(ia.shape[0]):
+            a = ia[j]
+            b = ib[j]
+            dx = pos[k, b, 0] - pos[k, a, 0]
+            dy = pos[k, b, 1] - pos[k, a, 1]
+            if order >= 1:
+                e2x = d2[k, b, 0] - d2[k, a, 0] if order >= 2 else 0.0
+                e2y = d2[k, b, 1] - d2[k, a, 1] if order >= 2 else 0.0
+                th, th1, th2 = angle_analogs(dx, dy, d1[k, b, 0] - d1[k, a, 0],
+                                      d1[k, b, 1] - d1[k, a, 1], e2x, e2y)
+                out[k, j, 0] = th
+                out[k, j, 1] = th1
+                out[k, j, 2] = th2 if order >= 2 else math.nan
+            else:
+                out[k, j, 0] = math.atan2(dy, dx)
+                out[k, j, 1] = math.nan
+                out[k, j, 2] = math.nan
+

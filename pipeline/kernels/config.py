@@ -1,0 +1,92 @@
+"""The one place that defines how kernels are compiled, the status codes and
+the layout of the tolerance vector passed to every solver.
+
+Tolerances are passed as arguments (never read from globals) because numba's
+on-disk cache freezes global values into the compiled code.
+"""
+
+import os
+
+import numpy as np
+
+# Fast-math flags.  Never 'nnan' or 'ninf': NaN is the failure signal.  The
+# default is strict IEEE; PIPELINE_FASTMATH=fast selects the safe subset below
+# (used by the speed/accuracy benchmark, which also points NUMBA_CACHE_DIR
+# elsewhere because the cache key does not include these flags).
+_FAST_FLAGS = {"nsz", "arcp", "contract", "afn", "reassoc"}
+FASTMATH = _FAST_FLAGS if os.environ.get("PIPELINE_FASTMATH", "strict") == "fast" else False
+
+# error_model="numpy": a division by zero gives inf/nan instead of raising,
+# so a kernel never raises inside prange.
+JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True)
+JIT_PARALLEL = dict(JIT, parallel=True)
+
+# ---- status codes (int8), ordered by how they are reported -----------------
+OK = 0
+NO_ASSEMBLY = 1       # cosine-law argument outside [-1, 1], block off its guide, ...
+NEWTON_MAXITER = 2    # class III Newton did not converge
+SINGULAR = 3          # toggle / dead position: the velocity analogs do not exist
+BRANCH_JUMP = 4       # assembly branch switched, or the revolution does not close
+BAD_GEOMETRY = 5      # impossible ternary triangle, non-positive length
+NOT_EVALUATED = 6     # sweep: stage skipped because the candidate already failed
+
+STATUS_NAMES = {
+    OK: "OK",
+    NO_ASSEMBLY: "NO_ASSEMBLY",
+    NEWTON_MAXITER: "NEWTON_MAXITER",
+    SINGULAR: "SINGULAR",
+    BRANCH_JUMP: "BRANCH_JUMP",
+    BAD_GEOMETRY: "BAD_GEOMETRY",
+    NOT_EVALUATED: "NOT_EVALUATED",
+}
+
+# ---- group codes of the compiled plan ---------------------------------------
+G_CRANK = 0
+G_RRR = 1
+G_RRP = 2
+G_RPR = 3
+G_CLASS3 = 4
+G_ATTACH = 5
+
+GROUP_NAMES = {G_CRANK: "crank", G_RRR: "RRR", G_RRP: "RRP", G_RPR: "RPR",
+               G_CLASS3: "class3", G_ATTACH: "attach"}
+
+# ---- what to compute --------------------------------------------------------
+POSITIONS = 0
+VELOCITIES = 1      # positions + first analogs
+ACCELERATIONS = 2   # positions + first and second analogs
+
+# ---- tolerance vector ---------------------------------------------------------
+T_NEWTON_TOL = 0      # closure residual accepted by Newton, mm
+T_NEWTON_MAXITER = 1  # iteration cap
+T_NEWTON_STEP = 2     # largest Newton step in (a, b), rad (damping)
+T_SINGULAR = 3        # |normalised determinant| below this is a toggle
+T_JUMP = 4            # largest change of a class III angle between two positions, rad
+T_SUBSTEP = 5         # largest crank step of the continuation, rad
+T_CLOSE = 6           # revolution must close on its start to this, rad
+T_ASSEMBLY_SLACK = 7  # cosine-law argument in [1, 1+slack] is clamped to a toggle
+N_TOLS = 8
+
+# state columns of a class III group (per candidate, per group)
+S_A = 0
+S_B = 1
+S_DET_SIGN = 2
+S_MARGIN = 3
+S_ITERS = 4
+N_STATE = 5
+
+
+def default_tolerances(newton_tol=1e-10, newton_maxiter=50, newton_step=0.5,
+                       singular=1e-9, jump=0.35, substep_deg=2.0, close=1e-7,
+                       assembly_slack=1e-12):
+    """The tolerance vector the kernels take, with the product's defaults."""
+    t = np.empty(N_TOLS)
+    t[T_NEWTON_TOL] = newton_tol
+    t[T_NEWTON_MAXITER] = newton_maxiter
+    t[T_NEWTON_STEP] = newton_step
+    t[T_SINGULAR] = singular
+    t[T_JUMP] = jump
+    t[T_SUBSTEP] = np.deg2rad(substep_deg)
+    t[T_CLOSE] = close
+    t[T_ASSEMBLY_SLACK] = assembly_slack
+    return t

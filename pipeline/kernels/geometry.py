@@ -1,0 +1,70 @@
+"""Planar geometry primitives: rotation, circle intersection, angle analogs."""
+
+import math
+
+from numba import njit
+
+from .config import JIT
+
+
+@njit(**JIT)
+def rot(x, y, alpha, length):
+    """The vector (x, y) rotated by alpha about +Z and rescaled to ``length``."""
+    n = math.hypot(x, y)
+    c = math.cos(alpha)
+    s = math.sin(alpha)
+    return length * (c * x - s * y) / n, length * (s * x + c * y) / n
+
+
+@njit(**JIT)
+def circle_intersection(ax, ay, cx, cy, l_ab, l_cb, w, slack):
+    """Point B at distance l_ab from A and l_cb from C (DOMAIN.md section 2).
+
+    r = A - C, U = arccos((|r|^2 + l_cb^2 - l_ab^2) / (2 |r| l_cb)),
+    C->B = rot(r, -w U, l_cb).  Returns (ok, bx, by, toggle): ok is False when
+    the cosine-law argument leaves [-1 - slack, 1 + slack]; toggle is True when
+    it had to be clamped (the two circles touch).
+    """
+    rx = ax - cx
+    ry = ay - cy
+    r2 = rx * rx + ry * ry
+    r = math.sqrt(r2)
+    if not (r > 0.0):
+        return False, math.nan, math.nan, False
+    arg = (r2 + l_cb * l_cb - l_ab * l_ab) / (2.0 * r * l_cb)
+    toggle = False
+    if arg > 1.0:
+        if arg > 1.0 + slack:
+            return False, math.nan, math.nan, False
+        arg = 1.0
+        toggle = True
+    elif arg < -1.0:
+        if arg < -1.0 - slack:
+            return False, math.nan, math.nan, False
+        arg = -1.0
+        toggle = True
+    u = math.acos(arg)
+    bx, by = rot(rx, ry, -w * u, l_cb)
+    return True, cx + bx, cy + by, toggle
+
+
+@njit(**JIT)
+def angle_analogs(dx, dy, d1x, d1y, d2x, d2y):
+    """Angle of the vector d and its exact first and second analogs.
+
+    theta = atan2(dy, dx); theta' = (d x d') / |d|^2;
+    theta'' = (d x d'') / |d|^2 - 2 (d . d') (d x d') / |d|^4.
+    """
+    r2 = dx * dx + dy * dy
+    c1 = dx * d1y - dy * d1x
+    c2 = dx * d2y - dy * d2x
+    th1 = c1 / r2
+    th2 = c2 / r2 - 2.0 * (dx * d1x + dy * d1y) * c1 / (r2 * r2)
+    return math.atan2(dy, dx), th1, th2
+
+
+@njit(**JIT)
+def solve2(a11, a12, a21, a22, b1, b2):
+    """Cramer's rule for a 2x2 system; inf/nan when singular (numpy error model)."""
+    det = a11 * a22 - a12 * a21
+    return (b1 * a22 - a12 * b2) / det, (a11 * b2 - b1 * a21) / det

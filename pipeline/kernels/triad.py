@@ -1,0 +1,227 @@
+"""Class III group (triad): ternary base link 3-4-5 with three leads.
+
+Lead 2-3 joins the known point P2 to vertex 3; leads 4-6 and 5-7 join
+vertices 4 and 5 to the known points P6 and P7.  Unknowns: the angle a of
+lead 2-3 and the angle b of side 3-4.
+
+    P3 = P2 + L23 e(a),  P4 = P3 + L34 e(b),  P5 = P3 + L35 e(b + U435)
+    F1 = |P4 - P6|^2 - L46^2 = 0,   F2 = |P5 - P7|^2 - L57^2 = 0
+
+solved by Newton with the analytic 2x2 Jacobian (damped: the step is limited),
+warm-started from the previous crank position.  The first and second analogs
+come from the same Jacobian applied to the differentiated closure equations.
+"""
+
+import math
+
+from numba import njit
+
+from .config import (JIT, OK, NEWTON_MAXITER, SINGULAR, BRANCH_JUMP,
+                     BAD_GEOMETRY, S_A, S_B, S_DET_SIGN, S_MARGIN, S_ITERS,
+                     T_NEWTON_TOL, T_NEWTON_MAXITER, T_NEWTON_STEP, T_SINGULAR, T_JUMP)
+from .geometry import solve2
+
+# Newton outcomes
+CONVERGED = 0
+MAXITER = 1
+SINGULAR_JACOBIAN = 2
+
+
+@njit(**JIT)
+def ternary_angle(l34, l45, l35, orientation):
+    """Angle U435 at vertex 3 between sides 3-4 and 3-5 (cosine law), signed by
+    ``orientation``; NaN when the triangle cannot be built."""
+    if not (l34 > 0.0 and l45 > 0.0 and l35 > 0.0):
+        return math.nan
+    if not (l45 < l34 + l35 and l34 < l45 + l35 and l35 < l34 + l45):
+        return math.nan
+    c = (l34 * l34 + l35 * l35 - l45 * l45) / (2.0 * l34 * l35)
+    return orientation * math.acos(min(1.0, max(-1.0, c)))
+
+
+@njit(**JIT)
+def closure(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b):
+    """Residuals (F1, F2) and Jacobian d(F1, F2)/d(a, b) at (a, b)."""
+    ca = math.cos(a)
+    sa = math.sin(a)
+    cb = math.cos(b)
+    sb = math.sin(b)
+    cc = math.cos(b + u435)
+    sc = math.sin(b + u435)
+    p3x = p2x + l23 * ca
+    p3y = p2y + l23 * sa
+    r4x = p3x + l34 * cb - p6x
+    r4y = p3y + l34 * sb - p6y
+    r5x = p3x + l35 * cc - p7x
+    r5y = p3y + l35 * sc - p7y
+    f1 = r4x * r4x + r4y * r4y - l46 * l46
+    f2 = r5x * r5x + r5y * r5y - l57 * l57
+    # d/da of P3 (and so of P4, P5) is L23 n(a), n(x) = (-sin x, cos x)
+    j11 = 2.0 * l23 * (-r4x * sa + r4y * ca)
+    j12 = 2.0 * l34 * (-r4x * sb + r4y * cb)
+    j21 = 2.0 * l23 * (-r5x * sa + r5y * ca)
+    j22 = 2.0 * l35 * (-r5x * sc + r5y * cc)
+    return f1, f2, j11, j12, j21, j22
+
+
+@njit(**JIT)
+def newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b,
+           tol, maxiter, max_step):
+    """Damped Newton on the closure equations from (a, b).
+
+    Returns (outcome, a, b, iterations, det J): outcome CONVERGED, MAXITER or
+    SINGULAR_JACOBIAN.  Converged means both closure residuals, expressed as
+    distances (|F| / 2L, mm), are at most ``tol``.
+    """
+    det = math.nan
+    for it in range(maxiter + 1):
+        f1, f2, j11, j12, j21, j22 = closure(p2x, p2y, p6x, p6y, p7x, p7y,
+                                             l23, l34, l35, l46, l57, u435, a, b)
+        det = j11 * j22 - j12 * j21
+        res = max(abs(f1) / (2.0 * l46), abs(f2) / (2.0 * l57))
+        if res <= tol:
+            return CONVERGED, a, b, it, det
+        if it == maxiter:
+            break
+        if not (det != 0.0 and math.isfinite(det)):
+            return SINGULAR_JACOBIAN, a, b, it, det
+        da, db = solve2(j11, j12, j21, j22, f1, f2)
+        step = max(abs(da), abs(db))
+        if not math.isfinite(step):
+            return SINGULAR_JACOBIAN, a, b, it, det
+        if step > max_step:
+            da *= max_step / step
+            db *= max_step / step
+        a -= da
+        b -= db
+    return MAXITER, a, b, maxiter, det
+
+
+@njit(**JIT)
+def _wrap(x):
+    """Angle difference wrapped to (-pi, pi]."""
+    return x - 2.0 * math.pi * math.floor((x + math.pi) / (2.0 * math.pi))
+
+
+@njit(**JIT)
+def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, l45, l35, l46, l57, orientation,
+           state, g, order, tols):
+    """Solve the class III group ``g`` at the current crank position.
+
+    ``state[g]`` carries the continuation: the last (a, b), the sign of det J
+    there (0 before the first solve), and receives the singularity margin and
+    the Newton iterations.  Returns (status, margin).
+    """
+    u435 = ternary_angle(l34, l45, l35, orientation)
+    if not (math.isfinite(u435) and l23 > 0.0 and l46 > 0.0 and l57 > 0.0):
+        for i in (i3, i4, i5):
+            for k in range(2):
+                pos[i, k] = math.nan
+                d1[i, k] = math.nan
+                d2[i, k] = math.nan
+        state[g, S_MARGIN] = 0.0
+        return BAD_GEOMETRY, 0.0
+    p2x = pos[i2, 0]
+    p2y = pos[i2, 1]
+    p6x = pos[i6, 0]
+    p6y = pos[i6, 1]
+    p7x = pos[i7, 0]
+    p7y = pos[i7, 1]
+    a0 = state[g, S_A]
+    b0 = state[g, S_B]
+    outcome, a, b, iters, det = newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57,
+                                       u435, a0, b0, tols[T_NEWTON_TOL],
+                                       int(tols[T_NEWTON_MAXITER]), tols[T_NEWTON_STEP])
+    state[g, S_ITERS] = iters
+    scale = 4.0 * l23 * l46 * l57 * max(l34, l35)
+    if outcome != CONVERGED:
+        for i in (i3, i4, i5):
+            for k in range(2):
+                pos[i, k] = math.nan
+                d1[i, k] = math.nan
+                d2[i, k] = math.nan
+        state[g, S_MARGIN] = 0.0
+        if outcome == SINGULAR_JACOBIAN:
+            return SINGULAR, 0.0
+        # Where the group cannot be assembled Newton does not converge either;
+        # the solver's own outcome is what is reported.
+        return NEWTON_MAXITER, 0.0
+    margin = abs(det) / scale
+    state[g, S_MARGIN] = margin
+    status = OK
+    sign = 1.0 if det > 0.0 else -1.0
+    if state[g, S_DET_SIGN] != 0.0:
+        if sign != state[g, S_DET_SIGN]:
+            status = BRANCH_JUMP
+        elif (abs(_wrap(a - a0)) > tols[T_JUMP] or abs(_wrap(b - b0)) > tols[T_JUMP]):
+            status = BRANCH_JUMP
+    state[g, S_A] = a
+    state[g, S_B] = b
+    state[g, S_DET_SIGN] = sign
+    if status == OK and margin < tols[T_SINGULAR]:
+        status = SINGULAR
+
+    ca = math.cos(a)
+    sa = math.sin(a)
+    cb = math.cos(b)
+    sb = math.sin(b)
+    cc = math.cos(b + u435)
+    sc = math.sin(b + u435)
+    pos[i3, 0] = p2x + l23 * ca
+    pos[i3, 1] = p2y + l23 * sa
+    pos[i4, 0] = pos[i3, 0] + l34 * cb
+    pos[i4, 1] = pos[i3, 1] + l34 * sb
+    pos[i5, 0] = pos[i3, 0] + l35 * cc
+    pos[i5, 1] = pos[i3, 1] + l35 * sc
+    if order < 1:
+        return status, margin
+    if status == SINGULAR:
+        for i in (i3, i4, i5):
+            for k in range(2):
+                d1[i, k] = math.nan
+                d2[i, k] = math.nan
+        return status, margin
+
+    r4x = pos[i4, 0] - p6x
+    r4y = pos[i4, 1] - p6y
+    r5x = pos[i5, 0] - p7x
+    r5y = pos[i5, 1] - p7y
+    # Jacobian of the half closure (r4.r4 - L46^2)/2, (r5.r5 - L57^2)/2
+    j11 = l23 * (-r4x * sa + r4y * ca)
+    j12 = l34 * (-r4x * sb + r4y * cb)
+    j21 = l23 * (-r5x * sa + r5y * ca)
+    j22 = l35 * (-r5x * sc + r5y * cc)
+    # first analogs: r4.(P4' - P6') = 0, r5.(P5' - P7') = 0
+    rhs1 = -(r4x * (d1[i2, 0] - d1[i6, 0]) + r4y * (d1[i2, 1] - d1[i6, 1]))
+    rhs2 = -(r5x * (d1[i2, 0] - d1[i7, 0]) + r5y * (d1[i2, 1] - d1[i7, 1]))
+    a1, b1 = solve2(j11, j12, j21, j22, rhs1, rhs2)
+    d1[i3, 0] = d1[i2, 0] - l23 * a1 * sa
+    d1[i3, 1] = d1[i2, 1] + l23 * a1 * ca
+    d1[i4, 0] = d1[i3, 0] - l34 * b1 * sb
+    d1[i4, 1] = d1[i3, 1] + l34 * b1 * cb
+    d1[i5, 0] = d1[i3, 0] - l35 * b1 * sc
+    d1[i5, 1] = d1[i3, 1] + l35 * b1 * cc
+    if order < 2:
+        return status, margin
+    # second analogs: r4.(P4'' - P6'') + |P4' - P6'|^2 = 0 (and for 5, 7), with
+    # P4'' = P2'' + L23 (a'' n(a) - a'^2 e(a)) + L34 (b'' n(b) - b'^2 e(b))
+    q4x = d1[i4, 0] - d1[i6, 0]
+    q4y = d1[i4, 1] - d1[i6, 1]
+    q5x = d1[i5, 0] - d1[i7, 0]
+    q5y = d1[i5, 1] - d1[i7, 1]
+    k3x = d2[i2, 0] - l23 * a1 * a1 * ca
+    k3y = d2[i2, 1] - l23 * a1 * a1 * sa
+    k4x = k3x - l34 * b1 * b1 * cb - d2[i6, 0]
+    k4y = k3y - l34 * b1 * b1 * sb - d2[i6, 1]
+    k5x = k3x - l35 * b1 * b1 * cc - d2[i7, 0]
+    k5y = k3y - l35 * b1 * b1 * sc - d2[i7, 1]
+    rhs1 = -(q4x * q4x + q4y * q4y) - (r4x * k4x + r4y * k4y)
+    rhs2 = -(q5x * q5x + q5y * q5y) - (r5x * k5x + r5y * k5y)
+    a2, b2 = solve2(j11, j12, j21, j22, rhs1, rhs2)
+    d2[i3, 0] = k3x - l23 * a2 * sa
+    d2[i3, 1] = k3y + l23 * a2 * ca
+    d2[i4, 0] = d2[i3, 0] - l34 * (b2 * sb + b1 * b1 * cb)
+    d2[i4, 1] = d2[i3, 1] + l34 * (b2 * cb - b1 * b1 * sb)
+    d2[i5, 0] = d2[i3, 0] - l35 * (b2 * sc + b1 * b1 * cc)
+    d2[i5, 1] = d2[i3, 1] + l35 * (b2 * cc - b1 * b1 * sc)
+    return status, margin
