@@ -7,7 +7,7 @@ parser converts from degrees), masses kg, moments of inertia kg*m^2.
 
 from __future__ import annotations
 
-import math
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -358,6 +358,8 @@ def compile_mechanism(m: Mechanism) -> Plan:
         else:
             continue
         jnames.append("R" + p[1:] if p.startswith("P") and p[1:].isdigit() else f"R[{p}]")
+    order = sorted(range(len(joints)), key=lambda k: natural_key(jnames[k]))
+    joints, jb, jnames = [joints[k] for k in order], [jb[k] for k in order], [jnames[k] for k in order]
     body_index = {b.name: i for i, b in enumerate(m.bodies)}
     sb, sd, sa, sn = [], [], [], []
     for s in m.slides:
@@ -390,5 +392,6 @@ def compile_mechanism(m: Mechanism) -> Plan:
     )
 
 
-def deg(x):
-    return math.radians(x)
+def natural_key(name):
+    """Sort R2 before R10."""
+    return [int(t) if t.isdigit() else t for t in re.split(r"(\d+)", name)]

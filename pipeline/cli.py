@@ -1,0 +1,108 @@
+"""Command line: subcommands parse, call the public API, return an exit code.
+No numerics here."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+
+EXIT_OK = 0
+EXIT_USER_ERROR = 2
+
+
+def _user_errors():
+    from .expressions import ExpressionError
+    from .storage import ResultsError
+    from .study import StudyError
+    return (StudyError, ResultsError, ExpressionError, FileNotFoundError, ValueError)
+
+
+def _print(obj, fmt):
+    if fmt == "json":
+        print(json.dumps(obj, indent=2, default=str))
+    else:
+        for k, v in obj.items():
+            print(f"{k:>24}: {v}")
+
+
+def cmd_run(a):
+    from .runner import run_study
+    res = run_study(a.study, a.output, candidates=a.candidates, resume=a.resume,
+                    scheduler=a.scheduler, n_jobs=a.jobs, chunk_size=a.chunk_size,
+                    progress=not a.quiet, pictures=not a.no_pictures)
+    info = {"results": str(res.results), **res.summary}
+    if res.pictures:
+        info["pictures"] = ", ".join(str(p) for p in res.pictures)
+    if not a.quiet:
+        _print(info, a.format)
+    return EXIT_OK
+
+
+def cmd_export(a):
+    from .export import export_csv
+    files = export_csv(a.results, a.csv)
+    if not a.quiet:
+        for f in files:
+            print(f)
+    return EXIT_OK
+
+
+def cmd_compile(a):
+    from .compile import compile_all
+    t = compile_all()
+    if not a.quiet:
+        _print({k: f"{v:.1f} s" for k, v in t.items()}, a.format)
+    return EXIT_OK
+
+
+def build_parser():
+    p = argparse.ArgumentParser(prog="pipeline", description=(
+        "Exact analysis and Monte-Carlo synthesis of hinged-lever mechanisms."))
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("-v", "--verbose", action="store_true", help="more log output")
+    common.add_argument("-q", "--quiet", action="store_true", help="no progress or summary")
+    common.add_argument("--format", choices=("table", "json"), default="table")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("run", parents=[common], help="run a study (scene or sweep)")
+    r.add_argument("study", help="study TOML file")
+    r.add_argument("-o", "--output", help="results HDF5 file (default results/<name>.h5)")
+    r.add_argument("--candidates", type=int, help="sweep: number of candidates (overrides study)")
+    r.add_argument("--resume", action="store_true", help="sweep: continue an interrupted run")
+    r.add_argument("--scheduler", help="sweep: Dask scheduler address tcp://HOST:PORT")
+    r.add_argument("-j", "--jobs", type=int, help="sweep: threads (default: all cores)")
+    r.add_argument("--chunk-size", type=int, help="sweep: candidates per chunk")
+    r.add_argument("--no-pictures", action="store_true", help="scene: skip the PNG pictures")
+    r.set_defaults(func=cmd_run)
+
+    e = sub.add_parser("export", parents=[common], help="write a scene's tables as CSV")
+    e.add_argument("results", help="results HDF5 file of a scene")
+    e.add_argument("--csv", required=True, metavar="DIR", help="output directory")
+    e.set_defaults(func=cmd_export)
+
+    c = sub.add_parser("compile", parents=[common],
+                       help="compile every kernel ahead of time (fills numba's cache)")
+    c.set_defaults(func=cmd_compile)
+    return p
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.DEBUG if args.verbose else
+                        (logging.WARNING if args.quiet else logging.INFO),
+                        format="%(message)s")
+    try:
+        return args.func(args)
+    except _user_errors() as e:
+        print(f"pipeline {args.command}: error: {e}", file=sys.stderr)
+        return EXIT_USER_ERROR
+    except KeyboardInterrupt:
+        print(f"pipeline {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,139 @@
+"""Force analysis of a scene: loads sampled on the crank-angle grid, the
+kinetostatics kernel, peaks over the revolution and pin sizing."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from .kernels.forces import kinetostatics_curve
+
+PIN_LENGTH_MM = 10.0       # DOMAIN.md section 5: pin of length 10 mm in bending
+PIN_SIGMA_MPA = 200.0      # allowed bending stress
+
+
+def pin_diameter(r_max, length=PIN_LENGTH_MM, sigma=PIN_SIGMA_MPA):
+    """d_min = (32 R_max l / (pi sigma))^(1/3) [mm] for R in N, l in mm, sigma in MPa."""
+    return np.cbrt(32.0 * np.asarray(r_max, float) * length / (math.pi * sigma))
+
+
+def load_time(phi, crank):
+    """Time at crank angle phi on a uniform run from phi0 (the kinetostatic crank)."""
+    return (np.asarray(phi, float) - crank.phi0) / crank.omega1
+
+
+def sample_loads(mechanism, phi):
+    """External loads at the crank angles ``phi`` (rad): array (n, n_loads, 3)
+    of (fx [N], fy [N], moment [N*m])."""
+    phi = np.asarray(phi, float)
+    t = load_time(phi, mechanism.crank)
+    out = np.zeros((phi.shape[0], len(mechanism.loads), 3))
+    for k, ld in enumerate(mechanism.loads):
+        for c, e in enumerate((ld.fx, ld.fy, ld.moment)):
+            out[:, k, c] = np.broadcast_to(e.evaluate(phi, t), phi.shape)
+    return out
+
+
+def plan_force_args(plan):
+    """The plan arrays the kinetostatics kernel reads, in its argument order."""
+    return (plan.body_com, plan.body_turn, plan.body_mass_off, plan.joint_point,
+            plan.joint_bodies, plan.slide_bodies, plan.slide_dir, plan.slide_angle,
+            plan.crank_body, plan.load_body, plan.load_point)
+
+
+def work_arrays(plan):
+    n = 3 * len(plan.body_names)
+    return np.zeros((n, n)), np.zeros(n)
+
+
+@dataclass
+class Reactions:
+    phi: np.ndarray          # rad
+    R: np.ndarray            # (n, n_joints, 2) N: force of the first body on the second
+    slide: np.ndarray        # (n, n_slides, 2): normal force N, couple N*m
+    M_bal: np.ndarray        # (n,) N*m, on the crank
+    body_loads: np.ndarray   # (n, n_bodies, 3): applied + inertia loads at S (N, N*m)
+    joint_names: tuple
+    slide_names: tuple
+    body_names: tuple
+
+    @property
+    def magnitude(self):
+        return np.hypot(self.R[..., 0], self.R[..., 1])
+
+    def peaks(self):
+        """Per joint: (R_max, phi1 at the peak [deg], d_min [mm])."""
+        mag = self.magnitude
+        rows = []
+        for j, name in enumerate(self.joint_names):
+            k = int(np.nanargmax(mag[:, j])) if np.isfinite(mag[:, j]).any() else 0
+            rows.append((name, float(mag[k, j]), float(np.rad2deg(self.phi[k])),
+                         float(pin_diameter(mag[k, j]))))
+        return rows
+
+    def summary(self):
+        peaks = self.peaks()
+        j = max(range(len(peaks)), key=lambda i: peaks[i][1]) if peaks else None
+        out = {}
+        if j is not None:
+            out["peak_reaction"] = f"{peaks[j][1]:.1f} N at {peaks[j][0]}, phi1 = {peaks[j][2]:g} deg"
+        k = int(np.nanargmax(np.abs(self.M_bal)))
+        out["peak_M_bal"] = f"{self.M_bal[k]:.3f} N*m at phi1 = {np.rad2deg(self.phi[k]):g} deg"
+        return out
+
+    def write(self, g):
+        from .storage import put
+        put(g, "reactions", self.R, "N", "joint reaction (force of the first body on the second)",
+            joints=list(self.joint_names))
+        put(g, "M_bal", self.M_bal, "N*m", "balancing moment on the crank")
+        if self.slide.shape[1]:
+            put(g, "slide_reactions", self.slide, "N, N*m",
+                "prismatic pair: normal force and couple", slides=list(self.slide_names))
+        put(g, "body_loads", self.body_loads, "N, N*m",
+            "applied and inertia loads reduced to the centre of mass",
+            bodies=list(self.body_names))
+
+
+def scene_forces(mechanism, plan, curves) -> Reactions:
+    """Reactions at every position of ``curves`` (which must carry second analogs)."""
+    crank = mechanism.crank
+    n = curves.phi.shape[0]
+    loads = sample_loads(mechanism, curves.phi)
+    nb, nj, ns = len(plan.body_names), len(plan.joint_names), len(plan.slide_names)
+    wa, wb = work_arrays(plan)
+    body_loads = np.zeros((n, nb, 3))
+    R = np.zeros((n, nj, 2))
+    S = np.zeros((n, ns, 2))
+    M = np.zeros(n)
+    kinetostatics_curve(curves.pos, curves.d1, curves.d2, crank.omega1, crank.eps1,
+                        plan.gravity, plan.par, *plan_force_args(plan), loads, wa, wb,
+                        body_loads, R, S, M)
+    return Reactions(curves.phi, R, S, M, body_loads, plan.joint_names, plan.slide_names,
+                     plan.body_names)
+
+
+def reaction_tables(g, dense) -> dict:
+    """reactions.csv (the table positions) and peaks.csv (peaks over the dense
+    revolution) frames from the stored groups."""
+    phi = g["phi1"][()]
+    R = g["reactions"][()]
+    joints = list(g["reactions"].attrs["joints"])
+    cols = {"phi1_deg": phi}
+    mag = np.hypot(R[..., 0], R[..., 1])
+    for j, name in enumerate(joints):
+        cols[f"{name}_x"] = R[:, j, 0]
+        cols[f"{name}_y"] = R[:, j, 1]
+        cols[name] = mag[:, j]
+    cols["M_bal"] = g["M_bal"][()]
+    rows = []
+    phi = dense["phi1"][()]
+    R = dense["reactions"][()]
+    mag = np.hypot(R[..., 0], R[..., 1])
+    for j, name in enumerate(joints):
+        k = int(np.nanargmax(mag[:, j]))
+        rows.append({"joint": name, "R_max": mag[k, j], "phi1_deg": phi[k],
+                     "d_min_mm": float(pin_diameter(mag[k, j]))})
+    return {"reactions.csv": pd.DataFrame(cols), "peaks.csv": pd.DataFrame(rows)}

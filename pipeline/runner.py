@@ -1,0 +1,66 @@
+"""Public entry points behind `pipeline run`: a study file in, results out."""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .study import load_study
+
+log = logging.getLogger("pipeline")
+
+
+@dataclass
+class RunOutcome:
+    kind: str
+    results: Path
+    pictures: list = field(default_factory=list)
+    summary: dict = field(default_factory=dict)
+
+
+def default_output(study):
+    return Path("results") / f"{study.name}.h5"
+
+
+def run_study(path, out=None, *, candidates=None, resume=False, scheduler=None, n_jobs=None,
+              chunk_size=None, progress=True, pictures=True) -> RunOutcome:
+    """Run a scene or a sweep study and write its results file (and pictures)."""
+    study = load_study(path)
+    out = Path(out) if out else default_output(study)
+    if study.kind == "scene":
+        if candidates is not None or resume or scheduler:
+            raise ValueError(f"{path}: --candidates, --resume and --scheduler apply to sweeps; "
+                             "this study is a scene")
+        return run_scene_study(study, out, pictures=pictures)
+    from .sweep import run_sweep
+    return run_sweep(study, out, candidates=candidates, resume=resume, scheduler=scheduler,
+                     n_jobs=n_jobs, chunk_size=chunk_size, progress=progress)
+
+
+def run_scene_study(study, out, pictures=True) -> RunOutcome:
+    from .kernels import config as kc
+    from .scene import run_scene
+    from .storage import write_scene
+    res = run_scene(study)
+    if study.dynamics is not None:
+        from .dynamics import run_dynamics
+        res.dynamics = run_dynamics(study, res.plan)
+    write_scene(res, out)
+    pics = []
+    if pictures:
+        from . import plots
+        pics.append(plots.scene_figure(res, out.with_suffix(".png")))
+        if res.dense.forces is not None:
+            pics.append(plots.forces_figure(res, out.with_name(out.stem + "_forces.png")))
+        for case in getattr(res, "dynamics", None) or ():
+            from .dynamics import dynamics_figure
+            pics.append(dynamics_figure(case, out.with_name(f"{out.stem}_{case.name}.png")))
+    summary = {"status": kc.STATUS_NAMES[res.status],
+               "table_positions": int(res.table.phi.shape[0]),
+               "dense_positions": int(res.dense.phi.shape[0])}
+    if res.dense.forces is not None:
+        summary.update(res.dense.forces.summary())
+    for case in getattr(res, "dynamics", None) or ():
+        summary[f"dynamics.{case.name}"] = case.summary()
+    return RunOutcome("scene", out, pics, summary)

@@ -1,0 +1,104 @@
+"""A scene: one mechanism analysed over a revolution (tables and dense curves).
+
+Pure computation over the compiled plan; writing files is ``pipeline.storage``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .kernels import config as kc
+from .kernels.assembly import link_angles, solve_revolution
+from .model import Plan
+
+ORDER = {"positions": kc.POSITIONS, "velocities": kc.VELOCITIES,
+         "accelerations": kc.ACCELERATIONS, "forces": kc.ACCELERATIONS}
+
+
+@dataclass
+class Curves:
+    """Kinematics at a sequence of crank angles (analogs with respect to phi1)."""
+    phi: np.ndarray          # rad
+    pos: np.ndarray          # (n, n_points, 2) mm
+    d1: np.ndarray           # mm/rad
+    d2: np.ndarray           # mm/rad^2
+    status: np.ndarray       # (n,) int8
+    margin: np.ndarray       # (n, n_groups)
+    iterations: np.ndarray   # (n,)
+    links: np.ndarray        # (n, n_links, 3): angle rad, analogs 1/rad, 1/rad^2
+    overall: int
+    forces: object = None    # pipeline.forces.Reactions when computed
+    extra: dict = field(default_factory=dict)
+
+
+def revolution_angles(crank, n, closing_row=False):
+    """phi1_k = phi0 + rot * 2 pi k / n, k = 0..n-1 (and k = n if closing_row)."""
+    k = np.arange(n + 1 if closing_row else n, dtype=np.float64)
+    return crank.phi0 + crank.rot * 2.0 * math.pi * k / n
+
+
+def solve_curves(plan: Plan, phis, order, tols=None, par=None, close_at=math.nan) -> Curves:
+    """Kinematics of ``plan`` at crank angles ``phis`` by continuation."""
+    tols = kc.default_tolerances() if tols is None else tols
+    par = plan.par if par is None else par
+    n = len(phis)
+    npnt, ng = plan.n_points, plan.n_groups
+    pos = np.full((n, npnt, 2), np.nan)
+    d1 = np.full((n, npnt, 2), np.nan)
+    d2 = np.full((n, npnt, 2), np.nan)
+    status = np.zeros(n, np.int8)
+    margin = np.zeros((n, ng))
+    iters = np.zeros(n)
+    overall = solve_revolution(plan.codes, plan.gidx, plan.goff, par, plan.fixed_idx,
+                               plan.fixed_off, np.ascontiguousarray(phis, dtype=np.float64),
+                               float(close_at), int(order), tols, pos, d1, d2, status, margin,
+                               iters)
+    links = np.full((n, len(plan.link_a), 3), np.nan)
+    link_angles(pos, d1, d2, plan.link_a, plan.link_b, int(order), links)
+    return Curves(np.asarray(phis, float), pos, d1, d2, status, margin, iters, links, int(overall))
+
+
+@dataclass
+class SceneResult:
+    study: object
+    plan: Plan
+    table: Curves
+    dense: Curves
+    tolerances: np.ndarray
+
+    @property
+    def status(self):
+        """The scene's status: the dense revolution (which also checks closure)."""
+        return self.dense.overall if self.dense.overall != kc.OK else self.table.overall
+
+
+def run_scene(study, tols=None) -> SceneResult:
+    """Tables at the study's table positions (closing row included) and dense
+    curves over one revolution, with the forces if the study asks for them."""
+    plan = study.mechanism.compile()
+    out = study.output
+    order = ORDER[out.analysis]
+    tols = kc.default_tolerances() if tols is None else tols
+    crank = study.mechanism.crank
+    table = solve_curves(plan, revolution_angles(crank, out.table_positions, True), order, tols)
+    dense_phis = revolution_angles(crank, out.dense_positions)
+    dense = solve_curves(plan, dense_phis, order, tols,
+                         close_at=crank.phi0 + crank.rot * 2.0 * math.pi)
+    if out.analysis == "forces":
+        from .forces import scene_forces
+        table.forces = scene_forces(study.mechanism, plan, table)
+        dense.forces = scene_forces(study.mechanism, plan, dense)
+    return SceneResult(study, plan, table, dense, tols)
+
+
+def real_motion(curves: Curves, omega1, eps1):
+    """Point velocities (m/s) and accelerations (m/s^2), link omega (1/s) and
+    eps (1/s^2) from the analogs: v = r' w, a = r'' w^2 + r' eps."""
+    v = curves.d1 * omega1 / 1000.0
+    a = (curves.d2 * omega1 ** 2 + curves.d1 * eps1) / 1000.0
+    om = curves.links[:, :, 1] * omega1
+    ep = curves.links[:, :, 2] * omega1 ** 2 + curves.links[:, :, 1] * eps1
+    return v, a, om, ep

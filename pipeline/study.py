@@ -1,0 +1,496 @@
+"""Study files (TOML) -> frozen dataclasses, with errors that name the file,
+the field and the reason.
+
+A study is a "scene" (one mechanism: tables, curves, pictures) or a "sweep"
+(a Monte-Carlo search over a mechanism's dimensions, see ``pipeline.sweep``).
+Both declare the mechanism in ``[mechanism]``; angles are in degrees in the
+file and radians in the model.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from .model import (RPR, RRP, RRR, Attach, Body, CentreOfMass, ClassIII, Crank, Load,
+                    Mechanism, Slide)
+
+
+class StudyError(ValueError):
+    """A study file is wrong: names the file, the field and the reason."""
+
+    def __init__(self, file, where, reason):
+        self.file = str(file)
+        self.field = where
+        self.reason = reason
+        super().__init__(f"{file}: {where}: {reason}" if where else f"{file}: {reason}")
+
+
+_MISSING = object()
+
+
+class Section:
+    """A table of the study being read: tracks its location and the keys used,
+    so that unknown keys are reported."""
+
+    def __init__(self, file, where, data):
+        self.file = file
+        self.where = where
+        if not isinstance(data, dict):
+            raise StudyError(file, where, f"expected a table, got {type(data).__name__}")
+        self.data = data
+        self.used = set()
+
+    def path(self, key):
+        return f"{self.where}.{key}" if self.where else key
+
+    def error(self, key, reason):
+        return StudyError(self.file, self.path(key) if key else self.where, reason)
+
+    def has(self, key):
+        return key in self.data
+
+    def raw(self, key, default=_MISSING):
+        self.used.add(key)
+        if key not in self.data:
+            if default is _MISSING:
+                raise self.error(key, "required field is missing")
+            return default
+        return self.data[key]
+
+    def number(self, key, default=_MISSING, positive=False, nonzero=False):
+        v = self.raw(key, default)
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise self.error(key, f"expected a number, got {_show(v)}")
+        v = float(v)
+        if not math.isfinite(v):
+            raise self.error(key, f"must be finite, got {v}")
+        if positive and not v > 0:
+            raise self.error(key, f"must be positive, got {v:g}")
+        if nonzero and v == 0:
+            raise self.error(key, "must not be zero")
+        return v
+
+    def integer(self, key, default=_MISSING, minimum=None, choices=None):
+        v = self.raw(key, default)
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise self.error(key, f"expected an integer, got {_show(v)}")
+        if minimum is not None and v < minimum:
+            raise self.error(key, f"must be at least {minimum}, got {v}")
+        if choices is not None and v not in choices:
+            raise self.error(key, f"must be one of {', '.join(map(str, choices))}, got {v}")
+        return v
+
+    def string(self, key, default=_MISSING, choices=None):
+        v = self.raw(key, default)
+        if not isinstance(v, str):
+            raise self.error(key, f"expected a string, got {_show(v)}")
+        if choices is not None and v not in choices:
+            raise self.error(key, f"must be one of {', '.join(choices)}, got {v!r}")
+        return v
+
+    def strings(self, key, n=None, default=_MISSING):
+        v = self.raw(key, default)
+        if v is None:
+            return None
+        if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
+            raise self.error(key, f"expected a list of strings, got {_show(v)}")
+        if n is not None and len(v) != n:
+            raise self.error(key, f"expected {n} names, got {len(v)}")
+        return tuple(v)
+
+    def numbers(self, key, n=None, default=_MISSING):
+        v = self.raw(key, default)
+        if not isinstance(v, list) or not all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
+            raise self.error(key, f"expected a list of numbers, got {_show(v)}")
+        if n is not None and len(v) != n:
+            raise self.error(key, f"expected {n} numbers, got {len(v)}")
+        if not all(math.isfinite(x) for x in v):
+            raise self.error(key, "numbers must be finite")
+        return tuple(float(x) for x in v)
+
+    def table(self, key, default=_MISSING):
+        v = self.raw(key, default)
+        if v is None:
+            return None
+        return Section(self.file, self.path(key), v)
+
+    def tables(self, key, default=_MISSING):
+        v = self.raw(key, default)
+        if not isinstance(v, list):
+            raise self.error(key, f"expected an array of tables ([[{self.path(key)}]]), got {_show(v)}")
+        return [Section(self.file, f"{self.path(key)}[{i}]", x) for i, x in enumerate(v)]
+
+    def done(self):
+        """Reject keys nobody asked for (typos must not be silently ignored)."""
+        extra = sorted(set(self.data) - self.used)
+        if extra:
+            raise self.error(extra[0], f"unknown key {extra[0]!r}"
+                             + (f" (known here: {', '.join(sorted(self.used))})" if self.used else ""))
+
+
+def _show(v):
+    s = repr(v)
+    return f"{type(v).__name__} {s[:40]}"
+
+
+# ----------------------------------------------------------------- study objects
+@dataclass(frozen=True)
+class OutputSpec:
+    working_point: str
+    links: tuple                 # (a, b) point-name pairs
+    link_labels: tuple           # "a_b" as written
+    table_positions: int = 12
+    dense_positions: int = 360
+    analysis: str = "accelerations"
+    rocker: tuple | None = None  # (pivot, point): output rocker for theta, stroke, dwell
+    dwell_deg: float = 150.0
+
+
+@dataclass(frozen=True)
+class DynamicsCase:
+    name: str
+    phi_start: float        # rad
+    omega_start: float      # rad/s
+    M1: object              # Expression
+    damping: float          # b, N*m*s
+    t_end: float
+    dt: float
+    sample_dt: float
+
+
+@dataclass(frozen=True)
+class DynamicsSpec:
+    cases: tuple
+    method: str = "rk4"
+
+
+@dataclass(frozen=True)
+class Study:
+    path: Path
+    text: str
+    kind: str
+    name: str
+    title: str
+    mechanism: Mechanism
+    output: OutputSpec
+    dynamics: DynamicsSpec | None = None
+    sweep: object = None     # pipeline.sweep.SweepSpec for kind = "sweep"
+    extra: dict = field(default_factory=dict)
+
+
+KINDS = ("scene", "sweep")
+ANALYSES = ("positions", "velocities", "accelerations", "forces")
+
+
+def load_study(path) -> Study:
+    """Read and validate a study file."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise StudyError(path, "", "file not found") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise StudyError(path, "", f"cannot read: {e}") from None
+    return parse_study(text, path)
+
+
+def parse_study(text: str, path="<study>") -> Study:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise StudyError(path, "", f"not valid TOML: {e}") from None
+    root = Section(path, "", data)
+    head = root.table("study")
+    kind = head.string("kind", choices=KINDS)
+    name = head.string("name")
+    title = head.string("title", default=name)
+    head.done()
+    mech = parse_mechanism(root.table("mechanism"), name)
+    output = parse_output(root.table("output", default={}), mech)
+    mech = replace(mech, links=output.links)
+    dynamics = None
+    if root.has("dynamics"):
+        dynamics = parse_dynamics(root.table("dynamics"), mech)
+    sweep = None
+    if kind == "sweep":
+        from .sweep_spec import parse_sweep  # sweep studies have their own section reader
+        sweep = parse_sweep(root, mech, output)
+    elif root.has("sweep"):
+        raise root.error("sweep", "a [sweep] section needs study.kind = \"sweep\"")
+    root.done()
+    return Study(path=Path(path), text=text, kind=kind, name=name, title=title,
+                 mechanism=mech, output=output, dynamics=dynamics, sweep=sweep)
+
+
+# ----------------------------------------------------------------- mechanism
+GROUP_TYPES = ("RRR", "RRP", "RPR", "class3", "attach")
+
+
+def parse_mechanism(sec: Section, name: str) -> Mechanism:
+    fixed = {}
+    fx = sec.table("fixed")
+    for p in list(fx.data):
+        fixed[p] = fx.numbers(p, n=2)
+    fx.done()
+    known = set(fixed)
+    defined = {p: fx.path(p) for p in fixed}
+
+    def need(s, key, pname):
+        if pname not in known:
+            if pname in defined:
+                raise s.error(key, f"point {pname!r} is solved later ({defined[pname]}); "
+                                   "groups must come in solve order")
+            raise s.error(key, f"unknown point {pname!r}")
+
+    def define(s, key, pname):
+        if pname in defined:
+            raise s.error(key, f"point {pname!r} is defined twice (first at {defined[pname]})")
+        defined[pname] = s.path(key)
+        known.add(pname)
+
+    cs = sec.table("crank")
+    pivot = cs.string("pivot")
+    if pivot not in fixed:
+        raise cs.error("pivot", f"the crank pivot {pivot!r} must be a fixed point (mechanism.fixed)")
+    tip = cs.string("tip")
+    define(cs, "tip", tip)
+    crank = Crank(pivot=pivot, tip=tip, length=cs.number("length", positive=True),
+                  phiM0=math.radians(cs.number("phiM0", 0.0)),
+                  omega1=cs.number("omega1", nonzero=True),
+                  eps1=cs.number("eps1", 0.0),
+                  rot=cs.integer("rot", -1 if cs.data.get("omega1", 1) < 0 else 1, choices=(-1, 1)),
+                  phi0=math.radians(cs.number("phi0", 0.0)))
+    cs.done()
+
+    groups = []
+    names = set()
+    for g in sec.tables("groups"):
+        t = g.string("type", choices=GROUP_TYPES)
+        gname = g.string("name", "")
+        if gname:
+            if gname in names:
+                raise g.error("name", f"group name {gname!r} is used twice")
+            names.add(gname)
+
+        def pnt(key):
+            p = g.string(key)
+            need(g, key, p)
+            return p
+
+        def pair(key, optional=False):
+            v = g.strings(key, n=2, default=None if optional else _MISSING)
+            if v is None:
+                return None
+            for p in v:
+                need(g, key, p)
+            if v[0] == v[1]:
+                raise g.error(key, "a link needs two different points")
+            return v
+
+        def mode(key="W"):
+            return g.integer(key, choices=(-1, 1))
+
+        if t == "RRR":
+            a, c = pnt("A"), pnt("C")
+            b = g.string("B")
+            define(g, "B", b)
+            grp = RRR(a, c, b, g.number("L_AB", positive=True), g.number("L_CB", positive=True),
+                      mode(), gname)
+        elif t == "RRP":
+            a, gp = pnt("A"), pnt("guide_point")
+            link = pair("guide_link", optional=True)
+            b = g.string("B")
+            define(g, "B", b)
+            grp = RRP(a, b, gp, math.radians(g.number("guide_angle", 0.0)),
+                      g.number("L_AB", positive=True), mode(), link, gname)
+        elif t == "RPR":
+            blk, piv = pnt("block"), pnt("pivot")
+            end = g.string("guide_end")
+            define(g, "guide_end", end)
+            grp = RPR(blk, piv, end, g.number("guide_length", positive=True),
+                      g.number("offset", 0.0), mode(), gname)
+        elif t == "class3":
+            inp, p6, p7 = pnt("input"), pnt("pivot_4"), pnt("pivot_5")
+            joints = g.strings("joints", n=3)
+            for p in joints:
+                define(g, "joints", p)
+            start = g.numbers("start", n=2)
+            L = {k: g.number(k, positive=True) for k in ("L23", "L34", "L45", "L35", "L46", "L57")}
+            if not (L["L45"] < L["L34"] + L["L35"] and L["L34"] < L["L45"] + L["L35"]
+                    and L["L35"] < L["L34"] + L["L45"]):
+                raise g.error("L45", "the ternary link 3-4-5 is not a triangle "
+                                     f"(L34={L['L34']:g}, L45={L['L45']:g}, L35={L['L35']:g})")
+            grp = ClassIII(inp, p6, p7, joints, **L, a0=math.radians(start[0]),
+                           b0=math.radians(start[1]),
+                           phi_start=math.radians(g.number("phi_start", 0.0)),
+                           orientation=g.integer("orientation", 1, choices=(-1, 1)),
+                           name=gname or "triad")
+        else:  # attach
+            base = pnt("base")
+            along = pair("along", optional=True)
+            p = g.string("point")
+            define(g, "point", p)
+            grp = Attach(p, base, along, math.radians(g.number("angle", 0.0)),
+                         g.number("length", positive=True), gname)
+        g.done()
+        groups.append(grp)
+
+    bodies, slides, loads = [], [], []
+    body_names = {}
+    if sec.has("bodies"):
+        for b in sec.tables("bodies"):
+            bname = b.string("name")
+            if bname in body_names:
+                raise b.error("name", f"body name {bname!r} is used twice")
+            joints = b.strings("joints")
+            for p in joints:
+                need(b, "joints", p)
+            cm = b.table("com")
+            base = cm.string("base")
+            need(cm, "base", base)
+            along = cm.strings("along", n=2, default=None)
+            for p in along or ():
+                need(cm, "along", p)
+            com = CentreOfMass(base, along, cm.number("lS", 0.0),
+                               math.radians(cm.number("US", 0.0)))
+            cm.done()
+            turns = b.strings("turns_with", n=2, default=None)
+            for p in turns or ():
+                need(b, "turns_with", p)
+            body = Body(bname, joints, b.number("mass", positive=True),
+                        b.number("J_S", 0.0), com, turns)
+            if body.J_S < 0:
+                raise b.error("J_S", "must not be negative")
+            b.done()
+            body_names[bname] = b.path("name")
+            bodies.append(body)
+        _check_joints(sec, bodies, fixed)
+    if sec.has("slides"):
+        for s in sec.tables("slides"):
+            slider = s.string("slider")
+            guide = s.string("guide", "ground")
+            for key, v in (("slider", slider), ("guide", guide)):
+                if v != "ground" and v not in body_names:
+                    raise s.error(key, f"unknown body {v!r}")
+            along = s.strings("along", n=2, default=None)
+            for p in along or ():
+                need(s, "along", p)
+            slides.append(Slide(slider, None if guide == "ground" else guide,
+                                math.radians(s.number("angle", 0.0)), along))
+            s.done()
+    if sec.has("loads"):
+        from .expressions import parse_expression
+        for ld in sec.tables("loads"):
+            body = ld.string("body")
+            if body not in body_names:
+                raise ld.error("body", f"unknown body {body!r}")
+            point = ld.string("point", "")
+            if point:
+                need(ld, "point", point)
+            comp = {}
+            for key in ("fx", "fy", "moment"):
+                v = ld.raw(key, 0.0)
+                comp[key] = parse_expression(v, f"{ld.file}: {ld.path(key)}")
+            if point == "" and not (comp["fx"].is_constant and comp["fx"].evaluate(0.0) == 0
+                                    and comp["fy"].is_constant and comp["fy"].evaluate(0.0) == 0):
+                raise ld.error("point", "a load with a force needs the point it acts at")
+            loads.append(Load(body, point or None, comp["fx"], comp["fy"], comp["moment"],
+                              where=f"{ld.file}: {ld.where}"))
+            ld.done()
+    gravity = sec.number("gravity", 9.81)
+    sec.done()
+    return Mechanism(name=name, fixed=fixed, crank=crank, groups=tuple(groups),
+                     bodies=tuple(bodies), slides=tuple(slides), loads=tuple(loads),
+                     gravity=gravity)
+
+
+def _check_joints(sec, bodies, fixed):
+    """Every point shared by bodies is a revolute joint of exactly two of them
+    (or of one body and the ground)."""
+    owners = {}
+    for b in bodies:
+        for p in b.joints:
+            owners.setdefault(p, []).append(b.name)
+    for p, who in owners.items():
+        n = len(who) + (1 if p in fixed else 0)
+        if n > 2:
+            raise sec.error("bodies", f"point {p!r} joins {n} links ({', '.join(who)}"
+                            + (", ground" if p in fixed else "") + "); only binary joints are "
+                            "supported: split it into two points")
+
+
+def parse_link(s: Section, key, label, known):
+    try:
+        a, b = label.split("_")
+    except ValueError:
+        raise s.error(key, f"link {label!r} must be written a_b (from point Pa to point Pb)") from None
+    pa = a if a in known else f"P{a}"
+    pb = b if b in known else f"P{b}"
+    for p in (pa, pb):
+        if p not in known:
+            raise s.error(key, f"link {label!r}: unknown point {p!r}")
+    return pa, pb
+
+
+def parse_output(sec: Section, mech: Mechanism) -> OutputSpec:
+    known = set(mech.fixed) | {mech.crank.tip}
+    for g in mech.groups:
+        known.update(g.writes())
+    labels = sec.strings("links", default=[]) or ()
+    links = tuple(parse_link(sec, "links", lab, known) for lab in labels)
+    wp = sec.string("working_point", mech.groups[-1].writes()[-1] if mech.groups else mech.crank.tip)
+    if wp not in known:
+        raise sec.error("working_point", f"unknown point {wp!r}")
+    rocker = None
+    if sec.has("rocker"):
+        rocker = sec.strings("rocker", n=2)
+        for p in rocker:
+            if p not in known:
+                raise sec.error("rocker", f"unknown point {p!r}")
+    default = "forces" if mech.bodies else "accelerations"
+    analysis = sec.string("analysis", default, choices=ANALYSES)
+    if analysis == "forces" and not mech.bodies:
+        raise sec.error("analysis", "force analysis needs mass data: declare [[mechanism.bodies]]")
+    out = OutputSpec(working_point=wp, links=links, link_labels=tuple(labels),
+                     table_positions=sec.integer("table_positions", 12, minimum=2),
+                     dense_positions=sec.integer("dense_positions", 360, minimum=4),
+                     analysis=analysis, rocker=rocker,
+                     dwell_deg=sec.number("dwell", 150.0, positive=True))
+    if not out.dwell_deg < 360:
+        raise sec.error("dwell", "must be less than 360 deg")
+    sec.done()
+    return out
+
+
+def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
+    from .expressions import parse_expression
+    if not mech.bodies:
+        raise sec.error("", "crank dynamics needs mass data: declare [[mechanism.bodies]]")
+    method = sec.string("method", "rk4", choices=("rk4", "dop853"))
+    cases = []
+    names = set()
+    for c in sec.tables("cases"):
+        name = c.string("name")
+        if name in names or not name.replace("_", "").isalnum():
+            raise c.error("name", f"case name {name!r} must be unique and made of letters, "
+                                  "digits and _")
+        names.add(name)
+        t_end = c.number("t_end", 10.0, positive=True)
+        dt = c.number("dt", 1e-3, positive=True)
+        sample = c.number("sample_dt", 0.01, positive=True)
+        if dt > sample:
+            raise c.error("dt", f"the integration step {dt:g} s exceeds the sampling step {sample:g} s")
+        cases.append(DynamicsCase(
+            name=name, phi_start=math.radians(c.number("phi_start")),
+            omega_start=c.number("omega_start", 0.0),
+            M1=parse_expression(c.raw("M1", 0.0), f"{c.file}: {c.path('M1')}"),
+            damping=c.number("damping", 0.0), t_end=t_end, dt=dt, sample_dt=sample))
+        if cases[-1].damping < 0:
+            raise c.error("damping", "must not be negative")
+        c.done()
+    sec.done()
+    return DynamicsSpec(cases=tuple(cases), method=method)

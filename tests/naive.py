@@ -1,0 +1,697 @@
+"""Naive, slow, obviously-correct reference implementations (test oracle).
+
+This module is deliberately independent of the ``pipeline`` package: it never
+imports it and uses none of its formulas.  Positions are found with a generic
+root finder (``scipy.optimize.fsolve``) on the plain distance / closure
+equations, then polished with a few Newton steps whose Jacobian comes from the
+complex-step derivative of the same residuals.  All derivatives with respect
+to the crank angle (the "analogs") come from 8th-order central finite
+differences of the position solver, never from an analytic velocity formula.
+
+Conventions (DOMAIN.md section 2)
+---------------------------------
+* angles in radians, lengths in mm, forces in N, moments in N*m;
+* analogs are derivatives with respect to the generalized coordinate phi1
+  (the crank angle); the crank's absolute angle is phi1 + phiM0;
+* ``rot(r, alpha, L)``: r rotated by alpha about +Z, rescaled to length L;
+* a link a_b has the angle atan2(Pb - Pa);
+* RRR dyad joining known A to known C through A-B and C-B, mode W:
+  C->B = rot(A - C, -W*U, L_CB) with U in [0, pi].  Hence the sign of
+  cross(A - C, B - C) is -W; W = -1 <=> cross(A - C, B - C) > 0.
+
+Kinetostatics sign convention
+-----------------------------
+Every joint is named as an ordered pair (first body, second body), the first
+being the ground or the lower-numbered link.  The reaction R_k = (Rx, Ry)
+returned for the joint is the force that the FIRST body exerts on the SECOND;
+the first body receives -R_k.  ``M_bal`` is the moment (about +Z, N*m) that
+the driver applies to the crank.  Per-link ``F`` is the resultant of all
+applied and inertia forces of the link (gravity + (-m a_S) + external
+forces), reduced to the centre of mass S; ``M`` is the resultant moment about
+S (-J_S eps + moments of external forces about S).  With these, the virtual
+power identity M_bal*omega1 + sum(F . v_S + M * omega) = 0 holds.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+
+import numpy as np
+from scipy.optimize import fsolve
+
+DEG = math.pi / 180.0
+G = 9.81
+
+# ---------------------------------------------------------------------------
+# small geometric helpers
+# ---------------------------------------------------------------------------
+
+
+def e(angle):
+    """Unit vector at ``angle`` (works for complex angles too)."""
+    return np.array([np.cos(angle), np.sin(angle)])
+
+
+def rot(r, alpha, length):
+    """rot(r, alpha, L): r rotated by alpha about +Z and rescaled to length L."""
+    r = np.asarray(r, dtype=float)
+    c, s = math.cos(alpha), math.sin(alpha)
+    v = np.array([c * r[0] - s * r[1], s * r[0] + c * r[1]])
+    return v * (length / math.hypot(v[0], v[1]))
+
+
+def cross(u, v):
+    return u[0] * v[1] - u[1] * v[0]
+
+
+def angle_of(p_from, p_to):
+    d = np.asarray(p_to) - np.asarray(p_from)
+    return math.atan2(d[1], d[0])
+
+
+def _wrap(x):
+    """Wrap an angle difference into (-pi, pi]."""
+    return (x + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def _complex_step_jacobian(fun, x, h=1e-30):
+    """Jacobian of a real-analytic vector function by the complex step."""
+    x = np.asarray(x, dtype=float)
+    f0 = np.asarray(fun(x.astype(complex)))
+    jac = np.zeros((f0.size, x.size))
+    for j in range(x.size):
+        xc = x.astype(complex)
+        xc[j] += 1j * h
+        jac[:, j] = np.imag(np.asarray(fun(xc))) / h
+    return jac
+
+
+def _solve(fun, guess, polish=3, tol=1e-9):
+    """fsolve (xtol 1e-14) followed by Newton polish steps; returns x."""
+    x, _info, ier, msg = fsolve(lambda z: np.real(fun(z)), np.asarray(guess, float),
+                                xtol=1e-14, full_output=True)
+    for _ in range(polish):
+        jac = _complex_step_jacobian(fun, x)
+        res = np.real(fun(x))
+        x = x - np.linalg.solve(jac, res)
+    res = np.abs(np.real(fun(x))).max()
+    if not np.isfinite(res) or res > tol:
+        raise ValueError(f"no solution (residual {res:.3e}; fsolve: {msg})")
+    return x
+
+
+def solve_rrr(A, C, L_AB, L_CB, W=-1):
+    """Point B of an RRR dyad (A-B length L_AB, C-B length L_CB), mode W.
+
+    Solved with fsolve on the two distance equations; the branch is the one
+    where sign(cross(A - C, B - C)) == -W (see module docstring).
+    """
+    A = np.asarray(A, float)
+    C = np.asarray(C, float)
+
+    def res(B):
+        return np.array([np.sqrt((B[0] - A[0]) ** 2 + (B[1] - A[1]) ** 2) - L_AB,
+                         np.sqrt((B[0] - C[0]) ** 2 + (B[1] - C[1]) ** 2) - L_CB])
+
+    d = A - C
+    u = d / np.hypot(*d)
+    n = np.array([-u[1], u[0]])           # +90 deg from C->A
+    want = -W
+    guess = C + L_CB * (0.3 * u + want * 0.95 * n)
+    B = _solve(res, guess)
+    if np.sign(cross(A - C, B - C)) != want:
+        # reflect across line CA and polish again
+        w = B - C
+        w_ref = 2.0 * np.dot(w, u) * u - w
+        B = _solve(res, C + w_ref)
+    if np.sign(cross(A - C, B - C)) != want:
+        raise ValueError("RRR dyad: requested branch not found")
+    return B
+
+
+# ---------------------------------------------------------------------------
+# Mechanism A (DOMAIN.md section 4)
+# ---------------------------------------------------------------------------
+
+A_DATA = dict(
+    P1=np.array([0.0, 0.0]), P4=np.array([26.0, 98.7]),
+    P6=np.array([105.3, 58.4]), P8=np.array([46.0, 533.0]),
+    L12=14.9, L23=105.0, L43=31.0, L35=61.0, L65=13.0, L57=423.0,
+    L87=115.0, L89=136.8, U789=-84.0 * DEG, phiM0=181.84 * DEG,
+    omega1=-97.2,
+)
+A_LINKS = ["1_2", "2_3", "4_3", "3_5", "6_5", "5_7", "8_7", "8_9"]
+
+
+def mech_a_positions(phi1):
+    """Positions P1..P9 of mechanism A at crank angle phi1 (rad), all W = -1."""
+    d = A_DATA
+    P1, P4, P6, P8 = d["P1"], d["P4"], d["P6"], d["P8"]
+    P2 = P1 + d["L12"] * e(phi1 + d["phiM0"])
+    P3 = solve_rrr(P2, P4, d["L23"], d["L43"], W=-1)
+    P5 = solve_rrr(P3, P6, d["L35"], d["L65"], W=-1)
+    P7 = solve_rrr(P5, P8, d["L57"], d["L87"], W=-1)
+    P9 = P8 + rot(P7 - P8, d["U789"], d["L89"])
+    return {"P1": P1.copy(), "P2": P2, "P3": P3, "P4": P4.copy(), "P5": P5,
+            "P6": P6.copy(), "P7": P7, "P8": P8.copy(), "P9": P9}
+
+
+# ---------------------------------------------------------------------------
+# Mechanism B (DOMAIN.md section 5)
+# ---------------------------------------------------------------------------
+
+B_DATA = dict(
+    P1=np.array([0.0, 0.0]), P6=np.array([195.0, 226.0]),
+    P7=np.array([46.0, 533.0]),
+    L12=50.0, L23=272.5, L34=81.0, L45=104.5, L35=174.0, L46=104.5,
+    L57=261.0, L78=136.8, U578=-25.0 * DEG, phiM0=173.0 * DEG,
+    omega1=-94.4,
+    guess0=(44.006 * DEG, 128.709 * DEG),
+)
+B_DATA["U435"] = math.acos((B_DATA["L34"] ** 2 + B_DATA["L35"] ** 2 - B_DATA["L45"] ** 2)
+                           / (2.0 * B_DATA["L34"] * B_DATA["L35"]))
+B_LINKS = ["1_2", "2_3", "3_4", "3_5", "4_5", "6_4", "7_5", "7_8"]
+
+# mass data: (base point, tip point, lS mm, US rad, m kg, J kg m^2, angle link)
+B_MASS = {
+    "crank": ("P1", "P2", 26.21, 0.0, 0.91, 0.001189631),
+    "lead_2_3": ("P2", "P3", 122.54, 0.0, 0.73, 0.008434849),
+    "ternary_3_4_5": ("P3", "P4", 85.01, 15.13 * DEG, 0.91, 0.004456758),
+    "lead_4_6": ("P6", "P4", 40.99, 0.0, 1.64, 0.005376871),
+    "rocker_5_7_8": ("P7", "P5", 125.30, 37.56 * DEG, 1.07, 0.012826014),
+}
+
+
+def _b_closure_points(ab, phi1, d=B_DATA):
+    a, b = ab[0], ab[1]
+    P2 = d["P1"] + d["L12"] * e(phi1 + d["phiM0"])
+    P3 = P2 + d["L23"] * e(a)
+    P4 = P3 + d["L34"] * e(b)
+    P5 = P3 + d["L35"] * e(b + d["U435"])
+    return P2, P3, P4, P5
+
+
+def _b_residual(ab, phi1):
+    _P2, _P3, P4, P5 = _b_closure_points(ab, phi1)
+    d4 = P4 - B_DATA["P6"]
+    d5 = P5 - B_DATA["P7"]
+    return np.array([np.sqrt(d4[0] ** 2 + d4[1] ** 2) - B_DATA["L46"],
+                     np.sqrt(d5[0] ** 2 + d5[1] ** 2) - B_DATA["L57"]])
+
+
+def _b_solve(phi1, guess):
+    return _solve(lambda ab: _b_residual(ab, phi1), guess)
+
+
+def _b_points(phi1, ab):
+    d = B_DATA
+    P2, P3, P4, P5 = _b_closure_points(ab, phi1)
+    P8 = d["P7"] + rot(P5 - d["P7"], d["U578"], d["L78"])
+    return {"P1": d["P1"].copy(), "P2": P2, "P3": P3, "P4": P4, "P5": P5,
+            "P6": d["P6"].copy(), "P7": d["P7"].copy(), "P8": P8}
+
+
+def _continue_b(phi_from, phi_to, ab, max_step=1.0 * DEG):
+    """Continuation of the class III solution from phi_from to phi_to."""
+    nsub = max(1, int(math.ceil(abs(phi_to - phi_from) / max_step - 1e-12)))
+    for k in range(1, nsub + 1):
+        ab = _b_solve(phi_from + (phi_to - phi_from) * k / nsub, ab)
+    return ab
+
+
+def mech_b_positions(phi1, guess=None):
+    """Positions P1..P8 of mechanism B and the solution (a, b) in rad.
+
+    ``guess``: (a, b) warm start in rad.  If None, the branch of DOMAIN.md
+    (a = 44.006 deg, b = 128.709 deg at phi1 = 0) is used: solved at phi1 = 0
+    from that guess and then continued to phi1 in substeps <= 1 deg (a plain
+    solve from the phi1 = 0 guess at a far crank angle could switch branch).
+    """
+    if guess is None:
+        ab0 = _b_solve(0.0, np.array(B_DATA["guess0"]))
+        ab = _continue_b(0.0, phi1, ab0)
+    else:
+        ab = _b_solve(phi1, np.asarray(guess, float))
+    return _b_points(phi1, ab), (float(ab[0]), float(ab[1]))
+
+
+def _b_points_with_S(phi1, guess=None):
+    pts, ab = mech_b_positions(phi1, guess)
+    for name, (base, tip, lS, US, _m, _J) in B_MASS.items():
+        pts["S_" + name] = pts[base] + rot(pts[tip] - pts[base], US, lS)
+    return pts, ab
+
+
+# ---------------------------------------------------------------------------
+# continuation helper
+# ---------------------------------------------------------------------------
+
+
+def revolution(pos_fn, phis, guess=None, max_step=1.0 * DEG):
+    """Evaluate ``pos_fn`` along the crank angles ``phis`` (rad).
+
+    If ``pos_fn`` accepts a ``guess`` argument it is taken to return
+    ``(points, state)``; the state of each solve warm-starts the next one and
+    the path between consecutive angles is walked in substeps of at most
+    ``max_step`` (1 deg).  The first angle is solved from ``guess`` (None lets
+    the position function pick its default branch).  Functions without a
+    ``guess`` parameter (closed branch selection, e.g. mechanism A) are simply
+    called at each angle.  Returns the list of results at the requested
+    angles (substeps are discarded).
+    """
+    phis = [float(p) for p in phis]
+    takes_guess = "guess" in inspect.signature(pos_fn).parameters
+    out = []
+    if not takes_guess:
+        return [pos_fn(p) for p in phis]
+    prev_phi, state = None, guess
+    for p in phis:
+        if prev_phi is not None:
+            nsub = max(1, int(math.ceil(abs(p - prev_phi) / max_step - 1e-12)))
+            for k in range(1, nsub):
+                _pts, state = pos_fn(prev_phi + (p - prev_phi) * k / nsub, guess=state)
+        res = pos_fn(p, guess=state)
+        state = res[1]
+        out.append(res)
+        prev_phi = p
+    return out
+
+
+# ---------------------------------------------------------------------------
+# finite-difference analogs
+# ---------------------------------------------------------------------------
+
+# 8th-order central differences, offsets 1..4
+_W1 = np.array([4.0 / 5.0, -1.0 / 5.0, 4.0 / 105.0, -1.0 / 280.0])
+_W2C = -205.0 / 72.0
+_W2 = np.array([8.0 / 5.0, -1.0 / 5.0, 8.0 / 315.0, -1.0 / 560.0])
+
+DEFAULT_H = 0.02  # rad; truncation ~h^8, rounding ~1e-13/h^2 (see self-check)
+
+
+def fd_analogs(points_at, phi1, links=(), h=DEFAULT_H):
+    """Positions, first and second analogs of all points, and link angles.
+
+    ``points_at(phi)`` returns a dict name -> np.ndarray(2).  The stencil is
+    phi1 + k*h, k = -4..4.  Link angles atan2(Pb - Pa) are unwrapped about
+    their value at phi1 before differencing.
+    Returns dict with keys "pos", "d1", "d2" (point dicts) and "ang",
+    "ang_d1", "ang_d2" (link dicts).
+    """
+    offs = list(range(-4, 5))
+    samples = {k: points_at(phi1 + k * h) for k in offs}
+    c = samples[0]
+    out = {"pos": {}, "d1": {}, "d2": {}, "ang": {}, "ang_d1": {}, "ang_d2": {}}
+    for name in c:
+        f = {k: np.asarray(samples[k][name], float) for k in offs}
+        d1 = sum(_W1[k - 1] * (f[k] - f[-k]) for k in range(1, 5)) / h
+        d2 = (_W2C * f[0] + sum(_W2[k - 1] * (f[k] + f[-k]) for k in range(1, 5))) / h ** 2
+        out["pos"][name] = f[0].copy()
+        out["d1"][name] = d1
+        out["d2"][name] = d2
+    for link in links:
+        a, b = link.split("_")
+        pa, pb = "P" + a, "P" + b
+        th0 = angle_of(c[pa], c[pb])
+        th = {k: th0 + _wrap(angle_of(samples[k][pa], samples[k][pb]) - th0) for k in offs}
+        out["ang"][link] = th0
+        out["ang_d1"][link] = sum(_W1[k - 1] * (th[k] - th[-k]) for k in range(1, 5)) / h
+        out["ang_d2"][link] = (_W2C * th[0]
+                               + sum(_W2[k - 1] * (th[k] + th[-k]) for k in range(1, 5))) / h ** 2
+    return out
+
+
+def _chained_b_sampler(phi1, guess, h, with_S=False):
+    """Mechanism B sampler for the stencil: solve at phi1 (from guess), then
+    walk outward one stencil step at a time, warm-starting each solve from the
+    neighbour nearer the centre."""
+    fn = _b_points_with_S if with_S else mech_b_positions
+    cache = {}
+    pts0, ab0 = fn(phi1, guess)
+    cache[0] = pts0
+    for sgn in (1, -1):
+        ab = ab0
+        for k in range(1, 5):
+            pts, ab = fn(phi1 + sgn * k * h, ab)
+            cache[sgn * k] = pts
+
+    def points_at(phi):
+        k = int(round((phi - phi1) / h))
+        return cache[k]
+
+    return points_at, ab0
+
+
+def mech_a_analogs(phi1, h=DEFAULT_H, links=A_LINKS):
+    """FD analogs of mechanism A at phi1 (see ``fd_analogs`` for the layout)."""
+    return fd_analogs(mech_a_positions, phi1, links, h)
+
+
+def mech_b_analogs(phi1, guess=None, h=DEFAULT_H, links=B_LINKS, with_S=False):
+    """FD analogs of mechanism B at phi1; result also has "ab" = (a, b)."""
+    sampler, ab0 = _chained_b_sampler(phi1, guess, h, with_S)
+    out = fd_analogs(sampler, phi1, links, h)
+    out["ab"] = ab0
+    return out
+
+
+# ---------------------------------------------------------------------------
+# Mechanism D (DOMAIN.md section 8)
+# ---------------------------------------------------------------------------
+
+D_DATA = dict(A=np.array([0.0, 0.0]), D=np.array([38.0, 0.0]),
+              LAB=15.0, LBC=41.0, LDC=40.0, LDE=60.0, phiM0=0.0, omega1=60.0)
+
+
+def _d_all_C(B):
+    """Both intersection points C of |C-B| = LBC, |C-D| = LDC (by fsolve)."""
+    Dp = D_DATA["D"]
+    sols = []
+    for W in (-1, 1):
+        sols.append(solve_rrr(B, Dp, D_DATA["LBC"], D_DATA["LDC"], W=W))
+    return sols
+
+
+def _d_branch_sign():
+    """sign of cross(B - D, C - D) of the open configuration: C above AD at 90 deg."""
+    B = D_DATA["A"] + D_DATA["LAB"] * e(90.0 * DEG)
+    Cs = _d_all_C(B)
+    above = [C for C in Cs if C[1] > 0.0]
+    assert len(above) == 1, "exactly one assembly must have C above AD at 90 deg"
+    C = above[0]
+    return int(np.sign(cross(B - D_DATA["D"], C - D_DATA["D"])))
+
+
+D_BRANCH = _d_branch_sign()          # cross(B - D, C - D) sign (= -W in solve_rrr)
+D_LINKS = ["1_2", "2_3", "4_3"]      # crank AB, coupler BC, rocker DC
+
+
+def mech_d_positions(phi1):
+    """Four-bar D: P1 = A, P2 = B, P3 = C, P4 = D, P5 = E (crank angle = phi1)."""
+    d = D_DATA
+    A, Dp = d["A"], d["D"]
+    B = A + d["LAB"] * e(phi1 + d["phiM0"])
+    C = solve_rrr(B, Dp, d["LBC"], d["LDC"], W=-D_BRANCH)
+    E = Dp + (C - Dp) * (d["LDE"] / d["LDC"])
+    return {"P1": A.copy(), "P2": B, "P3": C, "P4": Dp.copy(), "P5": E}
+
+
+D_MASS = {  # base, tip, distance of S from base along base->tip, m, J
+    "crank": ("P1", "P2", 5.0, 0.4, 2e-5),
+    "coupler": ("P2", "P3", 41.0 / 2.0, 0.6, 1e-4),
+    "rocker": ("P4", "P5", 25.0, 0.8, 2.5e-4),
+}
+
+
+def _d_points_with_S(phi1):
+    pts = mech_d_positions(phi1)
+    for name, (base, tip, lS, _m, _J) in D_MASS.items():
+        pts["S_" + name] = pts[base] + rot(pts[tip] - pts[base], 0.0, lS)
+    return pts
+
+
+def mech_d_analogs(phi1, h=DEFAULT_H, links=D_LINKS):
+    return fd_analogs(mech_d_positions, phi1, links, h)
+
+
+# ---------------------------------------------------------------------------
+# Mechanism C (DOMAIN.md section 7)
+# ---------------------------------------------------------------------------
+
+C_DATA = dict(l1=16.3, l2=44.2, P5=np.array([11.7, 35.69]), L54=55.0)
+C_MASS = {  # m kg, J_S kg m^2, angle link of the body
+    "S1": (0.200, 325e-6, "1_2"),
+    "S2": (0.055, 70e-6, "2_3"),
+    "S3": (0.100, 0.0, None),
+    "S4": (0.020, 25e-6, "5_4"),   # the block turns with the coulisse
+    "S5": (0.060, 50e-6, "5_4"),
+}
+C_LINKS = ["1_2", "2_3", "5_4"]
+
+
+def mech_c_positions(phi1):
+    """Mechanism C: (points dict P1..P5, P7, S1..S5, coulisse angle of P5->P4)."""
+    d = C_DATA
+    l1, l2 = d["l1"], d["l2"]
+    P1 = np.array([0.0, 0.0])
+    P2 = P1 + l1 * np.array([math.cos(phi1), math.sin(phi1)])
+    P3 = np.array([0.0, l1 * math.sin(phi1) - math.sqrt(l2 ** 2 - (l1 * math.cos(phi1)) ** 2)])
+    P4 = P2 + rot(P3 - P2, -90.0 * DEG, 10.0)
+    P5 = d["P5"].copy()
+    P7 = P5 + rot(P4 - P5, 0.0, d["L54"])
+    S1 = P1 + rot(P2 - P1, 180.0 * DEG, 5.0)
+    S2 = P2 + rot(P3 - P2, 30.0 * DEG, 10.0)
+    S3 = P3 + np.array([0.0, 10.0])
+    S4 = P4.copy()
+    S5 = P5 + rot(P4 - P5, 45.0 * DEG, 15.0)
+    pts = {"P1": P1, "P2": P2, "P3": P3, "P4": P4, "P5": P5, "P7": P7,
+           "S1": S1, "S2": S2, "S3": S3, "S4": S4, "S5": S5}
+    return pts, angle_of(P5, P4)
+
+
+def mech_c_analogs(phi1, h=DEFAULT_H, links=C_LINKS):
+    return fd_analogs(lambda p: mech_c_positions(p)[0], phi1, links, h)
+
+
+def naive_c_lagrange_terms(phi1, M1=0.025, h=DEFAULT_H):
+    """Reduced inertia J (kg m^2), (1/2) dJ/dphi, generalized force Q (N m)."""
+    an = mech_c_analogs(phi1, h)
+    J = 0.0
+    halfdJ = 0.0
+    Q = M1
+    for s, (m, Js, link) in C_MASS.items():
+        s1 = an["d1"][s] / 1000.0
+        s2 = an["d2"][s] / 1000.0
+        w1 = an["ang_d1"][link] if link else 0.0
+        w2 = an["ang_d2"][link] if link else 0.0
+        J += Js * w1 ** 2 + m * float(s1 @ s1)
+        halfdJ += Js * w1 * w2 + m * float(s1 @ s2)
+        Q += float(np.array([0.0, -m * G]) @ s1)
+    return J, halfdJ, Q
+
+
+# ---------------------------------------------------------------------------
+# naive kinetostatics: one dense linear system
+# ---------------------------------------------------------------------------
+
+
+def _kinetostatics(bodies, joints, omega1, eps1):
+    """Generic assembly.
+
+    bodies: list of dicts with keys name, S (m), aS (m/s^2), vS (m/s), m, J,
+            omega, eps, ext (list of (point m, force N)), crank (bool).
+    joints: list of (name, first body or None for ground, second body,
+            point (m)).  R = force of first on second.
+    """
+    nb = len(bodies)
+    nj = len(joints)
+    nu = 2 * nj + 1
+    idx = {b["name"]: i for i, b in enumerate(bodies)}
+    Amat = np.zeros((3 * nb, nu))
+    rhs = np.zeros(3 * nb)
+    F_all, M_all = {}, {}
+    for b in bodies:
+        i = idx[b["name"]]
+        F = b["m"] * (np.array([0.0, -G]) - b["aS"])
+        M = -b["J"] * b["eps"]
+        for (pt, f) in b["ext"]:
+            F = F + f
+            M += cross(pt - b["S"], f)
+        F_all[b["name"]] = F
+        M_all[b["name"]] = M
+        rhs[3 * i: 3 * i + 2] = -F
+        rhs[3 * i + 2] = -M
+        if b["crank"]:
+            Amat[3 * i + 2, 2 * nj] = 1.0
+    for j, (_name, first, second, pt) in enumerate(joints):
+        for body, sgn in ((first, -1.0), (second, 1.0)):
+            if body is None:
+                continue
+            i = idx[body]
+            r = pt - bodies[i]["S"]
+            Amat[3 * i, 2 * j] += sgn
+            Amat[3 * i + 1, 2 * j + 1] += sgn
+            Amat[3 * i + 2, 2 * j] += -sgn * r[1]
+            Amat[3 * i + 2, 2 * j + 1] += sgn * r[0]
+    x = np.linalg.solve(Amat, rhs)
+    out = {name: x[2 * j: 2 * j + 2].copy() for j, (name, *_r) in enumerate(joints)}
+    out["M_bal"] = float(x[2 * nj])
+    out["F"] = F_all
+    out["M"] = M_all
+    out["v_S"] = {b["name"]: b["vS"] for b in bodies}
+    out["omega"] = {b["name"]: b["omega"] for b in bodies}
+    out["omega1"] = omega1
+    out["eps1"] = eps1
+    return out
+
+
+def virtual_power_residual(res):
+    """M_bal*omega1 + sum(F . v_S + M*omega) and a scale for it."""
+    total = res["M_bal"] * res["omega1"]
+    scale = abs(total)
+    for name in res["F"]:
+        p1 = float(res["F"][name] @ res["v_S"][name])
+        p2 = res["M"][name] * res["omega"][name]
+        total += p1 + p2
+        scale = max(scale, abs(p1), abs(p2))
+    return total, scale
+
+
+def naive_forces_b(phi1, omega1=-94.4, eps1=0.0, guess=None, h=DEFAULT_H):
+    """Reactions R1..R7 (N; force of first-named body on second), M_bal (N m)
+    of mechanism B at phi1, plus per-link F, M, v_S, omega.
+
+    Joints: R1 ground->crank (P1), R2 crank->lead 2-3 (P2), R3 lead 2-3->
+    ternary (P3), R4 ternary->lead 4-6 (P4), R5 ternary->rocker (P5),
+    R6 ground->lead 4-6 (P6), R7 ground->rocker (P7).
+    """
+    an = mech_b_analogs(phi1, guess=guess, h=h, with_S=True,
+                        links=["1_2", "2_3", "3_4", "6_4", "7_5"])
+    link_of = {"crank": "1_2", "lead_2_3": "2_3", "ternary_3_4_5": "3_4",
+               "lead_4_6": "6_4", "rocker_5_7_8": "7_5"}
+    bodies = []
+    for name, (_b, _t, _lS, _US, m, J) in B_MASS.items():
+        s = "S_" + name
+        lk = link_of[name]
+        bodies.append(dict(
+            name=name, m=m, J=J, ext=[], crank=(name == "crank"),
+            S=an["pos"][s] / 1000.0,
+            vS=an["d1"][s] / 1000.0 * omega1,
+            aS=(an["d2"][s] * omega1 ** 2 + an["d1"][s] * eps1) / 1000.0,
+            omega=an["ang_d1"][lk] * omega1,
+            eps=an["ang_d2"][lk] * omega1 ** 2 + an["ang_d1"][lk] * eps1,
+        ))
+    P = {k: an["pos"][k] / 1000.0 for k in ("P1", "P2", "P3", "P4", "P5", "P6", "P7")}
+    joints = [
+        ("R1", None, "crank", P["P1"]),
+        ("R2", "crank", "lead_2_3", P["P2"]),
+        ("R3", "lead_2_3", "ternary_3_4_5", P["P3"]),
+        ("R4", "ternary_3_4_5", "lead_4_6", P["P4"]),
+        ("R5", "ternary_3_4_5", "rocker_5_7_8", P["P5"]),
+        ("R6", None, "lead_4_6", P["P6"]),
+        ("R7", None, "rocker_5_7_8", P["P7"]),
+    ]
+    out = _kinetostatics(bodies, joints, omega1, eps1)
+    out["ab"] = an["ab"]
+    return out
+
+
+def naive_forces_d(phi1, omega1=60.0, eps1=0.0, h=DEFAULT_H):
+    """Reactions R1..R4 (N; force of first-named body on second) and M_bal of
+    the four-bar D.  R1 ground->crank (A), R2 crank->coupler (B),
+    R3 coupler->rocker (C), R4 ground->rocker (D).  Load at E on the rocker:
+    (0, -150*(1 + 0.2*sin(2*phi1))) N."""
+    an = fd_analogs(_d_points_with_S, phi1, D_LINKS, h)
+    link_of = {"crank": "1_2", "coupler": "2_3", "rocker": "4_3"}
+    E = an["pos"]["P5"] / 1000.0
+    fE = np.array([0.0, -150.0 * (1.0 + 0.2 * math.sin(2.0 * phi1))])
+    bodies = []
+    for name, (_b, _t, _lS, m, J) in D_MASS.items():
+        s = "S_" + name
+        lk = link_of[name]
+        bodies.append(dict(
+            name=name, m=m, J=J, crank=(name == "crank"),
+            ext=[(E, fE)] if name == "rocker" else [],
+            S=an["pos"][s] / 1000.0,
+            vS=an["d1"][s] / 1000.0 * omega1,
+            aS=(an["d2"][s] * omega1 ** 2 + an["d1"][s] * eps1) / 1000.0,
+            omega=an["ang_d1"][lk] * omega1,
+            eps=an["ang_d2"][lk] * omega1 ** 2 + an["ang_d1"][lk] * eps1,
+        ))
+    P = {k: an["pos"][k] / 1000.0 for k in ("P1", "P2", "P3", "P4")}
+    joints = [
+        ("R1", None, "crank", P["P1"]),
+        ("R2", "crank", "coupler", P["P2"]),
+        ("R3", "coupler", "rocker", P["P3"]),
+        ("R4", None, "rocker", P["P4"]),
+    ]
+    return _kinetostatics(bodies, joints, omega1, eps1)
+
+
+# ---------------------------------------------------------------------------
+# dwell error, margin (DOMAIN.md section 9)
+# ---------------------------------------------------------------------------
+
+
+def naive_dwell_error(theta, delta_deg=150.0):
+    """Brute force: w = round(Delta*n/360) intervals, w+1 cyclic samples, every
+    start tried.  Returns (error, best_start_index)."""
+    theta = [float(t) for t in theta]
+    n = len(theta)
+    w = int(round(delta_deg * n / 360.0))
+    full = max(theta) - min(theta)
+    best, best_k = math.inf, -1
+    for k in range(n):
+        window = [theta[(k + j) % n] for j in range(w + 1)]
+        err = (max(window) - min(window)) / full
+        if err < best:
+            best, best_k = err, k
+    return best, best_k
+
+
+def _unwrap_list(angles):
+    out = [angles[0]]
+    for a in angles[1:]:
+        out.append(out[-1] + _wrap(a - out[-1]))
+    return out
+
+
+def mech_b_rocker_angles(n=720):
+    phis = [-k * 2.0 * math.pi / n for k in range(n)]
+    res = revolution(mech_b_positions, phis)
+    return _unwrap_list([angle_of(p["P7"], p["P5"]) for p, _ab in res]), res
+
+
+def mech_a_rocker_angles(n=720):
+    phis = [-k * 2.0 * math.pi / n for k in range(n)]
+    res = revolution(mech_a_positions, phis)
+    return _unwrap_list([angle_of(p["P8"], p["P7"]) for p in res])
+
+
+def naive_mech_b_dwell(n=720, delta_deg=150.0):
+    theta, _ = mech_b_rocker_angles(n)
+    return naive_dwell_error(theta, delta_deg)
+
+
+def naive_mech_a_dwell(n=720, delta_deg=150.0):
+    return naive_dwell_error(mech_a_rocker_angles(n), delta_deg)
+
+
+def _b_sq_closure(ab, phi1):
+    _P2, _P3, P4, P5 = _b_closure_points(ab, phi1)
+    d4 = P4 - B_DATA["P6"]
+    d5 = P5 - B_DATA["P7"]
+    return np.array([d4[0] ** 2 + d4[1] ** 2 - B_DATA["L46"] ** 2,
+                     d5[0] ** 2 + d5[1] ** 2 - B_DATA["L57"] ** 2])
+
+
+def naive_mech_b_margin(n=360):
+    """min over phi1_k = -k*360/n of |det J| / (4 L23 L46 L57 max(L34, L35)),
+    J the complex-step Jacobian of the squared-distance closure wrt (a, b).
+    Returns (margin, phi1 of the minimum in rad)."""
+    d = B_DATA
+    phis = [-k * 2.0 * math.pi / n for k in range(n)]
+    res = revolution(mech_b_positions, phis)
+    scale = 4.0 * d["L23"] * d["L46"] * d["L57"] * max(d["L34"], d["L35"])
+    best, best_phi = math.inf, None
+    for phi, (_p, ab) in zip(phis, res):
+        jac = _complex_step_jacobian(lambda z: _b_sq_closure(z, phi), np.array(ab))
+        m = abs(np.linalg.det(jac)) / scale
+        if m < best:
+            best, best_phi = m, phi
+    return best, best_phi
+
+
+def naive_mech_b_peak(n=12, omega1=-94.4, eps1=0.0):
+    """Largest |R_k| over joints and phi1_k = -k*360/n: (value N, joint, phi1 deg)."""
+    phis = [-k * 2.0 * math.pi / n for k in range(n)]
+    res = revolution(mech_b_positions, phis)
+    best = (-1.0, None, None)
+    for phi, (_p, ab) in zip(phis, res):
+        f = naive_forces_b(phi, omega1, eps1, guess=ab)
+        for k in range(1, 8):
+            r = float(np.hypot(*f[f"R{k}"]))
+            if r > best[0]:
+                best = (r, f"R{k}", phi / DEG)
+    return best
