@@ -60,6 +60,6 @@ def export_csv(path, outdir) -> list[Path]:
 
 
 def _write(df, path):
-    df.to_csv(path, index=False, float_format="%.9g")
+    df.to_csv(path, index=False, float_format="%.12g")
     return path
 

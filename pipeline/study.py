@@ -239,8 +239,23 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
     known = set(fixed)
     defined = {p: fx.path(p) for p in fixed}
 
+    # points that groups further down define, to tell "solved later" from "unknown"
+    later = {}
+    for i, g in enumerate(sec.data.get("groups", []) if isinstance(sec.data.get("groups"), list) else []):
+        if isinstance(g, dict):
+            for key in ("B", "guide_end", "point"):
+                if isinstance(g.get(key), str):
+                    later.setdefault(g[key], f"{sec.path('groups')}[{i}].{key}")
+            if isinstance(g.get("joints"), list):
+                for p in g["joints"]:
+                    if isinstance(p, str):
+                        later.setdefault(p, f"{sec.path('groups')}[{i}].joints")
+
     def need(s, key, pname):
         if pname not in known:
+            if pname in later:
+                raise s.error(key, f"point {pname!r} is solved later ({later[pname]}); "
+                                   "groups must come in solve order")
             if pname in defined:
                 raise s.error(key, f"point {pname!r} is solved later ({defined[pname]}); "
                                    "groups must come in solve order")
