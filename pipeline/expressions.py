@@ -254,16 +254,10 @@ class _Compiler:
         return ExpressionError(self.field, token, reason, self.text)
 
     def segment(self, node: ast.AST) -> str:
-        seg = None
-        try:
-            seg = ast.get_source_segment(self.src, node)
-        except Exception:  # pragma: no cover - defensive, positions missing
-            seg = None
-        if seg is None:
-            try:
-                seg = ast.unparse(node)
-            except Exception:  # pragma: no cover - defensive
-                seg = type(node).__name__
+        """Source text of ``node``, on one line and length-limited."""
+        seg = ast.get_source_segment(self.src, node)
+        if seg is None:  # pragma: no cover - every parsed node has positions
+            seg = ast.unparse(node)
         return _short(" ".join(seg.split()))
 
     # -- dispatch ----------------------------------------------------------
@@ -307,23 +301,20 @@ class _Compiler:
         value = node.value
         seg = self.segment(node)
         if isinstance(value, bool) or value is None or value is Ellipsis:
-            return self._raise(seg, f"constant '{seg}' is not allowed")
+            raise self.error(seg, f"constant '{seg}' is not allowed")
         if isinstance(value, (int, float)):
             try:
                 number = float(value)
             except OverflowError:
                 number = math.inf
             if not math.isfinite(number):
-                return self._raise(seg, f"number '{seg}' is out of range (not a finite float)")
+                raise self.error(seg, f"number '{seg}' is out of range (not a finite float)")
             return _const(number)
         if isinstance(value, complex):
-            return self._raise(seg, f"complex number '{seg}' is not allowed")
+            raise self.error(seg, f"complex number '{seg}' is not allowed")
         if isinstance(value, (str, bytes)):
-            return self._raise(seg, f"string {seg} is not allowed")
-        return self._raise(seg, f"constant '{seg}' is not allowed")  # pragma: no cover
-
-    def _raise(self, token: str, reason: str) -> _Fn:
-        raise self.error(token, reason)
+            raise self.error(seg, f"string {seg} is not allowed")
+        raise self.error(seg, f"constant '{seg}' is not allowed")  # pragma: no cover
 
     def _c_Name(self, node: ast.Name, depth: int) -> _Fn:
         name = node.id
@@ -430,7 +421,9 @@ def _compile_text(text: object, field: str) -> tuple[_Fn, bool, bool]:
     if len(text) > MAX_LENGTH:
         token = f"{len(text)} characters"
         raise ExpressionError(field, token, f"expression is too long ({token}, limit {MAX_LENGTH})", text)
-    src = text.strip()
+    # Line breaks (TOML multi-line strings) are plain blanks here; replacing
+    # them one for one keeps every column offset valid for messages.
+    src = text.replace("\r", " ").replace("\n", " ").strip()
     if not src:
         raise ExpressionError(field, "", "empty expression", text)
     for ch in src:

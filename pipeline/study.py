@@ -499,6 +499,12 @@ def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
         sample = c.number("sample_dt", 0.01, positive=True)
         if dt > sample:
             raise c.error("dt", f"the integration step {dt:g} s exceeds the sampling step {sample:g} s")
+        if abs(sample / dt - round(sample / dt)) > 1e-9 * (sample / dt):
+            raise c.error("dt", f"the sampling step {sample:g} s must be a whole number of "
+                                f"integration steps (dt = {dt:g} s)")
+        if abs(t_end / sample - round(t_end / sample)) > 1e-9 * (t_end / sample):
+            raise c.error("t_end", f"t_end = {t_end:g} s must be a whole number of sampling "
+                                   f"steps (sample_dt = {sample:g} s)")
         cases.append(DynamicsCase(
             name=name, phi_start=math.radians(c.number("phi_start")),
             omega_start=c.number("omega_start", 0.0),
@@ -507,5 +513,8 @@ def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
         if cases[-1].damping < 0:
             raise c.error("damping", "must not be negative")
         c.done()
+        # M1 and the loads must be constant, 2*pi-periodic in phi, or functions of t alone
+        from .dynamics import check_drive
+        check_drive(mech, cases[-1], c.file)
     sec.done()
     return DynamicsSpec(cases=tuple(cases), method=method)

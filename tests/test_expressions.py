@@ -119,6 +119,7 @@ def test_domain_load_on_array_matches_formula():
         ("cos(pi)", 0.0, 0.0, -1.0),
         ("sin(phi)**2 + cos(phi)**2", 0.7, 0.0, 1.0),
         ("( phi\n + 1 )", 1.0, 0.0, 2.0),  # newlines inside brackets (TOML multi-line strings)
+        ("phi\n  + 1\r\n", 1.0, 0.0, 2.0),  # and at top level too
         ("  phi + 1  ", 1.0, 0.0, 2.0),  # surrounding blanks are ignored
         ("where(phi > 0, log(phi), 0)", -1.0, 0.0, 0.0),  # non-finite only in the unused branch
         ("1/(1/phi)", 0.0, 0.0, 0.0),  # intermediate inf is fine, only the result is checked

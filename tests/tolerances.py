@@ -7,3 +7,9 @@ VIRTUAL_POWER_REL = 1e-9     # virtual-power identity, relative to the largest p
 REACTION_REL = 1e-7          # reactions vs the naive dense solve (its kinematics are FD)
 SELF_FD_REL = 1e-6           # kernel analog vs a plain finite difference of kernel positions
 SWEEP_VS_SCENE_REL = 1e-9    # sweep metrics recomputed through the scene path
+
+# property tests of the group kernels (tests/test_kernel_properties.py)
+LENGTH_REL = 1e-9            # link lengths / guide constraints kept by a group, relative
+KERNEL_EXACT_REL = 1e-9      # differentiated closure equations hold to rounding (relative,
+                             # further divided by the group's singularity margin)
+WELL_INSIDE_REL = 1e-6       # this far (relative) from a toggle a group must be OK or NO_ASSEMBLY

@@ -1,0 +1,467 @@
+"""Monte-Carlo sweeps: chunks of candidates evaluated by the compiled kernel,
+locally on all cores or on a Dask cluster, written to HDF5 chunk by chunk.
+
+Never losing finished work: every finished chunk is first saved atomically
+(write to a temporary name, then rename) in a journal folder ``OUT.h5.parts``
+next to the results file, then written into the HDF5 file.  The journal is the
+source of truth until the run completes: ``--resume`` rebuilds the HDF5 file
+from it (so a file damaged by kill -9 in the middle of a write costs nothing)
+and computes only the chunks still missing.  On completion the journal is
+removed.  Chunks are deterministic (see ``sweep_spec``), so an interrupted and
+resumed run gives exactly the same datasets as an uninterrupted one.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import math
+import os
+import shutil
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from .kernels import config as kc
+from .kernels import sweep as ks
+from .storage import FORMAT, ResultsError, put, status_table, write_root_attrs
+from .sweep_spec import METRICS, SweepSpec, draw_candidates, parameter_rows
+
+log = logging.getLogger("pipeline")
+
+JOURNAL_VERSION = 1
+
+# kernel metric column of each stored metric, and a conversion to its units
+COLUMN = {
+    "dwell_error": (ks.M_DWELL, 1.0),
+    "stroke": (ks.M_STROKE, 1.0),
+    "singularity_margin": (ks.M_MARGIN, 1.0),
+    "dwell_start": (ks.M_DWELL_START, 180.0 / math.pi),
+    "newton_iterations": (ks.M_NEWTON_MEAN, 1.0),
+    "peak_reaction": (ks.M_PEAK_R, 1.0),
+    "peak_joint": (ks.M_PEAK_JOINT, 1.0),
+    "peak_phi": (ks.M_PEAK_PHI, 180.0 / math.pi),
+    "peak_M_bal": (ks.M_PEAK_MBAL, 1.0),
+}
+
+
+# ----------------------------------------------------------------- the problem
+@dataclass
+class SweepProblem:
+    """Everything a worker needs to evaluate a chunk: plain arrays and the spec
+    (picklable; no study objects, no expressions)."""
+    spec: SweepSpec
+    plan: object
+    phis: np.ndarray
+    phi_close: float
+    tols: np.ndarray
+    rocker: tuple
+    dwell_w: int
+    omega1: float
+    eps1: float
+    loads: np.ndarray
+
+    def kernel_args(self, pars):
+        p = self.plan
+        s = self.spec
+        return (pars, p.codes, p.gidx, p.goff, p.fixed_idx, p.fixed_off, p.n_points, self.phis,
+                self.phi_close, self.tols, self.rocker[0], self.rocker[1], s.stroke_radius,
+                self.dwell_w, s.wants_forces, s.stroke_bounds[0], s.stroke_bounds[1],
+                s.margin_min, self.omega1, self.eps1, p.gravity, p.body_com, p.body_turn,
+                p.body_mass_off, p.joint_point, p.joint_bodies, p.slide_bodies, p.slide_dir,
+                p.slide_angle, p.crank_body, p.load_body, p.load_point, self.loads)
+
+    def evaluate_rows(self, pars, parallel=True):
+        n = pars.shape[0]
+        status = np.zeros(n, np.int8)
+        metrics = np.full((n, ks.N_METRICS), np.nan)
+        fn = ks.evaluate_batch_parallel if parallel else ks.evaluate_batch_serial
+        fn(*self.kernel_args(pars), status, metrics)
+        return status, metrics
+
+    def evaluate_chunk(self, chunk, parallel=True):
+        x = self.draw(chunk)
+        status, metrics = self.evaluate_rows(parameter_rows(self.plan, self.spec, x), parallel)
+        return chunk, x, status, metrics
+
+    def draw(self, chunk):
+        return draw_candidates(self.spec, chunk)
+
+
+def build_problem(study, spec: SweepSpec, tols=None) -> SweepProblem:
+    from .forces import sample_loads
+    from .scene import revolution_angles
+    mech = study.mechanism
+    plan = mech.compile()
+    crank = mech.crank
+    phis = revolution_angles(crank, spec.positions)
+    out = study.output
+    return SweepProblem(
+        spec=spec, plan=plan, phis=phis, phi_close=crank.phi0 + crank.rot * 2 * math.pi,
+        tols=kc.default_tolerances() if tols is None else tols,
+        rocker=(plan.point(out.rocker[0]), plan.point(out.rocker[1])),
+        dwell_w=int(round(out.dwell_deg * spec.positions / 360)),
+        omega1=crank.omega1, eps1=crank.eps1,
+        loads=sample_loads(mech, phis) if mech.loads else np.zeros((len(phis), 0, 3)))
+
+
+def evaluate_chunk_task(problem, chunk):
+    """Dask task: one chunk on one worker thread."""
+    return problem.evaluate_chunk(chunk, parallel=False)
+
+
+# ----------------------------------------------------------------- constraints, objectives
+def constraints(spec: SweepSpec, metrics: dict, status: np.ndarray, has_margin: bool):
+    """g <= 0 per constraint (stroke low, stroke high, margin) and the summed
+    violation CV (NaN where the candidate failed)."""
+    stroke = metrics["stroke_raw"]
+    g = [spec.stroke_bounds[0] - stroke, stroke - spec.stroke_bounds[1]]
+    names = ["stroke_min", "stroke_max"]
+    if has_margin:
+        g.append(spec.margin_min - metrics["margin_raw"])
+        names.append("singularity_margin_min")
+    G = np.stack(g, axis=1)
+    cv = np.where(status == kc.OK, np.nansum(np.maximum(G, 0.0), axis=1), np.nan)
+    return names, G, cv
+
+
+# ----------------------------------------------------------------- journal
+class Journal:
+    """Finished chunks saved atomically next to the results file."""
+
+    def __init__(self, out: Path):
+        self.dir = out.with_name(out.name + ".parts")
+
+    def exists(self):
+        return (self.dir / "manifest.json").exists()
+
+    def start(self, manifest):
+        self.dir.mkdir(parents=True, exist_ok=True)
+        self._atomic(self.dir / "manifest.json", json.dumps(manifest, indent=1).encode())
+
+    def manifest(self):
+        return json.loads((self.dir / "manifest.json").read_text())
+
+    def _atomic(self, path, data: bytes):
+        tmp = path.with_name(path.name + ".tmp")
+        with open(tmp, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+
+    def save(self, chunk, x, status, metrics):
+        import io
+        buf = io.BytesIO()
+        np.savez(buf, x=x, status=status, metrics=metrics)
+        self._atomic(self.dir / f"chunk_{chunk:07d}.npz", buf.getvalue())
+
+    def done(self):
+        out = []
+        for p in self.dir.glob("chunk_*.npz"):
+            out.append(int(p.stem.split("_")[1]))
+        return sorted(out)
+
+    def load(self, chunk):
+        with np.load(self.dir / f"chunk_{chunk:07d}.npz") as z:
+            return z["x"], z["status"], z["metrics"]
+
+    def remove(self):
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+
+def manifest_for(study, spec: SweepSpec):
+    return {"journal_version": JOURNAL_VERSION, "study_sha256":
+            hashlib.sha256(study.text.encode()).hexdigest(), "study_file": str(study.path),
+            "candidates": spec.candidates, "chunk_size": spec.chunk_size, "seed": spec.seed,
+            "sampler": spec.sampler, "positions": spec.positions}
+
+
+# ----------------------------------------------------------------- HDF5 file
+class SweepFile:
+    """The results file of a sweep, written chunk by chunk."""
+
+    def __init__(self, path: Path, study, problem: SweepProblem):
+        self.path = path
+        self.study = study
+        self.problem = problem
+        self.spec = problem.spec
+
+    def create(self):
+        spec, plan = self.spec, self.problem.plan
+        n, nv = spec.candidates, len(spec.variables)
+        ch = min(spec.chunk_size, n)
+        tmp = self.path.with_name(self.path.name + ".tmp")
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        with h5py.File(tmp, "w") as f:
+            write_root_attrs(f, "sweep", self.study, seed=spec.seed, sampler=spec.sampler,
+                             n_candidates=n, chunk_size=spec.chunk_size,
+                             positions_per_revolution=spec.positions,
+                             objectives=list(spec.objectives), complete=False)
+            c = f.create_group("candidates")
+            d = c.create_dataset("params", (n, nv), "f8", chunks=(ch, nv), compression="lzf",
+                                 fillvalue=np.nan)
+            d.attrs.update(units=json.dumps([v.units for v in spec.variables]),
+                           long_name="design variables", names=[v.name for v in spec.variables],
+                           params=[v.param for v in spec.variables],
+                           low=[v.low for v in spec.variables],
+                           high=[v.high for v in spec.variables])
+            d = c.create_dataset("status", (n,), "i1", chunks=(ch,), compression="lzf",
+                                 fillvalue=kc.NOT_EVALUATED)
+            d.attrs.update(units="1", long_name="candidate status", codes=status_table())
+            for name, units, long in (
+                    ("fail_phi", "deg", "crank angle phi1 where the candidate failed"),
+                    ("cv", "1", "summed constraint violation (0 = feasible, NaN = failed)")):
+                d = c.create_dataset(name, (n,), "f8", chunks=(ch,), compression="lzf",
+                                     fillvalue=np.nan)
+                d.attrs.update(units=units, long_name=long)
+            d = c.create_dataset("feasible", (n,), "?", chunks=(ch,), compression="lzf")
+            d.attrs.update(units="1", long_name="status OK, constraints met, objectives finite")
+            d = c.create_dataset("forces_evaluated", (n,), "?", chunks=(ch,), compression="lzf")
+            d.attrs.update(units="1", long_name="force stage run (skipped for candidates "
+                                                "already infeasible)")
+            gnames, _, _ = constraints(spec, {"stroke_raw": np.zeros(1), "margin_raw":
+                                              np.zeros(1)}, np.zeros(1), self.has_margin)
+            d = c.create_dataset("constraints", (n, len(gnames)), "f8",
+                                 chunks=(ch, len(gnames)), compression="lzf", fillvalue=np.nan)
+            d.attrs.update(units="mm, mm, 1", long_name="constraints g <= 0", names=gnames)
+            m = f.create_group("metrics")
+            for name in spec.metrics:
+                units, long, _ = METRICS[name]
+                d = m.create_dataset(name, (n,), "f8", chunks=(ch,), compression="lzf",
+                                     fillvalue=np.nan)
+                d.attrs.update(units=units, long_name=long)
+            joints = list(plan.joint_names)
+            m.attrs["joint_names"] = joints
+            p = f.create_group("progress")
+            d = p.create_dataset("chunk_done", (spec.n_chunks,), "?")
+            d.attrs.update(units="1", long_name="chunk written")
+            self._reference(f)
+        os.replace(tmp, self.path)
+
+    @property
+    def has_margin(self):
+        return bool((self.problem.plan.codes == kc.G_CLASS3).any())
+
+    def _reference(self, f):
+        """The study's own design (the reference mechanism), evaluated the same way."""
+        spec, plan = self.spec, self.problem.plan
+        x = np.array([[plan.par[plan.param(v.param)] for v in spec.variables]])
+        st, met = self.problem.evaluate_rows(np.ascontiguousarray(plan.par[None, :]), False)
+        g = f.create_group("reference")
+        g.attrs["long_name"] = "the study's reference design, evaluated like every candidate"
+        put(g, "params", x[0], "mixed", "design variables", names=[v.name for v in spec.variables])
+        put(g, "status", st, "1", "status", codes=status_table())
+        for name, col in self._columns(met).items():
+            put(g, name, col, METRICS[name][0], METRICS[name][1])
+
+    def _columns(self, metrics):
+        return {name: metrics[:, COLUMN[name][0]] * COLUMN[name][1] for name in self.spec.metrics}
+
+    def write_chunk(self, f, chunk, x, status, metrics):
+        lo, hi = self.spec.chunk_bounds(chunk)
+        f["candidates/params"][lo:hi] = x
+        f["candidates/status"][lo:hi] = status
+        f["candidates/fail_phi"][lo:hi] = np.rad2deg(metrics[:, ks.M_FAIL_PHI])
+        f["candidates/forces_evaluated"][lo:hi] = metrics[:, ks.M_FORCES_DONE] == 1.0
+        cols = self._columns(metrics)
+        for name, col in cols.items():
+            f[f"metrics/{name}"][lo:hi] = col
+        _, G, cv = constraints(self.spec, {"stroke_raw": metrics[:, ks.M_STROKE],
+                                           "margin_raw": metrics[:, ks.M_MARGIN]},
+                               status, self.has_margin)
+        f["candidates/constraints"][lo:hi] = G
+        f["candidates/cv"][lo:hi] = cv
+        objectives = np.stack([cols[o] for o in self.spec.objectives], axis=1)
+        f["candidates/feasible"][lo:hi] = ((status == kc.OK) & (cv == 0)
+                                           & np.isfinite(objectives).all(axis=1))
+        f["progress/chunk_done"][chunk] = True
+
+
+# ----------------------------------------------------------------- running
+@dataclass
+class SweepOutcome:
+    kind: str
+    results: Path
+    pictures: list
+    summary: dict
+
+
+def _check_existing(out: Path, journal: Journal, study, spec, resume: bool):
+    """Refuse anything that would overwrite or mix results silently."""
+    if not resume:
+        if out.exists() or journal.exists():
+            what = out if out.exists() else journal.dir
+            raise ResultsError(what, "already exists; use --resume to continue that run, or "
+                                     "choose another output with -o (nothing is overwritten)")
+        return
+    if journal.exists():
+        man = journal.manifest()
+        want = manifest_for(study, spec)
+        diff = [k for k in want if k != "study_file" and man.get(k) != want[k]]
+        if diff:
+            raise ResultsError(journal.dir, "belongs to another run (different "
+                               + ", ".join(diff) + "); refusing to mix results")
+        return
+    if out.exists():
+        try:
+            with h5py.File(out, "r") as f:
+                ours = f.attrs.get("format") == FORMAT
+                same = ours and f.attrs.get("study_toml") == study.text and \
+                    int(f.attrs.get("n_candidates", -1)) == spec.candidates
+                complete = bool(f.attrs.get("complete", False))
+        except OSError:
+            raise ResultsError(out, "is truncated or not an HDF5 file and there is no journal "
+                                    "to rebuild it from; refusing to touch it") from None
+        if not ours:
+            raise ResultsError(out, "is not a pipeline results file; refusing to write into it")
+        if not same:
+            raise ResultsError(out, "holds another study's results (or another candidate "
+                                    "count); refusing to write into it")
+        if not complete:
+            raise ResultsError(out, "is an unfinished sweep whose journal is gone; "
+                                    "run again into a new file")
+
+
+def run_sweep(study, out, *, candidates=None, resume=False, scheduler=None, client=None,
+              n_jobs=None, chunk_size=None, progress=True, stop_after_chunks=None) -> SweepOutcome:
+    """Run (or resume) a sweep study into ``out``."""
+    from dataclasses import replace
+    spec: SweepSpec = study.sweep
+    if candidates is not None:
+        if candidates < 1:
+            raise ValueError(f"--candidates must be at least 1, got {candidates}")
+        spec = spec.with_candidates(candidates)
+    if chunk_size is not None:
+        if chunk_size < 1:
+            raise ValueError(f"--chunk-size must be at least 1, got {chunk_size}")
+        spec = replace(spec, chunk_size=chunk_size)
+    scheduler = scheduler or spec.scheduler
+    out = Path(out)
+    journal = Journal(out)
+    _check_existing(out, journal, study, spec, resume)
+    if resume and not journal.exists() and out.exists():
+        log.info("%s is already complete; nothing to resume", out)
+        return SweepOutcome("sweep", out, [], summarize(out))
+
+    problem = build_problem(study, spec)
+    sf = SweepFile(out, study, problem)
+    if not journal.exists():
+        journal.start(manifest_for(study, spec))
+    sf.create()   # fresh, or rebuilt from the journal below
+    finished = set(journal.done())
+    t0 = time.perf_counter()
+    with h5py.File(out, "r+") as f:
+        for c in sorted(finished):
+            sf.write_chunk(f, c, *journal.load(c))
+        f.flush()
+    todo = [c for c in range(spec.n_chunks) if c not in finished]
+    if finished:
+        log.info("resuming: %d of %d chunks already done", len(finished), spec.n_chunks)
+    bar = _progress(spec, len(finished), progress)
+    computed = 0
+    try:
+        with h5py.File(out, "r+") as f:
+            for c, x, status, metrics in _chunks(problem, todo, scheduler, client, n_jobs):
+                journal.save(c, x, status, metrics)
+                sf.write_chunk(f, c, x, status, metrics)
+                f.flush()
+                computed += len(status)
+                bar.update(len(status))
+                if stop_after_chunks is not None and computed >= stop_after_chunks * spec.chunk_size:
+                    raise KeyboardInterrupt  # test hook: an interruption at a chunk boundary
+    except KeyboardInterrupt:
+        bar.close()
+        done = len(journal.done())
+        raise SweepInterrupted(f"{out}: interrupted with {done} of {spec.n_chunks} chunks "
+                               "saved; run again with --resume to continue") from None
+    bar.close()
+    wall = time.perf_counter() - t0
+    with h5py.File(out, "r+") as f:
+        f.attrs["complete"] = True
+        f.attrs["wall_time_s"] = wall
+        f.attrs["engine"] = "dask" if (scheduler or client) else "local"
+    journal.remove()
+    summary = summarize(out)
+    summary["wall_time"] = f"{wall:.1f} s"
+    if computed:
+        summary["throughput"] = f"{computed / wall:,.0f} candidates/s"
+    return SweepOutcome("sweep", out, [], summary)
+
+
+class SweepInterrupted(KeyboardInterrupt):
+    """Raised after an interruption, once everything finished is safe."""
+
+
+def _progress(spec, done, enabled):
+    from tqdm import tqdm
+    return tqdm(total=spec.candidates, initial=done * spec.chunk_size if done else 0,
+                unit="cand", unit_scale=True, disable=not enabled, smoothing=0.1,
+                desc="sweep", dynamic_ncols=True)
+
+
+def _chunks(problem, todo, scheduler, client, n_jobs):
+    """Yield (chunk, x, status, metrics) as chunks finish."""
+    if scheduler or client:
+        yield from _dask_chunks(problem, todo, scheduler, client)
+        return
+    import numba
+    before = numba.get_num_threads()
+    if n_jobs is not None:
+        if n_jobs < 1:
+            raise ValueError(f"--jobs must be at least 1, got {n_jobs}")
+        numba.set_num_threads(min(n_jobs, numba.config.NUMBA_NUM_THREADS))
+    try:
+        for c in todo:
+            yield problem.evaluate_chunk(c, parallel=True)
+    finally:
+        numba.set_num_threads(before)
+
+
+def _dask_chunks(problem, todo, scheduler, client):
+    """The same kernels on a Dask cluster; dask is imported only here."""
+    try:
+        from dask.distributed import Client, as_completed
+    except ImportError:  # pragma: no cover - depends on the installation
+        raise ValueError("--scheduler needs dask: pip install 'pipeline[dask]'") from None
+    own = client is None
+    if own:
+        try:
+            client = Client(scheduler, timeout="20s")
+        except OSError as e:
+            raise ValueError(f"cannot reach the Dask scheduler {scheduler}: {e}") from None
+    try:
+        remote = client.scatter(problem, broadcast=True)
+        futures = [client.submit(evaluate_chunk_task, remote, c, pure=False) for c in todo]
+        for fut in as_completed(futures):
+            yield fut.result()
+    finally:
+        if own:
+            client.close()
+
+
+def summarize(out) -> dict:
+    """Counts by status, feasible fraction, best objective values."""
+    from .kernels.config import STATUS_NAMES
+    with h5py.File(out, "r") as f:
+        st = f["candidates/status"][()]
+        feas = f["candidates/feasible"][()]
+        n = len(st)
+        s = {"candidates": n}
+        for code, name in STATUS_NAMES.items():
+            k = int((st == code).sum())
+            if k:
+                s[f"status {name}"] = f"{k} ({100 * k / n:.1f}%)"
+        s["feasible"] = f"{int(feas.sum())} ({100 * feas.mean():.1f}%)"
+        for o in f.attrs["objectives"]:
+            v = f[f"metrics/{o}"][()][feas]
+            if v.size:
+                s[f"best {o}"] = f"{v.min():.4g} {f['metrics/' + o].attrs['units']}"
+        ref = f["reference"]
+        s["reference design"] = ", ".join(
+            f"{o} {ref[o][()][0]:.4g}" for o in f.attrs["objectives"] if o in ref)
+    return s

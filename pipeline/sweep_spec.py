@@ -1,0 +1,242 @@
+"""The [sweep] section of a sweep study, and how candidates are drawn from it.
+
+Candidates are drawn per chunk, in NumPy, outside the kernels: chunk c of a
+study with seed s uses ``SeedSequence(s).spawn(n_chunks)[c]`` (uniform, Latin
+hypercube) or the points c*chunk .. (c+1)*chunk-1 of one scrambled Sobol
+sequence seeded by s.  A chunk is therefore the same whatever the thread
+count, the engine or the order in which chunks run.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import qmc
+
+SAMPLERS = ("uniform", "lhs", "sobol")
+METRICS = {
+    # name: (units, long name, needs forces)
+    "dwell_error": ("1", "dwell error: best window range / revolution range", False),
+    "stroke": ("mm", "stroke of the working point: radius x rocker swing", False),
+    "singularity_margin": ("1", "min |det J| / (4 L23 L46 L57 max(L34, L35)) over the revolution",
+                           False),
+    "dwell_start": ("deg", "crank angle phi1 where the best dwell window starts", False),
+    "newton_iterations": ("1", "mean Newton iterations per position", False),
+    "peak_reaction": ("N", "largest joint reaction over all joints and positions", True),
+    "peak_joint": ("1", "index of the joint with the peak reaction", True),
+    "peak_phi": ("deg", "crank angle phi1 of the peak reaction", True),
+    "peak_M_bal": ("N*m", "largest |balancing moment| over the revolution", True),
+}
+DEFAULT_METRICS = ("dwell_error", "peak_reaction", "stroke", "singularity_margin",
+                   "dwell_start", "peak_joint", "peak_phi", "peak_M_bal", "newton_iterations")
+
+
+@dataclass(frozen=True)
+class Variable:
+    name: str
+    param: str          # name in the compiled plan's parameter vector
+    low: float
+    high: float
+    units: str
+
+
+@dataclass(frozen=True)
+class MassScaling:
+    body: str
+    length_param: str   # characteristic length: m ~ L, J ~ L^3, lS ~ L
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    variables: tuple
+    candidates: int
+    seed: int
+    sampler: str
+    positions: int
+    chunk_size: int
+    metrics: tuple
+    objectives: tuple
+    stroke_radius: float
+    stroke_bounds: tuple
+    margin_min: float
+    mass_model: tuple
+    scheduler: str | None
+
+    @property
+    def n_chunks(self):
+        return math.ceil(self.candidates / self.chunk_size)
+
+    @property
+    def wants_forces(self):
+        return any(METRICS[m][2] for m in self.metrics + self.objectives)
+
+    def chunk_bounds(self, c):
+        lo = c * self.chunk_size
+        return lo, min(lo + self.chunk_size, self.candidates)
+
+    def with_candidates(self, n):
+        from dataclasses import replace
+        return replace(self, candidates=int(n))
+
+
+def parse_sweep(root, mech, output) -> SweepSpec:
+    """Read [sweep] of a study (``root`` is the study's top Section)."""
+    from .model import compile_mechanism
+    from .study import StudyError
+    sec = root.table("sweep")
+    plan = compile_mechanism(mech)
+    spread = sec.number("spread", 0.2, positive=True)
+    variables = []
+    vs = sec.table("variables")
+    for name in list(vs.data):
+        v = vs.table(name)
+        param = v.string("param")
+        if param not in plan.par_names:
+            close = [p for p in plan.par_names if not p.startswith("S[")]
+            raise v.error("param", f"no mechanism parameter {param!r}; known: {', '.join(close)}")
+        ref = float(plan.par[plan.param(param)])
+        low = v.number("min", ref - spread * abs(ref))
+        high = v.number("max", ref + spread * abs(ref))
+        if not low < high:
+            raise v.error("max", f"the bounds are empty: min {low:g} >= max {high:g}")
+        units = v.string("units", "deg" if param.endswith(("phiM0", "angle")) else "mm")
+        v.done()
+        variables.append(Variable(name, param, low, high, units))
+    vs.done()
+    if not variables:
+        raise sec.error("variables", "a sweep needs at least one design variable")
+    metrics = tuple(sec.strings("metrics", default=list(DEFAULT_METRICS)))
+    objectives = tuple(sec.strings("objectives", default=["dwell_error", "peak_reaction"]))
+    for key, names in (("metrics", metrics), ("objectives", objectives)):
+        for m in names:
+            if m not in METRICS:
+                raise sec.error(key, f"unknown metric {m!r}; known: {', '.join(METRICS)}")
+    metrics = tuple(dict.fromkeys(metrics + objectives))
+    if len(objectives) < 1:
+        raise sec.error("objectives", "at least one objective is needed")
+    if output.rocker is None:
+        raise StudyError(root.file, "output.rocker",
+                         "a sweep needs the output rocker [pivot, point] for stroke and dwell")
+    cons = sec.table("constraints", default={})
+    stroke = cons.numbers("stroke", n=2, default=[11.0, 15.0])
+    if not stroke[0] < stroke[1]:
+        raise cons.error("stroke", "expected [min, max] with min < max")
+    margin_min = cons.number("singularity_margin_min", 0.3)
+    cons.done()
+    mass_model = []
+    if sec.has("mass_model"):
+        bodies = {b.name for b in mech.bodies}
+        mm = sec.table("mass_model")
+        for body in list(mm.data):
+            if body not in bodies:
+                raise mm.error(body, f"unknown body {body!r}")
+            p = mm.string(body)
+            if p not in plan.par_names:
+                raise mm.error(body, f"no mechanism parameter {p!r}")
+            mass_model.append(MassScaling(body, p))
+        mm.done()
+    if any(METRICS[m][2] for m in metrics) and not mech.bodies:
+        raise sec.error("metrics", "force metrics need mass data: declare [[mechanism.bodies]]")
+    positions = sec.integer("positions", 360, minimum=12)
+    spec = SweepSpec(
+        variables=tuple(variables),
+        candidates=sec.integer("candidates", 10000, minimum=1),
+        seed=sec.integer("seed", 0, minimum=0),
+        sampler=sec.string("sampler", "sobol", choices=SAMPLERS),
+        positions=positions,
+        chunk_size=sec.integer("chunk_size", 1024, minimum=1),
+        metrics=metrics, objectives=objectives,
+        stroke_radius=sec.number("stroke_radius", positive=True),
+        stroke_bounds=stroke, margin_min=margin_min,
+        mass_model=tuple(mass_model),
+        scheduler=sec.string("scheduler", "") or None,
+    )
+    w = round(output.dwell_deg * positions / 360)
+    if not 1 <= w < positions:
+        raise StudyError(root.file, "output.dwell",
+                         f"a {output.dwell_deg:g} deg window spans {w} of {positions} intervals")
+    sec.done()
+    return spec
+
+
+def draw_unit(spec: SweepSpec, chunk: int) -> np.ndarray:
+    """Chunk ``chunk``'s candidates as points of the unit cube (n, n_vars)."""
+    lo, hi = spec.chunk_bounds(chunk)
+    d = len(spec.variables)
+    if spec.sampler == "sobol":
+        s = qmc.Sobol(d, scramble=True, seed=np.random.default_rng(spec.seed))
+        if lo:
+            s.fast_forward(lo)
+        with warnings.catch_warnings():  # chunks of one sequence need not be powers of 2
+            warnings.simplefilter("ignore", UserWarning)
+            return s.random(hi - lo)
+    child = np.random.SeedSequence(spec.seed).spawn(spec.n_chunks)[chunk]
+    rng = np.random.default_rng(child)
+    if spec.sampler == "lhs":
+        return qmc.LatinHypercube(d, seed=rng).random(hi - lo)
+    return rng.random((hi - lo, d))
+
+
+def draw_candidates(spec: SweepSpec, chunk: int) -> np.ndarray:
+    """Design variables of chunk ``chunk`` (n, n_vars) in their units."""
+    u = draw_unit(spec, chunk)
+    low = np.array([v.low for v in spec.variables])
+    high = np.array([v.high for v in spec.variables])
+    return low + u * (high - low)
+
+
+def parameter_rows(plan, spec: SweepSpec, x: np.ndarray) -> np.ndarray:
+    """Full kernel parameter rows for design-variable rows ``x``: the reference
+    row with the variables set, then the mass model (DOMAIN.md section 9:
+    m = m0 L/L0, J_S = J0 (L/L0)^3, lS = lS0 L/L0)."""
+    base = plan.par
+    pars = np.repeat(base[None, :], x.shape[0], axis=0)
+    for j, v in enumerate(spec.variables):
+        pars[:, plan.param(v.param)] = x[:, j]
+    for ms in spec.mass_model:
+        k = plan.param(ms.length_param)
+        ratio = pars[:, k] / base[k]
+        mass = plan.param(f"{ms.body}.mass")
+        inertia = plan.param(f"{ms.body}.J_S")
+        arm = plan.param(f"S[{ms.body}].length")
+        pars[:, mass] = base[mass] * ratio
+        pars[:, inertia] = base[inertia] * ratio ** 3
+        pars[:, arm] = base[arm] * ratio
+    return np.ascontiguousarray(pars)
+
+
+def apply_design(mech, spec: SweepSpec, x) -> "Mechanism":
+    """The declared mechanism of one candidate (design-variable row ``x``), with
+    the mass model applied: the scene path's twin of ``parameter_rows``."""
+    from dataclasses import replace
+    base_plan = mech.compile()
+    values = {v.param: float(xi) for v, xi in zip(spec.variables, x)}
+    fixed = dict(mech.fixed)
+    crank = mech.crank
+    groups = list(mech.groups)
+    labels = [g for g in base_plan.group_names]
+    for param, val in values.items():
+        owner, key = param.rsplit(".", 1)
+        if owner in fixed and key in ("x", "y"):
+            xy = list(fixed[owner])
+            xy["xy".index(key)] = val
+            fixed[owner] = tuple(xy)
+        elif owner == crank.name:
+            crank = replace(crank, **{key: val})
+        else:
+            k = labels.index(owner) - 1          # group_names[0] is the crank
+            groups[k] = replace(groups[k], **{key: val})
+    out = replace(mech, fixed=fixed, crank=crank, groups=tuple(groups))
+    scale = {}
+    new_plan = out.compile()
+    for ms in spec.mass_model:
+        k = base_plan.param(ms.length_param)
+        scale[ms.body] = new_plan.par[k] / base_plan.par[k]
+    bodies = tuple(
+        replace(b, mass=b.mass * scale[b.name], J_S=b.J_S * scale[b.name] ** 3,
+                com=replace(b.com, lS=b.com.lS * scale[b.name])) if b.name in scale else b
+        for b in mech.bodies)
+    return replace(out, bodies=bodies)

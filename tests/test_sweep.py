@@ -1,0 +1,258 @@
+"""Sweeps: metrics against the scene path, resume, engines, refusals."""
+
+import dataclasses
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import h5py
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+import naive
+from pipeline.forces import scene_forces
+from pipeline.kernels import config as kc
+from pipeline.kernels.metrics import dwell_error
+from pipeline.scene import revolution_angles, solve_curves
+from pipeline.storage import ResultsError
+from pipeline.study import load_study
+from pipeline.sweep import SweepInterrupted, build_problem, run_sweep
+from pipeline.sweep_spec import apply_design, draw_candidates, parameter_rows
+from sweep_helpers import assert_same_results
+from tolerances import SWEEP_VS_SCENE_REL
+
+N, CHUNK = 1200, 300
+
+
+@pytest.fixture(scope="module")
+def synthesis(studies):
+    return load_study(studies / "ov7_synthesis.toml")
+
+
+@pytest.fixture(scope="module")
+def baseline(synthesis, tmp_path_factory):
+    out = tmp_path_factory.mktemp("sweep") / "base.h5"
+    run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False)
+    return out
+
+
+# ---------------------------------------------------------------- dwell kernel
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.floats(-3, 3, allow_nan=False), min_size=8, max_size=60),
+       st.floats(0.05, 0.95))
+def test_dwell_kernel_equals_brute_force(values, frac):
+    theta = np.array(values)
+    n = len(theta)
+    w = max(1, min(n - 1, int(round(frac * n))))
+    q = np.empty(n + w + 1, np.int64)
+    err, start, full = dwell_error(theta, w, q, q.copy())
+    if not np.ptp(theta) > 0:
+        assert math.isnan(err)
+        return
+    delta = w * 360.0 / n
+    ref, ref_start = naive.naive_dwell_error(theta, delta)
+    assert err == ref and start == ref_start
+
+
+@pytest.mark.parametrize("delta,expected", [(120.0, 0.0193), (150.0, 0.0712)])
+def test_dwell_error_of_mechanism_b(synthesis, delta, expected):
+    """DOMAIN.md section 9, 720 positions: 0.0193 (120 deg), 0.0712 (150 deg)."""
+    spec = dataclasses.replace(synthesis.sweep, positions=720)
+    study = dataclasses.replace(synthesis, output=dataclasses.replace(synthesis.output,
+                                                                      dwell_deg=delta))
+    pb = build_problem(study, spec)
+    st_, met = pb.evaluate_rows(pb.plan.par[None, :].copy(), parallel=False)
+    assert st_[0] == kc.OK
+    assert round(met[0, 1], 4) == expected
+
+
+# ---------------------------------------------------------------- against the scene path
+def scene_metrics(study, x, positions):
+    """Stroke, dwell error, margin, peak reaction of one candidate through the
+    scene path (declared mechanism -> compiled plan -> curves -> forces)."""
+    spec = study.sweep
+    mech = apply_design(study.mechanism, spec, x)
+    plan = mech.compile()
+    crank = mech.crank
+    phis = revolution_angles(crank, positions)
+    c = solve_curves(plan, phis, kc.ACCELERATIONS, close_at=crank.phi0 + crank.rot * 2 * math.pi)
+    a, b = (plan.point(p) for p in study.output.rocker)
+    v = c.pos[:, b] - c.pos[:, a]
+    theta = np.unwrap(np.arctan2(v[:, 1], v[:, 0]))
+    err, start = naive.naive_dwell_error(theta, study.output.dwell_deg)
+    fr = scene_forces(mech, plan, c)
+    g = plan.group_names.index("triad")
+    return {"status": c.overall, "stroke": spec.stroke_radius * np.ptp(theta),
+            "dwell_error": err, "singularity_margin": c.margin[:, g].min(),
+            "peak_reaction": fr.magnitude.max(), "peak_M_bal": np.abs(fr.M_bal).max()}
+
+
+def test_sweep_metrics_match_scene_path(baseline, synthesis):
+    with h5py.File(baseline, "r") as f:
+        x = f["candidates/params"][()]
+        status = f["candidates/status"][()]
+        forces = f["candidates/forces_evaluated"][()]
+        m = {k: f[f"metrics/{k}"][()] for k in f["metrics"]}
+    rng = np.random.default_rng(0)
+    picked = list(rng.choice(np.flatnonzero(forces), 5, replace=False))
+    picked += list(rng.choice(np.flatnonzero((status == kc.OK) & ~forces), 3, replace=False))
+    for i in picked:
+        ref = scene_metrics(synthesis, x[i], synthesis.sweep.positions)
+        assert ref["status"] == kc.OK
+        for key in ("stroke", "dwell_error", "singularity_margin"):
+            assert m[key][i] == pytest.approx(ref[key], rel=SWEEP_VS_SCENE_REL, abs=1e-12), (i, key)
+        if forces[i]:
+            for key in ("peak_reaction", "peak_M_bal"):
+                assert m[key][i] == pytest.approx(ref[key], rel=SWEEP_VS_SCENE_REL), (i, key)
+        else:
+            assert np.isnan(m["peak_reaction"][i])
+    # failed candidates fail the scene path too, with the same status
+    for i in np.flatnonzero(status != kc.OK)[:4]:
+        assert scene_metrics(synthesis, x[i], synthesis.sweep.positions)["status"] == status[i]
+
+
+def test_apply_design_matches_parameter_rows(synthesis):
+    spec = synthesis.sweep
+    plan = synthesis.mechanism.compile()
+    x = draw_candidates(spec, 1)[:20]
+    rows = parameter_rows(plan, spec, x)
+    for i in range(len(x)):
+        np.testing.assert_array_equal(apply_design(synthesis.mechanism, spec, x[i]).compile().par,
+                                      rows[i])
+
+
+def test_file_contents(baseline, synthesis):
+    with h5py.File(baseline, "r") as f:
+        assert f.attrs["kind"] == "sweep" and f.attrs["complete"]
+        assert f.attrs["seed"] == synthesis.sweep.seed and f.attrs["sampler"] == "sobol"
+        p = f["candidates/params"]
+        assert p.shape == (N, 9) and list(p.attrs["names"]) == [
+            "L12", "P6x", "P6y", "L23", "L34", "L45", "L35", "L46", "L57"]
+        assert p.chunks[0] <= CHUNK and p.compression == "lzf"
+        st_ = f["candidates/status"][()]
+        assert st_.dtype == np.int8 and "NO_ASSEMBLY" in f["candidates/status"].attrs["codes"]
+        assert set(np.unique(st_)) <= {kc.OK, kc.NEWTON_MAXITER, kc.BRANCH_JUMP, kc.BAD_GEOMETRY,
+                                       kc.SINGULAR, kc.NO_ASSEMBLY}
+        assert (st_ == kc.BAD_GEOMETRY).any() and (st_ == kc.OK).any()
+        for name in ("dwell_error", "peak_reaction", "stroke", "singularity_margin"):
+            d = f[f"metrics/{name}"]
+            assert d.attrs["units"] and d.attrs["long_name"]
+        failed = st_ != kc.OK
+        assert np.isnan(f["metrics/dwell_error"][()][failed]).all()
+        fail_phi = f["candidates/fail_phi"][()]
+        assert np.isfinite(fail_phi[failed & (st_ != kc.BAD_GEOMETRY)]).all()
+        feas = f["candidates/feasible"][()]
+        assert feas.any() and (f["candidates/cv"][()][feas] == 0).all()
+        lo, hi = synthesis.sweep.stroke_bounds
+        s = f["metrics/stroke"][()][feas]
+        assert ((s >= lo) & (s <= hi)).all()
+        assert f["reference/status"][0] == kc.OK
+        assert f["reference/dwell_error"][0] == pytest.approx(0.0721, abs=1e-4)
+        assert not os.path.exists(str(baseline) + ".parts")
+
+
+# ---------------------------------------------------------------- never lose work
+def test_interrupted_then_resumed_equals_uninterrupted(baseline, synthesis, tmp_path):
+    out = tmp_path / "r.h5"
+    with pytest.raises(SweepInterrupted, match="--resume"):
+        run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False,
+                  stop_after_chunks=2)
+    with h5py.File(out, "r") as f:
+        assert f["progress/chunk_done"][()].sum() == 2 and not f.attrs["complete"]
+    with pytest.raises(ResultsError, match="already exists"):
+        run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False)
+    run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False, resume=True)
+    assert_same_results(baseline, out)
+
+
+def test_kill_9_then_resume_equals_uninterrupted(baseline, synthesis, tmp_path):
+    """A real kill -9 of a running sweep (at whatever moment it is), then --resume."""
+    out = tmp_path / "k.h5"
+    n, chunk = 6000, 100
+    cmd = [sys.executable, "-m", "pipeline.cli", "run", str(synthesis.path), "-o", str(out),
+           "--candidates", str(n), "--chunk-size", str(chunk), "-q"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    parts = tmp_path / "k.h5.parts"
+    deadline = time.time() + 120
+    while time.time() < deadline and len(list(parts.glob("chunk_*.npz"))) < 5:
+        assert proc.poll() is None, proc.stderr.read().decode()
+        time.sleep(0.05)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert len(list(parts.glob("chunk_*.npz"))) < n // chunk, "the run finished before the kill"
+    run_sweep(synthesis, out, candidates=n, chunk_size=chunk, progress=False, resume=True)
+    ref = tmp_path / "ref.h5"
+    run_sweep(synthesis, ref, candidates=n, chunk_size=chunk, progress=False)
+    assert_same_results(ref, out)
+
+
+def test_damaged_file_is_rebuilt_from_the_journal(synthesis, tmp_path, baseline):
+    out = tmp_path / "d.h5"
+    with pytest.raises(SweepInterrupted):
+        run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False,
+                  stop_after_chunks=1)
+    out.write_bytes(out.read_bytes()[:5000])   # as if killed in the middle of a write
+    run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False, resume=True)
+    assert_same_results(baseline, out)
+
+
+def test_refusals(synthesis, tmp_path, baseline, studies):
+    other = load_study(studies / "ov7_synthesis.toml")
+    other = dataclasses.replace(other, text=other.text.replace("seed = 20261121", "seed = 1"),
+                                sweep=dataclasses.replace(other.sweep, seed=1))
+    with pytest.raises(ResultsError, match="another study"):
+        run_sweep(other, baseline, candidates=N, chunk_size=CHUNK, progress=False, resume=True)
+    with pytest.raises(ResultsError, match="another study"):
+        run_sweep(synthesis, baseline, candidates=N + 1, chunk_size=CHUNK, progress=False,
+                  resume=True)
+    foreign = tmp_path / "foreign.h5"
+    with h5py.File(foreign, "w") as f:
+        f["x"] = 1
+    with pytest.raises(ResultsError, match="not a pipeline results file"):
+        run_sweep(synthesis, foreign, candidates=N, progress=False, resume=True)
+    junk = tmp_path / "junk.h5"
+    junk.write_bytes(b"\x89HDF\r\n" + b"0" * 100)
+    with pytest.raises(ResultsError, match="truncated or not an HDF5 file"):
+        run_sweep(synthesis, junk, candidates=N, progress=False, resume=True)
+    assert junk.read_bytes() == b"\x89HDF\r\n" + b"0" * 100   # untouched
+    # resuming a complete run changes nothing
+    before = baseline.read_bytes()
+    run_sweep(synthesis, baseline, candidates=N, chunk_size=CHUNK, progress=False, resume=True)
+    assert baseline.read_bytes() == before
+
+
+# ---------------------------------------------------------------- engines and threads
+def test_thread_count_does_not_change_results(synthesis, tmp_path, baseline):
+    out = tmp_path / "t1.h5"
+    run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False, n_jobs=1)
+    assert_same_results(baseline, out)
+
+
+def test_dask_cluster_equals_local(synthesis, tmp_path, baseline):
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        out = tmp_path / "dask.h5"
+        run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False,
+                  scheduler=cluster.scheduler_address)
+    assert_same_results(baseline, out)
+    with h5py.File(out, "r") as f:
+        assert f.attrs["engine"] == "dask"
+
+
+def test_samplers_stay_in_bounds_and_chunks_are_independent(synthesis):
+    for sampler in ("uniform", "lhs", "sobol"):
+        spec = dataclasses.replace(synthesis.sweep, sampler=sampler, candidates=1000,
+                                   chunk_size=250)
+        lo = np.array([v.low for v in spec.variables])
+        hi = np.array([v.high for v in spec.variables])
+        chunks = [draw_candidates(spec, c) for c in (3, 0, 2, 1)]
+        again = draw_candidates(spec, 2)
+        np.testing.assert_array_equal(chunks[2], again)
+        allx = np.concatenate(chunks)
+        assert ((allx >= lo) & (allx <= hi)).all()
+        assert len(np.unique(allx[:, 0])) == 1000
