@@ -34,7 +34,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .kernels import config as kc
-from .kernels.dynamics import acceleration, rk4, start_continuation, terms_curve
+from .kernels.dynamics import acceleration, begin, rk4, terms_curve
 from .study import StudyError
 
 log = logging.getLogger("pipeline")
@@ -350,10 +350,8 @@ def _dop853(plan, drive, case, tols, out, tail):
     b = float(case.damping)
 
     def restart():
-        st = start_continuation(*pa, float(case.phi_start), work["state"], work["last"],
-                                work["pos"], work["d1"], work["d2"], work["margins"])
-        if st != kc.OK:
-            raise _Stop(st)
+        begin(plan.codes, plan.goff, plan.par, float(case.phi_start), work["state"],
+              work["last"])
 
     def eps(t, phi, omega):
         st, e = acceleration(*pa, newton, *ma, *da, b, float(t), float(phi), float(omega),
@@ -438,10 +436,15 @@ def dynamics_figure(case: CaseResult, path):
     if case.status != kc.OK:
         head += f"\nstopped: {kc.STATUS_NAMES[case.status]}"
     fig, axs = plt.subplots(2, 2, figsize=(12, 7.5), layout="constrained")
-    rows = [(np.rad2deg(case.phi1), "phi1 [deg]"), (case.omega1, "omega1 [rad/s]"),
-            (case.eps1, "eps1 [rad/s$^2$]")]
-    for ax, (y, label) in zip((axs[0, 0], axs[0, 1], axs[1, 0]), rows):
-        ax.plot(case.t, y, lw=0.8)
+    rows = [(np.rad2deg(case.phi1), None, "phi1 [deg]"),
+            (case.omega1, case.tail_omega1, "omega1 [rad/s]"),
+            (case.eps1, case.tail_eps1, "eps1 [rad/s$^2$]")]
+    for ax, (y, fine, label) in zip((axs[0, 0], axs[0, 1], axs[1, 0]), rows):
+        ax.plot(case.t, y, lw=0.8, label=f"every {c.sample_dt:g} s")
+        if fine is not None and fine.size:
+            # the samples alias a fast rotation; the tail shows every step
+            ax.plot(case.tail_t, fine, lw=0.4, color="C3", label="every step")
+            ax.legend(fontsize=8, loc="lower right")
         ax.set_xlabel("t [s]")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)

@@ -214,6 +214,7 @@ class Plan:
     par_names: tuple
     group_names: tuple
     n_visible: int                     # points before the hidden centres of mass
+    n_kinematic: int                   # groups before the hidden centres of mass
     link_a: np.ndarray
     link_b: np.ndarray
     # force analysis (empty when no bodies)
@@ -329,6 +330,7 @@ def compile_mechanism(m: Mechanism) -> Plan:
         else:  # pragma: no cover - the parser only builds the types above
             raise TypeError(f"unknown group {g!r}")
     n_visible = len(names)
+    n_kinematic = len(codes)
 
     # bodies: each centre of mass is a hidden attached point "S[body]"
     body_com, body_turn, body_mass_off = [], [], []
@@ -380,7 +382,7 @@ def compile_mechanism(m: Mechanism) -> Plan:
         par=np.asarray(par, dtype=np.float64),
         fixed_idx=i64(fixed_idx), fixed_off=i64(fixed_off),
         point_names=tuple(names), par_names=tuple(par_names), group_names=tuple(gnames),
-        n_visible=n_visible,
+        n_visible=n_visible, n_kinematic=n_kinematic,
         link_a=i64([index[a] for a, _ in m.links]), link_b=i64([index[b] for _, b in m.links]),
         body_names=tuple(b.name for b in m.bodies),
         body_com=i64(body_com), body_turn=i64(body_turn, (-1, 2)),

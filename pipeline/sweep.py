@@ -68,7 +68,7 @@ class SweepProblem:
     def kernel_args(self, pars):
         p = self.plan
         s = self.spec
-        return (pars, p.codes, p.gidx, p.goff, p.fixed_idx, p.fixed_off, p.n_points, self.phis,
+        return (pars, p.codes, p.n_kinematic, p.gidx, p.goff, p.fixed_idx, p.fixed_off, p.n_points, self.phis,
                 self.phi_close, self.tols, self.rocker[0], self.rocker[1], s.stroke_radius,
                 self.dwell_w, s.wants_forces, s.stroke_bounds[0], s.stroke_bounds[1],
                 s.margin_min, self.omega1, self.eps1, p.gravity, p.body_com, p.body_turn,

@@ -138,17 +138,12 @@ def potential(pos, gravity, par, body_com, body_mass_off):
 
 # ----------------------------------------------------------------- one evaluation
 @njit(**JIT)
-def start_continuation(codes, gidx, goff, par, fixed_idx, fixed_off, tols, phi, state, last,
-                       pos, d1, d2, margins):
-    """Initialise the class III state from its declared guess and walk to ``phi``
-    (dyad-only plans: just solve there).  Sets last[0] = phi; returns the status."""
+def begin(codes, goff, par, phi, state, last):
+    """Start a continuation towards ``phi``: the class III groups from their
+    declared guess at their start angle (last[0] = that angle, so the first
+    evaluation walks from there to ``phi``); dyad-only plans start at ``phi``."""
     init_state(codes, goff, par, state)
-    newton = has_newton(codes)
-    phi_from = start_angle(codes, goff, par) if newton else phi
-    st = advance(codes, gidx, goff, par, fixed_idx, fixed_off, phi_from, phi, ACCELERATIONS,
-                 tols, state, newton, pos, d1, d2, margins)
-    last[0] = phi
-    return st
+    last[0] = start_angle(codes, goff, par) if has_newton(codes) else phi
 
 
 @njit(**JIT)
@@ -215,69 +210,69 @@ def rk4(codes, gidx, goff, par, fixed_idx, fixed_off, tols,
     n_steps = (n_samples - 1) * n_sub
     n_tail = tail_t.shape[0]
     tail0 = n_steps - n_tail + 1
-    st = start_continuation(codes, gidx, goff, par, fixed_idx, fixed_off, tols, phi0, state,
-                            last, pos, d1, d2, margins)
-    if st != OK:
-        return st, 0
+    begin(codes, goff, par, phi0, state, last)
     p = phi0
     w = omega0
     h = dt
-    st, e = acceleration(codes, gidx, goff, par, fixed_idx, fixed_off, tols, newton,
-                         gravity, body_com, body_turn, body_mass_off, load_body, load_point,
-                         const, tab_phi, h_phi, tab_t, h_t, damping,
-                         0.0, p, w, state, last, pos, d1, d2, margins, loads_k)
+    e = 0.0
+    st = OK
     recorded = 0
-    for n in range(n_steps + 1):
+    # One call site of ``acceleration`` (numba inlines callees per call site, so
+    # this keeps the compile time down): evaluation s = 0 is the start, s = 1..3
+    # are RK4 stages 2..4, s = 4 is the new state (= stage 1 of the next step).
+    n = 0
+    s = 0
+    kp = 0.0
+    kw = 0.0
+    sum_p = 0.0
+    sum_w = 0.0
+    while True:
+        if s == 0:
+            ts, ps, ws = 0.0, p, w
+        elif s < 4:
+            c = 0.5 if s < 3 else 1.0
+            ts, ps, ws = n * h + c * h, p + c * h * kp, w + c * h * kw
+        else:
+            p = p + h / 6.0 * sum_p
+            w = w + h / 6.0 * sum_w
+            n += 1
+            ts, ps, ws = n * h, p, w
+        st, es = acceleration(codes, gidx, goff, par, fixed_idx, fixed_off, tols, newton,
+                              gravity, body_com, body_turn, body_mass_off, load_body,
+                              load_point, const, tab_phi, h_phi, tab_t, h_t, damping,
+                              ts, ps, ws, state, last, pos, d1, d2, margins, loads_k)
         if st != OK:
             break
-        t = n * h
+        if 0 < s < 4:
+            weight = 2.0 if s < 3 else 1.0
+            sum_p += weight * ws
+            sum_w += weight * es
+            kp = ws
+            kw = es
+            s += 1
+            continue
+        # at a step point: record, then start the next step with stage 1
+        e = es
         if n % n_sub == 0:
             k = n // n_sub
-            out_t[k] = t
+            out_t[k] = n * h
             out_phi[k] = p
             out_omega[k] = w
             out_eps[k] = e
             recorded = k + 1
         if n >= tail0:
             j = n - tail0
-            tail_t[j] = t
+            tail_t[j] = n * h
             tail_phi[j] = p
             tail_omega[j] = w
             tail_eps[j] = e
         if n == n_steps:
             break
-        k1p = w
-        k1w = e
-        k2p = w + 0.5 * h * k1w
-        st, k2w = acceleration(codes, gidx, goff, par, fixed_idx, fixed_off, tols, newton,
-                               gravity, body_com, body_turn, body_mass_off, load_body,
-                               load_point, const, tab_phi, h_phi, tab_t, h_t, damping,
-                               t + 0.5 * h, p + 0.5 * h * k1p, k2p, state, last, pos, d1, d2,
-                               margins, loads_k)
-        if st != OK:
-            break
-        k3p = w + 0.5 * h * k2w
-        st, k3w = acceleration(codes, gidx, goff, par, fixed_idx, fixed_off, tols, newton,
-                               gravity, body_com, body_turn, body_mass_off, load_body,
-                               load_point, const, tab_phi, h_phi, tab_t, h_t, damping,
-                               t + 0.5 * h, p + 0.5 * h * k2p, k3p, state, last, pos, d1, d2,
-                               margins, loads_k)
-        if st != OK:
-            break
-        k4p = w + h * k3w
-        st, k4w = acceleration(codes, gidx, goff, par, fixed_idx, fixed_off, tols, newton,
-                               gravity, body_com, body_turn, body_mass_off, load_body,
-                               load_point, const, tab_phi, h_phi, tab_t, h_t, damping,
-                               t + h, p + h * k3p, k4p, state, last, pos, d1, d2, margins,
-                               loads_k)
-        if st != OK:
-            break
-        p = p + h / 6.0 * (k1p + 2.0 * k2p + 2.0 * k3p + k4p)
-        w = w + h / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w)
-        st, e = acceleration(codes, gidx, goff, par, fixed_idx, fixed_off, tols, newton,
-                             gravity, body_com, body_turn, body_mass_off, load_body, load_point,
-                             const, tab_phi, h_phi, tab_t, h_t, damping,
-                             (n + 1) * h, p, w, state, last, pos, d1, d2, margins, loads_k)
+        kp = w
+        kw = e
+        sum_p = w
+        sum_w = e
+        s = 1
     return st, recorded
 
 
@@ -299,14 +294,12 @@ def terms_curve(codes, gidx, goff, par, fixed_idx, fixed_off, tols,
     loads_k = np.empty((load_body.shape[0], 3))
     newton = has_newton(codes)
     worst = OK
+    if phis.shape[0] > 0:
+        begin(codes, goff, par, phis[0], state, last)
     for k in range(phis.shape[0]):
-        if k == 0:
-            st = start_continuation(codes, gidx, goff, par, fixed_idx, fixed_off, tols, phis[0],
-                                    state, last, pos, d1, d2, margins)
-        else:
-            st = advance(codes, gidx, goff, par, fixed_idx, fixed_off, last[0], phis[k],
-                         ACCELERATIONS, tols, state, newton, pos, d1, d2, margins)
-            last[0] = phis[k]
+        st = advance(codes, gidx, goff, par, fixed_idx, fixed_off, last[0], phis[k],
+                     ACCELERATIONS, tols, state, newton, pos, d1, d2, margins)
+        last[0] = phis[k]
         out_status[k] = st
         if worst == OK and st != OK:
             worst = st

@@ -41,13 +41,15 @@ N_METRICS = 11
 
 
 @njit(**JIT)
-def evaluate_candidate(par, codes, gidx, goff, fixed_idx, fixed_off, n_points, phis, phi_close,
+def evaluate_candidate(par, codes, n_kinematic, gidx, goff, fixed_idx, fixed_off, n_points, phis,
+                       phi_close,
                        tols, rocker_a, rocker_b, stroke_radius, dwell_w, want_forces,
                        stroke_lo, stroke_hi, margin_min, omega1, eps1, gravity, body_com,
                        body_turn, body_mass_off, joint_point, joint_bodies, slide_bodies,
                        slide_dir, slide_angle, crank_body, load_body, load_point, loads, out):
     """Evaluate one candidate (parameter row ``par``); writes ``out`` (N_METRICS)
-    and returns its status."""
+    and returns its status.  The positions stage solves only the first
+    ``n_kinematic`` groups (the centres of mass that follow serve forces)."""
     for k in range(N_METRICS):
         out[k] = math.nan
     out[M_FORCES_DONE] = 0.0
@@ -62,7 +64,8 @@ def evaluate_candidate(par, codes, gidx, goff, fixed_idx, fixed_off, n_points, p
     theta = np.empty(n)
     newton = has_newton(codes)
 
-    # ---- stage 1: positions over the revolution
+    # ---- stage 1: positions over the revolution, without the centres of mass
+    kin = codes[:n_kinematic]
     init_state(codes, goff, par, state)
     phi_prev = start_angle(codes, goff, par) if newton else phis[0]
     margin = math.inf
@@ -70,7 +73,7 @@ def evaluate_candidate(par, codes, gidx, goff, fixed_idx, fixed_off, n_points, p
     x0 = 0.0
     y0 = 0.0
     for k in range(n):
-        st = advance(codes, gidx, goff, par, fixed_idx, fixed_off, phi_prev, phis[k], 0, tols,
+        st = advance(kin, gidx, goff, par, fixed_idx, fixed_off, phi_prev, phis[k], 0, tols,
                      state, newton, pos, d1, d2, margins)
         phi_prev = phis[k]
         if st != OK:
@@ -87,7 +90,7 @@ def evaluate_candidate(par, codes, gidx, goff, fixed_idx, fixed_off, n_points, p
         theta[k] = relative_angle(x0, y0, pos[rocker_b, 0] - pos[rocker_a, 0],
                                   pos[rocker_b, 1] - pos[rocker_a, 1])
     if newton and math.isfinite(phi_close):
-        st = advance(codes, gidx, goff, par, fixed_idx, fixed_off, phi_prev, phi_close, 0, tols,
+        st = advance(kin, gidx, goff, par, fixed_idx, fixed_off, phi_prev, phi_close, 0, tols,
                      state, newton, pos, d1, d2, margins)
         if st != OK or not closes(codes, state, start_state, tols):
             out[M_FAIL_PHI] = phi_close
@@ -149,8 +152,8 @@ def evaluate_candidate(par, codes, gidx, goff, fixed_idx, fixed_off, n_points, p
 
 
 @njit(**JIT_PARALLEL)
-def evaluate_batch_parallel(pars, codes, gidx, goff, fixed_idx, fixed_off, n_points, phis,
-                            phi_close, tols, rocker_a, rocker_b, stroke_radius, dwell_w,
+def evaluate_batch_parallel(pars, codes, n_kinematic, gidx, goff, fixed_idx, fixed_off, n_points,
+                            phis, phi_close, tols, rocker_a, rocker_b, stroke_radius, dwell_w,
                             want_forces, stroke_lo, stroke_hi, margin_min, omega1, eps1, gravity,
                             body_com, body_turn, body_mass_off, joint_point, joint_bodies,
                             slide_bodies, slide_dir, slide_angle, crank_body, load_body,
@@ -158,16 +161,16 @@ def evaluate_batch_parallel(pars, codes, gidx, goff, fixed_idx, fixed_off, n_poi
     """evaluate_candidate over the rows of ``pars``, in parallel over candidates."""
     for i in prange(pars.shape[0]):
         status[i] = evaluate_candidate(
-            pars[i], codes, gidx, goff, fixed_idx, fixed_off, n_points, phis, phi_close, tols,
-            rocker_a, rocker_b, stroke_radius, dwell_w, want_forces, stroke_lo, stroke_hi,
-            margin_min, omega1, eps1, gravity, body_com, body_turn, body_mass_off, joint_point,
+            pars[i], codes, n_kinematic, gidx, goff, fixed_idx, fixed_off, n_points, phis,
+            phi_close, tols, rocker_a, rocker_b, stroke_radius, dwell_w, want_forces, stroke_lo,
+            stroke_hi, margin_min, omega1, eps1, gravity, body_com, body_turn, body_mass_off, joint_point,
             joint_bodies, slide_bodies, slide_dir, slide_angle, crank_body, load_body,
             load_point, loads, metrics[i])
 
 
 @njit(**JIT)
-def evaluate_batch_serial(pars, codes, gidx, goff, fixed_idx, fixed_off, n_points, phis,
-                          phi_close, tols, rocker_a, rocker_b, stroke_radius, dwell_w,
+def evaluate_batch_serial(pars, codes, n_kinematic, gidx, goff, fixed_idx, fixed_off, n_points,
+                          phis, phi_close, tols, rocker_a, rocker_b, stroke_radius, dwell_w,
                           want_forces, stroke_lo, stroke_hi, margin_min, omega1, eps1, gravity,
                           body_com, body_turn, body_mass_off, joint_point, joint_bodies,
                           slide_bodies, slide_dir, slide_angle, crank_body, load_body,
@@ -175,8 +178,8 @@ def evaluate_batch_serial(pars, codes, gidx, goff, fixed_idx, fixed_off, n_point
     """The same, on one thread (Dask workers: one task per core)."""
     for i in range(pars.shape[0]):
         status[i] = evaluate_candidate(
-            pars[i], codes, gidx, goff, fixed_idx, fixed_off, n_points, phis, phi_close, tols,
-            rocker_a, rocker_b, stroke_radius, dwell_w, want_forces, stroke_lo, stroke_hi,
-            margin_min, omega1, eps1, gravity, body_com, body_turn, body_mass_off, joint_point,
+            pars[i], codes, n_kinematic, gidx, goff, fixed_idx, fixed_off, n_points, phis,
+            phi_close, tols, rocker_a, rocker_b, stroke_radius, dwell_w, want_forces, stroke_lo,
+            stroke_hi, margin_min, omega1, eps1, gravity, body_com, body_turn, body_mass_off, joint_point,
             joint_bodies, slide_bodies, slide_dir, slide_angle, crank_body, load_body,
             load_point, loads, metrics[i])

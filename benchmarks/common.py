@@ -1,0 +1,82 @@
+"""Shared pieces of the benchmarks: the hardware line, timing with warm-up,
+and batch inputs built from the studies."""
+
+from __future__ import annotations
+
+import math
+import os
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+STUDIES = ROOT / "studies"
+
+
+def hardware():
+    cpu = "unknown CPU"
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    import numba
+    return (f"{cpu}, {os.cpu_count()} cores, numba {numba.__version__} "
+            f"({numba.get_num_threads()} threads), Python {platform.python_version()}")
+
+
+def best_of(fn, repeat=3):
+    """Steady-state seconds: the best of ``repeat`` calls (call once before to compile)."""
+    best = math.inf
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t)
+    return best
+
+
+def first_call(fn):
+    """Seconds of the first call (compile or cache load + one run)."""
+    t = time.perf_counter()
+    fn()
+    return time.perf_counter() - t
+
+
+def perturbed_rows(plan, names, n, spread=0.05, seed=0):
+    """n parameter rows: the reference row with ``names`` scaled by 1 +- spread."""
+    rng = np.random.default_rng(seed)
+    pars = np.repeat(plan.par[None, :], n, axis=0)
+    for name in names:
+        k = plan.param(name)
+        pars[:, k] *= 1.0 + rng.uniform(-spread, spread, n)
+    return np.ascontiguousarray(pars)
+
+
+def batch_runner(study, pars, positions, order, with_forces):
+    """A zero-argument function running revolutions_batch on ``pars``."""
+    from pipeline.forces import plan_force_args, sample_loads
+    from pipeline.kernels import config as kc
+    from pipeline.kernels.batch import revolutions_batch
+    from pipeline.scene import revolution_angles
+    mech = study.mechanism
+    plan = mech.compile()
+    phis = revolution_angles(mech.crank, positions)
+    tols = kc.default_tolerances()
+    loads = sample_loads(mech, phis) if mech.loads else np.zeros((positions, 0, 3))
+    n = pars.shape[0]
+    status = np.zeros(n, np.int8)
+    acc = np.zeros(n)
+    peak = np.zeros(n)
+    point = plan.point(study.output.working_point)
+
+    def run():
+        revolutions_batch(pars, plan.codes, plan.gidx, plan.goff, plan.fixed_idx,
+                          plan.fixed_off, plan.n_points, phis, order, tols, point, with_forces,
+                          mech.crank.omega1, mech.crank.eps1, plan.gravity,
+                          *plan_force_args(plan), loads, status, acc, peak)
+        return status, acc, peak
+    return run
