@@ -57,7 +57,7 @@ VELOCITIES = 1      # positions + first analogs
 ACCELERATIONS = 2   # positions + first and second analogs
 
 # ---- tolerance vector ---------------------------------------------------------
-T_NEWTON_TOL = 0      # closure residual accepted by Newton, mm
+T_NEWTON_TOL = 0      # closure residual accepted by Newton, relative to the lead lengths
 T_NEWTON_MAXITER = 1  # iteration cap
 T_NEWTON_STEP = 2     # largest Newton step in (a, b), rad (damping)
 T_SINGULAR = 3        # |normalised determinant| below this is a toggle
@@ -76,7 +76,7 @@ S_ITERS = 4
 N_STATE = 5
 
 
-def default_tolerances(newton_tol=1e-10, newton_maxiter=50, newton_step=0.5,
+def default_tolerances(newton_tol=1e-12, newton_maxiter=50, newton_step=0.5,
                        singular=1e-9, jump=0.35, substep_deg=2.0, close=1e-7,
                        assembly_slack=1e-12):
     """The tolerance vector the kernels take, with the product's defaults."""

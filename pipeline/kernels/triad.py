@@ -71,15 +71,17 @@ def newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b,
 
     Returns (outcome, a, b, iterations, det J): outcome CONVERGED, MAXITER or
     SINGULAR_JACOBIAN.  Converged means both closure residuals, expressed as
-    distances (|F| / 2L, mm), are at most ``tol``.
+    distances (|F| / 2L, mm), are at most ``tol`` times the longer lead
+    (a relative tolerance: the same digits at 1e-3 mm and at 1e4 mm).
     """
     det = math.nan
+    tol_mm = tol * max(l46, l57)
     for it in range(maxiter + 1):
         f1, f2, j11, j12, j21, j22 = closure(p2x, p2y, p6x, p6y, p7x, p7y,
                                              l23, l34, l35, l46, l57, u435, a, b)
         det = j11 * j22 - j12 * j21
         res = max(abs(f1) / (2.0 * l46), abs(f2) / (2.0 * l57))
-        if res <= tol:
+        if res <= tol_mm:
             return CONVERGED, a, b, it, det
         if it == maxiter:
             break
