@@ -57,26 +57,9 @@ def perturbed_rows(plan, names, n, spread=0.05, seed=0):
 
 
 def batch_runner(study, pars, positions, order, with_forces):
-    """A zero-argument function running revolutions_batch on ``pars``."""
-    from pipeline.forces import plan_force_args, sample_loads
-    from pipeline.kernels import config as kc
-    from pipeline.kernels.batch import revolutions_batch
-    from pipeline.scene import revolution_angles
-    mech = study.mechanism
-    plan = mech.compile()
-    phis = revolution_angles(mech.crank, positions)
-    tols = kc.default_tolerances()
-    loads = sample_loads(mech, phis) if mech.loads else np.zeros((positions, 0, 3))
-    n = pars.shape[0]
-    status = np.zeros(n, np.int8)
-    acc = np.zeros(n)
-    peak = np.zeros(n)
-    point = plan.point(study.output.working_point)
+    """A zero-argument function running one revolution of every row of ``pars``."""
+    from pipeline.scene import batch_revolutions
 
     def run():
-        revolutions_batch(pars, plan.codes, plan.gidx, plan.goff, plan.fixed_idx,
-                          plan.fixed_off, plan.n_points, phis, order, tols, point, with_forces,
-                          mech.crank.omega1, mech.crank.eps1, plan.gravity,
-                          *plan_force_args(plan), loads, status, acc, peak)
-        return status, acc, peak
+        return batch_revolutions(study, pars, positions, order, with_forces)
     return run

@@ -102,3 +102,27 @@ def real_motion(curves: Curves, omega1, eps1):
     om = curves.links[:, :, 1] * omega1
     ep = curves.links[:, :, 2] * omega1 ** 2 + curves.links[:, :, 1] * eps1
     return v, a, om, ep
+
+
+def batch_revolutions(study, pars, positions, order=kc.ACCELERATIONS, with_forces=False,
+                      tols=None):
+    """One revolution of every parameter row of ``pars`` (candidates of the
+    study's mechanism) on all cores, reduced to (status, peak |r''| of the
+    working point [mm/rad^2], peak joint reaction [N])."""
+    from .forces import plan_force_args, sample_loads
+    from .kernels.batch import revolutions_batch
+    mech = study.mechanism
+    plan = mech.compile()
+    phis = revolution_angles(mech.crank, positions)
+    tols = kc.default_tolerances() if tols is None else tols
+    loads = sample_loads(mech, phis) if mech.loads else np.zeros((positions, 0, 3))
+    n = pars.shape[0]
+    status = np.zeros(n, np.int8)
+    acc = np.zeros(n)
+    peak = np.zeros(n)
+    revolutions_batch(np.ascontiguousarray(pars), plan.codes, plan.gidx, plan.goff,
+                      plan.fixed_idx, plan.fixed_off, plan.n_points, phis, int(order), tols,
+                      plan.point(study.output.working_point), bool(with_forces),
+                      mech.crank.omega1, mech.crank.eps1, plan.gravity, *plan_force_args(plan),
+                      loads, status, acc, peak)
+    return status, acc, peak

@@ -24,9 +24,10 @@ import numpy as np
 from numba import njit
 
 from .config import (JIT, OK, G_CRANK, G_RRR, G_RRP, G_RPR, G_CLASS3, G_ATTACH,
-                     S_A, S_B, S_ITERS, N_STATE,
-                     T_SINGULAR, T_ASSEMBLY_SLACK, T_SUBSTEP, T_CLOSE,
-                     BRANCH_JUMP)
+                     S_A, S_B, S_ITERS, S_MARGIN, N_STATE,
+                     T_SINGULAR, T_ASSEMBLY_SLACK, T_SUBSTEP, T_CLOSE, T_MIN_STEP,
+                     BRANCH_JUMP, NEWTON_MAXITER, T_STEP_CHANGE, T_FIRST_STEP, S_SLOPE_A,
+                     S_SLOPE_B, S_HAS_SLOPE, S_A_OLD, S_B_OLD, S_SIGN_OLD, S_DET_SIGN)
 from .geometry import angle_analogs
 from .groups import attach, crank, rpr, rrp, rrr
 from .triad import class3, _wrap
@@ -54,6 +55,7 @@ def init_state(codes, goff, par, state):
         if codes[g] == G_CLASS3:
             state[g, S_A] = par[goff[g] + 7]
             state[g, S_B] = par[goff[g] + 8]
+            state[g, S_MARGIN] = 1.0   # not solved yet: full steps
 
 
 @njit(**JIT)
@@ -113,27 +115,113 @@ def solve_position(codes, gidx, goff, par, fixed_idx, fixed_off, phi1, order, to
 
 
 @njit(**JIT)
+def step_limit(codes, state, tols):
+    """Largest crank step from the current state: tols[T_SUBSTEP], and no
+    more than moves a class III angle by tols[T_STEP_CHANGE] along the secant
+    slope of the last step.  Near a fold of the solution curve the slope grows
+    without bound, so the walk slows down into the fold instead of stepping
+    over it onto another solution.  The first step of a walk (slope unknown)
+    is tols[T_FIRST_STEP] of the full step."""
+    h = tols[T_SUBSTEP]
+    for g in range(codes.shape[0]):
+        if codes[g] == G_CLASS3:
+            if state[g, S_HAS_SLOPE] == 0.0:
+                h = min(h, tols[T_SUBSTEP] * tols[T_FIRST_STEP])
+            else:
+                s = max(abs(state[g, S_SLOPE_A]), abs(state[g, S_SLOPE_B]))
+                if s > 0.0:
+                    h = min(h, tols[T_STEP_CHANGE] / s)
+    return h
+
+
+@njit(**JIT)
+def _predict(codes, state, dphi):
+    """Keep the current state and move (a, b) along the secant (predictor)."""
+    for g in range(codes.shape[0]):
+        if codes[g] == G_CLASS3:
+            state[g, S_A_OLD] = state[g, S_A]
+            state[g, S_B_OLD] = state[g, S_B]
+            state[g, S_SIGN_OLD] = state[g, S_DET_SIGN]
+            if state[g, S_HAS_SLOPE] != 0.0:
+                state[g, S_A] += state[g, S_SLOPE_A] * dphi
+                state[g, S_B] += state[g, S_SLOPE_B] * dphi
+
+
+@njit(**JIT)
+def _restore(codes, state):
+    for g in range(codes.shape[0]):
+        if codes[g] == G_CLASS3:
+            state[g, S_A] = state[g, S_A_OLD]
+            state[g, S_B] = state[g, S_B_OLD]
+            state[g, S_DET_SIGN] = state[g, S_SIGN_OLD]
+
+
+@njit(**JIT)
+def _accept(codes, state, dphi):
+    """The step is taken: its secant slope predicts the next one."""
+    if dphi == 0.0:
+        return
+    for g in range(codes.shape[0]):
+        if codes[g] == G_CLASS3:
+            state[g, S_SLOPE_A] = _wrap(state[g, S_A] - state[g, S_A_OLD]) / dphi
+            state[g, S_SLOPE_B] = _wrap(state[g, S_B] - state[g, S_B_OLD]) / dphi
+            state[g, S_HAS_SLOPE] = 1.0
+
+
+@njit(**JIT)
 def advance(codes, gidx, goff, par, fixed_idx, fixed_off, phi_from, phi_to, order, tols,
             state, newton, pos, d1, d2, margins):
-    """Continuation: walk from ``phi_from`` to ``phi_to`` in crank steps of at
-    most tols[T_SUBSTEP] (positions only), then solve at ``phi_to`` to
-    ``order``.  Dyad-only plans are closed form and need no substeps.
-    Returns the worst status met on the way (a branch jump or a failure in a
-    substep counts)."""
+    """Continuation from ``phi_from`` to ``phi_to``, then the solve at
+    ``phi_to`` to ``order``.
+
+    Dyad-only plans are closed form: one solve.  With class III groups the
+    walk is a predictor-corrector: secant predictor, Newton corrector, steps
+    bounded by ``step_limit``; a step whose Newton fails or jumps branch (det J
+    changes sign, or the correction exceeds tols[T_JUMP]) is retried at half
+    the size, down to tols[T_MIN_STEP] of the full step, and only then
+    reported.  Returns the first non-OK status met on the way.
+    """
+    if not newton:
+        return solve_position(codes, gidx, goff, par, fixed_idx, fixed_off, phi_to, order, tols,
+                              state, pos, d1, d2, margins)
     status = OK
-    if newton:
-        n_sub = int(math.ceil(abs(phi_to - phi_from) / tols[T_SUBSTEP]))
-        for i in range(1, n_sub):
-            phi = phi_from + (phi_to - phi_from) * i / n_sub
-            st = solve_position(codes, gidx, goff, par, fixed_idx, fixed_off, phi, 0, tols,
-                                state, pos, d1, d2, margins)
-            if status == OK and st != OK:
-                status = st
-    st = solve_position(codes, gidx, goff, par, fixed_idx, fixed_off, phi_to, order, tols,
-                        state, pos, d1, d2, margins)
-    if status == OK and st != OK:
-        status = st
-    return status
+    direction = 1.0 if phi_to >= phi_from else -1.0
+    h_min = tols[T_SUBSTEP] * tols[T_MIN_STEP]
+    h_cap = tols[T_SUBSTEP]
+    phi = phi_from
+    while True:
+        h = max(min(step_limit(codes, state, tols), h_cap), h_min)
+        final = abs(phi_to - phi) <= h
+        target = phi_to if final else phi + direction * h
+        dphi = target - phi
+        _predict(codes, state, dphi)
+        st = solve_position(codes, gidx, goff, par, fixed_idx, fixed_off, target,
+                            order if final else 0, tols, state, pos, d1, d2, margins)
+        # retry decisions use the intended step h, never the rounded dphi
+        # (phi + h - phi can exceed h_min by an ulp forever)
+        if (st == NEWTON_MAXITER or st == BRANCH_JUMP) and min(h, abs(dphi)) > h_min:
+            _restore(codes, state)
+            h_cap = 0.5 * min(h, abs(dphi))
+            continue
+        if st == OK:
+            _accept(codes, state, dphi)
+            h_cap = min(2.0 * h_cap, tols[T_SUBSTEP])
+            phi = target
+            if final:
+                return status
+            continue
+        # a failure at the smallest step is a fact about the candidate: record
+        # it, and go straight to phi_to from the last good solution (so that a
+        # scene still shows what can be shown) instead of crawling on
+        if status == OK:
+            status = st
+        if st == NEWTON_MAXITER:
+            _restore(codes, state)
+        if final:
+            return status
+        st = solve_position(codes, gidx, goff, par, fixed_idx, fixed_off, phi_to, order, tols,
+                            state, pos, d1, d2, margins)
+        return status
 
 
 @njit(**JIT)

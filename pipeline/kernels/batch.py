@@ -20,7 +20,8 @@ def revolutions_batch(pars, codes, gidx, goff, fixed_idx, fixed_off, n_points, p
                       peak_reaction):
     """For each parameter row: status over the revolution, the peak
     acceleration analog |r''| of ``point`` (mm/rad^2) and, with_forces, the
-    peak joint reaction (N)."""
+    peak joint reaction (N).  NaN peaks with an OK status would be an
+    unflagged failure (the stress suite checks there are none)."""
     ng = codes.shape[0]
     nb = body_com.shape[0]
     nj = joint_point.shape[0]
@@ -42,6 +43,7 @@ def revolutions_batch(pars, codes, gidx, goff, fixed_idx, fixed_off, n_points, p
         st = OK
         acc = 0.0
         peak = 0.0
+        finite = True
         for k in range(phis.shape[0]):
             s = advance(codes, gidx, goff, par, fixed_idx, fixed_off, phi_prev, phis[k], order,
                         tols, state, newton, pos, d1, d2, margins)
@@ -49,14 +51,19 @@ def revolutions_batch(pars, codes, gidx, goff, fixed_idx, fixed_off, n_points, p
             if s != OK:
                 st = s
                 break
-            acc = max(acc, math.hypot(d2[point, 0], d2[point, 1]))
+            a = math.hypot(d2[point, 0], d2[point, 1])
+            finite = finite and math.isfinite(a)
+            acc = max(acc, a)
             if with_forces:
                 kinetostatics(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn,
                               body_mass_off, joint_point, joint_bodies, slide_bodies, slide_dir,
                               slide_angle, crank_body, load_body, load_point, loads[k], work_a,
                               work_b, loads_out, r_out, slide_out)
                 for j in range(nj):
-                    peak = max(peak, math.hypot(r_out[j, 0], r_out[j, 1]))
+                    r = math.hypot(r_out[j, 0], r_out[j, 1])
+                    finite = finite and math.isfinite(r)
+                    peak = max(peak, r)
         status[i] = st
-        peak_acc[i] = acc if st == OK else math.nan
+        # a NaN under an OK status must stay visible: NaN then, with status OK
+        peak_acc[i] = acc if (st == OK and finite) else math.nan
         peak_reaction[i] = peak if (st == OK and with_forces) else math.nan

@@ -61,11 +61,14 @@ T_NEWTON_TOL = 0      # closure residual accepted by Newton, relative to the lea
 T_NEWTON_MAXITER = 1  # iteration cap
 T_NEWTON_STEP = 2     # largest Newton step in (a, b), rad (damping)
 T_SINGULAR = 3        # |normalised determinant| below this is a toggle
-T_JUMP = 4            # largest change of a class III angle between two positions, rad
+T_JUMP = 4            # largest Newton correction of a predicted class III step, rad
 T_SUBSTEP = 5         # largest crank step of the continuation, rad
 T_CLOSE = 6           # revolution must close on its start to this, rad
 T_ASSEMBLY_SLACK = 7  # cosine-law argument in [1, 1+slack] is clamped to a toggle
-N_TOLS = 8
+T_STEP_CHANGE = 8     # continuation steps change a class III angle by at most this, rad
+T_MIN_STEP = 9        # a rejected step is halved down to this fraction of T_SUBSTEP
+T_FIRST_STEP = 10     # first step of a walk (no slope known yet), fraction of T_SUBSTEP
+N_TOLS = 11
 
 # state columns of a class III group (per candidate, per group)
 S_A = 0
@@ -73,12 +76,19 @@ S_B = 1
 S_DET_SIGN = 2
 S_MARGIN = 3
 S_ITERS = 4
-N_STATE = 5
+S_SLOPE_A = 5     # secant slopes da/dphi, db/dphi of the last accepted step
+S_SLOPE_B = 6
+S_HAS_SLOPE = 7
+S_A_OLD = 8       # the state before the step being tried
+S_B_OLD = 9
+S_SIGN_OLD = 10
+N_STATE = 11
 
 
 def default_tolerances(newton_tol=1e-12, newton_maxiter=50, newton_step=0.5,
-                       singular=1e-9, jump=0.35, substep_deg=2.0, close=1e-7,
-                       assembly_slack=1e-12):
+                       singular=1e-9, jump=0.1, substep_deg=2.0, close=1e-7,
+                       assembly_slack=1e-12, step_change=0.05, min_step=1e-5,
+                       first_step=1.0 / 256.0):
     """The tolerance vector the kernels take, with the product's defaults."""
     t = np.empty(N_TOLS)
     t[T_NEWTON_TOL] = newton_tol
@@ -89,4 +99,7 @@ def default_tolerances(newton_tol=1e-12, newton_maxiter=50, newton_step=0.5,
     t[T_SUBSTEP] = np.deg2rad(substep_deg)
     t[T_CLOSE] = close
     t[T_ASSEMBLY_SLACK] = assembly_slack
+    t[T_STEP_CHANGE] = step_change
+    t[T_MIN_STEP] = min_step
+    t[T_FIRST_STEP] = first_step
     return t

@@ -43,7 +43,6 @@ from .config import ACCELERATIONS, JIT, N_STATE, OK, SINGULAR
 from .geometry import angle_analogs
 
 MM = 1e-3
-TWO_PI = 2.0 * math.pi
 
 
 # ----------------------------------------------------------------- drive channels
