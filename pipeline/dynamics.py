@@ -152,18 +152,28 @@ def _mass_args(plan):
 
 
 # ----------------------------------------------------------------- helpers for tests
-def _curve(plan, phi, t=0.0, mechanism=None, tols=None):
+def _zero_drive(n_loads):
+    """No driving moment and no loads (the channel count must match the plan)."""
+    empty = np.zeros((1 + 3 * n_loads, 0, 4))
+    return Drive(np.zeros(1 + 3 * n_loads), empty, 1.0, empty, 1.0)
+
+
+def _curve(plan, phi, t=0.0, mechanism=None, loads=True, tols=None):
     if len(plan.body_names) == 0:
         raise ValueError("crank dynamics needs mass data (bodies)")
-    if len(plan.load_body) and mechanism is None:
+    n_loads = len(plan.load_body)
+    if loads and n_loads and mechanism is None:
         raise ValueError("the plan has external loads: pass the mechanism that declares them")
     tols = kc.default_tolerances() if tols is None else tols
-    from .expressions import parse_expression
-    zero = parse_expression(0.0, "M1")
-    drive = build_drive(mechanism, zero) if len(plan.load_body) else \
-        Drive(np.zeros(1), np.zeros((1, 0, 4)), 1.0, np.zeros((1, 0, 4)), 1.0)
     phis = np.atleast_1d(np.asarray(phi, dtype=np.float64)).ravel().copy()
-    ts = np.broadcast_to(np.asarray(t, dtype=np.float64), phis.shape).copy()
+    ts = np.broadcast_to(np.asarray(t, dtype=np.float64), np.shape(phi)).ravel().copy()
+    if loads and n_loads:
+        from .expressions import parse_expression
+        t_max = max(1e-3, float(np.max(ts))) if ts.size else 1e-3
+        drive = build_drive(mechanism, parse_expression(0.0, "M1"), t_end=t_max,
+                            dt=t_max / 2000)
+    else:
+        drive = _zero_drive(n_loads)
     out = [np.full(phis.shape, np.nan) for _ in range(5)]
     status = np.zeros(phis.shape, np.int8)
     terms_curve(*_plan_args(plan, tols), *_mass_args(plan), *drive.args(), phis, ts, *out,
@@ -185,7 +195,7 @@ def reduced_terms(plan, phi, t=0.0, mechanism=None):
 def energy(plan, phi, omega):
     """(T, V) [J]: kinetic energy J(phi) omega^2 / 2 and gravitational
     potential sum m g y_S at the states (phi [rad], omega [rad/s])."""
-    (J, _h, _Q, _m1, V), _ = _curve(plan, phi)
+    (J, _h, _Q, _m1, V), _ = _curve(plan, phi, loads=False)
     shape = np.shape(phi)
     T = 0.5 * J * np.broadcast_to(np.asarray(omega, float), J.shape) ** 2
     if len(shape) == 0:
@@ -218,8 +228,10 @@ class CaseResult:
     def steady(self, revolutions=STEADY_REVOLUTIONS):
         """Statistics of the last whole revolutions of the fine tail (at most
         ``revolutions``), or None if the crank does not rotate there:
-        omega_mean = (revolutions * 2 pi) / time taken, and the coefficient of
-        non-uniformity delta = (omega_max - omega_min) / omega_mean."""
+        omega_mean = (revolutions * 2 pi) / time taken (the time mean, not
+        (omega_max + omega_min) / 2), the coefficient of non-uniformity
+        delta = (omega_max - omega_min) / omega_mean, and omega_mean_change, the
+        change of omega_mean from the revolutions before (0 once steady)."""
         phi, om, t = self.tail_phi1, self.tail_omega1, self.tail_t
         if phi.size < 3 or not np.isfinite(phi).all():
             return None
@@ -229,18 +241,26 @@ class CaseResult:
         n = min(revolutions, int(abs(phi[-1] - phi[0]) / (2.0 * math.pi)))
         if n < 1:
             return None
-        start = phi[-1] - sgn * 2.0 * math.pi * n
-        i = int(np.argmax((phi - start) * sgn >= 0.0))
-        # the window starts exactly one whole number of revolutions back: interpolate t there
-        if i > 0:
-            t0 = np.interp(start * sgn, phi[i - 1:i + 1] * sgn, t[i - 1:i + 1])
-        else:
-            t0 = t[0]
+
+        def time_at(angle):
+            # the crank passes ``angle`` between two steps: interpolate the time there
+            i = int(np.argmax((phi - angle) * sgn >= 0.0))
+            if i == 0:
+                return t[0], 0
+            return float(np.interp(angle * sgn, phi[i - 1:i + 1] * sgn, t[i - 1:i + 1])), i
+
+        span = sgn * 2.0 * math.pi * n
+        t0, i = time_at(phi[-1] - span)
         w = om[i:] * sgn
         mean = 2.0 * math.pi * n / (t[-1] - t0)
-        return {"revolutions": n, "omega_mean": sgn * mean, "omega_max": sgn * float(w.max()),
-                "omega_min": sgn * float(w.min()), "delta": float((w.max() - w.min()) / mean),
-                "rpm": sgn * mean * 30.0 / math.pi}
+        out = {"revolutions": n, "omega_mean": sgn * mean, "omega_max": sgn * float(w.max()),
+               "omega_min": sgn * float(w.min()), "delta": float((w.max() - w.min()) / mean),
+               "rpm": sgn * mean * 30.0 / math.pi, "omega_mean_change": math.nan}
+        if abs(phi[-1] - phi[0]) >= 2.0 * abs(span):
+            # the n revolutions before: a non-zero change says the run-up is not over
+            tb, _ = time_at(phi[-1] - 2.0 * span)
+            out["omega_mean_change"] = sgn * (mean - 2.0 * math.pi * n / (t0 - tb))
+        return out
 
     def oscillation(self):
         """Settled angle, amplitude and period of an oscillation in the fine
@@ -264,7 +284,8 @@ class CaseResult:
         if s is not None:
             out.update(omega_mean=_round(s["omega_mean"]), rpm=_round(s["rpm"], 5),
                        delta=_round(s["delta"], 5),
-                       omega_min=_round(s["omega_min"]), omega_max=_round(s["omega_max"]))
+                       omega_min=_round(s["omega_min"]), omega_max=_round(s["omega_max"]),
+                       omega_mean_change=_round(s["omega_mean_change"], 3))
         else:
             o = self.oscillation()
             if o is not None:
@@ -339,7 +360,8 @@ class _Stop(Exception):
 
 def _dop853(plan, drive, case, tols, out, tail):
     """The reference: scipy's DOP853 at rtol = atol = 1e-12 over the compiled
-    right-hand side; samples from its dense output, eps1 re-evaluated there."""
+    right-hand side; samples from its dense output, eps1 re-evaluated there.
+    A kinematic failure stops it with that status and leaves every sample NaN."""
     from scipy.integrate import solve_ivp
     n = plan.n_points
     work = dict(state=np.zeros((plan.n_groups, kc.N_STATE)), last=np.zeros(1),
@@ -444,7 +466,7 @@ def dynamics_figure(case: CaseResult, path):
         if fine is not None and fine.size:
             # the samples alias a fast rotation; the tail shows every step
             ax.plot(case.tail_t, fine, lw=0.4, color="C3", label="every step")
-            ax.legend(fontsize=8, loc="lower right")
+            ax.legend(fontsize=8, loc="best")
         ax.set_xlabel("t [s]")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)

@@ -1,0 +1,260 @@
+"""Crank dynamics of the thread take-up (DOMAIN.md section 7): the Lagrange
+terms against the independent finite-difference oracle, physics checks
+(energy, small-oscillation period), RK4 against scipy's DOP853, the drive
+channels, and `pipeline run` / `pipeline export` end to end."""
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.optimize import brentq
+
+from naive import naive_c_lagrange_terms
+from pipeline import dynamics as dy
+from pipeline.cli import main
+from pipeline.kernels import config as kc
+from pipeline.study import DynamicsCase, StudyError, load_study, parse_study
+from pipeline.expressions import parse_expression
+from tolerances import ANALOG_REL
+
+# tolerances of this file (explicit; never loosened to make a test pass)
+TERMS_REL = ANALOG_REL        # J, J'/2, Q vs the FD oracle, relative to each term's scale
+HALF_DJ_FD_REL = 1e-8         # J'/2 vs a 4th-order central difference of J
+ENERGY_REL = 1e-9             # drift of T + V over 10 s, relative to the largest T
+PERIOD_REL = 1e-3             # small-oscillation period vs 2 pi sqrt(J / -Q')
+RK4_VS_DOP853_RAD = 1e-6      # phi1 at 10 s, run-up case
+DRIVE_TABLE_REL = 1e-9        # tabulated constant / periodic drive vs the exact one
+
+ANGLES_DEG = (0.0, 37.0, 91.0, 150.0, 200.0, 269.18, 280.0, 333.0)
+
+
+@pytest.fixture(scope="module")
+def study(studies):
+    return load_study(studies / "takeup_dynamics.toml")
+
+
+@pytest.fixture(scope="module")
+def plan(study):
+    return study.mechanism.compile()
+
+
+@pytest.fixture(scope="module")
+def cases(study):
+    return {c.name: c for c in study.dynamics.cases}
+
+
+@pytest.fixture(scope="module")
+def runup_rk4(study, plan, cases):
+    return dy.integrate(plan, study.mechanism, cases["runup"], "rk4")
+
+
+def test_study_declares_section_7(cases):
+    r, f = cases["runup"], cases["free"]
+    assert math.degrees(r.phi_start) == pytest.approx(269.18)
+    assert math.degrees(f.phi_start) == pytest.approx(280.0)
+    assert r.M1.evaluate(0.0) == 0.025 and f.M1.evaluate(0.0) == 0.0
+    assert r.damping == f.damping == 2e-4
+    assert r.t_end == f.t_end == 10.0 and r.sample_dt == f.sample_dt == 0.01
+    assert r.omega_start == f.omega_start == 0.0
+
+
+# ----------------------------------------------------------------- (a), (b) Lagrange terms
+@pytest.mark.parametrize("deg", ANGLES_DEG)
+def test_terms_match_naive_oracle(plan, deg):
+    phi = math.radians(deg)
+    J, half, Q = dy.reduced_terms(plan, phi)
+    Jn, halfn, Qn = naive_c_lagrange_terms(phi, M1=0.0)
+    # each term relative to its own scale over the revolution (J'/2 and Q cross zero)
+    assert J == pytest.approx(Jn, rel=TERMS_REL)
+    assert abs(half - halfn) <= TERMS_REL * 2e-5
+    assert abs(Q - Qn) <= TERMS_REL * 2e-2
+
+
+def test_half_dJ_is_half_the_derivative_of_J(plan):
+    phis = np.radians(np.arange(0.0, 360.0, 7.5))
+    h = 1e-3
+    Jm2, Jm1, Jp1, Jp2 = (dy.reduced_terms(plan, phis + k * h)[0] for k in (-2, -1, 1, 2))
+    fd = (Jm2 - 8.0 * Jm1 + 8.0 * Jp1 - Jp2) / (12.0 * h)
+    half = dy.reduced_terms(plan, phis)[1]
+    assert np.max(np.abs(half - 0.5 * fd)) <= HALF_DJ_FD_REL * np.max(np.abs(half))
+
+
+def test_Q_is_minus_the_derivative_of_V(plan):
+    phis = np.radians(np.arange(0.0, 360.0, 15.0))
+    h = 1e-4
+    _, Vp = dy.energy(plan, phis + h, 0.0)
+    _, Vm = dy.energy(plan, phis - h, 0.0)
+    Q = dy.reduced_terms(plan, phis)[2]
+    assert np.max(np.abs(Q + (Vp - Vm) / (2 * h))) <= 1e-7 * np.max(np.abs(Q))
+
+
+# ----------------------------------------------------------------- (c) energy
+@pytest.mark.parametrize("start_deg, omega0", [(280.0, 0.0), (120.0, 20.0)],
+                         ids=["oscillation", "rotation"])
+def test_energy_is_conserved_without_damping_and_drive(study, plan, cases, start_deg, omega0):
+    case = dy.with_changes(cases["free"], damping=0.0, M1=0.0,
+                           phi_start=math.radians(start_deg), omega_start=omega0)
+    res = dy.integrate(plan, study.mechanism, case)
+    assert res.status == kc.OK and np.isfinite(res.phi1).all()
+    if omega0:
+        assert res.steady() is not None          # it turns round: every position is visited
+    T, V = dy.energy(plan, res.phi1, res.omega1)
+    E = T + V
+    assert np.ptp(E) <= ENERGY_REL * T.max()
+
+
+# ----------------------------------------------------------------- (d) small oscillations
+def test_small_oscillation_period(study, plan, cases):
+    Q = lambda p: dy.reduced_terms(plan, p)[2]
+    eq = brentq(Q, math.radians(260.0), math.radians(275.0), xtol=1e-15)
+    h = 1e-5
+    dQ = (Q(eq + h) - Q(eq - h)) / (2 * h)
+    assert dQ < 0.0                                  # a stable equilibrium
+    J = dy.reduced_terms(plan, eq)[0]
+    period = 2.0 * math.pi * math.sqrt(J / -dQ)
+    case = dy.with_changes(cases["free"], damping=0.0, M1=0.0, phi_start=eq + 1e-4)
+    res = dy.integrate(plan, study.mechanism, case)
+    x = res.phi1 - eq
+    k = np.nonzero((x[:-1] < 0.0) & (x[1:] >= 0.0))[0]      # upward zero crossings
+    tc = res.t[k] - x[k] * (res.t[k + 1] - res.t[k]) / (x[k + 1] - x[k])
+    assert len(tc) >= 10
+    measured = (tc[-1] - tc[0]) / (len(tc) - 1)
+    assert measured == pytest.approx(period, rel=PERIOD_REL)
+    # the free case (damped, larger amplitude) settles about the same equilibrium
+    free = dy.integrate(plan, study.mechanism, cases["free"])
+    osc = free.oscillation()
+    assert abs(math.radians(osc["phi_mid_deg"]) - eq) < math.radians(0.2)
+    assert osc["amplitude_deg"] < 10.8 / 5
+
+
+# ----------------------------------------------------------------- (e) RK4 vs DOP853
+def test_rk4_agrees_with_dop853(study, plan, cases, runup_rk4):
+    ref = dy.integrate(plan, study.mechanism, cases["runup"], "dop853")
+    assert runup_rk4.status == ref.status == kc.OK
+    np.testing.assert_allclose(ref.t, runup_rk4.t, rtol=0, atol=1e-12)
+    assert abs(ref.phi1[-1] - runup_rk4.phi1[-1]) <= RK4_VS_DOP853_RAD
+    assert np.max(np.abs(ref.phi1 - runup_rk4.phi1)) <= RK4_VS_DOP853_RAD
+
+
+def test_runup_reaches_a_steady_rotation(runup_rk4):
+    s = runup_rk4.steady()
+    assert s is not None and s["revolutions"] == dy.STEADY_REVOLUTIONS
+    # energy balance of the steady cycle: M1 = b * (phi-average of omega) = 125 rad/s
+    assert 120.0 < s["omega_mean"] < 125.0
+    assert 0.0 < s["delta"] < 0.1
+    assert s["omega_min"] < s["omega_mean"] < s["omega_max"]
+    # eps1 recorded at a sample is the equation's value there
+    e = runup_rk4.eps1
+    assert np.isfinite(e).all() and abs(e[0] - 68.95) < 0.1   # (Q + M1) / J at rest
+
+
+# ----------------------------------------------------------------- drive channels and loads
+def _short(case, **kw):
+    return dy.with_changes(case, t_end=1.0, **kw)
+
+
+@pytest.mark.parametrize("text", ["0.025 + 0*sin(phi)", "0.025 + 0*t"], ids=["phi", "t"])
+def test_tabulated_constant_drive_is_exact(study, plan, cases, text):
+    base = dy.integrate(plan, study.mechanism, _short(cases["runup"]))
+    tab = dy.integrate(plan, study.mechanism, _short(cases["runup"], M1=text))
+    assert np.max(np.abs(tab.phi1 - base.phi1)) <= DRIVE_TABLE_REL * np.max(np.abs(base.phi1))
+
+
+@pytest.mark.parametrize("text, var", [
+    ("0.025*(1 + 0.5*sin(phi) + 0.2*cos(3*phi))", "phi"),
+    ("0.025*(1 - exp(-t/0.3)) + 0.002*sin(7*t)", "t"),
+])
+def test_drive_tables_follow_the_expression(study, text, var):
+    from pipeline.kernels.dynamics import channel
+    m1 = parse_expression(text, "M1")
+    drive = dy.build_drive(study.mechanism, m1, t_end=10.0, dt=1e-4)
+    tab, other = (drive.tab_phi, drive.tab_t) if var == "phi" else (drive.tab_t, drive.tab_phi)
+    assert tab.shape[1] > 0 and other.shape[1] == 0
+    xs = np.linspace(-20.0, 20.0, 41) if var == "phi" else np.linspace(0.0, 10.0, 37) + 1e-4
+    for x in xs:
+        phi, t = (x, 0.0) if var == "phi" else (0.0, x)
+        want = float(m1.evaluate(phi, t))
+        assert abs(channel(*drive.args(), 0, phi, t) - want) <= DRIVE_TABLE_REL * 0.025
+
+
+def test_loads_enter_the_generalized_force(study, plan):
+    extra = """
+[[mechanism.loads]]
+body = "crank"
+moment = 0.01
+[[mechanism.loads]]
+body = "crank"
+point = "P2"
+fx = "0"
+fy = "-3*(1 + 0.5*sin(2*phi))"
+"""
+    text = study.text.replace("[[mechanism.slides]]", extra + "\n[[mechanism.slides]]", 1)
+    st = parse_study(text, study.path)
+    p = st.mechanism.compile()
+    l1 = 16.3e-3
+    for phi in np.radians([0.0, 50.0, 190.0, 300.0]):
+        Q0 = dy.reduced_terms(plan, phi)[2]
+        Q1 = dy.reduced_terms(p, phi, mechanism=st.mechanism)[2]
+        fy = -3.0 * (1.0 + 0.5 * math.sin(2 * phi))
+        assert Q1 - Q0 == pytest.approx(0.01 + fy * l1 * math.cos(phi), rel=1e-9, abs=1e-12)
+
+
+@pytest.mark.parametrize("m1, why", [
+    ('"0.025*sin(phi)*t"', "depends on both phi and t"),
+    ('"0.001*phi"', "not 2*pi-periodic"),
+])
+def test_unsupported_drives_are_rejected_when_read(study, m1, why):
+    text = study.text.replace("M1 = 0.025", f"M1 = {m1}", 1)
+    with pytest.raises(StudyError) as e:
+        parse_study(text, "c.toml")
+    assert "dynamics.cases[0].M1" in str(e.value) and why in str(e.value)
+    assert str(e.value).startswith("c.toml: ")
+
+
+def test_steps_must_divide_the_samples(study):
+    text = study.text.replace("dt = 1e-4", "dt = 3e-3", 1)
+    with pytest.raises(StudyError, match=r"dynamics.cases\[0\].dt: .*whole number"):
+        parse_study(text, "c.toml")
+
+
+# ----------------------------------------------------------------- class III plans
+def test_class3_plan_keeps_its_continuation(studies):
+    """Mechanism B swinging under gravity: the triad's Newton state is carried
+    through the RK4 stages; T + V conserved, DOP853 agrees."""
+    st = load_study(studies / "ov7_class3.toml")
+    p = st.mechanism.compile()
+    case = DynamicsCase(name="swing", phi_start=0.0, omega_start=-20.0,
+                        M1=parse_expression(0.0, "M1"), damping=0.0, t_end=0.2, dt=1e-4,
+                        sample_dt=0.01)
+    res = dy.integrate(p, st.mechanism, case)
+    assert res.status == kc.OK and np.isfinite(res.phi1).all()
+    T, V = dy.energy(p, res.phi1, res.omega1)
+    assert np.ptp(T + V) <= ENERGY_REL * T.max()
+    ref = dy.integrate(p, st.mechanism, case, "dop853")
+    assert np.max(np.abs(ref.phi1 - res.phi1)) <= RK4_VS_DOP853_RAD
+
+
+# ----------------------------------------------------------------- (f) CLI end to end
+def test_cli_run_and_export_motion_tables(studies, tmp_path):
+    out = tmp_path / "c.h5"
+    assert main(["run", str(studies / "takeup_dynamics.toml"), "-o", str(out), "-q"]) == 0
+    for case in ("runup", "free"):
+        assert (tmp_path / f"c_{case}.png").stat().st_size > 10_000
+    import h5py
+    with h5py.File(out, "r") as f:
+        g = f["dynamics/runup"]
+        for name, unit in (("t", "s"), ("phi1", "deg"), ("omega1", "rad/s"),
+                           ("eps1", "rad/s^2")):
+            assert g[name].attrs["units"] == unit and g[name].attrs["long_name"]
+        assert g.attrs["method"] == "rk4" and g.attrs["status"] == "OK"
+        assert 0.0 < g.attrs["summary_delta"] < 0.1
+    csv = tmp_path / "csv"
+    assert main(["export", str(out), "--csv", str(csv), "-q"]) == 0
+    for case, phi0 in (("runup", 269.18), ("free", 280.0)):
+        df = pd.read_csv(csv / f"motion_{case}.csv")
+        assert list(df.columns) == ["t_s", "phi1_deg", "omega1", "eps1"]
+        assert len(df) == 1001
+        np.testing.assert_allclose(df["t_s"], np.arange(1001) * 0.01, atol=1e-9)
+        assert df["phi1_deg"][0] == pytest.approx(phi0) and df["omega1"][0] == 0.0
+        assert np.isfinite(df.to_numpy()).all()
