@@ -57,6 +57,37 @@ def cmd_compile(a):
     return EXIT_OK
 
 
+def cmd_analyze(a):
+    from .analysis import analyze
+    info = analyze(a.results, n_representatives=a.representatives, max_samples=a.max_samples,
+                   n_jobs=a.jobs)
+    if not a.quiet:
+        _print(info, a.format)
+    return EXIT_OK
+
+
+def cmd_browse(a):
+    from .browse import browse
+    print(browse(a.results, top=a.top, candidate=a.candidate, fmt=a.format))
+    return EXIT_OK
+
+
+def cmd_show(a):
+    from .browse import show
+    info = show(a.results, a.candidate, a.output)
+    if not a.quiet:
+        _print(info, a.format)
+    return EXIT_OK
+
+
+def cmd_report(a):
+    from .report import write_report
+    info = write_report(a.results, a.output, top=a.top)
+    if not a.quiet:
+        _print(info, a.format)
+    return EXIT_OK
+
+
 def build_parser():
     p = argparse.ArgumentParser(prog="pipeline", description=(
         "Exact analysis and Monte-Carlo synthesis of hinged-lever mechanisms."))
@@ -85,6 +116,52 @@ def build_parser():
     c = sub.add_parser("compile", parents=[common],
                        help="compile every kernel ahead of time (fills numba's cache)")
     c.set_defaults(func=cmd_compile)
+
+    an = sub.add_parser("analyze", parents=[common], help=(
+        "rank a sweep's feasible candidates into Pareto fronts, model each objective and "
+        "pick representative designs (written into the file as /analysis)"))
+    an.add_argument("results", help="results HDF5 file of a sweep")
+    an.add_argument("-n", "--representatives", type=int, default=5, metavar="N",
+                    help="representative front-1 designs to pick (default 5)")
+    an.add_argument("--max-samples", type=int, default=20000, metavar="N",
+                    help="feasible candidates used per model, train + test (default 20000)")
+    an.add_argument("-j", "--jobs", type=int, default=1, help="threads for the models")
+    an.set_defaults(func=cmd_analyze)
+
+    # browse also writes CSV: its own copy of the common options
+    common_csv = argparse.ArgumentParser(add_help=False)
+    common_csv.add_argument("-v", "--verbose", action="store_true", help="more log output")
+    common_csv.add_argument("-q", "--quiet", action="store_true", help="no progress or summary")
+    common_csv.add_argument("--format", choices=("table", "json", "csv"), default="table",
+                            help="csv: the designs table (or one candidate's values)")
+    b = sub.add_parser("browse", parents=[common_csv], help=(
+        "a sweep file's contents, counts by status and best designs, or one candidate"))
+    b.add_argument("results", help="results HDF5 file of a sweep")
+    b.add_argument("--top", type=int, default=10, metavar="N",
+                   help="rows per table: front 1 spread along the front, and the N best per "
+                        "objective (default 10)")
+    b.add_argument("--candidate", metavar="ID",
+                   help="one candidate: an index, 'knee' or 'reference'")
+    b.set_defaults(func=cmd_browse)
+
+    s = sub.add_parser("show", parents=[common], help=(
+        "re-run one candidate of a sweep as a scene and draw it: mechanism, output motion "
+        "over the OV-7 cyclogram, joint reactions"))
+    s.add_argument("results", help="results HDF5 file of a sweep")
+    s.add_argument("--candidate", required=True, metavar="ID",
+                   help="an index, 'knee' or 'reference'")
+    s.add_argument("-o", "--output", metavar="PNG",
+                   help="picture (default: next to the results file, <name>_candidate<ID>.png)")
+    s.set_defaults(func=cmd_show)
+
+    rp = sub.add_parser("report", parents=[common], help=(
+        "one self-contained HTML page about a sweep (runs analyze first if needed)"))
+    rp.add_argument("results", help="results HDF5 file of a sweep")
+    rp.add_argument("-o", "--output", metavar="HTML",
+                    help="report file (default: next to the results file, <name>_report.html)")
+    rp.add_argument("--top", type=int, default=20, metavar="N",
+                    help="rows of the front-1 table (default 20)")
+    rp.set_defaults(func=cmd_report)
     return p
 
 

@@ -1,0 +1,414 @@
+"""One self-contained HTML page about a sweep (`pipeline report`): the Pareto
+plot, the parameter importances, the representative designs drawn, front 1,
+the counts by status and the run's provenance.
+
+Everything is inline: the pictures are PNG data URIs, the style sheet is in the
+page, and a few lines of script only record (in ``data-*`` attributes of
+<body>) whether every picture decoded, so that a headless browser can check
+the page.  Nothing is fetched from anywhere.
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime as _dt
+import html
+import io
+import logging
+import math
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+from .analysis import analyze, has_analysis, read_analysis, read_sweep
+from .browse import _s, design_table, ranking, rerun_candidate, status_counts
+from .storage import open_results
+
+log = logging.getLogger("pipeline")
+
+MAX_GREY = 60_000       # infeasible points drawn in the Pareto plot (seeded subsample)
+MAX_FRONT_POINTS = 200_000
+
+CSS = """
+body { font-family: -apple-system, "Segoe UI", Helvetica, Arial, sans-serif; margin: 0 auto;
+       max-width: 1180px; padding: 1.2em 2em 3em; color: #222; line-height: 1.4; }
+h1 { font-size: 1.55em; margin-bottom: 0.1em; }
+h2 { font-size: 1.2em; border-bottom: 1px solid #ccc; padding-bottom: 0.2em; margin-top: 1.8em; }
+.sub { color: #555; margin-top: 0; }
+table { border-collapse: collapse; font-size: 0.85em; margin: 0.5em 0; }
+th, td { padding: 0.2em 0.6em; text-align: right; border-bottom: 1px solid #e4e4e4; }
+th { background: #f3f3f3; }
+td.l, th.l { text-align: left; white-space: nowrap; }
+.wide { overflow-x: auto; max-width: 100%; }
+img { max-width: 100%; height: auto; }
+.cards { display: flex; flex-wrap: wrap; gap: 14px; }
+.card { border: 1px solid #ddd; border-radius: 6px; padding: 8px; width: 350px; }
+.card h3 { font-size: 0.95em; margin: 0.1em 0 0.3em; }
+.card table { font-size: 0.78em; width: 100%; }
+.kv td:first-child { text-align: left; color: #555; }
+pre { background: #f7f7f7; border: 1px solid #ddd; padding: 0.8em; font-size: 0.8em;
+      overflow-x: auto; }
+.note { color: #555; font-size: 0.9em; }
+tr.knee td { background: #fff4d6; }
+"""
+
+SCRIPT = """
+(function () {
+  window.addEventListener('error', function () {
+    document.body.dataset.jsErrors = String(Number(document.body.dataset.jsErrors || 0) + 1);
+  });
+  window.addEventListener('load', function () {
+    var imgs = Array.prototype.slice.call(document.images);
+    var ok = imgs.filter(function (i) { return i.complete && i.naturalWidth > 0; }).length;
+    document.body.dataset.imagesTotal = String(imgs.length);
+    document.body.dataset.imagesOk = String(ok);
+    document.body.dataset.imagesLoaded = (imgs.length > 0 && ok === imgs.length) ? 'true' : 'false';
+  });
+})();
+"""
+
+
+def _png(fig, dpi=100) -> str:
+    import matplotlib.pyplot as plt
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    plt.close(fig)
+    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _img(uri, alt):
+    return f'<img src="{uri}" alt="{html.escape(alt)}">'
+
+
+def _fmt(v, digits=4):
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        return html.escape(str(v))
+    if math.isnan(v):
+        return "&ndash;"
+    if math.isinf(v):
+        return "&infin;"
+    return f"{v:.{digits}g}"
+
+
+def _letters(k):
+    return [chr(ord("A") + i) if i < 26 else f"R{i}" for i in range(k)]
+
+
+# ----------------------------------------------------------------- figures
+def _plain_fmt(v, _pos=None):
+    return f"{v:g}"
+
+
+def _plain_2_5_fmt(v, _pos=None):
+    """Minor log ticks: label only 2 and 5 times a power of ten."""
+    if not v > 0:
+        return ""
+    lead = v / 10 ** math.floor(math.log10(v) + 1e-12)
+    return f"{v:g}" if round(lead) in (2, 5) and abs(lead - round(lead)) < 1e-6 else ""
+
+
+def _formatters():
+    from matplotlib.ticker import FuncFormatter
+    return FuncFormatter(_plain_fmt), FuncFormatter(_plain_2_5_fmt)
+
+
+def pareto_figure(data, ana) -> str:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    F, rank = data.F, ana.rank
+    o = data.objectives
+    _plain, _plain_2_5 = _formatters()
+    fig, ax = plt.subplots(figsize=(10.5, 6.2), layout="constrained")
+    finite = np.isfinite(F[:, :2]).all(axis=1) if F.shape[1] >= 2 else np.zeros(len(F), bool)
+    if F.shape[1] < 2:
+        ax.text(0.5, 0.5, "one objective: no Pareto plot", ha="center", transform=ax.transAxes)
+        return _png(fig)
+    x, y = F[:, 0], F[:, 1]
+    logx = bool((x[finite] > 0).all()) and finite.any()
+    logy = bool((y[finite] > 0).all()) and finite.any()
+    rng = np.random.default_rng(data.seed)
+    grey = np.flatnonzero(finite & (rank == 0))
+    if grey.size > MAX_GREY:
+        grey = np.sort(rng.choice(grey, MAX_GREY, replace=False))
+    if grey.size:
+        ax.scatter(x[grey], y[grey], s=3, c="0.75", lw=0, rasterized=True,
+                   label=f"infeasible ({int((finite & (rank == 0)).sum())} with both "
+                         "objectives)")
+    feas = np.flatnonzero(rank > 1)
+    if feas.size > MAX_FRONT_POINTS:
+        feas = np.sort(rng.choice(feas, MAX_FRONT_POINTS, replace=False))
+    nf = int(rank.max(initial=0))
+    if feas.size:
+        sc = ax.scatter(x[feas], y[feas], s=4, c=rank[feas], cmap="viridis_r", lw=0,
+                        norm=matplotlib.colors.LogNorm(vmin=2, vmax=max(nf, 3)),
+                        rasterized=True, alpha=0.8, label="feasible, fronts 2 ...")
+        cb = fig.colorbar(sc, ax=ax, pad=0.01)
+        cb.set_label("Pareto front (rank)")
+        ticks = [t for t in (2, 3, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000)
+                 if t <= max(nf, 3)]
+        cb.set_ticks(ticks, labels=[str(t) for t in ticks])
+        cb.ax.minorticks_off()
+    f1 = ana.front1
+    if f1.size:
+        ax.plot(x[f1], y[f1], "-", color="C3", lw=1.2, zorder=4)
+        ax.scatter(x[f1], y[f1], s=28, color="C3", ec="k", lw=0.5, zorder=5,
+                   label=f"front 1 ({f1.size} designs)")
+    reps = ana.representatives
+    for lab, i in zip(_letters(len(reps)), reps):
+        ax.annotate(lab, (x[i], y[i]), textcoords="offset points", xytext=(6, 6), fontsize=10,
+                    weight="bold", color="C3", zorder=7)
+    if ana.knee >= 0:
+        ax.scatter([x[ana.knee]], [y[ana.knee]], s=140, marker="D", facecolor="none",
+                   ec="k", lw=1.6, zorder=6, label=f"knee (#{ana.knee})")
+    ro = np.asarray(ana.reference.get("objectives", [np.nan, np.nan]), float)
+    if ro.size >= 2 and np.isfinite(ro[:2]).all():
+        ax.scatter([ro[0]], [ro[1]], s=260, marker="*", color="gold", ec="k", lw=1.0, zorder=6,
+                   label=f"reference design (front {int(ana.reference['rank'])})")
+    for on, axis, setter in ((logx, ax.xaxis, ax.set_xscale), (logy, ax.yaxis, ax.set_yscale)):
+        if on:
+            setter("log")
+            axis.set_major_formatter(_plain)
+            axis.set_minor_formatter(_plain_2_5)
+    ax.set_xlabel(f"{o[0]} [{data.objective_units[0]}] (minimised)")
+    ax.set_ylabel(f"{o[1]} [{data.objective_units[1]}] (minimised)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8, loc="upper right", markerscale=0.7, framealpha=0.9)
+    ax.set_title(f"{int(data.feasible.sum())} feasible of {data.n} candidates in {nf} fronts",
+                 fontsize=10)
+    return _png(fig)
+
+
+def importance_figure(data, ana) -> str:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    objs = list(data.objectives)
+    fig, axes = plt.subplots(1, len(objs), figsize=(5.2 * len(objs), 3.8), layout="constrained",
+                             squeeze=False)
+    names = data.names
+    ypos = np.arange(len(names))
+    for ax, o in zip(axes[0], objs):
+        m = ana.models.get(o, {})
+        if not m.get("fitted"):
+            ax.text(0.5, 0.5, f"no model:\n{_s(m.get('reason', 'not fitted'))}", ha="center",
+                    va="center", transform=ax.transAxes, wrap=True, fontsize=9)
+            ax.set_axis_off()
+            ax.set_title(o, fontsize=10)
+            continue
+        mean, std = np.asarray(m["mean"]), np.asarray(m["std"])
+        ax.barh(ypos, mean, xerr=std, color="C0", alpha=0.85, capsize=2)
+        ax.set_yticks(ypos, names)
+        ax.invert_yaxis()
+        ax.axvline(0, color="k", lw=0.6)
+        ax.set_xlabel("drop of held-out R$^2$ when shuffled")
+        ax.grid(alpha=0.3, axis="x")
+        ax.set_title(f"{o}: held-out R$^2$ = {float(m['r2_test']):.3f}\n"
+                     f"({_s(m.get('target', ''))} target, {int(m.get('n_train', 0))} train / "
+                     f"{int(m.get('n_test', 0))} test)", fontsize=10)
+    return _png(fig)
+
+
+def design_figure(run) -> str:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from .plots import draw_positions
+    fig, ax = plt.subplots(figsize=(3.6, 4.4), layout="constrained")
+    draw_positions(ax, run.scene, run.table, highlight=0)
+    ax.set_xlabel("x [mm]", fontsize=8)
+    ax.set_ylabel("y [mm]", fontsize=8)
+    ax.tick_params(labelsize=7)
+    return _png(fig, dpi=90)
+
+
+# ----------------------------------------------------------------- page parts
+def _table_html(df, knee=None) -> str:
+    cols = list(df.columns)
+    out = ["<table><thead><tr>"]
+    out += [f'<th class="{"l" if c in ("selection", "mark") else ""}">{html.escape(str(c))}</th>'
+            for c in cols]
+    out.append("</tr></thead><tbody>")
+    for _, row in df.iterrows():
+        cls = ' class="knee"' if knee is not None and row.get("candidate") == knee else ""
+        out.append(f"<tr{cls}>" + "".join(
+            f'<td class="l">{html.escape(str(row[c]))}</td>' if c in ("selection", "mark")
+            else f"<td>{_fmt(row[c])}</td>" for c in cols) + "</tr>")
+    out.append("</tbody></table>")
+    return "".join(out)
+
+
+def _kv(pairs) -> str:
+    return '<table class="kv">' + "".join(
+        f"<tr><td>{html.escape(str(k))}</td><td>{v}</td></tr>" for k, v in pairs) + "</table>"
+
+
+def _card(title, run, values, data) -> str:
+    rows = [(k, v) for k, v in values]
+    rows += [(f"{n} [{u}]", _fmt(x, 5)) for n, x, u in zip(data.names, run.x, data.units)]
+    pic = design_figure(run)
+    return (f'<div class="card"><h3>{html.escape(title)}</h3>{_img(pic, title)}'
+            f"{_kv(rows)}</div>")
+
+
+def _metric_row(f, i, names):
+    out = []
+    for m in names:
+        if m in f["metrics"]:
+            d = f["metrics"][m]
+            v = float(d[i]) if i != "reference" else float(f["reference"][m][0])
+            out.append((f"{m} [{_s(d.attrs.get('units', '1'))}]", _fmt(v)))
+    return out
+
+
+def build_html(path, top=20) -> str:
+    """The report page of an analyzed sweep file."""
+    data = read_sweep(path)
+    with open_results(path, "sweep") as f:
+        ana = read_analysis(f)
+        a = {k: _s(f.attrs[k]) for k in f.attrs}
+        counts = status_counts(f)
+        rk = ranking(f)
+        front = ana.front1[:top]
+        ftab = design_table(f, front, "", rk).drop(columns=["selection", "front"])
+        mark = []
+        reps = list(ana.representatives)
+        letters = dict(zip(reps, _letters(len(reps))))
+        for i in front:
+            tags = (["knee"] if i == ana.knee else []) + \
+                ([f"representative {letters[i]}"] if i in letters else [])
+            mark.append(", ".join(tags))
+        ftab.insert(1, "mark", mark)
+        show_metrics = [m for m in ("dwell_error", "peak_reaction", "stroke",
+                                    "singularity_margin", "dwell_start", "peak_M_bal")]
+        rep_values = {i: _metric_row(f, i, show_metrics) for i in reps}
+        ref_values = _metric_row(f, "reference", show_metrics) if "reference" in f else None
+        ga = {k: _s(f["analysis"].attrs[k]) for k in f["analysis"].attrs}
+
+    title = a.get("study_title", a.get("study_name", "sweep"))
+    parts = [f"<h1>{html.escape(str(title))}</h1>",
+             f'<p class="sub">Sweep report of <code>{html.escape(Path(path).name)}</code>: '
+             f"{data.n} candidates, study <code>{html.escape(str(a.get('study_name', '')))}"
+             "</code></p>"]
+
+    # summary
+    ref = ana.reference
+    knee = ana.knee
+    summary = [("candidates", data.n),
+               ("feasible", f"{int(data.feasible.sum())} "
+                            f"({100 * data.feasible.mean():.1f}%)" if data.n else "0"),
+               ("objectives (minimised)", ", ".join(data.objectives)),
+               ("Pareto fronts", int(ana.rank.max(initial=0))),
+               ("front 1", f"{ana.front1.size} designs")]
+    if knee >= 0:
+        summary.append(("knee", f"#{knee}: " + ", ".join(
+            f"{o} {_fmt(data.F[knee, j])} {data.objective_units[j]}"
+            for j, o in enumerate(data.objectives))))
+    if int(ref["rank"]) > 0:
+        summary.append(("reference design", f"front {int(ref['rank'])}, dominated by "
+                        f"{int(ref['dominated_by_count'])} feasible candidates "
+                        f"({len(ref['dominators_front1'])} of them on front 1); "
+                        f"{html.escape(str(ref.get('note', '')))}"))
+    parts += ["<h2>Summary</h2>", _kv(summary)]
+    if not a.get("complete", True):
+        parts.append('<p class="note"><b>The sweep is unfinished</b>: only the evaluated '
+                     "candidates are ranked.</p>")
+
+    parts += ["<h2>Pareto fronts</h2>",
+              '<p class="note">Every feasible candidate coloured by its front (front 1 in red, '
+              "joined by a line); grey: candidates that violate a constraint but have both "
+              "objectives; diamond: the knee of front 1; star: the study's reference design; "
+              "letters: the representative designs below.</p>",
+              _img(pareto_figure(data, ana), "Pareto plot")]
+
+    parts += ["<h2>What drives each objective</h2>",
+              '<p class="note">A gradient-boosted tree model of each objective on the design '
+              "variables, fitted on the feasible candidates (seeded subsample and split); "
+              "permutation importance = how much the held-out R<sup>2</sup> drops when one "
+              "variable is shuffled (mean &plusmn; std over the repeats).</p>",
+              _img(importance_figure(data, ana), "parameter importances")]
+
+    parts.append("<h2>Representative designs</h2>")
+    parts.append('<p class="note">Front-1 members nearest the centroids of a k-means '
+                 "clustering of the normalised front-1 objectives, each drawn at 12 crank "
+                 "positions (thick: phi1 = 0), with the study's reference design for "
+                 "comparison. <code>pipeline show FILE --candidate ID</code> draws one with "
+                 "its motion and reactions.</p>")
+    cards = []
+    for i in reps:
+        run = rerun_candidate(path, int(i), forces=False)
+        cards.append(_card(f"{letters[i]}: candidate #{i}" + (" (knee)" if i == knee else ""),
+                           run, rep_values[i], data))
+    if ref_values is not None:
+        run = rerun_candidate(path, "reference", forces=False)
+        cards.append(_card("reference design", run, ref_values, data))
+    parts.append('<div class="cards">' + "".join(cards) + "</div>" if cards else
+                 '<p class="note">No feasible design: nothing to draw.</p>')
+
+    parts.append("<h2>Front 1</h2>")
+    more = f" (first {len(front)} of {ana.front1.size})" if ana.front1.size > len(front) else ""
+    parts.append(f'<p class="note">Non-dominated feasible designs sorted by '
+                 f"{html.escape(data.objectives[0])}{more}.</p>")
+    parts.append(f'<div class="wide">{_table_html(ftab, knee)}</div>' if len(front)
+                 else '<p class="note">empty</p>')
+
+    parts.append("<h2>Candidates by status</h2>")
+    parts.append(_kv([(k, f"{v['count']} ({v['percent']:.1f}%)") for k, v in counts.items()]))
+
+    parts.append("<h2>Provenance</h2>")
+    prov = [("results file", html.escape(str(Path(path).resolve()))),
+            ("study file", html.escape(str(a.get("study_file", "")))),
+            ("run with", f"pipeline {html.escape(str(a.get('software_version', '?')))}, "
+                         f"{html.escape(str(a.get('created', '?')))}"),
+            ("analysis", f"pipeline {html.escape(str(ga.get('software_version', '?')))}, "
+                         f"{html.escape(str(ga.get('created', '?')))}"),
+            ("report", f"pipeline {__version__}, "
+                       f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')}"),
+            ("seed", html.escape(str(a.get("seed", "?")))),
+            ("sampler", html.escape(str(a.get("sampler", "?")))),
+            ("positions per revolution", html.escape(str(a.get("positions_per_revolution", "?")))),
+            ("format", html.escape(f"{a.get('format', '?')} {a.get('format_version', '')}"))]
+    if "wall_time_s" in a:
+        prov.append(("sweep wall time", f"{float(a['wall_time_s']):.1f} s "
+                                        f"({html.escape(str(a.get('engine', '')))})"))
+    parts.append(_kv(prov))
+    parts.append("<p>The study, as stored verbatim in the results file:</p>")
+    parts.append(f"<pre>{html.escape(str(a.get('study_toml', '')))}</pre>")
+
+    return ("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+            "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+            f"<title>{html.escape(str(title))}: sweep report</title>\n"
+            f"<style>{CSS}</style>\n</head>\n<body>\n" + "\n".join(parts)
+            + f"\n<script>{SCRIPT}</script>\n</body>\n</html>\n")
+
+
+def default_report_output(path) -> Path:
+    path = Path(path)
+    return path.with_name(f"{path.stem}_report.html")
+
+
+def write_report(path, out=None, top=20) -> dict:
+    """Write the HTML report of a sweep file (running ``analyze`` first if the
+    file has no analysis); returns a summary."""
+    if top < 1:
+        raise ValueError(f"--top must be at least 1, got {top}")
+    with open_results(path, "sweep") as f:
+        analyzed = has_analysis(f)
+    info = {}
+    if not analyzed:
+        log.info("%s has no analysis: running `pipeline analyze` first", path)
+        info["analysis"] = "run now (stored in the results file)"
+        analyze(path)
+    page = build_html(path, top=top)
+    out = Path(out) if out else default_report_output(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(out.name + ".tmp")
+    tmp.write_text(page, encoding="utf-8")
+    tmp.replace(out)
+    info.update(report=str(out), size=f"{out.stat().st_size / 1024:.0f} KiB")
+    return info
