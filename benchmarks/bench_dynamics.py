@@ -14,12 +14,14 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
-import platform
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from common import hardware  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 STEPS = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4)
@@ -30,20 +32,6 @@ REPEATS = 3
 def _order(err_prev, err, dt_prev, dt):
     """Observed order between two steps."""
     return math.log(err_prev / err) / math.log(dt_prev / dt) if err > 0 else math.nan
-
-
-def hardware():
-    import numba
-    cpu = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return (f"{cpu}; {os.cpu_count()} logical CPUs; Python {platform.python_version()}, "
-            f"numba {numba.__version__}, numpy {np.__version__}")
 
 
 def main(argv=None):

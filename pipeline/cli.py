@@ -57,6 +57,14 @@ def cmd_compile(a):
     return EXIT_OK
 
 
+def cmd_bench(a):
+    from .bench import run_benchmarks
+    out = run_benchmarks(quick=a.quick, echo=(lambda *x: None) if a.quiet else print)
+    if a.quiet:
+        print(out)
+    return EXIT_OK
+
+
 def cmd_analyze(a):
     from .analysis import analyze
     info = analyze(a.results, n_representatives=a.representatives, max_samples=a.max_samples,
@@ -162,6 +170,12 @@ def build_parser():
     rp.add_argument("--top", type=int, default=20, metavar="N",
                     help="rows of the front-1 table (default 20)")
     rp.set_defaults(func=cmd_report)
+
+    bn = sub.add_parser("bench", parents=[common], help=(
+        "speed and accuracy: run time against error and the throughput table, "
+        "written under results/bench/"))
+    bn.add_argument("--quick", action="store_true", help="small sizes (about a minute)")
+    bn.set_defaults(func=cmd_bench)
     return p
 
 

@@ -47,6 +47,13 @@ def place_fixed(par, fixed_idx, fixed_off, pos, d1, d2):
 
 
 @njit(**JIT)
+def kinematic_work(n_points, n_groups):
+    """Work arrays of one candidate's walk: (pos, d1, d2, margins, state, start_state)."""
+    return (np.empty((n_points, 2)), np.empty((n_points, 2)), np.empty((n_points, 2)),
+            np.empty(n_groups), np.empty((n_groups, N_STATE)), np.empty((n_groups, N_STATE)))
+
+
+@njit(**JIT)
 def init_state(codes, goff, par, state):
     """Start every class III group from its declared guess (a0, b0)."""
     for g in range(codes.shape[0]):
@@ -101,7 +108,7 @@ def solve_position(codes, gidx, goff, par, fixed_idx, fixed_off, phi1, order, to
                         par[o + 2], order, sing, slack)
         elif c == G_RPR:
             st, m = rpr(pos, d1, d2, ix[0], ix[1], ix[2], par[o], par[o + 1], par[o + 2],
-                        order, sing)
+                        order, sing, slack)
         elif c == G_CLASS3:
             st, m = class3(pos, d1, d2, ix[0], ix[1], ix[2], ix[3], ix[4], ix[5],
                            par[o], par[o + 1], par[o + 2], par[o + 3], par[o + 4], par[o + 5],
@@ -249,13 +256,7 @@ def solve_revolution(codes, gidx, goff, par, fixed_idx, fixed_off, phis, phi_clo
     BRANCH_JUMP if the revolution does not close.
     """
     n_groups = codes.shape[0]
-    n_points = pos_out.shape[1]
-    pos = np.empty((n_points, 2))
-    d1 = np.empty((n_points, 2))
-    d2 = np.empty((n_points, 2))
-    margins = np.empty(n_groups)
-    state = np.empty((n_groups, N_STATE))
-    start_state = np.empty((n_groups, N_STATE))
+    pos, d1, d2, margins, state, start_state = kinematic_work(pos_out.shape[1], n_groups)
     init_state(codes, goff, par, state)
     newton = has_newton(codes)
     phi_prev = start_angle(codes, goff, par) if newton else phis[0]

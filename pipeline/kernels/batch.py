@@ -7,9 +7,9 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .assembly import advance, has_newton, init_state, start_angle
-from .config import JIT_PARALLEL, N_STATE, OK
-from .forces import kinetostatics
+from .assembly import advance, has_newton, init_state, kinematic_work, start_angle
+from .config import JIT_PARALLEL, OK
+from .forces import force_work, kinetostatics
 
 
 @njit(**JIT_PARALLEL)
@@ -28,16 +28,8 @@ def revolutions_batch(pars, codes, gidx, goff, fixed_idx, fixed_off, n_points, p
     newton = has_newton(codes)
     for i in prange(pars.shape[0]):
         par = pars[i]
-        pos = np.empty((n_points, 2))
-        d1 = np.empty((n_points, 2))
-        d2 = np.empty((n_points, 2))
-        margins = np.empty(ng)
-        state = np.empty((ng, N_STATE))
-        work_a = np.empty((3 * nb, 3 * nb))
-        work_b = np.empty(3 * nb)
-        loads_out = np.empty((nb, 3))
-        r_out = np.empty((nj, 2))
-        slide_out = np.empty((slide_bodies.shape[0], 2))
+        pos, d1, d2, margins, state, _ = kinematic_work(n_points, ng)
+        work_a, work_b, loads_out, r_out, slide_out = force_work(nb, nj, slide_bodies.shape[0])
         init_state(codes, goff, par, state)
         phi_prev = start_angle(codes, goff, par) if newton else phis[0]
         st = OK

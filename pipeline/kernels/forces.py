@@ -16,6 +16,7 @@ position arrays are mm; forces N, moments N*m.
 
 import math
 
+import numpy as np
 from numba import njit
 
 from .config import JIT
@@ -58,6 +59,14 @@ def gauss_solve(a, b, n):
             s -= a[c, k] * b[k]
         b[c] = s / a[c, c]
     return True
+
+
+@njit(**JIT)
+def force_work(nb, nj, ns):
+    """Work arrays of ``kinetostatics`` for nb bodies, nj joints, ns slides:
+    (work_a, work_b, loads_out, r_out, slide_out); allocate once per candidate."""
+    return (np.empty((3 * nb, 3 * nb)), np.empty(3 * nb), np.empty((nb, 3)), np.empty((nj, 2)),
+            np.empty((ns, 2)))
 
 
 @njit(**JIT)

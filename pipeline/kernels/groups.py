@@ -14,7 +14,7 @@ import math
 
 from numba import njit
 
-from .config import JIT, OK, NO_ASSEMBLY, SINGULAR
+from .config import BAD_GEOMETRY, JIT, NO_ASSEMBLY, OK, SINGULAR
 from .geometry import angle_analogs, circle_intersection, solve2
 
 
@@ -46,6 +46,9 @@ def crank(pos, d1, d2, ip, io, length, phi_m0, phi1, order):
 @njit(**JIT)
 def rrr(pos, d1, d2, ia, ic, ib, l_ab, l_cb, w, order, sing_tol, slack):
     """RRR dyad: B joined to known A by link A-B and to known C by link C-B."""
+    if not (l_ab > 0.0 and l_cb > 0.0):
+        _nan_point(pos, d1, d2, ib)
+        return BAD_GEOMETRY, 0.0
     ok, bx, by, toggle = circle_intersection(pos[ia, 0], pos[ia, 1], pos[ic, 0], pos[ic, 1],
                                              l_ab, l_cb, w, slack)
     if not ok:
@@ -60,7 +63,7 @@ def rrr(pos, d1, d2, ia, ic, ib, l_ab, l_cb, w, order, sing_tol, slack):
     pcy = by - pos[ic, 1]
     margin = abs(pax * pcy - pay * pcx) / (l_ab * l_cb)  # |sin| of the angle at B
     status = OK
-    if toggle or margin < sing_tol:
+    if toggle or not margin >= sing_tol:     # (NaN-safe: a NaN margin is singular)
         status = SINGULAR
     if order >= 1:
         if status == SINGULAR:
@@ -94,6 +97,8 @@ def _direction(pos, d1, d2, ga, gb, angle, order):
         return angle, 0.0, 0.0
     dx = pos[gb, 0] - pos[ga, 0]
     dy = pos[gb, 1] - pos[ga, 1]
+    if not (dx * dx + dy * dy > 0.0):
+        return math.nan, math.nan, math.nan
     if order >= 1:
         th, th1, th2 = angle_analogs(dx, dy, d1[gb, 0] - d1[ga, 0], d1[gb, 1] - d1[ga, 1],
                                      d2[gb, 0] - d2[ga, 0], d2[gb, 1] - d2[ga, 1])
@@ -112,7 +117,13 @@ def rrp(pos, d1, d2, ia, ig, ib, ga, gb, l_ab, angle, w, order, sing_tol, slack)
     link ga->gb (``angle`` relative to it).  B = G + s u with
     s = u.(A - G) + w sqrt(L^2 - h^2), h the distance of A from the guide.
     """
+    if not l_ab > 0.0:
+        _nan_point(pos, d1, d2, ib)
+        return BAD_GEOMETRY, 0.0
     th, th1, th2 = _direction(pos, d1, d2, ga, gb, angle, order)
+    if not math.isfinite(th):   # the guide link has no length: no direction
+        _nan_point(pos, d1, d2, ib)
+        return SINGULAR, 0.0
     ux = math.cos(th)
     uy = math.sin(th)
     nx = -uy
@@ -135,7 +146,7 @@ def rrp(pos, d1, d2, ia, ig, ib, ga, gb, l_ab, angle, w, order, sing_tol, slack)
     pos[ib, 1] = pos[ig, 1] + s * uy
     margin = q / l_ab  # |cos| of the angle between link A-B and the guide
     status = OK
-    if toggle or margin < sing_tol:
+    if toggle or not margin >= sing_tol:
         status = SINGULAR
     if order >= 1:
         if status == SINGULAR:
@@ -168,7 +179,7 @@ def rrp(pos, d1, d2, ia, ig, ib, ga, gb, l_ab, angle, w, order, sing_tol, slack)
 
 
 @njit(**JIT)
-def rpr(pos, d1, d2, ia, ic, ib, offset, guide_length, w, order, sing_tol):
+def rpr(pos, d1, d2, ia, ic, ib, offset, guide_length, w, order, sing_tol, slack):
     """RPR dyad (coulisse): a block pinned at known A slides on a guide that
     turns about C; the guide line runs at perpendicular distance ``offset``
     from C.  Solves the guide angle th and writes the guide's end point
@@ -182,9 +193,16 @@ def rpr(pos, d1, d2, ia, ic, ib, offset, guide_length, w, order, sing_tol):
     dy = pos[ia, 1] - pos[ic, 1]
     rho2 = dx * dx + dy * dy
     q2 = rho2 - offset * offset
-    if q2 < 0.0:
+    toggle = False
+    if not q2 >= 0.0:
+        if not q2 >= -slack * offset * offset:
+            _nan_point(pos, d1, d2, ib)
+            return NO_ASSEMBLY, 0.0
+        q2 = 0.0          # rounding at the toggle: the block at the foot of the perpendicular
+        toggle = True
+    if not guide_length > 0.0:
         _nan_point(pos, d1, d2, ib)
-        return NO_ASSEMBLY, 0.0
+        return BAD_GEOMETRY, 0.0
     s = w * math.sqrt(q2)
     th = math.atan2(dy, dx) - math.atan2(offset, s)
     ux = math.cos(th)
@@ -195,7 +213,7 @@ def rpr(pos, d1, d2, ia, ic, ib, offset, guide_length, w, order, sing_tol):
     pos[ib, 1] = pos[ic, 1] + guide_length * uy
     margin = abs(s) / guide_length
     status = OK
-    if margin < sing_tol:
+    if toggle or not margin >= sing_tol:
         status = SINGULAR
     if order >= 1:
         if status == SINGULAR:

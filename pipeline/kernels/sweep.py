@@ -20,9 +20,9 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .assembly import advance, closes, has_newton, init_state, start_angle
-from .config import (BRANCH_JUMP, G_CLASS3, JIT, JIT_PARALLEL, N_STATE, OK, S_ITERS)
-from .forces import kinetostatics
+from .assembly import advance, closes, has_newton, init_state, kinematic_work, start_angle
+from .config import BRANCH_JUMP, G_CLASS3, JIT, JIT_PARALLEL, OK, S_ITERS
+from .forces import force_work, kinetostatics
 from .metrics import dwell_error, relative_angle
 
 # metric columns
@@ -55,12 +55,7 @@ def evaluate_candidate(par, codes, n_kinematic, gidx, goff, fixed_idx, fixed_off
     out[M_FORCES_DONE] = 0.0
     n = phis.shape[0]
     ng = codes.shape[0]
-    pos = np.empty((n_points, 2))
-    d1 = np.empty((n_points, 2))
-    d2 = np.empty((n_points, 2))
-    margins = np.empty(ng)
-    state = np.empty((ng, N_STATE))
-    start_state = np.empty((ng, N_STATE))
+    pos, d1, d2, margins, state, start_state = kinematic_work(n_points, ng)
     theta = np.empty(n)
     newton = has_newton(codes)
 
@@ -111,13 +106,9 @@ def evaluate_candidate(par, codes, n_kinematic, gidx, goff, fixed_idx, fixed_off
         return OK
     if newton and not (margin >= margin_min):
         return OK
-    nb = body_com.shape[0]
     nj = joint_point.shape[0]
-    work_a = np.empty((3 * nb, 3 * nb))
-    work_b = np.empty(3 * nb)
-    loads_out = np.empty((nb, 3))
-    r_out = np.empty((nj, 2))
-    slide_out = np.empty((slide_bodies.shape[0], 2))
+    work_a, work_b, loads_out, r_out, slide_out = force_work(
+        body_com.shape[0], nj, slide_bodies.shape[0])
     init_state(codes, goff, par, state)
     phi_prev = start_angle(codes, goff, par) if newton else phis[0]
     peak = -1.0
