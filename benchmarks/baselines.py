@@ -3,7 +3,7 @@ compute, written again without numba, once in plain NumPy (vectorized over
 candidates) and once in pure Python (loops, ``math``, lists).
 
 The code is independent of ``pipeline.kernels``: it reads numbers from the
-project's parameter rows (``four_bar_params`` and ``class3_rows`` pick the
+project's parameter rows (``fourbar_params`` and ``class3_rows`` pick the
 columns by name) and nothing else, and solves the equations of DOMAIN.md
 sections 2, 3, 5, 6, 8 and 9 on its own:
 
@@ -11,9 +11,13 @@ sections 2, 3, 5, 6, 8 and 9 on its own:
   convention of section 2 (W = +1 is the open configuration);
 * class III group (mechanism B): Newton on (a, b) with the analytic 2x2
   Jacobian, step limited to 0.5 rad, continuation along the revolution
-  (secant predictor from the previous two positions), then the exact first
-  and second analogs from the same Jacobian applied to the differentiated
-  closure equations;
+  (secant predictor from the last step; steps of at most 2 deg, a step whose
+  Newton fails or that jumps branch is halved, down to 1e-5 of that), then
+  the exact first and second analogs from the same Jacobian applied to the
+  differentiated closure equations.  The NumPy walk solves every candidate
+  at once; the few that still need halved steps in an interval (at most
+  ``STRAGGLERS``) finish it in the scalar code, where NumPy's per-call cost
+  on tiny arrays would dominate;
 * sweep (section 9): positions over the revolution (failure = impossible
   ternary triangle, Newton not converging, branch jump, singular position, or
   a revolution that does not close on its start), singularity margin, rocker
@@ -26,8 +30,8 @@ sections 2, 3, 5, 6, 8 and 9 on its own:
 
 The numeric settings are the project's defaults (Newton residual 1e-12 of the
 longer lead, 50 iterations, 0.5 rad step limit, singular below 1e-9, jump
-above 0.1 rad, closure to 1e-7 rad) so that both sides accept and reject the
-same candidates.  Status codes are numbered like the project's.
+above 0.1 rad, closure to 1e-7 rad, 2 deg continuation steps halved down to
+1e-5 of that) so that both sides accept and reject the same candidates.  Status codes are numbered like the project's.
 """
 
 from __future__ import annotations
@@ -61,7 +65,7 @@ POINTS_B = ("P2", "P3", "P4", "P5", "P8")
 
 
 # ============================================================== inputs
-def four_bar_params(plan, pars):
+def fourbar_params(plan, pars):
     """Baseline inputs (n, 5) = (crank AB, coupler BC, rocker DC, ground AD,
     arm DE) from parameter rows of mechanism D's plan; A = (0, 0), D = (AD, 0),
     phiM0 = 0 and E on DC extended are checked, not assumed."""
@@ -115,7 +119,7 @@ def _closing_angle(phis):
 
 
 # ============================================================== four-bar, NumPy
-def four_bar_positions_numpy(params, phis, w=1):
+def fourbar_positions_numpy(params, phis, w=1):
     """Positions of B, C, E for every candidate and crank angle: array
     (n_candidates, n_phi, 3, 2), NaN where the dyad cannot be assembled.
 
@@ -147,8 +151,8 @@ def four_bar_positions_numpy(params, phis, w=1):
 
 
 # ============================================================== four-bar, pure Python
-def four_bar_positions_python(params, phis, w=1):
-    """The same as ``four_bar_positions_numpy`` with loops and ``math``:
+def fourbar_positions_python(params, phis, w=1):
+    """The same as ``fourbar_positions_numpy`` with loops and ``math``:
     a list (candidates) of lists (positions) of ((Bx, By), (Cx, Cy), (Ex, Ey))."""
     rows = params.tolist() if hasattr(params, "tolist") else list(params)
     angles = [float(f) for f in phis]
@@ -205,31 +209,40 @@ def _residuals_numpy(r, u, p2x, p2y, a, b):
     return f1, f2, g11, g12, g21, g22
 
 
-def _newton_numpy(r, u, p2x, p2y, a, b, live, tol):
-    """Damped Newton for every ``live`` candidate at once; returns
+def _newton_numpy(r, u, p2x, p2y, a, b, tol):
+    """Damped Newton for every candidate at once (those still iterating are
+    gathered into smaller arrays as the others converge); returns
     (converged, a, b, det J at the solution)."""
+    n = a.shape[0]
     a = a.copy()
     b = b.copy()
-    todo = live.copy()
-    conv = np.zeros_like(live)
-    det_out = np.full(a.shape, np.nan)
+    conv = np.zeros(n, bool)
+    det_out = np.full(n, np.nan)
+    idx = np.arange(n)
+    rs, us, px, py, tl = r, u, p2x, p2y, tol
     for it in range(NEWTON_ITERS + 1):
-        f1, f2, g11, g12, g21, g22 = _residuals_numpy(r, u, p2x, p2y, a, b)
+        f1, f2, g11, g12, g21, g22 = _residuals_numpy(rs, us, px, py, a[idx], b[idx])
         det = g11 * g22 - g12 * g21
-        res = np.maximum(np.abs(f1) / (2.0 * r["L46"]), np.abs(f2) / (2.0 * r["L57"]))
-        done = todo & (res <= tol)
-        conv |= done
-        det_out[done] = det[done]
-        todo &= ~done
-        if it == NEWTON_ITERS or not todo.any():
+        res = np.maximum(np.abs(f1) / (2.0 * rs["L46"]), np.abs(f2) / (2.0 * rs["L57"]))
+        done = res <= tl
+        conv[idx[done]] = True
+        det_out[idx[done]] = det[done]
+        if it == NEWTON_ITERS:
             break
-        todo &= np.isfinite(det) & (det != 0.0)
+        go = ~done & np.isfinite(det) & (det != 0.0)
+        if not go.any():
+            break
         da = (f1 * g22 - g12 * f2) / det
         db = (g11 * f2 - f1 * g21) / det
         step = np.maximum(np.abs(da), np.abs(db))
         fac = np.where(step > NEWTON_STEP, NEWTON_STEP / step, 1.0)
-        a = np.where(todo, a - fac * da, a)
-        b = np.where(todo, b - fac * db, b)
+        a[idx] -= np.where(go, fac * da, 0.0)
+        b[idx] -= np.where(go, fac * db, 0.0)
+        if not go.all():
+            idx = idx[go]
+            rs = {k: rs[k][go] for k in ("P6x", "P6y", "P7x", "P7y", "L23", "L34", "L35", "L46",
+                                          "L57")}
+            us, px, py, tl = us[go], px[go], py[go], tl[go]
     return conv, a, b, det_out
 
 
@@ -254,8 +267,7 @@ def _try_step_numpy(r, u, tol, scale, st, idx, target):
     ang = target + r["phiM0"]
     p2x = r["P1x"] + r["L12"] * np.cos(ang)
     p2y = r["P1y"] + r["L12"] * np.sin(ang)
-    live = np.ones(idx.shape, bool)
-    conv, an, bn, det = _newton_numpy(r, u, p2x, p2y, ap, bp, live, tol)
+    conv, an, bn, det = _newton_numpy(r, u, p2x, p2y, ap, bp, tol)
     out = np.where(conv, OK, NEWTON_MAXITER).astype(np.int8)
     sg = np.sign(det)
     jump = conv & (sgn != 0.0) & ((sg != sgn) | (np.abs(_wrap_numpy(an - ap)) > JUMP_TOL)
