@@ -121,24 +121,28 @@ class FD:
     noise2: float
 
 
-def fd_from_samples(samples, h):
+def fd_from_samples(samples, h, size=0.0):
     """First and second derivatives at t = 0 from samples[k] = f(k h), k = -4..4.
-    Rounding of the samples (~eps |f|) is amplified by ~10/h and ~30/h^2; the
-    noise bounds keep a 100x margin over that."""
+    The samples carry rounding of ~eps times the size of the geometry that
+    produced them (``size``, mm) or of the samples themselves; the stencil
+    amplifies it by ~10/h and ~30/h^2; the noise bounds keep a 100x margin."""
     f = {k: np.asarray(v, dtype=float) for k, v in samples.items()}
     d1 = sum(w * (f[k] - f[-k]) for k, w in zip(range(1, 5), _W1)) / h
     d2 = (_W2C * f[0] + sum(w * (f[k] + f[-k]) for k, w in zip(range(1, 5), _W2))) / h ** 2
-    big = max(float(np.abs(v).max()) for v in f.values()) * np.finfo(float).eps
+    big = max([size] + [float(np.abs(v).max()) for v in f.values()]) * np.finfo(float).eps
     return FD(d1, d2, 1e3 * big / h, 3e3 * big / h ** 2)
 
 
-def fd(fun, inputs, length, margin=1.0, sampler=None):
+def fd(fun, inputs, length, margin=1.0, size=0.0, sampler=None):
     """Analogs of ``fun(t)`` at t = 0 by central differences, or of a ``sampler``
-    h -> {k: f(k h)} (a continuation solver walks outward from k = 0)."""
+    h -> {k: f(k h)} (a continuation solver walks outward from k = 0).
+    ``length``: the shortest length of the group (sets the time scale with the
+    inputs' speeds); ``margin``: its distance from a toggle; ``size``: the
+    largest coordinate difference the reference computes with (rounding)."""
     if sampler is None:
         sampler = lambda h: {k: fun(k * h) for k in OFFSETS}     # noqa: E731
     h = fd_step(sampler, inputs, length, margin)
-    return fd_from_samples(sampler(h), h)
+    return fd_from_samples(sampler(h), h, size)
 
 
 def rate_of(v, a, length):
@@ -319,7 +323,8 @@ def test_rrr_analogs_match_finite_differences(case):
     lmin = min(l_ab, l_cb, norm(A.p - C.p))
     s1, s2 = motion_scale([A, C], lmin)
     As, Cs = A.shift(C.p), C.shift(C.p)
-    f = fd(lambda t: ref_rrr(As.at(t), Cs.at(t), l_ab, l_cb, w), [A, C], lmin, sin_b)
+    f = fd(lambda t: ref_rrr(As.at(t), Cs.at(t), l_ab, l_cb, w), [A, C], lmin, sin_b,
+           size=l_ab + l_cb + norm(A.p - C.p))
     note(f"kernel d1 {d1[2]}, d2 {d2[2]}")
     assert_fd("B'", d1[2], f.d1, s1, f.noise1)
     assert_fd("B''", d2[2], f.d2, s2, f.noise2)
@@ -507,7 +512,7 @@ def test_rrp_analogs_match_finite_differences(case):
     As, Gs = A.shift(o), G.shift(o)
     gas, gbs = (ga.shift(o), gb.shift(o)) if ga is not None else (None, None)
     f = fd(lambda t: ref_rrp(As.at(t), Gs.at(t), guide_direction(angle_, gas, gbs, t), l_ab, w),
-           moving, lmin, cos_)
+           moving, lmin, cos_, size=l_ab + arm + norm(A.p - G.p))
     note(f"kernel d1 {d1[ib]}, d2 {d2[ib]}")
     assert_fd("B'", d1[ib], f.d1, s1, f.noise1)
     assert_fd("B''", d2[ib], f.d2, s2, f.noise2)
@@ -620,7 +625,8 @@ def test_rpr_analogs_match_finite_differences(case):
     s = math.sqrt(rho * rho - offset * offset)
     s1, s2 = motion_scale([A, C], s)
     As, Cs = A.shift(C.p), C.shift(C.p)
-    f = fd(lambda t: ref_rpr(As.at(t), Cs.at(t), offset, guide_length, w), [A, C], s, s / rho)
+    f = fd(lambda t: ref_rpr(As.at(t), Cs.at(t), offset, guide_length, w), [A, C], s, s / rho,
+           size=rho + abs(offset) + guide_length)
     k = guide_length / s
     note(f"kernel d1 {d1[2]}, d2 {d2[2]}")
     assert_fd("B'", d1[2], f.d1, k * s1, f.noise1)
@@ -712,7 +718,7 @@ def test_attached_point_is_rigid(base, a, b, rel_angle, dist, along_link, order)
     lmin = norm(b.p - a.p) if along_link else 100.0
     s1, s2 = motion_scale(moving, lmin)
     k = 1.0 + dist / lmin
-    f = fd(lambda t: ref(t, base.p), moving, lmin)
+    f = fd(lambda t: ref(t, base.p), moving, lmin, size=dist * (1.0 + 200.0 / lmin) + lmin)
     assert_fd("P'", d1[io], f.d1, k * s1, f.noise1)
     if order >= 2:
         assert_fd("P''", d2[io], f.d2, k * s2, f.noise2)
@@ -738,7 +744,7 @@ def test_crank_tip(pivot, l12, phi_m0, phi1):
     assert status == kc.OK
     assert abs(norm(pos[1] - pivot.p) - l12) <= LENGTH_REL * l12
     ref = lambda t: pivot.at(t) + l12 * e(phi1 + t + phi_m0)     # noqa: E731
-    f = fd(lambda t: ref(t) - pivot.p, [pivot], l12)
+    f = fd(lambda t: ref(t) - pivot.p, [pivot], l12, size=l12)
     s1, s2 = motion_scale([pivot], l12)
     assert_fd("P2'", d1[1], f.d1, s1 + l12, f.noise1)
     assert_fd("P2''", d2[1], f.d2, s2 + l12, f.noise2)
@@ -898,7 +904,8 @@ def test_class3_newton_and_analogs(case, P2v, P2a, p67_move, v6, v7, a6, a7, da,
                 samples[sgn * k] = np.array(tri.points(P2s.at(t), *ab))
         return samples
 
-    f = fd(None, [P2, P6, P7], lmin, m0, sampler=sampler)
+    f = fd(None, [P2, P6, P7], lmin, m0, size=tri.l23 + tri.l34 + tri.l35 + tri.l46 + tri.l57,
+           sampler=sampler)
     k = max(tri.l23, tri.l34, tri.l35) / (lmin * m0)
     for row, name in enumerate(("P3", "P4", "P5")):
         assert_fd(name + "'", d1[3 + row], f.d1[row], k * s1, f.noise1)
