@@ -190,8 +190,9 @@ def main(argv=None) -> int:
     except _user_errors() as e:
         print(f"pipeline {args.command}: error: {e}", file=sys.stderr)
         return EXIT_USER_ERROR
-    except KeyboardInterrupt:
-        print(f"pipeline {args.command}: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as e:
+        # a sweep says how much is saved and how to resume
+        print(f"pipeline {args.command}: {e or 'interrupted'}", file=sys.stderr)
         return 130
 
 

@@ -190,6 +190,19 @@ def test_kill_9_then_resume_equals_uninterrupted(baseline, synthesis, tmp_path):
     assert_same_results(ref, out)
 
 
+def test_cli_interrupt_says_how_to_resume(synthesis, tmp_path, capsys, monkeypatch):
+    import pipeline.sweep as sw
+    from pipeline.cli import main
+    real = sw.run_sweep
+    monkeypatch.setattr(sw, "run_sweep", lambda *a, **k: real(*a, **k, stop_after_chunks=1))
+    out = tmp_path / "i.h5"
+    code = main(["run", str(synthesis.path), "-o", str(out), "--candidates", "600",
+                 "--chunk-size", "300", "-q"])
+    assert code == 130
+    err = capsys.readouterr().err
+    assert "1 of 2 chunks saved" in err and "--resume" in err
+
+
 def test_damaged_file_is_rebuilt_from_the_journal(synthesis, tmp_path, baseline):
     out = tmp_path / "d.h5"
     with pytest.raises(SweepInterrupted):
