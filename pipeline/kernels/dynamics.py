@@ -38,8 +38,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .assembly import advance, has_newton, init_state, start_angle
-from .config import ACCELERATIONS, JIT, N_STATE, OK, SINGULAR
+from .assembly import advance, has_newton, init_state, kinematic_work, start_angle
+from .config import ACCELERATIONS, JIT, OK, SINGULAR
 from .geometry import angle_analogs
 
 MM = 1e-3
@@ -196,12 +196,8 @@ def rk4(codes, gidx, goff, par, fixed_idx, fixed_off, tols,
     sample is the first stage of the following step (no extra evaluation).
     Returns (status, samples recorded).
     """
-    n_points = pos_count(gidx, fixed_idx)
-    pos = np.empty((n_points, 2))
-    d1 = np.empty((n_points, 2))
-    d2 = np.empty((n_points, 2))
-    margins = np.empty(codes.shape[0])
-    state = np.empty((codes.shape[0], N_STATE))
+    pos, d1, d2, margins, state, _ = kinematic_work(pos_count(gidx, fixed_idx),
+                                                    codes.shape[0])
     last = np.empty(1)
     loads_k = np.empty((load_body.shape[0], 3))
     newton = has_newton(codes)
@@ -283,12 +279,8 @@ def terms_curve(codes, gidx, goff, par, fixed_idx, fixed_off, tols,
                 out_J, out_half, out_Q, out_M1, out_V, out_status):
     """J, (1/2) J', Q (without M1), M1 and V at the crank angles ``phis`` (and
     times ``ts`` for the drive channels), by continuation in the given order."""
-    n_points = pos_count(gidx, fixed_idx)
-    pos = np.empty((n_points, 2))
-    d1 = np.empty((n_points, 2))
-    d2 = np.empty((n_points, 2))
-    margins = np.empty(codes.shape[0])
-    state = np.empty((codes.shape[0], N_STATE))
+    pos, d1, d2, margins, state, _ = kinematic_work(pos_count(gidx, fixed_idx),
+                                                    codes.shape[0])
     last = np.empty(1)
     loads_k = np.empty((load_body.shape[0], 3))
     newton = has_newton(codes)
