@@ -251,12 +251,6 @@ class Plan:
         except ValueError:
             raise KeyError(f"no parameter {name!r}; known: {', '.join(self.par_names)}") from None
 
-    def kernel_args(self):
-        return (self.codes, self.gidx, self.goff)
-
-    def fixed_args(self):
-        return (self.fixed_idx, self.fixed_off)
-
 
 def group_label(g, k):
     """A readable name for group ``g`` at position ``k`` of the solve order."""

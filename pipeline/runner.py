@@ -53,7 +53,7 @@ def run_scene_study(study, out, pictures=True) -> RunOutcome:
         pics.append(plots.scene_figure(res, out.with_suffix(".png")))
         if res.dense.forces is not None:
             pics.append(plots.forces_figure(res, out.with_name(out.stem + "_forces.png")))
-        for case in getattr(res, "dynamics", None) or ():
+        for case in res.dynamics or ():
             from .dynamics import dynamics_figure
             pics.append(dynamics_figure(case, out.with_name(f"{out.stem}_{case.name}.png")))
     summary = {"status": kc.STATUS_NAMES[res.status],
@@ -61,6 +61,6 @@ def run_scene_study(study, out, pictures=True) -> RunOutcome:
                "dense_positions": int(res.dense.phi.shape[0])}
     if res.dense.forces is not None:
         summary.update(res.dense.forces.summary())
-    for case in getattr(res, "dynamics", None) or ():
+    for case in res.dynamics or ():
         summary[f"dynamics.{case.name}"] = case.summary()
     return RunOutcome("scene", out, pics, summary)

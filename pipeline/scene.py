@@ -68,6 +68,7 @@ class SceneResult:
     table: Curves
     dense: Curves
     tolerances: np.ndarray
+    dynamics: list | None = None     # pipeline.dynamics.CaseResult per case, if the study asks
 
     @property
     def status(self):

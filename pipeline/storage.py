@@ -120,7 +120,7 @@ def write_scene(res, path):
         put(m, "tolerances", res.tolerances, "mixed", "solver tolerances")
         for name, curves in (("table", res.table), ("dense", res.dense)):
             _curves(f.create_group(name), res, curves, study)
-        if getattr(res, "dynamics", None):
+        if res.dynamics:
             for case in res.dynamics:
                 case.write(f.require_group("dynamics"))
     return path
