@@ -373,27 +373,20 @@ def _angle_analogs_numpy(x, y, x1, y1, x2, y2):
     return np.arctan2(y, x), c1 / q, c2 / q - 2.0 * (x * x1 + y * y1) * c1 / (q * q)
 
 
-def _kinematics_numpy(r, u, phis, A, B):
-    """Points, link angles and their analogs at every (candidate, position),
-    from the solved angles A, B (n, m) of the class III group.  Returns a dict:
-    point -> (x, y, x', y', x'', y''); link -> (angle, angle', angle'')."""
-    col = lambda k: r[k][:, None]
-    ang = np.asarray(phis)[None, :] + col("phiM0")
-    L12, L23, L34, L35 = col("L12"), col("L23"), col("L34"), col("L35")
-    uu = u[:, None]
-    ce, se = np.cos(ang), np.sin(ang)
-    ca, sa = np.cos(A), np.sin(A)
-    cb, sb = np.cos(B), np.sin(B)
-    cc, sc = np.cos(B + uu), np.sin(B + uu)
-    p2 = (col("P1x") + L12 * ce, col("P1y") + L12 * se, -L12 * se, L12 * ce, -L12 * ce, -L12 * se)
+def _triad_analogs(p2, trig, L23, L34, L35, p6x, p6y, p7x, p7y):
+    """P3, P4, P5 as (x, y, x', y', x'', y'') and the analogs (a', a''), (b', b'')
+    of the class III angles, from P2 (with its analogs) and the solved angles'
+    (cos a, sin a, cos b, sin b, cos(b+U), sin(b+U)).  Plain arithmetic, so the
+    NumPy baseline passes arrays and the pure-Python baseline passes floats."""
+    ca, sa, cb, sb, cc, sc = trig
     x3 = p2[0] + L23 * ca
     y3 = p2[1] + L23 * sa
     x4 = x3 + L34 * cb
     y4 = y3 + L34 * sb
     x5 = x3 + L35 * cc
     y5 = y3 + L35 * sc
-    r4x, r4y = x4 - col("P6x"), y4 - col("P6y")
-    r5x, r5y = x5 - col("P7x"), y5 - col("P7y")
+    r4x, r4y = x4 - p6x, y4 - p6y
+    r5x, r5y = x5 - p7x, y5 - p7y
     # d/dphi of |r4|^2 / 2 = 0 and |r5|^2 / 2 = 0: the Jacobian of the closure
     g11 = L23 * (r4y * ca - r4x * sa)
     g12 = L34 * (r4y * cb - r4x * sb)
@@ -417,10 +410,32 @@ def _kinematics_numpy(r, u, phis, A, B):
     a2 = (h1 * g22 - g12 * h2) / det
     b2 = (g11 * h2 - h1 * g21) / det
     x3dd, y3dd = kx3 - L23 * a2 * sa, ky3 + L23 * a2 * ca
-    x4dd, y4dd = x3dd - L34 * (b2 * sb + b1 * b1 * cb), y3dd + L34 * (b2 * cb - b1 * b1 * sb)
-    x5dd, y5dd = x3dd - L35 * (b2 * sc + b1 * b1 * cc), y3dd + L35 * (b2 * cc - b1 * b1 * sc)
-    rock = _angle_analogs_numpy(r5x, r5y, x5d, y5d, x5dd, y5dd)
-    lead = _angle_analogs_numpy(r4x, r4y, x4d, y4d, x4dd, y4dd)
+    p3 = (x3, y3, x3d, y3d, x3dd, y3dd)
+    p4 = (x4, y4, x4d, y4d, x3dd - L34 * (b2 * sb + b1 * b1 * cb),
+          y3dd + L34 * (b2 * cb - b1 * b1 * sb))
+    p5 = (x5, y5, x5d, y5d, x3dd - L35 * (b2 * sc + b1 * b1 * cc),
+          y3dd + L35 * (b2 * cc - b1 * b1 * sc))
+    return p3, p4, p5, (a1, a2), (b1, b2), (r4x, r4y), (r5x, r5y)
+
+
+def _kinematics_numpy(r, u, phis, A, B):
+    """Points, link angles and their analogs at every (candidate, position),
+    from the solved angles A, B (n, m) of the class III group.  Returns a dict:
+    point -> (x, y, x', y', x'', y''); link -> (angle, angle', angle'')."""
+    col = lambda k: r[k][:, None]
+    ang = np.asarray(phis)[None, :] + col("phiM0")
+    L12, L23, L34, L35 = col("L12"), col("L23"), col("L34"), col("L35")
+    uu = u[:, None]
+    ce, se = np.cos(ang), np.sin(ang)
+    ca, sa = np.cos(A), np.sin(A)
+    cb, sb = np.cos(B), np.sin(B)
+    cc, sc = np.cos(B + uu), np.sin(B + uu)
+    p2 = (col("P1x") + L12 * ce, col("P1y") + L12 * se, -L12 * se, L12 * ce, -L12 * ce, -L12 * se)
+    p3, p4, p5, (a1, a2), (b1, b2), (r4x, r4y), (r5x, r5y) = _triad_analogs(
+        p2, (ca, sa, cb, sb, cc, sc), L23, L34, L35, col("P6x"), col("P6y"), col("P7x"),
+        col("P7y"))
+    rock = _angle_analogs_numpy(r5x, r5y, p5[2], p5[3], p5[4], p5[5])
+    lead = _angle_analogs_numpy(r4x, r4y, p4[2], p4[3], p4[4], p4[5])
     t = rock[0] + col("U578")
     ct, st = np.cos(t), np.sin(t)
     L78 = col("L78")
@@ -428,8 +443,7 @@ def _kinematics_numpy(r, u, phis, A, B):
           -L78 * rock[1] * st, L78 * rock[1] * ct,
           -L78 * (rock[2] * st + rock[1] ** 2 * ct), L78 * (rock[2] * ct - rock[1] ** 2 * st))
     one = np.ones_like(ang)
-    return {"P2": p2, "P3": (x3, y3, x3d, y3d, x3dd, y3dd), "P4": (x4, y4, x4d, y4d, x4dd, y4dd),
-            "P5": (x5, y5, x5d, y5d, x5dd, y5dd), "P8": p8,
+    return {"P2": p2, "P3": p3, "P4": p4, "P5": p5, "P8": p8,
             "crank": (ang, one, 0.0 * one), "lead 2-3": (A, a1, a2), "ternary": (B, b1, b2),
             "lead 4-6": lead, "rocker": rock}
 
@@ -757,42 +771,10 @@ def _kinematics_python(c, u, phi, a, b):
     cb, sb = math.cos(b), math.sin(b)
     cc, sc = math.cos(b + u), math.sin(b + u)
     p2 = (c["P1x"] + L12 * ce, c["P1y"] + L12 * se, -L12 * se, L12 * ce, -L12 * ce, -L12 * se)
-    x3 = p2[0] + L23 * ca
-    y3 = p2[1] + L23 * sa
-    x4 = x3 + L34 * cb
-    y4 = y3 + L34 * sb
-    x5 = x3 + L35 * cc
-    y5 = y3 + L35 * sc
-    r4x, r4y = x4 - c["P6x"], y4 - c["P6y"]
-    r5x, r5y = x5 - c["P7x"], y5 - c["P7y"]
-    g11 = L23 * (r4y * ca - r4x * sa)
-    g12 = L34 * (r4y * cb - r4x * sb)
-    g21 = L23 * (r5y * ca - r5x * sa)
-    g22 = L35 * (r5y * cc - r5x * sc)
-    det = g11 * g22 - g12 * g21
-    h1 = -(r4x * p2[2] + r4y * p2[3])
-    h2 = -(r5x * p2[2] + r5y * p2[3])
-    a1 = (h1 * g22 - g12 * h2) / det
-    b1 = (g11 * h2 - h1 * g21) / det
-    x3d, y3d = p2[2] - L23 * a1 * sa, p2[3] + L23 * a1 * ca
-    x4d, y4d = x3d - L34 * b1 * sb, y3d + L34 * b1 * cb
-    x5d, y5d = x3d - L35 * b1 * sc, y3d + L35 * b1 * cc
-    kx3 = p2[4] - L23 * a1 * a1 * ca
-    ky3 = p2[5] - L23 * a1 * a1 * sa
-    kx4, ky4 = kx3 - L34 * b1 * b1 * cb, ky3 - L34 * b1 * b1 * sb
-    kx5, ky5 = kx3 - L35 * b1 * b1 * cc, ky3 - L35 * b1 * b1 * sc
-    h1 = -(x4d * x4d + y4d * y4d) - (r4x * kx4 + r4y * ky4)
-    h2 = -(x5d * x5d + y5d * y5d) - (r5x * kx5 + r5y * ky5)
-    a2 = (h1 * g22 - g12 * h2) / det
-    b2 = (g11 * h2 - h1 * g21) / det
-    x3dd, y3dd = kx3 - L23 * a2 * sa, ky3 + L23 * a2 * ca
-    p3 = (x3, y3, x3d, y3d, x3dd, y3dd)
-    p4 = (x4, y4, x4d, y4d, x3dd - L34 * (b2 * sb + b1 * b1 * cb),
-          y3dd + L34 * (b2 * cb - b1 * b1 * sb))
-    p5 = (x5, y5, x5d, y5d, x3dd - L35 * (b2 * sc + b1 * b1 * cc),
-          y3dd + L35 * (b2 * cc - b1 * b1 * sc))
-    rock = _angle_analogs_python(r5x, r5y, x5d, y5d, p5[4], p5[5])
-    lead = _angle_analogs_python(r4x, r4y, x4d, y4d, p4[4], p4[5])
+    p3, p4, p5, (a1, a2), (b1, b2), (r4x, r4y), (r5x, r5y) = _triad_analogs(
+        p2, (ca, sa, cb, sb, cc, sc), L23, L34, L35, c["P6x"], c["P6y"], c["P7x"], c["P7y"])
+    rock = _angle_analogs_python(r5x, r5y, p5[2], p5[3], p5[4], p5[5])
+    lead = _angle_analogs_python(r4x, r4y, p4[2], p4[3], p4[4], p4[5])
     t = rock[0] + c["U578"]
     ct, st = math.cos(t), math.sin(t)
     L78 = c["L78"]

@@ -41,6 +41,14 @@ def _synthesis():
     return load_study(STUDIES / "ov7_synthesis.toml")
 
 
+def _class3_scene(positions):
+    """Mechanism B's scene study, its compiled plan and one revolution's crank angles."""
+    from pipeline.scene import revolution_angles
+    from pipeline.study import load_study
+    study = load_study(STUDIES / "ov7_class3.toml")
+    return study, study.mechanism.compile(), revolution_angles(study.mechanism.crank, positions)
+
+
 def _rows(plan, n=REPEAT_ROWS):
     return np.ascontiguousarray(np.repeat(plan.par[None, :], n, axis=0))
 
@@ -98,11 +106,8 @@ def positions_study(quick):
 # ----------------------------------------------------------------- (b) Newton
 def newton_study(quick):
     from pipeline.kernels import config as kc
-    from pipeline.scene import batch_revolutions, revolution_angles, solve_curves
-    from pipeline.study import load_study
-    study = load_study(STUDIES / "ov7_class3.toml")
-    plan = study.mechanism.compile()
-    phis = revolution_angles(study.mechanism.crank, 360)
+    from pipeline.scene import batch_revolutions, solve_curves
+    study, plan, phis = _class3_scene(360)
     tight = kc.default_tolerances(newton_tol=1e-15, newton_maxiter=100)
     ref = solve_curves(plan, phis, kc.POSITIONS, tight).pos[:, :plan.n_visible]
     r = _rows(plan)
@@ -129,11 +134,8 @@ def newton_study(quick):
 # ----------------------------------------------------------------- (c) analogs
 def analogs_study(quick):
     from pipeline.kernels import config as kc
-    from pipeline.scene import batch_revolutions, revolution_angles, solve_curves
-    from pipeline.study import load_study
-    study = load_study(STUDIES / "ov7_class3.toml")
-    plan = study.mechanism.compile()
-    phis = revolution_angles(study.mechanism.crank, 360)
+    from pipeline.scene import batch_revolutions, solve_curves
+    study, plan, phis = _class3_scene(360)
     exact = solve_curves(plan, phis, kc.ACCELERATIONS)
     i8 = plan.point("P8")
     s1 = np.abs(exact.d1[:, i8]).max()

@@ -38,7 +38,7 @@ import numpy as np
 from . import __version__
 from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank
-from .storage import ResultsError, open_results, put
+from .storage import ResultsError, attr_text, open_results, put, stored_study
 
 log = logging.getLogger("pipeline")
 
@@ -78,16 +78,12 @@ class SweepData:
         return int(self.attrs.get("seed", 0)) % 2 ** 32
 
 
-def _attr_str(v):
-    return v.decode() if isinstance(v, bytes) else v
-
-
 def sweep_objectives(f) -> tuple:
     """The study's objectives (root attribute ``objectives``), all minimised."""
     obj = f.attrs.get("objectives")
     if obj is None or len(obj) == 0:
         obj = DEFAULT_OBJECTIVES
-    names = tuple(str(_attr_str(o)) for o in np.atleast_1d(obj))
+    names = tuple(str(attr_text(o)) for o in np.atleast_1d(obj))
     missing = [o for o in names if f"metrics/{o}" not in f]
     if missing:
         raise ResultsError(f.filename, f"objective {missing[0]!r} has no dataset metrics/"
@@ -99,7 +95,7 @@ def variable_units(d) -> list:
     """Units of the design variables (attribute ``units``: a JSON list)."""
     u = d.attrs.get("units", "[]")
     try:
-        units = json.loads(_attr_str(u))
+        units = json.loads(attr_text(u))
     except (TypeError, ValueError):
         units = [str(u)] * d.shape[1]
     if not isinstance(units, list) or len(units) != d.shape[1]:
@@ -114,7 +110,7 @@ def read_sweep(path) -> SweepData:
             if need not in f:
                 raise ResultsError(path, f"has no dataset {need}; the sweep file is damaged")
         d = f["candidates/params"]
-        names = [str(_attr_str(x)) for x in d.attrs.get("names", [])] or \
+        names = [str(attr_text(x)) for x in d.attrs.get("names", [])] or \
             [f"x{j}" for j in range(d.shape[1])]
         objectives = sweep_objectives(f)
         F = np.stack([f[f"metrics/{o}"][()] for o in objectives], axis=1).astype(np.float64)
@@ -260,11 +256,8 @@ def representatives(F, front_idx, k, seed) -> tuple[np.ndarray, np.ndarray]:
 def _study_spec(data: SweepData):
     """The study's sweep spec, rebuilt from the TOML stored in the file (None if
     the file has none)."""
-    text = data.attrs.get("study_toml")
-    if not text:
-        return None
-    from .study import parse_study
-    return parse_study(_attr_str(text), _attr_str(data.attrs.get("study_file", "<study>"))).sweep
+    study = stored_study(data.attrs)
+    return study.sweep if study is not None else None
 
 
 def compute(data: SweepData, n_representatives=5, *, max_samples=MAX_MODEL_SAMPLES,
@@ -464,12 +457,12 @@ def read_analysis(f) -> Analysis | None:
     g = f[GROUP]
     models = {}
     for o, og in g["importance"].items():
-        m = {k: (_attr_str(v) if isinstance(v, bytes) else v) for k, v in og.attrs.items()}
+        m = {k: (attr_text(v) if isinstance(v, bytes) else v) for k, v in og.attrs.items()}
         for k in og:
             m[k] = og[k][()]
         models[o] = m
     ref = {k: g["reference"][k][()] for k in g["reference"]}
-    ref["note"] = _attr_str(g["reference"].attrs.get("feasibility", ""))
+    ref["note"] = attr_text(g["reference"].attrs.get("feasibility", ""))
     return Analysis(rank=g["pareto_rank"][()], crowding=g["crowding"][()],
                     knee=int(g["knee"][()]), front1=g["front1/index"][()],
                     representatives=g["representatives/index"][()], reference=ref,

@@ -22,7 +22,8 @@ import pandas as pd
 from .analysis import read_analysis, sweep_objectives, variable_units
 from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank
-from .storage import ResultsError, open_results
+from .storage import ResultsError, attr_text, open_results, stored_study
+from .sweep import status_counts
 
 FORMATS = ("table", "json", "csv")
 
@@ -41,10 +42,6 @@ OV7_DWELL_START = 240.0
 OV7_PHASES = (("dwell", 240.0, 390.0, "#cfe3f7"),
               ("swing forward", 30.0, 130.0, "#fbe3c8"),
               ("swing back", 130.0, 240.0, "#d9efd2"))
-
-
-def _s(v):
-    return v.decode() if isinstance(v, bytes) else v
 
 
 def _clean(v):
@@ -83,30 +80,13 @@ def tree(f) -> list[dict]:
         if isinstance(obj, h5py.Dataset):
             rows.append({"path": "/" + name, "kind": "dataset",
                          "shape": "x".join(map(str, obj.shape)) or "scalar",
-                         "dtype": str(obj.dtype), "units": str(_s(a.get("units", ""))),
-                         "long_name": str(_s(a.get("long_name", "")))})
+                         "dtype": str(obj.dtype), "units": str(attr_text(a.get("units", ""))),
+                         "long_name": str(attr_text(a.get("long_name", "")))})
         else:
             rows.append({"path": "/" + name, "kind": "group", "shape": "", "dtype": "",
-                         "units": "", "long_name": str(_s(a.get("long_name", "")))})
+                         "units": "", "long_name": str(attr_text(a.get("long_name", "")))})
     f.visititems(visit)
     return rows
-
-
-def status_counts(f) -> dict:
-    st = f["candidates/status"][()]
-    feas = f["candidates/feasible"][()]
-    n = len(st)
-    out = {}
-    for code, name in kc.STATUS_NAMES.items():
-        k = int((st == code).sum())
-        if k:
-            out[name] = {"count": k, "percent": round(100.0 * k / max(n, 1), 2)}
-    ok_infeasible = int(((st == kc.OK) & ~feas).sum())
-    out["OK but constraints violated"] = {"count": ok_infeasible,
-                                       "percent": round(100.0 * ok_infeasible / max(n, 1), 2)}
-    out["feasible"] = {"count": int(feas.sum()), "percent": round(100.0 * feas.mean(), 2)
-                       if n else 0.0}
-    return out
 
 
 @dataclass
@@ -141,7 +121,7 @@ def design_table(f, idx, selection, rk: Ranking) -> pd.DataFrame:
     idx = np.asarray(idx, np.int64)
     obj, rest = _metric_names(f)
     p = f["candidates/params"]
-    names = [str(_s(x)) for x in p.attrs["names"]]
+    names = [str(attr_text(x)) for x in p.attrs["names"]]
     units = variable_units(p)
     cols = {"selection": selection if isinstance(selection, list) else [selection] * len(idx),
             "candidate": idx, "front": rk.rank[idx], "crowding": rk.crowding[idx]}
@@ -150,7 +130,7 @@ def design_table(f, idx, selection, rk: Ranking) -> pd.DataFrame:
         d = f[f"metrics/{m}"]
         vals = np.empty(len(idx))
         vals[order] = d[np.sort(idx)] if len(idx) else []
-        cols[f"{m} [{_s(d.attrs.get('units', '1'))}]"] = vals
+        cols[f"{m} [{attr_text(d.attrs.get('units', '1'))}]"] = vals
     P = p[np.sort(idx)] if len(idx) else np.zeros((0, len(names)))
     Pv = np.empty_like(P)
     Pv[order] = P
@@ -195,7 +175,7 @@ def overview(path, top=10) -> dict:
     with open_results(path, "sweep") as f:
         a = f.attrs
         rk = ranking(f)
-        info = {k: _clean(_s(a[k])) for k in ("study_name", "study_title", "study_file",
+        info = {k: _clean(attr_text(a[k])) for k in ("study_name", "study_title", "study_file",
                                               "software_version", "created", "seed", "sampler",
                                               "n_candidates", "positions_per_revolution",
                                               "complete") if k in a}
@@ -212,7 +192,7 @@ def overview(path, top=10) -> dict:
             ana["reference dominated by"] = int(A.reference["dominated_by_count"])
             for o, m in A.models.items():
                 ana[f"R2 {o}"] = float(m["r2_test"]) if m.get("fitted") else \
-                    f"skipped: {_s(m.get('reason', ''))}"
+                    f"skipped: {attr_text(m.get('reason', ''))}"
         ref = {}
         if "reference" in f:
             for o in info["objectives"]:
@@ -264,9 +244,9 @@ def candidate_details(path, cid) -> dict:
     with open_results(path, "sweep") as f:
         i = resolve_candidate(f, cid)
         p = f["candidates/params"]
-        names = [str(_s(x)) for x in p.attrs["names"]]
+        names = [str(attr_text(x)) for x in p.attrs["names"]]
         units = variable_units(p)
-        joints = [str(_s(j)) for j in f["metrics"].attrs.get("joint_names", [])]
+        joints = [str(attr_text(j)) for j in f["metrics"].attrs.get("joint_names", [])]
         metrics = []
         if i == "reference":
             g = f["reference"]
@@ -282,7 +262,7 @@ def candidate_details(path, cid) -> dict:
             status = int(f["candidates/status"][i])
             feas = bool(f["candidates/feasible"][i])
             fail = float(f["candidates/fail_phi"][i])
-            cn = [str(_s(n)) for n in f["candidates/constraints"].attrs.get("names", [])]
+            cn = [str(attr_text(n)) for n in f["candidates/constraints"].attrs.get("names", [])]
             G = f["candidates/constraints"][i]
             for m in f["metrics"]:
                 metrics.append((m, float(f["metrics"][m][i]), f["metrics"][m].attrs))
@@ -297,8 +277,8 @@ def candidate_details(path, cid) -> dict:
                          for n, v, u in zip(names, x, units)]
         rows = []
         for m, v, a in metrics:
-            row = {"name": m, "value": v, "units": str(_s(a.get("units", ""))),
-                   "long_name": str(_s(a.get("long_name", "")))}
+            row = {"name": m, "value": v, "units": str(attr_text(a.get("units", ""))),
+                   "long_name": str(attr_text(a.get("long_name", "")))}
             if m == "peak_joint" and math.isfinite(v) and 0 <= int(v) < len(joints):
                 row["joint"] = joints[int(v)]
             rows.append(row)
@@ -433,11 +413,10 @@ class CandidateRun:
 
 def load_study_from_results(f):
     """The study rebuilt from the TOML stored verbatim in the results file."""
-    from .study import parse_study
-    text = f.attrs.get("study_toml")
-    if not text:
+    study = stored_study(f.attrs)
+    if study is None:
         raise ResultsError(f.filename, "has no stored study (attribute study_toml)")
-    return parse_study(_s(text), _s(f.attrs.get("study_file", "<stored study>")))
+    return study
 
 
 def rerun_candidate(path, cid, *, forces=True, n_table=12, positions=None) -> CandidateRun:
@@ -451,7 +430,7 @@ def rerun_candidate(path, cid, *, forces=True, n_table=12, positions=None) -> Ca
         i = resolve_candidate(f, cid)
         study = load_study_from_results(f)
         p = f["candidates/params"]
-        names = [str(_s(x)) for x in p.attrs["names"]]
+        names = [str(attr_text(x)) for x in p.attrs["names"]]
         units = variable_units(p)
         x = f["reference/params"][()] if i == "reference" else p[i]
     if not np.isfinite(x).all():

@@ -20,6 +20,17 @@ def pin_diameter(r_max, length=PIN_LENGTH_MM, sigma=PIN_SIGMA_MPA):
     return np.cbrt(32.0 * np.asarray(r_max, float) * length / (math.pi * sigma))
 
 
+def joint_peaks(phi_deg, magnitude, joint_names):
+    """Per joint: (name, R_max [N], phi1 at the peak [deg], d_min [mm]) from the
+    reaction magnitudes (n_positions, n_joints)."""
+    rows = []
+    for j, name in enumerate(joint_names):
+        col = magnitude[:, j]
+        k = int(np.nanargmax(col)) if np.isfinite(col).any() else 0
+        rows.append((name, float(col[k]), float(phi_deg[k]), float(pin_diameter(col[k]))))
+    return rows
+
+
 def load_time(phi, crank):
     """Time at crank angle phi on a uniform run from phi0 (the kinetostatic crank)."""
     return (np.asarray(phi, float) - crank.phi0) / crank.omega1
@@ -65,14 +76,8 @@ class Reactions:
         return np.hypot(self.R[..., 0], self.R[..., 1])
 
     def peaks(self):
-        """Per joint: (R_max, phi1 at the peak [deg], d_min [mm])."""
-        mag = self.magnitude
-        rows = []
-        for j, name in enumerate(self.joint_names):
-            k = int(np.nanargmax(mag[:, j])) if np.isfinite(mag[:, j]).any() else 0
-            rows.append((name, float(mag[k, j]), float(np.rad2deg(self.phi[k])),
-                         float(pin_diameter(mag[k, j]))))
-        return rows
+        """Per joint: (name, R_max, phi1 at the peak [deg], d_min [mm])."""
+        return joint_peaks(np.rad2deg(self.phi), self.magnitude, self.joint_names)
 
     def summary(self):
         peaks = self.peaks()
@@ -128,12 +133,7 @@ def reaction_tables(g, dense) -> dict:
         cols[f"{name}_y"] = R[:, j, 1]
         cols[name] = mag[:, j]
     cols["M_bal"] = g["M_bal"][()]
-    rows = []
-    phi = dense["phi1"][()]
     R = dense["reactions"][()]
-    mag = np.hypot(R[..., 0], R[..., 1])
-    for j, name in enumerate(joints):
-        k = int(np.nanargmax(mag[:, j]))
-        rows.append({"joint": name, "R_max": mag[k, j], "phi1_deg": phi[k],
-                     "d_min_mm": float(pin_diameter(mag[k, j]))})
-    return {"reactions.csv": pd.DataFrame(cols), "peaks.csv": pd.DataFrame(rows)}
+    peaks = pd.DataFrame(joint_peaks(dense["phi1"][()], np.hypot(R[..., 0], R[..., 1]), joints),
+                         columns=["joint", "R_max", "phi1_deg", "d_min_mm"])
+    return {"reactions.csv": pd.DataFrame(cols), "peaks.csv": peaks}

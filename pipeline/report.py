@@ -22,8 +22,9 @@ import numpy as np
 
 from . import __version__
 from .analysis import analyze, has_analysis, read_analysis, read_sweep
-from .browse import _s, design_table, ranking, rerun_candidate, status_counts
-from .storage import open_results
+from .browse import design_table, ranking, rerun_candidate
+from .storage import attr_text, open_results
+from .sweep import status_counts
 
 log = logging.getLogger("pipeline")
 
@@ -196,7 +197,7 @@ def importance_figure(data, ana) -> str:
     for ax, o in zip(axes[0], objs):
         m = ana.models.get(o, {})
         if not m.get("fitted"):
-            ax.text(0.5, 0.5, f"no model:\n{_s(m.get('reason', 'not fitted'))}", ha="center",
+            ax.text(0.5, 0.5, f"no model:\n{attr_text(m.get('reason', 'not fitted'))}", ha="center",
                     va="center", transform=ax.transAxes, wrap=True, fontsize=9)
             ax.set_axis_off()
             ax.set_title(o, fontsize=10)
@@ -209,7 +210,7 @@ def importance_figure(data, ana) -> str:
         ax.set_xlabel("drop of held-out R$^2$ when shuffled")
         ax.grid(alpha=0.3, axis="x")
         ax.set_title(f"{o}: held-out R$^2$ = {float(m['r2_test']):.3f}\n"
-                     f"({_s(m.get('target', ''))} target, {int(m.get('n_train', 0))} train / "
+                     f"({attr_text(m.get('target', ''))} target, {int(m.get('n_train', 0))} train / "
                      f"{int(m.get('n_test', 0))} test)", fontsize=10)
     return _png(fig)
 
@@ -262,7 +263,7 @@ def _metric_row(f, i, names):
         if m in f["metrics"]:
             d = f["metrics"][m]
             v = float(d[i]) if i != "reference" else float(f["reference"][m][0])
-            out.append((f"{m} [{_s(d.attrs.get('units', '1'))}]", _fmt(v)))
+            out.append((f"{m} [{attr_text(d.attrs.get('units', '1'))}]", _fmt(v)))
     return out
 
 
@@ -271,7 +272,7 @@ def build_html(path, top=20) -> str:
     data = read_sweep(path)
     with open_results(path, "sweep") as f:
         ana = read_analysis(f)
-        a = {k: _s(f.attrs[k]) for k in f.attrs}
+        a = {k: attr_text(f.attrs[k]) for k in f.attrs}
         counts = status_counts(f)
         rk = ranking(f)
         front = ana.front1[:top]
@@ -288,7 +289,7 @@ def build_html(path, top=20) -> str:
                                     "singularity_margin", "dwell_start", "peak_M_bal")]
         rep_values = {i: _metric_row(f, i, show_metrics) for i in reps}
         ref_values = _metric_row(f, "reference", show_metrics) if "reference" in f else None
-        ga = {k: _s(f["analysis"].attrs[k]) for k in f["analysis"].attrs}
+        ga = {k: attr_text(f["analysis"].attrs[k]) for k in f["analysis"].attrs}
 
     title = a.get("study_title", a.get("study_name", "sweep"))
     parts = [f"<h1>{html.escape(str(title))}</h1>",

@@ -25,6 +25,21 @@ class ResultsError(ValueError):
         super().__init__(f"{path}: {reason}")
 
 
+def attr_text(v):
+    """An HDF5 string attribute as str (h5py may hand back bytes)."""
+    return v.decode() if isinstance(v, bytes) else v
+
+
+def stored_study(attrs, default_path="<stored study>"):
+    """The study rebuilt from the TOML stored verbatim in a results file's root
+    attributes; None if the file has none."""
+    text = attrs.get("study_toml")
+    if not text:
+        return None
+    from .study import parse_study
+    return parse_study(attr_text(text), attr_text(attrs.get("study_file", default_path)))
+
+
 def status_table():
     return "; ".join(f"{k}={v}" for k, v in kc.STATUS_NAMES.items())
 

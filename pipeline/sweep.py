@@ -115,18 +115,20 @@ def evaluate_chunk_task(problem, chunk):
 
 
 # ----------------------------------------------------------------- constraints, objectives
-def constraints(spec: SweepSpec, metrics: dict, status: np.ndarray, has_margin: bool):
-    """g <= 0 per constraint (stroke low, stroke high, margin) and the summed
+def constraint_names(has_margin: bool):
+    """The stored constraints, in column order (the margin only for class III plans)."""
+    return ["stroke_min", "stroke_max"] + (["singularity_margin_min"] if has_margin else [])
+
+
+def constraints(spec: SweepSpec, stroke, margin, status: np.ndarray, has_margin: bool):
+    """g <= 0 per constraint (columns as ``constraint_names``) and the summed
     violation CV (NaN where the candidate failed)."""
-    stroke = metrics["stroke_raw"]
     g = [spec.stroke_bounds[0] - stroke, stroke - spec.stroke_bounds[1]]
-    names = ["stroke_min", "stroke_max"]
     if has_margin:
-        g.append(spec.margin_min - metrics["margin_raw"])
-        names.append("singularity_margin_min")
+        g.append(spec.margin_min - margin)
     G = np.stack(g, axis=1)
     cv = np.where(status == kc.OK, np.nansum(np.maximum(G, 0.0), axis=1), np.nan)
-    return names, G, cv
+    return G, cv
 
 
 # ----------------------------------------------------------------- journal
@@ -224,8 +226,7 @@ class SweepFile:
             d = c.create_dataset("forces_evaluated", (n,), "?", chunks=(ch,), compression="lzf")
             d.attrs.update(units="1", long_name="force stage run (skipped for candidates "
                                                 "already infeasible)")
-            gnames, _, _ = constraints(spec, {"stroke_raw": np.zeros(1), "margin_raw":
-                                              np.zeros(1)}, np.zeros(1), self.has_margin)
+            gnames = constraint_names(self.has_margin)
             d = c.create_dataset("constraints", (n, len(gnames)), "f8",
                                  chunks=(ch, len(gnames)), compression="lzf", fillvalue=np.nan)
             d.attrs.update(units="mm, mm, 1", long_name="constraints g <= 0", names=gnames)
@@ -271,9 +272,8 @@ class SweepFile:
         cols = self._columns(metrics)
         for name, col in cols.items():
             f[f"metrics/{name}"][lo:hi] = col
-        _, G, cv = constraints(self.spec, {"stroke_raw": metrics[:, ks.M_STROKE],
-                                           "margin_raw": metrics[:, ks.M_MARGIN]},
-                               status, self.has_margin)
+        G, cv = constraints(self.spec, metrics[:, ks.M_STROKE], metrics[:, ks.M_MARGIN],
+                            status, self.has_margin)
         f["candidates/constraints"][lo:hi] = G
         f["candidates/cv"][lo:hi] = cv
         objectives = np.stack([cols[o] for o in self.spec.objectives], axis=1)
@@ -444,19 +444,34 @@ def _dask_chunks(problem, todo, scheduler, client):
             client.close()
 
 
+def status_counts(f) -> dict:
+    """Candidates per status, OK-but-infeasible and feasible: count and percent."""
+    st = f["candidates/status"][()]
+    feas = f["candidates/feasible"][()]
+    n = len(st)
+    out = {}
+    for code, name in kc.STATUS_NAMES.items():
+        k = int((st == code).sum())
+        if k:
+            out[name] = {"count": k, "percent": round(100.0 * k / max(n, 1), 2)}
+    ok_infeasible = int(((st == kc.OK) & ~feas).sum())
+    out["OK but constraints violated"] = {"count": ok_infeasible,
+                                       "percent": round(100.0 * ok_infeasible / max(n, 1), 2)}
+    out["feasible"] = {"count": int(feas.sum()), "percent": round(100.0 * feas.mean(), 2)
+                       if n else 0.0}
+    return out
+
+
 def summarize(out) -> dict:
     """Counts by status, feasible fraction, best objective values."""
-    from .kernels.config import STATUS_NAMES
     with h5py.File(out, "r") as f:
-        st = f["candidates/status"][()]
         feas = f["candidates/feasible"][()]
-        n = len(st)
-        s = {"candidates": n}
-        for code, name in STATUS_NAMES.items():
-            k = int((st == code).sum())
-            if k:
-                s[f"status {name}"] = f"{k} ({100 * k / n:.1f}%)"
-        s["feasible"] = f"{int(feas.sum())} ({100 * feas.mean():.1f}%)"
+        s = {"candidates": len(feas)}
+        counts = status_counts(f)
+        for name in kc.STATUS_NAMES.values():
+            if name in counts:
+                s[f"status {name}"] = f"{counts[name]['count']} ({counts[name]['percent']:.1f}%)"
+        s["feasible"] = f"{counts['feasible']['count']} ({counts['feasible']['percent']:.1f}%)"
         for o in f.attrs["objectives"]:
             v = f[f"metrics/{o}"][()][feas]
             if v.size:
