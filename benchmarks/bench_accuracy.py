@@ -7,10 +7,11 @@
 (d) the RK4 step for mechanism C;
 (e) strict IEEE against numba fastmath flags (a fresh process, its own cache).
 
-Each study is a table (CSV) and a log-log plot of error against time under
-results/bench/.  Times are steady state (after a warm-up), per candidate.
+Each study is a table (CSV) and a log-log plot of error against time in the
+output folder (``out``; default results/bench/ of the checkout).  Times are
+steady state (after a warm-up), per candidate.
 
-    python benchmarks/bench_accuracy.py [--quick]
+    python benchmarks/bench_accuracy.py [--quick] [-o DIR]
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import ROOT, STUDIES, best_of, hardware  # noqa: E402
 
-OUT = ROOT / "results" / "bench"
+DEFAULT_OUT = ROOT / "results" / "bench"   # where run() writes unless told otherwise
 REPEAT_ROWS = 64          # identical candidates per timing call (amortises call overhead)
 
 
@@ -74,7 +75,7 @@ def _plot(df, x, ys, title, path, xlabel="time per candidate [s]"):
 
 
 # ----------------------------------------------------------------- (a) positions
-def positions_study(quick):
+def positions_study(quick, out=DEFAULT_OUT):
     from pipeline.kernels.sweep import M_DWELL, M_PEAK_R
     from pipeline.sweep import build_problem
     study = _synthesis()
@@ -99,12 +100,12 @@ def positions_study(quick):
                         f"peak reaction {mref[0, M_PEAK_R]:.3f} N")
     _plot(df, "time_s", [("dwell_abs_error", "dwell error (absolute)"),
                          ("peak_rel_error", "peak reaction (relative)")],
-          "(a) positions per revolution", OUT / "a_positions.png")
+          "(a) positions per revolution", Path(out) / "a_positions.png")
     return df
 
 
 # ----------------------------------------------------------------- (b) Newton
-def newton_study(quick):
+def newton_study(quick, out=DEFAULT_OUT):
     from pipeline.kernels import config as kc
     from pipeline.scene import batch_revolutions, solve_curves
     study, plan, phis = _class3_scene(360)
@@ -127,12 +128,12 @@ def newton_study(quick):
     df = pd.DataFrame(rows)
     df.attrs["note"] = "mechanism B, 360 positions, positions only; error = max over points"
     _plot(df, "time_s", [("position_error_mm", "position error [mm]")],
-          "(b) Newton tolerance and iteration cap", OUT / "b_newton.png")
+          "(b) Newton tolerance and iteration cap", Path(out) / "b_newton.png")
     return df
 
 
 # ----------------------------------------------------------------- (c) analogs
-def analogs_study(quick):
+def analogs_study(quick, out=DEFAULT_OUT):
     from pipeline.kernels import config as kc
     from pipeline.scene import batch_revolutions, solve_curves
     study, plan, phis = _class3_scene(360)
@@ -163,12 +164,12 @@ def analogs_study(quick):
           [("velocity_rel_error", "velocity analog"),
            ("acceleration_rel_error", "acceleration analog")],
           f"(c) finite-difference analogs (exact: 0 error at {t_exact / len(r):.1e} s)",
-          OUT / "c_analogs.png")
+          Path(out) / "c_analogs.png")
     return df
 
 
 # ----------------------------------------------------------------- (d) RK4
-def rk4_study(quick):
+def rk4_study(quick, out=DEFAULT_OUT):
     from pipeline import dynamics as dy
     from pipeline.study import load_study
     study = load_study(STUDIES / "takeup_dynamics.toml")
@@ -194,7 +195,7 @@ def rk4_study(quick):
     df.attrs["note"] = (f"mechanism C run-up, error of phi1 at {case.t_end:g} s against DOP853 "
                         f"(rtol = atol = {dy.DOP853_TOL:g}); time per simulation")
     _plot(df, "time_s", [("phi_error_rad", "phi1 error [rad]")], "(d) RK4 step",
-          OUT / "d_rk4.png", xlabel="time per simulation [s]")
+          Path(out) / "d_rk4.png", xlabel="time per simulation [s]")
     return df
 
 
@@ -214,12 +215,12 @@ rows = parameter_rows(pb.plan, spec, pb.draw(0))
 t = time.perf_counter(); pb.evaluate_rows(rows[:2], parallel=False); compile_s = time.perf_counter() - t
 secs = best_of(lambda: pb.evaluate_rows(rows, parallel=False), 2)
 st, m = pb.evaluate_rows(rows, parallel=False)
-np.savez({out!r}, status=st, metrics=m)
+np.savez({npz!r}, status=st, metrics=m)
 print(json.dumps(dict(compile_s=compile_s, secs=secs)))
 """
 
 
-def fastmath_study(quick):
+def fastmath_study(quick, out=DEFAULT_OUT):
     """Strict IEEE in this process (its kernels are compiled already); the
     fastmath build in a fresh process with its own numba cache, because the
     cache key does not include the fastmath flags."""
@@ -227,9 +228,9 @@ def fastmath_study(quick):
     results = {}
     with tempfile.TemporaryDirectory() as tmp:
         for mode in ("strict", "fast"):
-            out = os.path.join(tmp, f"{mode}.npz")
+            npz = os.path.join(tmp, f"{mode}.npz")
             code = _PROBE.format(bench=str(Path(__file__).resolve().parent),
-                                 study=str(STUDIES / "ov7_synthesis.toml"), n=n, out=out)
+                                 study=str(STUDIES / "ov7_synthesis.toml"), n=n, npz=npz)
             if mode == "strict":
                 from pipeline.kernels.config import FASTMATH
                 if FASTMATH:
@@ -249,7 +250,7 @@ def fastmath_study(quick):
                 if r.returncode:
                     raise RuntimeError(f"fastmath probe failed:\n{r.stderr[-2000:]}")
                 info = json.loads(r.stdout.strip().splitlines()[-1])
-            with np.load(out) as z:
+            with np.load(npz) as z:
                 info["status"], info["metrics"] = z["status"], z["metrics"]
             results[mode] = info
     s, f = results["strict"], results["fast"]
@@ -273,7 +274,7 @@ def fastmath_study(quick):
                         f"(its compile time includes the cold cache); errors against strict IEEE")
     _plot(df[df.setting == "fast"], "time_s", [("dwell_error_rel_error", "dwell error"),
                                               ("peak_reaction_rel_error", "peak reaction")],
-          "(e) fastmath against strict IEEE", OUT / "e_fastmath.png")
+          "(e) fastmath against strict IEEE", Path(out) / "e_fastmath.png")
     return df
 
 
@@ -281,16 +282,19 @@ STUDIES_ALL = {"a_positions": positions_study, "b_newton": newton_study,
                "c_analogs": analogs_study, "d_rk4": rk4_study, "e_fastmath": fastmath_study}
 
 
-def run(quick=False, only=None, echo=print):
-    OUT.mkdir(parents=True, exist_ok=True)
+def run(quick=False, only=None, echo=print, out=None):
+    """Run the studies (all, or those named in ``only``), writing each table and
+    plot into the folder ``out`` (default DEFAULT_OUT); return the tables."""
+    out = Path(out) if out is not None else DEFAULT_OUT
+    out.mkdir(parents=True, exist_ok=True)
     echo(f"hardware: {hardware()}")
     tables = {}
     for name, fn in STUDIES_ALL.items():
         if only and name not in only:
             continue
         t = time.perf_counter()
-        df = fn(quick)
-        df.to_csv(OUT / f"{name}.csv", index=False)
+        df = fn(quick, out)
+        df.to_csv(out / f"{name}.csv", index=False)
         tables[name] = df
         echo(f"\n{name} ({time.perf_counter() - t:.1f} s): {df.attrs.get('note', '')}")
         echo(df.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
@@ -301,8 +305,10 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", nargs="*", choices=list(STUDIES_ALL))
+    ap.add_argument("-o", "--output", metavar="DIR", default=str(DEFAULT_OUT),
+                    help="folder for the tables and plots (default: %(default)s)")
     a = ap.parse_args(argv)
-    run(a.quick, a.only)
+    run(a.quick, a.only, out=a.output)
 
 
 if __name__ == "__main__":

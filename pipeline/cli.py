@@ -59,7 +59,8 @@ def cmd_compile(a):
 
 def cmd_bench(a):
     from .bench import run_benchmarks
-    out = run_benchmarks(quick=a.quick, echo=(lambda *x: None) if a.quiet else print)
+    out = run_benchmarks(quick=a.quick, echo=(lambda *x: None) if a.quiet else print,
+                         out=a.output)
     if a.quiet:
         print(out)
     return EXIT_OK
@@ -173,8 +174,11 @@ def build_parser():
 
     bn = sub.add_parser("bench", parents=[common], help=(
         "speed and accuracy: run time against error and the throughput table, "
-        "written under results/bench/"))
+        "written under results/bench/ or -o DIR"))
     bn.add_argument("--quick", action="store_true", help="small sizes (about a minute)")
+    bn.add_argument("-o", "--output", metavar="DIR",
+                    help="folder for the tables, plots and summary.md (default: results/bench/ "
+                         "of the source checkout)")
     bn.set_defaults(func=cmd_bench)
     return p
 

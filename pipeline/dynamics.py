@@ -34,7 +34,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .kernels import config as kc
-from .kernels.dynamics import acceleration, begin, rk4, terms_curve
+from .compiler import kernels_for
 from .study import StudyError
 
 log = logging.getLogger("pipeline")
@@ -143,12 +143,7 @@ def build_drive(mechanism, M1, t_end=1.0, dt=1e-3, file="<study>") -> Drive:
 
 
 def _plan_args(plan, tols):
-    return (plan.codes, plan.gidx, plan.goff, plan.par, plan.fixed_idx, plan.fixed_off, tols)
-
-
-def _mass_args(plan):
-    return (float(plan.gravity), plan.body_com, plan.body_turn, plan.body_mass_off,
-            plan.load_body, plan.load_point)
+    return (plan.par, tols)
 
 
 # ----------------------------------------------------------------- helpers for tests
@@ -176,8 +171,7 @@ def _curve(plan, phi, t=0.0, mechanism=None, loads=True, tols=None):
         drive = _zero_drive(n_loads)
     out = [np.full(phis.shape, np.nan) for _ in range(5)]
     status = np.zeros(phis.shape, np.int8)
-    terms_curve(*_plan_args(plan, tols), *_mass_args(plan), *drive.args(), phis, ts, *out,
-                status)
+    kernels_for(plan).terms_curve(*_plan_args(plan, tols), *drive.args(), phis, ts, *out, status)
     return out, status
 
 
@@ -344,8 +338,8 @@ def integrate(plan, mechanism, case, method="rk4", tols=None, file="<study>") ->
     tail = [np.full(n_tail, np.nan) for _ in range(4)]
     t0 = time.perf_counter()
     if method == "rk4":
-        status, _ = rk4(*_plan_args(plan, tols), *_mass_args(plan), *drive.args(),
-                        float(case.damping), float(case.phi_start), float(case.omega_start),
+        status, _ = kernels_for(plan).rk4(*_plan_args(plan, tols), *drive.args(),
+                                          float(case.damping), float(case.phi_start), float(case.omega_start),
                         float(case.dt), n_sub, *out, *tail)
     else:
         status = _dop853(plan, drive, case, tols, out, tail)
@@ -364,19 +358,18 @@ def _dop853(plan, drive, case, tols, out, tail):
     A kinematic failure stops it with that status and leaves every sample NaN."""
     from scipy.integrate import solve_ivp
     n = plan.n_points
-    work = dict(state=np.zeros((plan.n_groups, kc.N_STATE)), last=np.zeros(1),
+    kern = kernels_for(plan)
+    work = dict(state=np.zeros((kern.N_TRIADS, kc.N_STATE)), last=np.zeros(1),
                 pos=np.zeros((n, 2)), d1=np.zeros((n, 2)), d2=np.zeros((n, 2)),
                 margins=np.zeros(plan.n_groups), loads_k=np.zeros((len(plan.load_body), 3)))
-    pa, ma, da = _plan_args(plan, tols), _mass_args(plan), drive.args()
-    newton = bool(np.any(plan.codes == kc.G_CLASS3))
+    pa, da = _plan_args(plan, tols), drive.args()
     b = float(case.damping)
 
     def restart():
-        begin(plan.codes, plan.goff, plan.par, float(case.phi_start), work["state"],
-              work["last"])
+        kern.begin(plan.par, float(case.phi_start), work["state"], work["last"])
 
     def eps(t, phi, omega):
-        st, e = acceleration(*pa, newton, *ma, *da, b, float(t), float(phi), float(omega),
+        st, e = kern.acceleration(*pa, *da, b, float(t), float(phi), float(omega),
                              work["state"], work["last"], work["pos"], work["d1"], work["d2"],
                              work["margins"], work["loads_k"])
         if st != kc.OK:

@@ -9,7 +9,6 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .kernels.forces import kinetostatics_curve
 
 PIN_LENGTH_MM = 10.0       # DOMAIN.md section 5: pin of length 10 mm in bending
 PIN_SIGMA_MPA = 200.0      # allowed bending stress
@@ -46,18 +45,6 @@ def sample_loads(mechanism, phi):
         for c, e in enumerate((ld.fx, ld.fy, ld.moment)):
             out[:, k, c] = np.broadcast_to(e.evaluate(phi, t), phi.shape)
     return out
-
-
-def plan_force_args(plan):
-    """The plan arrays the kinetostatics kernel reads, in its argument order."""
-    return (plan.body_com, plan.body_turn, plan.body_mass_off, plan.joint_point,
-            plan.joint_bodies, plan.slide_bodies, plan.slide_dir, plan.slide_angle,
-            plan.crank_body, plan.load_body, plan.load_point)
-
-
-def work_arrays(plan):
-    n = 3 * len(plan.body_names)
-    return np.zeros((n, n)), np.zeros(n)
 
 
 @dataclass
@@ -108,14 +95,13 @@ def scene_forces(mechanism, plan, curves) -> Reactions:
     n = curves.phi.shape[0]
     loads = sample_loads(mechanism, curves.phi)
     nb, nj, ns = len(plan.body_names), len(plan.joint_names), len(plan.slide_names)
-    wa, wb = work_arrays(plan)
     body_loads = np.zeros((n, nb, 3))
     R = np.zeros((n, nj, 2))
     S = np.zeros((n, ns, 2))
     M = np.zeros(n)
-    kinetostatics_curve(curves.pos, curves.d1, curves.d2, crank.omega1, crank.eps1,
-                        plan.gravity, plan.par, *plan_force_args(plan), loads, wa, wb,
-                        body_loads, R, S, M)
+    from .compiler import kernels_for
+    kernels_for(plan).forces_curve(plan.par, curves.pos, curves.d1, curves.d2, crank.omega1,
+                                   crank.eps1, loads, body_loads, R, S, M)
     return Reactions(curves.phi, R, S, M, body_loads, plan.joint_names, plan.slide_names,
                      plan.body_names)
 

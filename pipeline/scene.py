@@ -11,7 +11,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .kernels import config as kc
-from .kernels.assembly import link_angles, solve_revolution
+from .compiler import kernels_for
+from .kernels.geometry import link_angles
 from .model import Plan
 
 ORDER = {"positions": kc.POSITIONS, "velocities": kc.VELOCITIES,
@@ -52,10 +53,9 @@ def solve_curves(plan: Plan, phis, order, tols=None, par=None, close_at=math.nan
     status = np.zeros(n, np.int8)
     margin = np.zeros((n, ng))
     iters = np.zeros(n)
-    overall = solve_revolution(plan.codes, plan.gidx, plan.goff, par, plan.fixed_idx,
-                               plan.fixed_off, np.ascontiguousarray(phis, dtype=np.float64),
-                               float(close_at), int(order), tols, pos, d1, d2, status, margin,
-                               iters)
+    overall = kernels_for(plan).revolution(
+        np.ascontiguousarray(par, dtype=np.float64), np.ascontiguousarray(phis, dtype=np.float64),
+        float(close_at), int(order), tols, pos, d1, d2, status, margin, iters)
     links = np.full((n, len(plan.link_a), 3), np.nan)
     link_angles(pos, d1, d2, plan.link_a, plan.link_b, int(order), links)
     return Curves(np.asarray(phis, float), pos, d1, d2, status, margin, iters, links, int(overall))
@@ -110,8 +110,7 @@ def batch_revolutions(study, pars, positions, order=kc.ACCELERATIONS, with_force
     """One revolution of every parameter row of ``pars`` (candidates of the
     study's mechanism) on all cores, reduced to (status, peak |r''| of the
     working point [mm/rad^2], peak joint reaction [N])."""
-    from .forces import plan_force_args, sample_loads
-    from .kernels.batch import revolutions_batch
+    from .forces import sample_loads
     mech = study.mechanism
     plan = mech.compile()
     phis = revolution_angles(mech.crank, positions)
@@ -121,9 +120,7 @@ def batch_revolutions(study, pars, positions, order=kc.ACCELERATIONS, with_force
     status = np.zeros(n, np.int8)
     acc = np.zeros(n)
     peak = np.zeros(n)
-    revolutions_batch(np.ascontiguousarray(pars), plan.codes, plan.gidx, plan.goff,
-                      plan.fixed_idx, plan.fixed_off, plan.n_points, phis, int(order), tols,
-                      plan.point(study.output.working_point), bool(with_forces),
-                      mech.crank.omega1, mech.crank.eps1, plan.gravity, *plan_force_args(plan),
-                      loads, status, acc, peak)
+    kernels_for(plan).batch(np.ascontiguousarray(pars), phis, int(order), tols,
+                            plan.point(study.output.working_point), bool(with_forces),
+                            mech.crank.omega1, mech.crank.eps1, loads, status, acc, peak)
     return status, acc, peak

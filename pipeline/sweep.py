@@ -59,28 +59,39 @@ class SweepProblem:
     phis: np.ndarray
     phi_close: float
     tols: np.ndarray
-    rocker: tuple
+    rocker: tuple            # (pivot, point) names of the output rocker
     dwell_w: int
     omega1: float
     eps1: float
     loads: np.ndarray
+    name: str = ""
 
-    def kernel_args(self, pars):
-        p = self.plan
+    @property
+    def kernels(self):
+        """The mechanism's generated kernels (compiled on first use, then cached)."""
+        from .compiler import kernels_for
+        return kernels_for(self.plan, self.rocker, self.name)
+
+    def settings(self):
         s = self.spec
-        return (pars, p.codes, p.n_kinematic, p.gidx, p.goff, p.fixed_idx, p.fixed_off, p.n_points, self.phis,
-                self.phi_close, self.tols, self.rocker[0], self.rocker[1], s.stroke_radius,
-                self.dwell_w, s.wants_forces, s.stroke_bounds[0], s.stroke_bounds[1],
-                s.margin_min, self.omega1, self.eps1, p.gravity, p.body_com, p.body_turn,
-                p.body_mass_off, p.joint_point, p.joint_bodies, p.slide_bodies, p.slide_dir,
-                p.slide_angle, p.crank_body, p.load_body, p.load_point, self.loads)
+        return ks.settings(s.stroke_radius, self.dwell_w, s.wants_forces, s.stroke_bounds[0],
+                           s.stroke_bounds[1], s.margin_min, self.omega1, self.eps1)
 
     def evaluate_rows(self, pars, parallel=True):
+        """Status and metric rows (N_METRICS) of the parameter rows ``pars``, on
+        all of numba's threads, or on the calling thread only (a Dask task)."""
+        import numba
         n = pars.shape[0]
         status = np.zeros(n, np.int8)
         metrics = np.full((n, ks.N_METRICS), np.nan)
-        fn = ks.evaluate_batch_parallel if parallel else ks.evaluate_batch_serial
-        fn(*self.kernel_args(pars), status, metrics)
+        before = numba.get_num_threads()
+        if not parallel:
+            numba.set_num_threads(1)      # this thread only: numba's mask is per thread
+        try:
+            self.kernels.evaluate(np.ascontiguousarray(pars), self.phis, self.phi_close,
+                                  self.tols, self.settings(), self.loads, status, metrics)
+        finally:
+            numba.set_num_threads(before)
         return status, metrics
 
     def evaluate_chunk(self, chunk, parallel=True):
@@ -103,7 +114,7 @@ def build_problem(study, spec: SweepSpec, tols=None) -> SweepProblem:
     return SweepProblem(
         spec=spec, plan=plan, phis=phis, phi_close=crank.phi0 + crank.rot * 2 * math.pi,
         tols=kc.default_tolerances() if tols is None else tols,
-        rocker=(plan.point(out.rocker[0]), plan.point(out.rocker[1])),
+        rocker=(out.rocker[0], out.rocker[1]), name=mech.name,
         dwell_w=int(round(out.dwell_deg * spec.positions / 360)),
         omega1=crank.omega1, eps1=crank.eps1,
         loads=sample_loads(mech, phis) if mech.loads else np.zeros((len(phis), 0, 3)))

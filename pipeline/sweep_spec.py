@@ -188,6 +188,21 @@ def draw_candidates(spec: SweepSpec, chunk: int) -> np.ndarray:
     return low + u * (high - low)
 
 
+def scaled_mass_data(m0, J0, lS0, ratio):
+    """The mass model of DOMAIN.md section 9 for a body whose characteristic
+    length changes by ``ratio`` = L/L0: (m, J_S, lS) = (m0 L/L0, J0 (L/L0)^3,
+    lS0 L/L0).
+
+    The one place both the sweep (``parameter_rows``, NumPy arrays over the
+    candidates) and the scene path (``apply_design``, Python scalars) scale the
+    mass data.  Only plain IEEE multiplications are used (the cube as
+    ``ratio * ratio * ratio``, never ``** 3``, whose array and scalar routes
+    round differently), so array and scalar inputs give bit-identical results.
+    """
+    cube = ratio * ratio * ratio
+    return m0 * ratio, J0 * cube, lS0 * ratio
+
+
 def parameter_rows(plan, spec: SweepSpec, x: np.ndarray) -> np.ndarray:
     """Full kernel parameter rows for design-variable rows ``x``: the reference
     row with the variables set, then the mass model (DOMAIN.md section 9:
@@ -198,13 +213,11 @@ def parameter_rows(plan, spec: SweepSpec, x: np.ndarray) -> np.ndarray:
         pars[:, plan.param(v.param)] = x[:, j]
     for ms in spec.mass_model:
         k = plan.param(ms.length_param)
-        ratio = pars[:, k] / base[k]
         mass = plan.param(f"{ms.body}.mass")
         inertia = plan.param(f"{ms.body}.J_S")
         arm = plan.param(f"S[{ms.body}].length")
-        pars[:, mass] = base[mass] * ratio
-        pars[:, inertia] = base[inertia] * ratio ** 3
-        pars[:, arm] = base[arm] * ratio
+        pars[:, mass], pars[:, inertia], pars[:, arm] = scaled_mass_data(
+            base[mass], base[inertia], base[arm], pars[:, k] / base[k])
     return np.ascontiguousarray(pars)
 
 
@@ -234,9 +247,11 @@ def apply_design(mech, spec: SweepSpec, x) -> "Mechanism":
     new_plan = out.compile()
     for ms in spec.mass_model:
         k = base_plan.param(ms.length_param)
-        scale[ms.body] = new_plan.par[k] / base_plan.par[k]
-    bodies = tuple(
-        replace(b, mass=b.mass * scale[b.name], J_S=b.J_S * scale[b.name] ** 3,
-                com=replace(b.com, lS=b.com.lS * scale[b.name])) if b.name in scale else b
-        for b in mech.bodies)
-    return replace(out, bodies=bodies)
+        scale[ms.body] = float(new_plan.par[k] / base_plan.par[k])
+    bodies = []
+    for b in mech.bodies:
+        if b.name in scale:
+            m, J, lS = scaled_mass_data(b.mass, b.J_S, b.com.lS, scale[b.name])
+            b = replace(b, mass=m, J_S=J, com=replace(b.com, lS=lS))
+        bodies.append(b)
+    return replace(out, bodies=tuple(bodies))

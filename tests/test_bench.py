@@ -1,16 +1,28 @@
-"""`pipeline bench --quick` runs and writes its tables and plots (the numbers
-themselves are measurements, not assertions; their consistency is checked)."""
+"""`pipeline bench --quick -o DIR` runs and writes its tables and plots into DIR
+(the numbers themselves are measurements, not assertions; their consistency is
+checked).  The test writes only under tmp_path, never into results/bench/."""
+
+from pathlib import Path
 
 import pandas as pd
 
-from pipeline.cli import main
 from pipeline.bench import BENCHMARKS
+from pipeline.cli import main
+
+DEFAULT_OUT = BENCHMARKS.parent / "results" / "bench"
 
 
-def test_bench_quick_writes_tables_and_plots(capsys):
-    assert main(["bench", "--quick", "-q"]) == 0
-    out = BENCHMARKS.parent / "results" / "bench"
-    for name in ("a_positions", "b_newton", "c_analogs", "d_rk4", "e_fastmath"):
+def _snapshot(folder):
+    return {p: p.stat().st_mtime_ns for p in folder.rglob("*")} if folder.exists() else {}
+
+
+def test_bench_quick_writes_tables_and_plots(capsys, tmp_path):
+    out = tmp_path / "bench"
+    before = _snapshot(DEFAULT_OUT)
+    assert main(["bench", "--quick", "-q", "-o", str(out)]) == 0
+    assert _snapshot(DEFAULT_OUT) == before      # a user's own benchmark output is left alone
+    assert Path(capsys.readouterr().out.strip().splitlines()[-1]) == out   # -q prints the folder
+    for name in ("a_positions", "b_newton", "c_analogs", "d_rk4", "e_fastmath", "throughput"):
         assert (out / f"{name}.csv").exists(), name
     assert (out / "summary.md").exists()
     for png in ("a_positions.png", "b_newton.png", "c_analogs.png", "d_rk4.png"):

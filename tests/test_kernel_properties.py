@@ -29,7 +29,7 @@ from hypothesis import strategies as st
 
 from pipeline.kernels import config as kc
 from pipeline.kernels.groups import attach, crank, rpr, rrp, rrr
-from pipeline.kernels.triad import class3
+from pipeline.kernels.triad import class3, ternary_angle
 from pipeline.model import ClassIII, Crank, Mechanism, RRR
 from pipeline.scene import solve_curves
 from tolerances import CLOSURE_MM, KERNEL_EXACT_REL, LENGTH_REL, SELF_FD_REL, WELL_INSIDE_REL
@@ -809,8 +809,9 @@ def call_class3(tri, P2, P6, P7, a_guess, b_guess, order, det_sign=0.0, tols=TOL
     state[0, kc.S_A] = a_guess
     state[0, kc.S_B] = b_guess
     state[0, kc.S_DET_SIGN] = det_sign
-    status, margin = class3(pos, d1, d2, 0, 1, 2, 3, 4, 5, tri.l23, tri.l34, tri.l45, tri.l35,
-                            tri.l46, tri.l57, tri.orientation, state, 0, order, tols)
+    u435 = ternary_angle(tri.l34, tri.l45, tri.l35, tri.orientation)
+    status, margin = class3(pos, d1, d2, 0, 1, 2, 3, 4, 5, tri.l23, tri.l34, u435, tri.l35,
+                            tri.l46, tri.l57, state, 0, order, tols)
     return int(status), float(margin), pos, d1, d2, state
 
 

@@ -184,18 +184,3 @@ def kinetostatics(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn, 
         slide_out[k, 0] = work_b[2 * nj + 2 * k] if ok else math.nan
         slide_out[k, 1] = work_b[2 * nj + 2 * k + 1] if ok else math.nan
     return work_b[col_m] if ok else math.nan
-
-
-@njit(**JIT)
-def kinetostatics_curve(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn,
-                        body_mass_off, joint_point, joint_bodies, slide_bodies, slide_dir,
-                        slide_angle, crank_body, load_body, load_point, loads, work_a, work_b,
-                        loads_out, r_out, slide_out, m_out):
-    """kinetostatics at every position k of pos/d1/d2 (n, n_points, 2); loads
-    (n, n_loads, 3); outputs indexed by k first."""
-    for k in range(pos.shape[0]):
-        m_out[k] = kinetostatics(pos[k], d1[k], d2[k], omega1, eps1, gravity, par, body_com,
-                                 body_turn, body_mass_off, joint_point, joint_bodies,
-                                 slide_bodies, slide_dir, slide_angle, crank_body, load_body,
-                                 load_point, loads[k], work_a, work_b, loads_out[k], r_out[k],
-                                 slide_out[k])

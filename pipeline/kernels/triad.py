@@ -106,15 +106,17 @@ def _wrap(x):
 
 
 @njit(**JIT)
-def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, l45, l35, l46, l57, orientation,
+def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
            state, g, order, tols):
-    """Solve the class III group ``g`` at the current crank position.
+    """Solve the class III group whose continuation state is row ``g`` of
+    ``state``, at the current crank position.
 
-    ``state[g]`` carries the continuation: the last (a, b), the sign of det J
-    there (0 before the first solve), and receives the singularity margin and
-    the Newton iterations.  Returns (status, margin).
+    ``u435`` is the ternary link's angle at vertex 3 (``ternary_angle``, NaN
+    when the triangle cannot be built), computed once per candidate by the
+    caller.  ``state[g]`` carries the continuation: the last (a, b), the sign
+    of det J there (0 before the first solve), and receives the singularity
+    margin and the Newton iterations.  Returns (status, margin).
     """
-    u435 = ternary_angle(l34, l45, l35, orientation)
     if not (math.isfinite(u435) and l23 > 0.0 and l46 > 0.0 and l57 > 0.0):
         for i in (i3, i4, i5):
             for k in range(2):

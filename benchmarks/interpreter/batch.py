@@ -1,4 +1,7 @@
-"""One revolution of every candidate, with full kinematics (and optionally the
+"""FROZEN COPY of the pre-compiler interpreter kernels (agreement check and
+benchmarks only).
+
+One revolution of every candidate, with full kinematics (and optionally the
 force analysis), reduced per candidate to its peaks: the batch form of a
 scene, used for throughput measurements and quick screening."""
 
@@ -8,8 +11,8 @@ import numpy as np
 from numba import njit, prange
 
 from .assembly import advance, has_newton, init_state, kinematic_work, start_angle
-from .config import JIT_PARALLEL, OK
-from .forces import force_work, kinetostatics
+from pipeline.kernels.config import JIT_PARALLEL, OK
+from pipeline.kernels.forces import force_work, kinetostatics
 
 
 @njit(**JIT_PARALLEL)

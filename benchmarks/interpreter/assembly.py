@@ -1,4 +1,8 @@
-"""The compiled plan interpreter: one crank position, then a revolution.
+"""FROZEN COPY of the plan interpreter the product used before the mechanism
+compiler (kept only for the agreement check and the benchmarks; not part of
+the product).
+
+The compiled plan interpreter: one crank position, then a revolution.
 
 A mechanism is compiled (``pipeline.model``) into flat arrays:
 
@@ -23,14 +27,14 @@ import math
 import numpy as np
 from numba import njit
 
-from .config import (JIT, OK, G_CRANK, G_RRR, G_RRP, G_RPR, G_CLASS3, G_ATTACH,
+from pipeline.kernels.config import (JIT, OK, G_CRANK, G_RRR, G_RRP, G_RPR, G_CLASS3, G_ATTACH,
                      S_A, S_B, S_ITERS, S_MARGIN, N_STATE,
                      T_SINGULAR, T_ASSEMBLY_SLACK, T_SUBSTEP, T_CLOSE, T_MIN_STEP,
                      BRANCH_JUMP, NEWTON_MAXITER, T_STEP_CHANGE, T_FIRST_STEP, S_SLOPE_A,
                      S_SLOPE_B, S_HAS_SLOPE, S_A_OLD, S_B_OLD, S_SIGN_OLD, S_DET_SIGN)
-from .geometry import angle_analogs
-from .groups import attach, crank, rpr, rrp, rrr
-from .triad import class3, _wrap
+from pipeline.kernels.geometry import angle_analogs
+from pipeline.kernels.groups import attach, crank, rpr, rrp, rrr
+from pipeline.kernels.triad import class3, ternary_angle, _wrap
 
 
 @njit(**JIT)
@@ -110,9 +114,10 @@ def solve_position(codes, gidx, goff, par, fixed_idx, fixed_off, phi1, order, to
             st, m = rpr(pos, d1, d2, ix[0], ix[1], ix[2], par[o], par[o + 1], par[o + 2],
                         order, sing, slack)
         elif c == G_CLASS3:
+            u435 = ternary_angle(par[o + 1], par[o + 2], par[o + 3], par[o + 6])
             st, m = class3(pos, d1, d2, ix[0], ix[1], ix[2], ix[3], ix[4], ix[5],
-                           par[o], par[o + 1], par[o + 2], par[o + 3], par[o + 4], par[o + 5],
-                           par[o + 6], state, g, order, tols)
+                           par[o], par[o + 1], u435, par[o + 3], par[o + 4], par[o + 5],
+                           state, g, order, tols)
         else:  # G_ATTACH
             st, m = attach(pos, d1, d2, ix[0], ix[1], ix[2], ix[3], par[o], par[o + 1], order)
         margins[g] = m

@@ -1,0 +1,89 @@
+"""The mechanism compiler: from a mechanism's plan, the Python source of
+kernels specialised to it, written to a cache folder and imported from there.
+
+``kernels_for(plan)`` returns the imported module (see ``generate`` for its
+kernels).  The module's name is the hash of its source, and the source
+carries a digest of the kernel library it calls, so:
+
+* the same mechanism in a later run imports the same file, and numba's
+  on-disk cache (``cache=True``) compiles nothing the second time;
+* a change of the mechanism, of an emitter or of a library kernel gives a new
+  file (a stale compiled kernel is never reused).
+
+The folder is ``$PIPELINE_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/pipeline``
+(``~/.cache/pipeline``).  Files are written to a temporary name and renamed,
+so concurrent processes (Dask workers) never import half a file.  Nothing is
+passed to exec or eval: the module is imported like any other.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import os
+import sys
+import threading
+from pathlib import Path
+
+from .generate import generate
+
+LANES = 8                      # candidates per block in the sweep's lock-step path
+_LOCK = threading.Lock()
+_MODULES: dict[str, object] = {}
+_DIGEST: list[str] = []
+
+
+def cache_dir() -> Path:
+    d = os.environ.get("PIPELINE_CACHE_DIR")
+    if d:
+        return Path(d)
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "pipeline"
+
+
+def library_digest() -> str:
+    """Digest of every kernel and compiler source the generated modules depend on."""
+    if not _DIGEST:
+        here = Path(__file__).resolve().parent
+        files = sorted(here.glob("*.py")) + sorted((here.parent / "kernels").glob("*.py"))
+        h = hashlib.sha256()
+        for f in files:
+            h.update(f.name.encode())
+            h.update(f.read_bytes())
+        _DIGEST.append(h.hexdigest()[:16])
+    return _DIGEST[0]
+
+
+def source_for(plan, rocker=None, name="") -> str:
+    """The generated source of ``plan``'s kernels (``rocker``: the output
+    rocker's (pivot, point) names, for the sweep's positions stage)."""
+    return generate(plan, rocker=rocker, digest=library_digest(), lanes_width=LANES,
+                    mechanism=name)
+
+
+def module_name(source: str) -> str:
+    return "pipeline_mech_" + hashlib.sha256(source.encode()).hexdigest()[:20]
+
+
+def kernels_for(plan, rocker=None, name=""):
+    """The generated kernels of ``plan``, imported (written first if new)."""
+    src = source_for(plan, rocker, name)
+    mod_name = module_name(src)
+    with _LOCK:
+        mod = _MODULES.get(mod_name)
+        if mod is not None:
+            return mod
+        folder = cache_dir()
+        folder.mkdir(parents=True, exist_ok=True)
+        path = folder / f"{mod_name}.py"
+        if not path.exists() or path.read_text() != src:
+            tmp = path.with_name(f"{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
+            tmp.write_text(src)
+            os.replace(tmp, path)
+        if str(folder) not in sys.path:
+            sys.path.insert(0, str(folder))
+        importlib.invalidate_caches()
+        mod = importlib.import_module(mod_name)
+        mod.SOURCE_PATH = str(path)
+        _MODULES[mod_name] = mod
+        return mod

@@ -1,0 +1,235 @@
+"""One emitter per structural group type.
+
+An emitter writes the lines of its group for the generated kernels:
+
+* ``params``: the parameters of the candidate row it reads (once per candidate);
+* ``derived``: constants it computes from them once per candidate (the
+  ternary link's angle, cos/sin of fixed angles, squared lengths);
+* ``careful``: the careful path at one crank position (positions, first and
+  second analogs to ``order``, status and margin), calling the group's
+  formulas in ``pipeline.kernels`` with constant point indices;
+* ``lanes`` (where the group has a fast form): the lock-step lane path of the
+  sweep's positions stage, written out in full: division and square root
+  only, no library call.
+
+Adding a group type means adding one emitter here and its tests.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..kernels import config as kc
+
+
+class Emitter:
+    code = None
+    fast = False            # has a lane form
+
+    def __init__(self, plan, names, g, triad_row=-1):
+        self.plan = plan
+        self.n = names
+        self.g = g
+        self.label = plan.group_names[g]
+        self.ix = [int(i) for i in plan.gidx[g]]
+        self.triad_row = triad_row
+
+    # -- helpers
+    def k(self, key):
+        return self.n.K(self.label, key)
+
+    def p(self, j):
+        return self.n.P(self.ix[j])
+
+    def pname(self, j):
+        return self.plan.point_names[self.ix[j]]
+
+    def keys(self):
+        o = int(self.plan.goff[self.g])
+        end = o
+        while end < len(self.plan.par_names) and self.plan.par_names[end].startswith(self.label + "."):
+            end += 1
+        return [self.plan.par_names[i].split(".", 1)[1] for i in range(o, end)]
+
+    def params(self):
+        return [self.k(key) for key in self.keys()]
+
+    def derived(self):
+        return []
+
+    def title(self):
+        return f"group {self.g}: {type(self).__name__.lower()} {self.label!r}"
+
+    def careful(self):
+        raise NotImplementedError
+
+    def lanes(self):
+        raise NotImplementedError
+
+
+class CrankEmitter(Emitter):
+    code = kc.G_CRANK
+    fast = True
+
+    def careful(self):
+        return [f"# {self.title()}: {self.pname(1)} = {self.pname(0)} + L e(phi1 + phiM0)",
+                f"st, m = crank(pos, d1, d2, {self.p(0)}, {self.p(1)}, {self.k('length')}, "
+                f"{self.k('phiM0')}, phi, order)"]
+
+    def derived(self):
+        return [(f"{self.k('phiM0')}_cos", f"math.cos({self.k('phiM0')})"),
+                (f"{self.k('phiM0')}_sin", f"math.sin({self.k('phiM0')})")]
+
+    def lanes(self):
+        # e(phi1 + phiM0) = e(phi1) rotated by phiM0: the table's cos/sin times
+        # the candidate's hoisted cos/sin (no library call)
+        o, t = self.n.point[self.pname(0)], self.n.point[self.pname(1)]
+        c, s, L = lane(f"{self.k('phiM0')}_cos"), lane(f"{self.k('phiM0')}_sin"), \
+            lane(self.k("length"))
+        return [f"# {self.title()}: {t} = {o} + L e(phi1) rotated by phiM0 (table cos/sin)",
+                f"ec = cph * {c} - sph * {s}",
+                f"es = sph * {c} + cph * {s}",
+                f"{t}x = {o}x + {L} * ec",
+                f"{t}y = {o}y + {L} * es"]
+
+
+class RRREmitter(Emitter):
+    code = kc.G_RRR
+    fast = True
+
+    def careful(self):
+        return [f"# {self.title()}: {self.pname(2)} at L_AB from {self.pname(0)} and L_CB "
+                f"from {self.pname(1)}, assembly mode W (circle intersection)",
+                f"st, m = rrr(pos, d1, d2, {self.p(0)}, {self.p(1)}, {self.p(2)}, "
+                f"{self.k('L_AB')}, {self.k('L_CB')}, {self.k('W')}, order, sing, slack)"]
+
+    def lanes(self):
+        A, C, B = (self.n.point[self.pname(j)] for j in range(3))
+        lab, lcb, w = (lane(self.k(x)) for x in ("L_AB", "L_CB", "W"))
+        return [
+            f"# {self.title()}: {B} from {A} and {C}, cosine law without acos:",
+            f"# C->B = L_CB (cos U r/|r| - W sin U n(r)/|r|), r = A - C, cos U = arg",
+            f"rx = {A}x - {C}x",
+            f"ry = {A}y - {C}y",
+            "r2 = rx * rx + ry * ry",
+            "ir = 1.0 / math.sqrt(r2)",
+            f"cu = (r2 + {lcb} * {lcb} - {lab} * {lab}) * (0.5 * ir / {lcb})",
+            "q = 1.0 - cu * cu",
+            "bad = bad | (q < 0.0) | (r2 <= 0.0)",
+            "su = math.sqrt(max(q, 0.0))",
+            f"{B}x = {C}x + {lcb} * ir * (cu * rx + {w} * su * ry)",
+            f"{B}y = {C}y + {lcb} * ir * (cu * ry - {w} * su * rx)",
+            f"# margin |sin| of the angle at {B}",
+            f"m = abs(({B}x - {A}x) * ({B}y - {C}y) - ({B}y - {A}y) * ({B}x - {C}x)) "
+            f"/ ({lab} * {lcb})",
+            "low = low | (not (m >= margin_safe))",
+        ]
+
+
+class RRPEmitter(Emitter):
+    code = kc.G_RRP
+
+    def careful(self):
+        ga = self.p(3) if self.ix[3] >= 0 else "-1"
+        gb = self.p(4) if self.ix[4] >= 0 else "-1"
+        return [f"# {self.title()}: slider {self.pname(2)} on the guide through "
+                f"{self.pname(1)}, link from {self.pname(0)}",
+                f"st, m = rrp(pos, d1, d2, {self.p(0)}, {self.p(1)}, {self.p(2)}, {ga}, {gb}, "
+                f"{self.k('L_AB')}, {self.k('guide_angle')}, {self.k('W')}, order, sing, slack)"]
+
+
+class RPREmitter(Emitter):
+    code = kc.G_RPR
+
+    def careful(self):
+        return [f"# {self.title()}: coulisse about {self.pname(1)} through the block at "
+                f"{self.pname(0)}; guide end {self.pname(2)}",
+                f"st, m = rpr(pos, d1, d2, {self.p(0)}, {self.p(1)}, {self.p(2)}, "
+                f"{self.k('offset')}, {self.k('guide_length')}, {self.k('W')}, order, sing, slack)"]
+
+
+class AttachEmitter(Emitter):
+    code = kc.G_ATTACH
+
+    @property
+    def fast(self):
+        return self.ix[1] >= 0
+
+    def careful(self):
+        ia = self.p(1) if self.ix[1] >= 0 else "-1"
+        ib = self.p(2) if self.ix[2] >= 0 else "-1"
+        along = (f"rot({self.pname(1)}->{self.pname(2)}, angle, length)" if self.ix[1] >= 0
+                 else "length e(angle)")
+        return [f"# {self.title()}: {self.pname(3)} = {self.pname(0)} + {along}",
+                f"st, m = attach(pos, d1, d2, {self.p(0)}, {ia}, {ib}, {self.p(3)}, "
+                f"{self.k('angle')}, {self.k('length')}, order)"]
+
+    def derived(self):
+        return [(f"{self.k('angle')}_cos", f"math.cos({self.k('angle')})"),
+                (f"{self.k('angle')}_sin", f"math.sin({self.k('angle')})")]
+
+    def lanes(self):
+        base, a, b, out = (self.n.point[self.pname(j)] for j in (0, 1, 2, 3))
+        c, s, L = lane(f"{self.k('angle')}_cos"), lane(f"{self.k('angle')}_sin"), \
+            lane(self.k("length"))
+        return [f"# {self.title()}: {out} = {base} + rot({a}->{b}, angle, length), "
+                "hoisted cos/sin",
+                f"vx = {b}x - {a}x",
+                f"vy = {b}y - {a}y",
+                f"f = {L} / math.sqrt(vx * vx + vy * vy)",
+                f"{out}x = {base}x + f * ({c} * vx - {s} * vy)",
+                f"{out}y = {base}y + f * ({s} * vx + {c} * vy)"]
+
+
+class ClassIIIEmitter(Emitter):
+    code = kc.G_CLASS3
+    fast = True
+
+    def derived(self):
+        u = self.k("U435")
+        return [(u, f"ternary_angle({self.k('L34')}, {self.k('L45')}, {self.k('L35')}, "
+                    f"{self.k('orientation')})"),
+                (f"{u}_cos", f"math.cos({u})"), (f"{u}_sin", f"math.sin({u})")]
+
+    def careful(self):
+        i2, i6, i7, i3, i4, i5 = (self.p(j) for j in range(6))
+        k = self.k
+        return [f"# {self.title()}: ternary link {self.pname(3)}-{self.pname(4)}-"
+                f"{self.pname(5)} on leads from {self.pname(0)}, {self.pname(1)}, "
+                f"{self.pname(2)}; Newton on the closure from the continuation state row "
+                f"{self.triad_row}",
+                f"st, m = class3(pos, d1, d2, {i2}, {i6}, {i7}, {i3}, {i4}, {i5}, {k('L23')}, "
+                f"{k('L34')}, {k('U435')}, {k('L35')}, {k('L46')}, {k('L57')}, state, "
+                f"{self.triad_row}, order, tols)"]
+
+
+EMITTERS = {e.code: e for e in (CrankEmitter, RRREmitter, RRPEmitter, RPREmitter,
+                                AttachEmitter, ClassIIIEmitter)}
+
+
+def emitters_for(plan, names):
+    """The emitters of a plan's groups, in solve order."""
+    out, row = [], 0
+    for g, code in enumerate(plan.codes):
+        cls = EMITTERS[int(code)]
+        if cls is ClassIIIEmitter:
+            out.append(cls(plan, names, g, row))
+            row += 1
+        else:
+            out.append(cls(plan, names, g))
+    return out
+
+
+def lane(name: str) -> str:
+    """A per-candidate constant in the lane path: row R_name of the block's
+    constants, this lane."""
+    return f"S[R_{name}, l]"
+
+
+def literal(x: float) -> str:
+    """A float as Python source that reads back to the same double."""
+    if math.isnan(x):
+        return "math.nan"
+    if math.isinf(x):
+        return "math.inf" if x > 0 else "-math.inf"
+    return repr(float(x))

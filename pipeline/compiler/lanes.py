@@ -1,0 +1,298 @@
+"""The sweep's positions stage in lock-step lanes.
+
+LANES candidates of a block advance together, position by position; the lane
+loop is the innermost loop, with straight-line code (no call, no library
+function: division and square root only), so LLVM turns it into packed
+vector instructions.  Every per-candidate constant and every piece of state
+that lives from one crank position to the next is a row of one array
+``S[row, lane]`` (a single base pointer: no aliasing to rule out).
+
+The fast path is exact to rounding where it runs, and says where it cannot
+vouch for a lane (``redo`` bit set): an assembly failure or a margin below
+``settings[SET_MARGIN_SAFE]``, a Newton that did not reach the tolerance in
+its fixed count, a correction or a step larger than the careful walk allows,
+a change of sign of det J, a revolution that does not close, a rocker step
+too large for the series.  Such a lane is redone on the careful path, which
+gives every status and failure angle exactly as before.
+
+Class III groups: the unknown angles a, b live as unit vectors e(a), e(b);
+a Newton update is a rotation by a small angle, with cos/sin from their
+series (exact to rounding for |angle| <= 0.05 rad, larger corrections are
+refused); the predictor rotates by the last increment (the secant predictor
+of the careful walk).  The output rocker's angle is accumulated from its
+increments, atan of a small argument by its series.
+"""
+
+from __future__ import annotations
+
+from .emit import ClassIIIEmitter, lane
+
+NEWTON_STEPS = 2          # Newton steps per position after the predictor
+SMALL_ANGLE = 0.05        # largest rotation taken by the cos/sin series, rad
+ATAN_ARG = 0.1            # largest tan of a rocker step taken by the atan series
+
+
+def _rot_lines(c, s, delta):
+    """e <- e rotated by ``delta`` (a small angle): cos/sin by their series."""
+    return [
+        f"z = {delta} * {delta}",
+        "cd = 1.0 - z * (0.5 - z * (1.0 / 24.0 - z * (1.0 / 720.0 - z * (1.0 / 40320.0"
+        " - z * (1.0 / 3628800.0)))))",
+        f"sd = {delta} * (1.0 - z * (1.0 / 6.0 - z * (1.0 / 120.0 - z * (1.0 / 5040.0"
+        " - z * (1.0 / 362880.0 - z * (1.0 / 39916800.0))))))",
+        f"{c}, {s} = {c} * cd - {s} * sd, {s} * cd + {c} * sd",
+    ]
+
+
+def _triad_lines(e, names):
+    """Lane lines of one class III group: predictor, NEWTON_STEPS Newton steps,
+    the confirming evaluation and the checks."""
+    P2, P6, P7, P3, P4, P5 = (names.point[e.pname(j)] for j in range(6))
+    k = e.k
+    t = f"t{e.triad_row}"
+    L23, L34, L35, L46, L57 = (lane(k(x)) for x in ("L23", "L34", "L35", "L46", "L57"))
+    cu, su = lane(f"{k('U435')}_cos"), lane(f"{k('U435')}_sin")
+    r = {x: f"S[R_{t}_{x}, l]" for x in ("ca", "sa", "cb", "sb", "dca", "dsa", "dcb", "dsb",
+                                          "sign")}
+    out = [f"# {e.title()}: Newton on the closure |P4 - P6| = L46, |P5 - P7| = L57",
+           "# predictor: e(a), e(b) turned by the last increment (secant)",
+           f"ca0 = {r['ca']}", f"sa0 = {r['sa']}", f"cb0 = {r['cb']}", f"sb0 = {r['sb']}",
+           f"ca = ca0 * {r['dca']} - sa0 * {r['dsa']}",
+           f"sa = sa0 * {r['dca']} + ca0 * {r['dsa']}",
+           f"cb = cb0 * {r['dcb']} - sb0 * {r['dsb']}",
+           f"sb = sb0 * {r['dcb']} + cb0 * {r['dsb']}",
+           "corr_a = 0.0", "corr_b = 0.0"]
+
+    def evaluate():
+        return [
+            f"cc = cb * {cu} - sb * {su}", f"sc = sb * {cu} + cb * {su}",
+            f"{P3}x = {P2}x + {L23} * ca", f"{P3}y = {P2}y + {L23} * sa",
+            f"r4x = {P3}x + {L34} * cb - {P6}x", f"r4y = {P3}y + {L34} * sb - {P6}y",
+            f"r5x = {P3}x + {L35} * cc - {P7}x", f"r5y = {P3}y + {L35} * sc - {P7}y",
+            f"f1 = r4x * r4x + r4y * r4y - {L46} * {L46}",
+            f"f2 = r5x * r5x + r5y * r5y - {L57} * {L57}",
+            f"j11 = 2.0 * {L23} * (r4y * ca - r4x * sa)",
+            f"j12 = 2.0 * {L34} * (r4y * cb - r4x * sb)",
+            f"j21 = 2.0 * {L23} * (r5y * ca - r5x * sa)",
+            f"j22 = 2.0 * {L35} * (r5y * cc - r5x * sc)",
+            "det = j11 * j22 - j12 * j21",
+        ]
+
+    for step in range(NEWTON_STEPS):
+        out += [f"# Newton step {step + 1}: J (da, db) = F, then e(a), e(b) turned by -da, -db"]
+        out += evaluate()
+        out += ["da = (f1 * j22 - j12 * f2) / det", "db = (j11 * f2 - f1 * j21) / det",
+                "corr_a += da", "corr_b += db",
+                f"big = big | (abs(da) > {SMALL_ANGLE}) | (abs(db) > {SMALL_ANGLE})",
+                "na = -da", "nb = -db"]
+        out += _rot_lines("ca", "sa", "na") + _rot_lines("cb", "sb", "nb")
+    out += ["# renormalise the unit vectors (one Newton step for 1/|e|, no division)",
+            "g = 1.5 - 0.5 * (ca * ca + sa * sa)", "ca *= g", "sa *= g",
+            "g = 1.5 - 0.5 * (cb * cb + sb * sb)", "cb *= g", "sb *= g",
+            "# confirming evaluation: the residual, and det J for the margin and the branch"]
+    out += evaluate()
+    out += [
+        f"res = max(abs(f1) / (2.0 * {L46}), abs(f2) / (2.0 * {L57}))",
+        f"conv = res <= tol * max({L46}, {L57})",
+        f"m = abs(det) / (4.0 * {L23} * {L46} * {L57} * max({L34}, {L35}))",
+        f"sgn = 1.0 if det > 0.0 else -1.0",
+        f"big = big | (not conv) | (sgn != {r['sign']}) | (abs(corr_a) > jump) | "
+        "(abs(corr_b) > jump)",
+        "low = low | (not (m >= margin_safe))",
+        "margin = min(margin, m)",
+        "# the increment of this step: the next predictor, and the careful walk's step bound",
+        "ia_c = ca0 * ca + sa0 * sa", "ia_s = ca0 * sa - sa0 * ca",
+        "ib_c = cb0 * cb + sb0 * sb", "ib_s = cb0 * sb - sb0 * cb",
+        "big = big | (abs(ia_s) > step_change) | (abs(ib_s) > step_change) | (ia_c <= 0.0)"
+        " | (ib_c <= 0.0)",
+        f"{r['dca']} = ia_c", f"{r['dsa']} = ia_s", f"{r['dcb']} = ib_c", f"{r['dsb']} = ib_s",
+        f"{r['ca']} = ca", f"{r['sa']} = sa", f"{r['cb']} = cb", f"{r['sb']} = sb",
+        f"{P4}x = {P3}x + {L34} * cb", f"{P4}y = {P3}y + {L34} * sb",
+        f"{P5}x = {P3}x + {L35} * cc", f"{P5}y = {P3}y + {L35} * sc",
+    ]
+    return out
+
+
+def lane_kernel(plan, names, ems, rocker, width):
+    """Source of ``evaluate_block`` for ``plan`` with the output rocker
+    ``rocker`` = (pivot, point) names, LANES = ``width``."""
+    kin = ems[:plan.n_kinematic]
+    fast = all(e.fast for e in kin)
+    triads = [e for e in kin if isinstance(e, ClassIIIEmitter)]
+    rows = []
+    # per-candidate constants: every entry of constants(par)
+    from .generate import constant_names
+    consts = constant_names(plan, names, ems)
+    rows += consts
+    for e in triads:
+        t = f"t{e.triad_row}"
+        rows += [f"{t}_{x}" for x in ("ca", "sa", "cb", "sb", "dca", "dsa", "dcb", "dsb",
+                                      "sign", "a0c", "a0s", "b0c", "b0s")]
+    rows += ["rock_x", "rock_y", "theta", "margin", "flag"]
+    piv, pt = names.point[rocker[0]], names.point[rocker[1]]
+    src = [f"ROCKER_PIVOT = {names.I(rocker[0])}",
+           f"ROCKER_POINT = {names.I(rocker[1])}",
+           f"LANES = {width}",
+           f"HAS_LANES = {fast}   # every kinematic group has a lane form",
+           f"N_LANE_ROWS = {len(rows)}",
+           "# rows of the lane array S[row, lane]"]
+    src += [f"R_{r} = {i}" for i, r in enumerate(rows)]
+    src.append("")
+    if not fast:
+        src += ["", "@njit(**JIT)",
+                "def evaluate_block(pars, i0, phis, phi_close, tols, settings, loads, cph, sph,"
+                " S, theta, col, status, metrics):",
+                '    """A group without a lane form: every lane takes the careful path."""',
+                "    return (1 << LANES) - 1", ""]
+        return "\n".join(src) + "\n"
+
+    unpack = "(" + ", ".join(consts) + ("," if len(consts) == 1 else "") + ") = K"
+    body = []
+    a = body.append
+    a('"""Positions stage of the block of LANES candidates starting at row ``i0`` in')
+    a("lock-step; writes status and metrics of every lane it vouches for and returns")
+    a("the bit mask of the lanes to redo on the careful path.  ``theta`` (n + 1, LANES)")
+    a("receives the rocker angles; the last block is padded with its last row.\"\"\"")
+    a("n = pars.shape[0]")
+    a("npos = phis.shape[0]")
+    a("redo = 0")
+    a("margin_safe = settings[SET_MARGIN_SAFE]")
+    a("tol = tols[T_NEWTON_TOL]")
+    a("jump = tols[T_JUMP]")
+    a("step_change = tols[T_STEP_CHANGE]")
+    a("close = tols[T_CLOSE]")
+    a("if npos < 3 or abs(phis[1] - phis[0]) > tols[T_SUBSTEP]:")
+    a("    return (1 << LANES) - 1")
+    a("pos, d1, d2, margins, state, _ = work(N_POINTS, N_GROUPS, N_TRIADS)")
+    a("# ---- per lane, once: the constants, and the careful solve at phis[0] (order 1)")
+    a("for l in range(LANES):")
+    a("    i = min(i0 + l, n - 1)")
+    a("    K = constants(pars[i])")
+    for line in _split(unpack):
+        a("    " + line)
+    for c in consts:
+        a(f"    S[R_{c}, l] = {c}")
+    a("    st = advance(K, walk_start(K, phis[0], state), phis[0], 1, tols, state, pos, d1, d2,")
+    a("                 margins, False)")
+    a("    ok = st == OK")
+    for e in triads:
+        t = f"t{e.triad_row}"
+        j = e.triad_row
+        P2, P3, P4 = (names.I(e.pname(x)) for x in (0, 3, 4))
+        a(f"    # {e.title()}: e(a), e(b) at phis[0] and the first increment from the analogs")
+        a(f"    av = state[{j}, S_A]")
+        a(f"    bv = state[{j}, S_B]")
+        a(f"    S[R_{t}_ca, l] = math.cos(av)")
+        a(f"    S[R_{t}_sa, l] = math.sin(av)")
+        a(f"    S[R_{t}_cb, l] = math.cos(bv)")
+        a(f"    S[R_{t}_sb, l] = math.sin(bv)")
+        a(f"    S[R_{t}_a0c, l] = S[R_{t}_ca, l]")
+        a(f"    S[R_{t}_a0s, l] = S[R_{t}_sa, l]")
+        a(f"    S[R_{t}_b0c, l] = S[R_{t}_cb, l]")
+        a(f"    S[R_{t}_b0s, l] = S[R_{t}_sb, l]")
+        a(f"    S[R_{t}_sign, l] = state[{j}, S_DET_SIGN]")
+        a("    # a' = (P3' - P2') . n(a) / L23, b' = (P4' - P3') . n(b) / L34")
+        a(f"    ad = ((d1[{P3}, 1] - d1[{P2}, 1]) * math.cos(av) - (d1[{P3}, 0] - d1[{P2}, 0])"
+          f" * math.sin(av)) / {e.k('L23')}")
+        a(f"    bd = ((d1[{P4}, 1] - d1[{P3}, 1]) * math.cos(bv) - (d1[{P4}, 0] - d1[{P3}, 0])"
+          f" * math.sin(bv)) / {e.k('L34')}")
+        a("    h = phis[1] - phis[0]")
+        a("    ok = ok and math.isfinite(ad) and math.isfinite(bd)")
+        a("    if not ok:")
+        a("        ad = 0.0")
+        a("        bd = 0.0")
+        a(f"    S[R_{t}_dca, l] = math.cos(ad * h)")
+        a(f"    S[R_{t}_dsa, l] = math.sin(ad * h)")
+        a(f"    S[R_{t}_dcb, l] = math.cos(bd * h)")
+        a(f"    S[R_{t}_dsb, l] = math.sin(bd * h)")
+        a("    if not ok:")
+        a(f"        S[R_{t}_ca, l] = 1.0")
+        a(f"        S[R_{t}_sa, l] = 0.0")
+        a(f"        S[R_{t}_cb, l] = 1.0")
+        a(f"        S[R_{t}_sb, l] = 0.0")
+    a("    S[R_rock_x, l] = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]")
+    a("    S[R_rock_y, l] = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]")
+    a("    S[R_theta, l] = 0.0")
+    a("    theta[0, l] = 0.0")
+    if triads:
+        a("    S[R_margin, l] = min(" + ", ".join(f"state[{e.triad_row}, S_MARGIN]" for e in triads)
+          + ("" if len(triads) > 1 else ", math.inf") + ")")
+    else:
+        a("    S[R_margin, l] = math.inf")
+    a("    if not ok or not math.isfinite(S[R_rock_x, l]):")
+    a("        redo |= 1 << l")
+    a("        S[R_rock_x, l] = 1.0")
+    a("        S[R_rock_y, l] = 0.0")
+    a("    S[R_flag, l] = 0.0")
+    last = "npos + 1" if triads else "npos"
+    a(f"# ---- the lock-step walk: positions 1 .. n - 1{' and the closing position' if triads else ''}")
+    a(f"for k in range(1, {last}):")
+    a("    cph_k = cph_tab[k]")
+    a("    sph_k = sph_tab[k]")
+    a("    for l in range(LANES):")
+    inner = ["bad = False", "low = False", "big = False", "margin = S[R_margin, l]",
+             "cph = cph_k", "sph = sph_k"]
+    for fi in plan.fixed_idx:
+        p = plan.point_names[int(fi)]
+        pn = names.point[p]
+        inner += [f"{pn}x = S[R_{names.param[p + '.x']}, l]",
+                  f"{pn}y = S[R_{names.param[p + '.y']}, l]"]
+    for e in kin:
+        inner += (_triad_lines(e, names) if isinstance(e, ClassIIIEmitter) else e.lanes())
+    inner += [
+        "# the output rocker: its angle from the increments (atan series of a small tan)",
+        f"ux = {pt}x - {piv}x", f"uy = {pt}y - {piv}y",
+        "vx = S[R_rock_x, l]", "vy = S[R_rock_y, l]",
+        "tn = (vx * uy - vy * ux) / (vx * ux + vy * uy)",
+        "z = tn * tn",
+        "dth = tn * (1.0 - z * (1.0 / 3.0 - z * (1.0 / 5.0 - z * (1.0 / 7.0 - z * (1.0 / 9.0"
+        " - z * (1.0 / 11.0 - z * (1.0 / 13.0 - z * (1.0 / 15.0))))))))",
+        f"big = big | (not (abs(tn) <= {ATAN_ARG}))",
+        "th = S[R_theta, l] + dth",
+        "big = big | (abs(th) > 3.0)",
+        "S[R_rock_x, l] = ux", "S[R_rock_y, l] = uy", "S[R_theta, l] = th",
+        "theta[k, l] = th",
+        "S[R_margin, l] = margin",
+        "S[R_flag, l] = max(S[R_flag, l], 1.0 if (bad | low | big) else 0.0)",
+    ]
+    for line in inner:
+        a("        " + line)
+    if triads:
+        a("# ---- the revolution closes on its start (the last row is phi_close)")
+        a("for l in range(LANES):")
+        for e in triads:
+            t = f"t{e.triad_row}"
+            a(f"    ea = S[R_{t}_a0c, l] * S[R_{t}_sa, l] - S[R_{t}_a0s, l] * S[R_{t}_ca, l]")
+            a(f"    eb = S[R_{t}_b0c, l] * S[R_{t}_sb, l] - S[R_{t}_b0s, l] * S[R_{t}_cb, l]")
+            a(f"    dot = S[R_{t}_a0c, l] * S[R_{t}_ca, l] + S[R_{t}_a0s, l] * S[R_{t}_sa, l]")
+            a("    if not (abs(ea) <= close and abs(eb) <= close and dot > 0.0):")
+            a("        S[R_flag, l] = 1.0")
+    a("# ---- metrics of the lanes vouched for; the rest go back to the careful path")
+    a("for l in range(LANES):")
+    a("    i = i0 + l")
+    a("    if i >= n:")
+    a("        break")
+    a("    if S[R_flag, l] != 0.0 or (redo >> l) & 1:")
+    a("        redo |= 1 << l")
+    a("        continue")
+    a("    out = metrics[i]")
+    a("    for c in range(N_METRICS):")
+    a("        out[c] = math.nan")
+    a("    out[M_FORCES_DONE] = 0.0")
+    a("    K = constants(pars[i])")
+    a(f"    iters = {float(NEWTON_STEPS * len(triads))} * npos")
+    a("    for k in range(npos):")
+    a("        col[k] = theta[k, l]")
+    a("    status[i] = finish(pars[i], K, phis, tols, settings, loads, col,")
+    a("                       S[R_margin, l], iters, out)")
+    a("return redo")
+    src += ["", "@njit(**JIT)",
+            "def evaluate_block(pars, i0, phis, phi_close, tols, settings, loads, cph_tab, sph_tab, "
+            "S, theta, col, status, metrics):"]
+    src += ["    " + x for x in body]
+    return "\n".join(src) + "\n\n"
+
+
+def _split(line, width=90):
+    from .generate import _wrap_line
+    return _wrap_line(line, width).split("\n")
