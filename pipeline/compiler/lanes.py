@@ -25,6 +25,8 @@ increments, atan of a small argument by its series.
 
 from __future__ import annotations
 
+import re
+
 from .emit import ClassIIIEmitter, lane
 
 NEWTON_STEPS = 2          # Newton steps per position after the predictor
@@ -226,12 +228,22 @@ def lane_kernel(plan, names, ems, rocker, width):
     a("    S[R_flag, l] = 0.0")
     last = "npos + 1" if triads else "npos"
     a(f"# ---- the lock-step walk: positions 1 .. n - 1{' and the closing position' if triads else ''}")
-    a(f"for k in range(1, {last}):")
-    a("    cph_k = cph_tab[k]")
-    a("    sph_k = sph_tab[k]")
-    a("    for l in range(LANES):")
-    inner = ["bad = False", "low = False", "big = False", "margin = S[R_margin, l]",
-             "cph = cph_k", "sph = sph_k"]
+    a(f"walk(S.reshape(N_LANE_ROWS * LANES), S.shape[1], theta, cph_tab, sph_tab, {last}, tol,")
+    a("     jump, step_change, margin_safe)")
+    walk = ["@njit(**JIT)",
+            "def walk(S, n_lanes, theta, cph_tab, sph_tab, k_end, tol, jump, step_change,",
+            "         margin_safe):",
+            '    """The lock-step walk over crank positions 1 .. k_end - 1: every lane of the',
+            "    block advances one position at a time (straight-line code, division and",
+            "    square root only); a function of its own so that nothing outside the",
+            '    loops shares their variables (LLVM then vectorizes the lane loop)."""',
+            "    for k in range(1, k_end):",
+            "        cph = cph_tab[k]",
+            "        sph = sph_tab[k]",
+            "        # a trip count known only at run time: LLVM vectorizes this loop (a",
+            "        # constant count is unrolled instead, and stays scalar)",
+            "        for l in range(n_lanes):"]
+    inner = ["bad = False", "low = False", "big = False", "margin = S[R_margin, l]"]
     for fi in plan.fixed_idx:
         p = plan.point_names[int(fi)]
         pn = names.point[p]
@@ -255,8 +267,11 @@ def lane_kernel(plan, names, ems, rocker, width):
         "S[R_margin, l] = margin",
         "S[R_flag, l] = max(S[R_flag, l], 1.0 if (bad | low | big) else 0.0)",
     ]
-    for line in inner:
-        a("        " + line)
+    # the walk sees S flat, rows LANES apart (a constant stride: rows provably
+    # apart, so no run-time overlap checks), while the lane count stays a
+    # run-time value (a constant trip count is unrolled, and stays scalar)
+    walk += ["            " + re.sub(r"S\[(R_\w+), l\]", r"S[\1 * LANES + l]", line)
+             for line in inner]
     if triads:
         a("# ---- the revolution closes on its start (the last row is phi_close)")
         a("for l in range(LANES):")
@@ -286,7 +301,7 @@ def lane_kernel(plan, names, ems, rocker, width):
     a("    status[i] = finish(pars[i], K, phis, tols, settings, loads, col,")
     a("                       S[R_margin, l], iters, out)")
     a("return redo")
-    src += ["", "@njit(**JIT)",
+    src += [""] + walk + ["", "", "@njit(**JIT)",
             "def evaluate_block(pars, i0, phis, phi_close, tols, settings, loads, cph_tab, sph_tab, "
             "S, theta, col, status, metrics):"]
     src += ["    " + x for x in body]

@@ -9,12 +9,17 @@ import os
 
 import numpy as np
 
-# Fast-math flags.  Never 'nnan' or 'ninf': NaN is the failure signal.  The
-# default is strict IEEE; PIPELINE_FASTMATH=fast selects the safe subset below
-# (used by the speed/accuracy benchmark, which also points NUMBA_CACHE_DIR
-# elsewhere because the cache key does not include these flags).
+# Floating-point flags, in one place.  The default allows FMA contraction only
+# ("contract": a*b + c in one rounding), which the vectorised lane kernels need
+# to reach the FMA units; results then differ from strict IEEE in the last
+# bits, identically for every candidate, thread count and engine.  Never
+# 'nnan' or 'ninf': NaN is the failure signal.  PIPELINE_FASTMATH=strict
+# turns contraction off; PIPELINE_FASTMATH=fast selects the wider subset
+# below (used by the speed/accuracy benchmark, which also points
+# NUMBA_CACHE_DIR elsewhere because the cache key does not include these flags).
 _FAST_FLAGS = {"nsz", "arcp", "contract", "afn", "reassoc"}
-FASTMATH = _FAST_FLAGS if os.environ.get("PIPELINE_FASTMATH", "strict") == "fast" else False
+_MODE = os.environ.get("PIPELINE_FASTMATH", "contract")
+FASTMATH = {"strict": False, "fast": _FAST_FLAGS}.get(_MODE, {"contract"})
 
 # error_model="numpy": a division by zero gives inf/nan instead of raising,
 # so a kernel never raises inside prange.
