@@ -24,6 +24,7 @@ import numpy as np
 
 from ..kernels import config as kc
 from .emit import ClassIIIEmitter, emitters_for, literal
+from .forces import force_kernel
 from .lanes import lane_kernel
 from .names import Names
 
@@ -47,7 +48,7 @@ from pipeline.kernels.config import (JIT, JIT_PARALLEL, OK, BRANCH_JUMP, NEWTON_
 from pipeline.kernels.continuation import (accept, closes, predict, restore, start_triad,
                                            step_limit, work, wrap)
 from pipeline.kernels.dynamics import drive, lagrange_terms, potential
-from pipeline.kernels.forces import force_work, kinetostatics
+from pipeline.kernels.forces import applied_loads, force_work, gauss_solve, kinetostatics
 from pipeline.kernels.groups import attach, crank, rpr, rrp, rrr
 from pipeline.kernels.metrics import dwell_error, relative_angle
 from pipeline.kernels.sweep import (M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, M_PEAK_R,
@@ -154,6 +155,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, mechanism="") -> str:
           body))
 
     w(textwrap.dedent(ADVANCE_NEWTON if n_triads else ADVANCE_CLOSED))
+    w(force_kernel(plan, n))
     w(textwrap.dedent(CAREFUL))
     if rocker is not None:
         w(lane_kernel(plan, n, ems, rocker, lanes_width))
@@ -322,17 +324,6 @@ CAREFUL = '''
 
 
     @njit(**JIT)
-    def forces_at(par, pos, d1, d2, omega1, eps1, loads_k, work_a, work_b, loads_out, r_out,
-                  slide_out):
-        """Kinetostatics at one position: reactions r_out (n_joints, 2) [N], slides
-        (N [N], C [N*m]), loads at the centres of mass; returns M_bal [N*m]."""
-        return kinetostatics(pos, d1, d2, omega1, eps1, GRAVITY, par, BODY_COM, BODY_TURN,
-                             BODY_MASS_OFF, JOINT_POINT, JOINT_BODIES, SLIDE_BODIES, SLIDE_DIR,
-                             SLIDE_ANGLE, CRANK_BODY, LOAD_BODY, LOAD_POINT, loads_k, work_a,
-                             work_b, loads_out, r_out, slide_out)
-
-
-    @njit(**JIT)
     def forces_curve(par, pos, d1, d2, omega1, eps1, loads, loads_out, r_out, slide_out, m_out):
         """forces_at every position k of pos/d1/d2 (n, n_points, 2); loads (n, n_loads, 3)."""
         work_a, work_b, _l, _r, _s = force_work(N_BODIES, N_JOINTS, N_SLIDES)
@@ -342,7 +333,7 @@ CAREFUL = '''
 
 
     @njit(**JIT)
-    def evaluate_careful(par, phis, phi_close, tols, settings, loads, theta, out):
+    def evaluate_careful(par, phis, phi_close, tols, settings, loads, theta, trail, out):
         """The sweep's stages for one candidate on the careful path; writes
         ``out`` (N_METRICS) and returns its status.
 
@@ -384,12 +375,14 @@ CAREFUL = '''
             if st != OK or not closes(state, start_state, tols):
                 out[M_FAIL_PHI] = phi_close
                 return st if st != OK else BRANCH_JUMP
-        return finish(par, K, phis, tols, settings, loads, theta, margin, iters, out)
+        return finish(par, K, phis, tols, settings, loads, theta, trail, False, margin, iters,
+                      out)
 
 
     @njit(**JIT)
-    def finish(par, K, phis, tols, settings, loads, theta, margin, iters, out):
-        """Dwell and stroke from the rocker angles ``theta``, then the force stage."""
+    def finish(par, K, phis, tols, settings, loads, theta, trail, use_trail, margin, iters, out):
+        """Dwell and stroke from the rocker angles ``theta``, then the force stage
+        (from the lane path's solutions ``trail`` where ``use_trail``)."""
         n = phis.shape[0]
         dwell_w = int(settings[SET_DWELL_W])
         qmax = np.empty(n + dwell_w + 1, np.int64)
@@ -407,12 +400,19 @@ CAREFUL = '''
             return OK
         if N_TRIADS > 0 and not (margin >= settings[SET_MARGIN_MIN]):
             return OK
-        return force_stage(par, K, phis, tols, settings, loads, out)
+        st = force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail)
+        if st != OK and use_trail:   # the direct solves refused: walk the careful way
+            st = force_stage(par, K, phis, tols, settings, loads, out, trail, False)
+        return st
 
 
     @njit(**JIT)
-    def force_stage(par, K, phis, tols, settings, loads, out):
-        """Second analogs and kinetostatics at every position: the peaks."""
+    def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail):
+        """Second analogs and kinetostatics at every position: the peaks.  With
+        ``use_trail`` every position is solved directly from the class III
+        solution the lane path found there (trail[k] = e(a), e(b) per group:
+        Newton confirms it, the branch checks still apply); otherwise by the
+        careful continuation."""
         omega1 = settings[SET_OMEGA1]
         eps1 = settings[SET_EPS1]
         pos, d1, d2, margins, state, _ = work(N_POINTS, N_GROUPS, N_TRIADS)
@@ -423,7 +423,13 @@ CAREFUL = '''
         peak_phi = math.nan
         peak_m = 0.0
         for k in range(phis.shape[0]):
-            st = advance(K, phi_prev, phis[k], 2, tols, state, pos, d1, d2, margins, True)
+            if use_trail:
+                for j in range(N_TRIADS):
+                    state[j, S_A] = math.atan2(trail[k, 4 * j + 1], trail[k, 4 * j])
+                    state[j, S_B] = math.atan2(trail[k, 4 * j + 3], trail[k, 4 * j + 2])
+                st = position(K, phis[k], 2, tols, state, pos, d1, d2, margins, True)
+            else:
+                st = advance(K, phi_prev, phis[k], 2, tols, state, pos, d1, d2, margins, True)
             phi_prev = phis[k]
             if st != OK:  # cannot happen after stage 1 unless the solver is not deterministic
                 out[M_FAIL_PHI] = phis[k]
@@ -591,11 +597,12 @@ NO_LANES = '''
     LANES = 1
     HAS_LANES = False
     N_LANE_ROWS = 1
+    THETA_COLS = 1
 
 
     @njit(**JIT)
     def evaluate_block(pars, i0, phis, phi_close, tols, settings, loads, cph, sph, S, theta,
-                       col, status, metrics):
+                       col, trail, status, metrics):
         """No output rocker declared: every lane takes the careful path."""
         return (1 << LANES) - 1
 
@@ -622,19 +629,20 @@ PARALLEL = '''
         per = 16   # blocks per task: work arrays are allocated once per task
         for task in prange((n_blocks + per - 1) // per):
             S = np.empty((N_LANE_ROWS, LANES))
-            theta = np.empty((npos + 1, LANES))
+            theta = np.empty((npos + 1, LANES * THETA_COLS))
             col = np.empty(npos)
+            trail = np.empty((npos + 1, max(THETA_COLS - 1, 1)))
             for b in range(task * per, min((task + 1) * per, n_blocks)):
                 i0 = b * LANES
                 redo = evaluate_block(pars, i0, phis, phi_close, tols, settings, loads, cph,
-                                      sph, S, theta, col, status, metrics)
+                                      sph, S, theta, col, trail, status, metrics)
                 for l in range(LANES):
                     i = i0 + l
                     if i >= n:
                         break
                     if (redo >> l) & 1:
                         status[i] = evaluate_careful(pars[i], phis, phi_close, tols, settings,
-                                                     loads, col, metrics[i])
+                                                     loads, col, trail, metrics[i])
 
 
     @njit(**JIT_PARALLEL)

@@ -109,6 +109,11 @@ def _triad_lines(e, names):
         " | (ib_c <= 0.0)",
         f"{r['dca']} = ia_c", f"{r['dsa']} = ia_s", f"{r['dcb']} = ib_c", f"{r['dsb']} = ib_s",
         f"{r['ca']} = ca", f"{r['sa']} = sa", f"{r['cb']} = cb", f"{r['sb']} = sb",
+        "# the solution at this position, handed to the force stage",
+        f"theta[k, {1 + 4 * e.triad_row} * LANES + l] = ca",
+        f"theta[k, {2 + 4 * e.triad_row} * LANES + l] = sa",
+        f"theta[k, {3 + 4 * e.triad_row} * LANES + l] = cb",
+        f"theta[k, {4 + 4 * e.triad_row} * LANES + l] = sb",
         f"{P4}x = {P3}x + {L34} * cb", f"{P4}y = {P3}y + {L34} * sb",
         f"{P5}x = {P3}x + {L35} * cc", f"{P5}y = {P3}y + {L35} * sc",
     ]
@@ -136,6 +141,7 @@ def lane_kernel(plan, names, ems, rocker, width):
            f"ROCKER_POINT = {names.I(rocker[1])}",
            f"LANES = {width}",
            f"HAS_LANES = {fast}   # every kinematic group has a lane form",
+           f"THETA_COLS = {1 + 4 * len(triads)}   # rocker angle, then e(a), e(b) of each class III group",
            f"N_LANE_ROWS = {len(rows)}",
            "# rows of the lane array S[row, lane]"]
     src += [f"R_{r} = {i}" for i, r in enumerate(rows)]
@@ -143,7 +149,7 @@ def lane_kernel(plan, names, ems, rocker, width):
     if not fast:
         src += ["", "@njit(**JIT)",
                 "def evaluate_block(pars, i0, phis, phi_close, tols, settings, loads, cph, sph,"
-                " S, theta, col, status, metrics):",
+                " S, theta, col, trail, status, metrics):",
                 '    """A group without a lane form: every lane takes the careful path."""',
                 "    return (1 << LANES) - 1", ""]
         return "\n".join(src) + "\n"
@@ -193,6 +199,8 @@ def lane_kernel(plan, names, ems, rocker, width):
         a(f"    S[R_{t}_b0c, l] = S[R_{t}_cb, l]")
         a(f"    S[R_{t}_b0s, l] = S[R_{t}_sb, l]")
         a(f"    S[R_{t}_sign, l] = state[{j}, S_DET_SIGN]")
+        for q, v in enumerate(("ca", "sa", "cb", "sb")):
+            a(f"    theta[0, {1 + 4 * j + q} * LANES + l] = S[R_{t}_{v}, l]")
         a("    # a' = (P3' - P2') . n(a) / L23, b' = (P4' - P3') . n(b) / L34")
         a(f"    ad = ((d1[{P3}, 1] - d1[{P2}, 1]) * math.cos(av) - (d1[{P3}, 0] - d1[{P2}, 0])"
           f" * math.sin(av)) / {e.k('L23')}")
@@ -298,12 +306,14 @@ def lane_kernel(plan, names, ems, rocker, width):
     a(f"    iters = {float(NEWTON_STEPS * len(triads))} * npos")
     a("    for k in range(npos):")
     a("        col[k] = theta[k, l]")
-    a("    status[i] = finish(pars[i], K, phis, tols, settings, loads, col,")
+    a("        for q in range(THETA_COLS - 1):")
+    a("            trail[k, q] = theta[k, (1 + q) * LANES + l]")
+    a("    status[i] = finish(pars[i], K, phis, tols, settings, loads, col, trail, True,")
     a("                       S[R_margin, l], iters, out)")
     a("return redo")
     src += [""] + walk + ["", "", "@njit(**JIT)",
             "def evaluate_block(pars, i0, phis, phi_close, tols, settings, loads, cph_tab, sph_tab, "
-            "S, theta, col, status, metrics):"]
+            "S, theta, col, trail, status, metrics):"]
     src += ["    " + x for x in body]
     return "\n".join(src) + "\n\n"
 

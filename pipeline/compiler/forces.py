@@ -1,0 +1,231 @@
+"""Force equations of a mechanism, eliminated at generation time.
+
+The kinetostatic system (``pipeline.kernels.forces``) has one unknown pair per
+revolute joint (Rx, Ry), per prismatic pair (N, C) and the balancing moment;
+each moving body gives three rows: the x and y force balance and the moment
+balance about its centre of mass.  The force-balance rows have coefficients
++-1 in the joint columns (they are the body-joint incidence matrix, which is
+totally unimodular), so they are eliminated here, symbolically, with exact
+pivots +-1 chosen for the least fill-in.  What is left is a small dense system
+(mostly the moment rows) that the generated code fills and solves with partial
+pivoting at run time (``gauss_solve``); back substitution then gives every
+unknown.  Mechanism B: 15 unknowns, a 5 x 5 system at run time instead of
+15 x 15.  A plan whose system is not square keeps the general solver (it
+reports NaN, as before).
+"""
+
+from __future__ import annotations
+
+from .emit import literal
+
+MM = 1e-3
+
+
+class _Sym:
+    """Straight-line code of the elimination: entries are exact numbers
+    (floats) or names of generated locals."""
+
+    def __init__(self):
+        self.lines = []
+        self.k = 0
+
+    def var(self, expr):
+        name = f"e{self.k}"
+        self.k += 1
+        self.lines.append(f"{name} = {expr}")
+        return name
+
+    @staticmethod
+    def is_num(x):
+        return isinstance(x, float)
+
+    def mul(self, a, b):
+        if self.is_num(a) and self.is_num(b):
+            return a * b
+        if self.is_num(b):
+            a, b = b, a
+        if self.is_num(a):
+            if a == 0.0:
+                return 0.0
+            if a == 1.0:
+                return b
+            if a == -1.0:
+                return self.var(f"-{b}")
+            return self.var(f"{literal(a)} * {b}")
+        return self.var(f"{a} * {b}")
+
+    def sub(self, a, b):
+        """a - b"""
+        if self.is_num(a) and self.is_num(b):
+            return a - b
+        if self.is_num(b) and b == 0.0:
+            return a
+        if self.is_num(a) and a == 0.0:
+            return self.var(f"-{b}") if not self.is_num(b) else -b
+        return self.var(f"{_s(a)} - {_s(b)}")
+
+
+def _s(x):
+    return literal(x) if isinstance(x, float) else x
+
+
+def force_kernel(plan, names) -> str:
+    """Source of ``forces_at`` for ``plan`` (same signature and outputs as the
+    general kinetostatics kernel)."""
+    nb, nj, ns = len(plan.body_names), len(plan.joint_names), len(plan.slide_names)
+    n = 3 * nb
+    col_m = 2 * nj + 2 * ns
+    sig = ("def forces_at(par, pos, d1, d2, omega1, eps1, loads_k, work_a, work_b, loads_out, "
+           "r_out, slide_out):")
+    general = ["@njit(**JIT)", sig,
+               '    """Kinetostatics at one position (the general solver: this plan\'s system',
+               '    is not square or has no body)."""',
+               "    return kinetostatics(pos, d1, d2, omega1, eps1, GRAVITY, par, BODY_COM, "
+               "BODY_TURN,",
+               "                         BODY_MASS_OFF, JOINT_POINT, JOINT_BODIES, SLIDE_BODIES, "
+               "SLIDE_DIR,",
+               "                         SLIDE_ANGLE, CRANK_BODY, LOAD_BODY, LOAD_POINT, loads_k, "
+               "work_a,", "                         work_b, loads_out, r_out, slide_out)", ""]
+    if nb == 0 or col_m + 1 != n or plan.crank_body < 0:
+        return "\n".join(general) + "\n"
+
+    sym = _Sym()
+    L = sym.lines
+    P = [names.I(p) for p in plan.point_names]
+    A: dict = {}                       # (row, col) -> entry
+
+    def add(r, c, v):
+        old = A.get((r, c), 0.0)
+        if isinstance(old, float) and isinstance(v, float):
+            val = old + v
+        elif isinstance(old, float) and old == 0.0:
+            val = v
+        else:
+            val = sym.var(f"{_s(old)} + {_s(v)}")
+        if isinstance(val, float) and val == 0.0:
+            A.pop((r, c), None)
+        else:
+            A[(r, c)] = val
+
+    L.append("# applied and inertia loads reduced to each centre of mass: (Fx, Fy, M)")
+    L.append("applied_loads(pos, d1, d2, omega1, eps1, GRAVITY, par, BODY_COM, BODY_TURN, "
+             "BODY_MASS_OFF,")
+    L.append("              LOAD_BODY, LOAD_POINT, loads_k, loads_out)")
+    b = {}
+    for i in range(nb):
+        for k in range(3):
+            b[3 * i + k] = sym.var(f"-loads_out[{i}, {k}]")
+    L.append("# revolute joints: R_j (force of the first body on the second) on both bodies,")
+    L.append("# with its moment about each body's centre of mass (levers in m)")
+    for j in range(nj):
+        p = int(plan.joint_point[j])
+        for side in range(2):
+            body = int(plan.joint_bodies[j, side])
+            if body < 0:
+                continue
+            sgn = 1.0 if side == 1 else -1.0
+            s = int(plan.body_com[body])
+            lx = sym.var(f"(pos[{P[p]}, 0] - pos[{P[s]}, 0]) * {MM}")
+            ly = sym.var(f"(pos[{P[p]}, 1] - pos[{P[s]}, 1]) * {MM}")
+            add(3 * body, 2 * j, sgn)
+            add(3 * body + 1, 2 * j + 1, sgn)
+            add(3 * body + 2, 2 * j, sym.mul(-sgn, ly))
+            add(3 * body + 2, 2 * j + 1, sym.mul(sgn, lx))
+    for k in range(ns):
+        q = int(plan.slide_bodies[k, 1])
+        sq = int(plan.body_com[q])
+        if plan.slide_dir[k, 0] >= 0:
+            a_, b_ = (int(v) for v in plan.slide_dir[k])
+            th = sym.var(f"math.atan2(pos[{P[b_]}, 1] - pos[{P[a_]}, 1], pos[{P[b_]}, 0] - "
+                         f"pos[{P[a_]}, 0]) + {literal(float(plan.slide_angle[k]))}")
+        else:
+            th = sym.var(literal(float(plan.slide_angle[k])))
+        nx = sym.var(f"-math.sin({th})")
+        ny = sym.var(f"math.cos({th})")
+        col = 2 * nj + 2 * k
+        for side in range(2):
+            body = int(plan.slide_bodies[k, side])
+            if body < 0:
+                continue
+            sgn = 1.0 if side == 1 else -1.0
+            sb = int(plan.body_com[body])
+            lx = sym.var(f"(pos[{P[sq]}, 0] - pos[{P[sb]}, 0]) * {MM}")
+            ly = sym.var(f"(pos[{P[sq]}, 1] - pos[{P[sb]}, 1]) * {MM}")
+            fx = sym.mul(sgn, nx)
+            fy = sym.mul(sgn, ny)
+            add(3 * body, col, fx)
+            add(3 * body + 1, col, fy)
+            add(3 * body + 2, col, sym.var(f"{lx} * {fy} - {ly} * {fx}"))
+            add(3 * body + 2, col + 1, sgn)
+    add(3 * plan.crank_body + 2, col_m, 1.0)
+
+    # ---- symbolic elimination with exact +-1 pivots, least fill first
+    L.append("# elimination with the exact pivots +-1 of the force-balance rows")
+    rows_left, cols_left = set(range(n)), set(range(n))
+    pivots = []                                   # (row, col) in elimination order
+    while True:
+        best = None
+        for (r, c), v in A.items():
+            if r in rows_left and c in cols_left and isinstance(v, float) and abs(v) == 1.0:
+                rc = sum(1 for (r2, c2) in A if r2 == r and c2 in cols_left)
+                cc = sum(1 for (r2, c2) in A if c2 == c and r2 in rows_left)
+                cost = (rc - 1) * (cc - 1)
+                if best is None or cost < best[0]:
+                    best = (cost, r, c)
+        if best is None:
+            break
+        _, r, c = best
+        piv = A[(r, c)]
+        rows_left.discard(r)
+        cols_left.discard(c)
+        pivots.append((r, c))
+        row = {c2: v for (r2, c2), v in A.items() if r2 == r and c2 in cols_left}
+        for r2 in sorted(rows_left):
+            f = A.get((r2, c))
+            if f is None:
+                continue
+            f = f if piv == 1.0 else sym.mul(-1.0, f)      # multiplier a[r2, c] / piv
+            A.pop((r2, c))
+            for c2, v in row.items():
+                add(r2, c2, sym.mul(sym.mul(-1.0, f), v))
+            b[r2] = sym.sub(b[r2], sym.mul(f, b[r]))
+    rem_r, rem_c = sorted(rows_left), sorted(cols_left)
+    m = len(rem_r)
+    body = list(L)
+    body.append(f"# the remaining {m} x {m} system, partial pivoting at run time")
+    body.append("ok = True")
+    if m:
+        for i, r in enumerate(rem_r):
+            for jj, c in enumerate(rem_c):
+                v = A.get((r, c), 0.0)
+                body.append(f"work_a[{i}, {jj}] = {_s(v)}")
+            body.append(f"work_b[{i}] = {_s(b[r])}")
+        body.append(f"ok = gauss_solve(work_a, work_b, {m})")
+    x = {}
+    for jj, c in enumerate(rem_c):
+        x[c] = f"x{c}"
+        body.append(f"x{c} = work_b[{jj}]")
+    body.append("# back substitution through the eliminated rows")
+    for r, c in reversed(pivots):
+        piv = A[(r, c)]
+        terms = [f"{_s(v)} * x{c2}" for (r2, c2), v in sorted(A.items())
+                 if r2 == r and c2 != c and c2 in x]
+        rhs = _s(b[r]) + "".join(f" - {t}" for t in terms)
+        body.append(f"x{c} = {'' if piv == 1.0 else '-'}({rhs})")
+        x[c] = f"x{c}"
+    body.append("if not ok:")
+    body.append("    " + " = ".join(f"x{c}" for c in range(n)) + " = math.nan")
+    for j in range(nj):
+        body += [f"r_out[{j}, 0] = x{2 * j}", f"r_out[{j}, 1] = x{2 * j + 1}"]
+    for k in range(ns):
+        body += [f"slide_out[{k}, 0] = x{2 * nj + 2 * k}",
+                 f"slide_out[{k}, 1] = x{2 * nj + 2 * k + 1}"]
+    body.append(f"return x{col_m}")
+    src = ["@njit(**JIT)", sig,
+           '    """Kinetostatics at one position: reactions r_out (n_joints, 2) [N], slides',
+           "    (N [N], C [N*m]), loads at the centres of mass; returns M_bal [N*m] (NaN",
+           "    everywhere when the system is singular or the kinematics is NaN).  The",
+           "    force equations of every body, with the force-balance rows eliminated",
+           f'    at generation time ({n} unknowns, {m} solved at run time)."""']
+    src += ["    " + line for line in body]
+    return "\n".join(src) + "\n\n"
