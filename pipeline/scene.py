@@ -106,7 +106,7 @@ def real_motion(curves: Curves, omega1, eps1):
 
 
 def batch_revolutions(study, pars, positions, order=kc.ACCELERATIONS, with_forces=False,
-                      tols=None):
+                      tols=None, n_jobs=None):
     """One revolution of every parameter row of ``pars`` (candidates of the
     study's mechanism) on all cores, reduced to (status, peak |r''| of the
     working point [mm/rad^2], peak joint reaction [N])."""
@@ -120,7 +120,8 @@ def batch_revolutions(study, pars, positions, order=kc.ACCELERATIONS, with_force
     status = np.zeros(n, np.int8)
     acc = np.zeros(n)
     peak = np.zeros(n)
-    kernels_for(plan).batch(np.ascontiguousarray(pars), phis, int(order), tols,
-                            plan.point(study.output.working_point), bool(with_forces),
-                            mech.crank.omega1, mech.crank.eps1, loads, status, acc, peak)
+    from .compiler.parallel import run_rows
+    run_rows(kernels_for(plan).batch, np.ascontiguousarray(pars), phis, int(order), tols,
+             plan.point(study.output.working_point), bool(with_forces), mech.crank.omega1,
+             mech.crank.eps1, loads, status, acc, peak, n_jobs=n_jobs)
     return status, acc, peak

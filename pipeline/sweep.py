@@ -77,26 +77,23 @@ class SweepProblem:
         return ks.settings(s.stroke_radius, self.dwell_w, s.wants_forces, s.stroke_bounds[0],
                            s.stroke_bounds[1], s.margin_min, self.omega1, self.eps1)
 
-    def evaluate_rows(self, pars, parallel=True):
+    def evaluate_rows(self, pars, parallel=True, n_jobs=None):
         """Status and metric rows (N_METRICS) of the parameter rows ``pars``, on
-        all of numba's threads, or on the calling thread only (a Dask task)."""
-        import numba
+        ``n_jobs`` threads (all cores by default), or on the calling thread only
+        (``parallel=False``: a Dask task)."""
+        from .compiler.parallel import run_rows
         n = pars.shape[0]
         status = np.zeros(n, np.int8)
         metrics = np.full((n, ks.N_METRICS), np.nan)
-        before = numba.get_num_threads()
-        if not parallel:
-            numba.set_num_threads(1)      # this thread only: numba's mask is per thread
-        try:
-            self.kernels.evaluate(np.ascontiguousarray(pars), self.phis, self.phi_close,
-                                  self.tols, self.settings(), self.loads, status, metrics)
-        finally:
-            numba.set_num_threads(before)
+        run_rows(self.kernels.evaluate, np.ascontiguousarray(pars), self.phis, self.phi_close,
+                 self.tols, self.settings(), self.loads, status, metrics,
+                 n_jobs=n_jobs if parallel else 1)
         return status, metrics
 
-    def evaluate_chunk(self, chunk, parallel=True):
+    def evaluate_chunk(self, chunk, parallel=True, n_jobs=None):
         x = self.draw(chunk)
-        status, metrics = self.evaluate_rows(parameter_rows(self.plan, self.spec, x), parallel)
+        status, metrics = self.evaluate_rows(parameter_rows(self.plan, self.spec, x), parallel,
+                                             n_jobs)
         return chunk, x, status, metrics
 
     def draw(self, chunk):
@@ -420,17 +417,10 @@ def _chunks(problem, todo, scheduler, client, n_jobs):
     if scheduler or client:
         yield from _dask_chunks(problem, todo, scheduler, client)
         return
-    import numba
-    before = numba.get_num_threads()
-    if n_jobs is not None:
-        if n_jobs < 1:
-            raise ValueError(f"--jobs must be at least 1, got {n_jobs}")
-        numba.set_num_threads(min(n_jobs, numba.config.NUMBA_NUM_THREADS))
-    try:
-        for c in todo:
-            yield problem.evaluate_chunk(c, parallel=True)
-    finally:
-        numba.set_num_threads(before)
+    if n_jobs is not None and n_jobs < 1:
+        raise ValueError(f"--jobs must be at least 1, got {n_jobs}")
+    for c in todo:
+        yield problem.evaluate_chunk(c, parallel=True, n_jobs=n_jobs)
 
 
 def _dask_chunks(problem, todo, scheduler, client):

@@ -141,6 +141,7 @@ def lane_kernel(plan, names, ems, rocker, width):
            f"ROCKER_POINT = {names.I(rocker[1])}",
            f"LANES = {width}",
            f"HAS_LANES = {fast}   # every kinematic group has a lane form",
+           f"NEWTON_STEPS = {NEWTON_STEPS}   # Newton steps per position in the lanes",
            f"THETA_COLS = {1 + 4 * len(triads)}   # rocker angle, then e(a), e(b) of each class III group",
            f"N_LANE_ROWS = {len(rows)}",
            "# rows of the lane array S[row, lane]"]
@@ -159,8 +160,9 @@ def lane_kernel(plan, names, ems, rocker, width):
     a = body.append
     a('"""Positions stage of the block of LANES candidates starting at row ``i0`` in')
     a("lock-step; writes status and metrics of every lane it vouches for and returns")
-    a("the bit mask of the lanes to redo on the careful path.  ``theta`` (n + 1, LANES)")
-    a("receives the rocker angles; the last block is padded with its last row.\"\"\"")
+    a("the bit mask of the lanes to redo on the careful path.  ``theta`` (n + 1,")
+    a("LANES * THETA_COLS) receives the rocker angles and the class III solutions; S keeps")
+    a("each lane's margin.  The last block is padded with its last row.\"\"\"")
     a("n = pars.shape[0]")
     a("npos = phis.shape[0]")
     a("redo = 0")
@@ -290,28 +292,12 @@ def lane_kernel(plan, names, ems, rocker, width):
             a(f"    dot = S[R_{t}_a0c, l] * S[R_{t}_ca, l] + S[R_{t}_a0s, l] * S[R_{t}_sa, l]")
             a("    if not (abs(ea) <= close and abs(eb) <= close and dot > 0.0):")
             a("        S[R_flag, l] = 1.0")
-    a("# ---- metrics of the lanes vouched for; the rest go back to the careful path")
     a("for l in range(LANES):")
-    a("    i = i0 + l")
-    a("    if i >= n:")
-    a("        break")
-    a("    if S[R_flag, l] != 0.0 or (redo >> l) & 1:")
+    a("    if S[R_flag, l] != 0.0:")
     a("        redo |= 1 << l")
-    a("        continue")
-    a("    out = metrics[i]")
-    a("    for c in range(N_METRICS):")
-    a("        out[c] = math.nan")
-    a("    out[M_FORCES_DONE] = 0.0")
-    a("    K = constants(pars[i])")
-    a(f"    iters = {float(NEWTON_STEPS * len(triads))} * npos")
-    a("    for k in range(npos):")
-    a("        col[k] = theta[k, l]")
-    a("        for q in range(THETA_COLS - 1):")
-    a("            trail[k, q] = theta[k, (1 + q) * LANES + l]")
-    a("    status[i] = finish(pars[i], K, phis, tols, settings, loads, col, trail, True,")
-    a("                       S[R_margin, l], iters, out)")
     a("return redo")
-    src += [""] + walk + ["", "", "@njit(**JIT)",
+    src += [""] + walk + ["", "",
+            "@njit(**JIT)",
             "def evaluate_block(pars, i0, phis, phi_close, tols, settings, loads, cph_tab, sph_tab, "
             "S, theta, col, trail, status, metrics):"]
     src += ["    " + x for x in body]
