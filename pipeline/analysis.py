@@ -38,7 +38,8 @@ import numpy as np
 from . import __version__
 from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank
-from .storage import ResultsError, attr_text, open_results, put, stored_study
+from .storage import ResultsError, attr_text, open_results, put
+from .study import stored_study
 
 log = logging.getLogger("pipeline")
 

@@ -22,7 +22,8 @@ import pandas as pd
 from .analysis import read_analysis, sweep_objectives, variable_units
 from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank
-from .storage import ResultsError, attr_text, open_results, stored_study
+from .storage import ResultsError, attr_text, open_results
+from .study import stored_study
 from .sweep import status_counts
 
 FORMATS = ("table", "json", "csv")

@@ -50,10 +50,16 @@ def cmd_export(a):
 
 
 def cmd_compile(a):
-    from .compile import compile_all
-    t = compile_all()
+    from .compile import compile_all, source, study_files
+    if a.show:
+        from .study import load_study
+        for p in study_files(a.studies):
+            print(source(load_study(p)))
+        return EXIT_OK
+    done = compile_all(a.studies)
     if not a.quiet:
-        _print({k: f"{v:.1f} s" for k, v in t.items()}, a.format)
+        _print({c.study: f"{c.kind}: {c.seconds:.1f} s, kernels in {c.source}" for c in done},
+               a.format)
     return EXIT_OK
 
 
@@ -122,8 +128,12 @@ def build_parser():
     e.add_argument("--csv", required=True, metavar="DIR", help="output directory")
     e.set_defaults(func=cmd_export)
 
-    c = sub.add_parser("compile", parents=[common],
-                       help="compile every kernel ahead of time (fills numba's cache)")
+    c = sub.add_parser("compile", parents=[common], help=(
+        "generate and compile the kernels of the studies (all of studies/ by default) ahead "
+        "of time, so their runs compile nothing"))
+    c.add_argument("studies", nargs="*", metavar="STUDY", help="study files (default: all)")
+    c.add_argument("--show", action="store_true",
+                   help="print the generated source of each study's kernels instead")
     c.set_defaults(func=cmd_compile)
 
     an = sub.add_parser("analyze", parents=[common], help=(

@@ -1,50 +1,69 @@
-"""Compile every kernel ahead of time (fills numba's on-disk cache), so users
-pay the compile cost once, not on every run: `pipeline compile`."""
+"""Compile the kernels of studies ahead of time: `pipeline compile [STUDY ...]`.
+
+Each study's mechanism is compiled into its generated module
+(``pipeline.compiler``), and the kernels the study uses are run once on a
+tiny problem, which fills numba's on-disk cache: the next run of the study
+compiles nothing.  ``--show`` prints the generated source.
+"""
 
 from __future__ import annotations
 
+import dataclasses
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 STUDIES = Path(__file__).resolve().parent.parent / "studies"
 
 
-def compile_all() -> dict:
-    """Run each kernel family once on a tiny problem; returns seconds per family."""
-    import dataclasses
+@dataclass
+class Compiled:
+    study: str
+    kind: str
+    source: Path          # the generated module's file
+    seconds: float        # generation, import and compilation (a cached run: the load)
 
+
+def study_files(paths=()) -> list[Path]:
+    """The studies named, or every study shipped in studies/."""
+    if paths:
+        return [Path(p) for p in paths]
+    return sorted(STUDIES.glob("*.toml"))
+
+
+def compile_study(study) -> Compiled:
+    """Generate, import and compile the kernels ``study`` uses."""
     import numpy as np
 
-    from .scene import batch_revolutions, run_scene
-    from .study import load_study
-    times = {}
-
-    def timed(label, fn):
-        t = time.perf_counter()
-        fn()
-        times[label] = time.perf_counter() - t
-
-    for name in ("ov7_base", "ov7_class3", "warp_feed_fourbar"):
-        study = load_study(STUDIES / f"{name}.toml")
-        timed(f"scene {name}", lambda: run_scene(study))
-    b = load_study(STUDIES / "ov7_class3.toml")
-    timed("batch revolutions", lambda: batch_revolutions(
-        b, b.mechanism.compile().par[None, :].copy(), 12, 2, True))
-    syn = load_study(STUDIES / "ov7_synthesis.toml")
-
-    def sweep_kernels():
+    from .compiler import kernels_for
+    t = time.perf_counter()
+    mech = study.mechanism
+    plan = mech.compile()
+    if study.kind == "sweep":
         from .sweep import build_problem
-        pb = build_problem(syn, dataclasses.replace(syn.sweep, positions=36))
-        rows = np.ascontiguousarray(pb.plan.par[None, :])
-        pb.evaluate_rows(rows, parallel=True)
-        pb.evaluate_rows(rows, parallel=False)
-    timed("sweep kernels", sweep_kernels)
-    takeup = load_study(STUDIES / "takeup_dynamics.toml")
+        pb = build_problem(study, dataclasses.replace(study.sweep, positions=36))
+        pb.evaluate_rows(np.ascontiguousarray(plan.par[None, :]), parallel=False)
+        mod = pb.kernels
+    else:
+        from .scene import run_scene
+        run_scene(dataclasses.replace(study, output=dataclasses.replace(
+            study.output, table_positions=12, dense_positions=36)))
+        mod = kernels_for(plan)
+        if getattr(study, "dynamics", None) is not None and study.dynamics.cases:
+            from .dynamics import integrate, with_changes
+            case = study.dynamics.cases[0]
+            integrate(plan, mech, with_changes(case, t_end=case.sample_dt))
+    return Compiled(study.name, study.kind, Path(mod.SOURCE_PATH), time.perf_counter() - t)
 
-    def dynamics():
-        from .dynamics import integrate, with_changes
-        case = takeup.dynamics.cases[0]
-        integrate(takeup.mechanism.compile(), takeup.mechanism,
-                  with_changes(case, t_end=case.sample_dt))
-    timed("crank dynamics", dynamics)
-    return times
+
+def source(study) -> str:
+    """The generated source of the kernels ``study`` uses."""
+    from .compiler import source_for
+    plan = study.mechanism.compile()
+    rocker = tuple(study.output.rocker) if study.kind == "sweep" else None
+    return source_for(plan, rocker)
+
+
+def compile_all(paths=()) -> list[Compiled]:
+    from .study import load_study
+    return [compile_study(load_study(p)) for p in study_files(paths)]

@@ -35,7 +35,7 @@ import numpy as np
 
 from .kernels import config as kc
 from .compiler import kernels_for
-from .study import StudyError
+from .errors import StudyError
 
 log = logging.getLogger("pipeline")
 

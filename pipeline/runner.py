@@ -41,7 +41,7 @@ def run_study(path, out=None, *, candidates=None, resume=False, scheduler=None, 
 def run_scene_study(study, out, pictures=True) -> RunOutcome:
     from .kernels import config as kc
     from .scene import run_scene
-    from .storage import write_scene
+    from .scene_file import write_scene
     res = run_scene(study)
     if study.dynamics is not None:
         from .dynamics import run_dynamics

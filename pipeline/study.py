@@ -14,18 +14,9 @@ import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from .errors import StudyError
 from .model import (RPR, RRP, RRR, Attach, Body, CentreOfMass, ClassIII, Crank, Load,
                     Mechanism, Slide)
-
-
-class StudyError(ValueError):
-    """A study file is wrong: names the file, the field and the reason."""
-
-    def __init__(self, file, where, reason):
-        self.file = str(file)
-        self.field = where
-        self.reason = reason
-        super().__init__(f"{file}: {where}: {reason}" if where else f"{file}: {reason}")
 
 
 _MISSING = object()
@@ -519,3 +510,13 @@ def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
         check_drive(mech, cases[-1], c.file)
     sec.done()
     return DynamicsSpec(cases=tuple(cases), method=method)
+
+
+def stored_study(attrs, default_path="<stored study>"):
+    """The study rebuilt from the TOML stored verbatim in a results file's root
+    attributes; None if the file has none."""
+    from .storage import attr_text
+    text = attrs.get("study_toml")
+    if not text:
+        return None
+    return parse_study(attr_text(text), attr_text(attrs.get("study_file", default_path)))

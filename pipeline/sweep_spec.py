@@ -85,7 +85,7 @@ class SweepSpec:
 def parse_sweep(root, mech, output) -> SweepSpec:
     """Read [sweep] of a study (``root`` is the study's top Section)."""
     from .model import compile_mechanism
-    from .study import StudyError
+    from .errors import StudyError
     sec = root.table("sweep")
     plan = compile_mechanism(mech)
     spread = sec.number("spread", 0.2, positive=True)

@@ -233,3 +233,38 @@ def literal(x: float) -> str:
     if math.isinf(x):
         return "math.inf" if x > 0 else "-math.inf"
     return repr(float(x))
+
+
+def constants_of(plan, n, ems):
+    """(local name, expression) of every per-candidate constant: the fixed
+    pivots, each group's parameters and what its emitter derives from them."""
+    consts = []
+    for fi in plan.fixed_idx:
+        p = plan.point_names[int(fi)]
+        for c in "xy":
+            consts.append((n.param[f"{p}.{c}"], f"par[PAR_{n.param[f'{p}.{c}']}]"))
+    for e in ems:
+        for k in e.params():
+            consts.append((k, f"par[PAR_{k}]"))
+        consts.extend(e.derived())
+    return consts
+
+
+def constant_names(plan, n, ems):
+    return [c[0] for c in constants_of(plan, n, ems)]
+
+
+def _wrap_line(s, width=95):
+    """Break a long tuple line at commas (inside the parentheses)."""
+    if len(s) <= width:
+        return s
+    parts = s.split(", ")
+    lines, cur = [], ""
+    for p in parts:
+        if cur and len(cur) + len(p) + 2 > width:
+            lines.append(cur + ",")
+            cur = "        " + p
+        else:
+            cur = p if not cur else cur + ", " + p
+    lines.append(cur)
+    return "\n".join(lines)

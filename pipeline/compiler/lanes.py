@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import re
 
-from .emit import ClassIIIEmitter, lane
+from .emit import ClassIIIEmitter, _wrap_line, constant_names, lane
 
 NEWTON_STEPS = 2          # Newton steps per position after the predictor
 SMALL_ANGLE = 0.05        # largest rotation taken by the cos/sin series, rad
@@ -128,7 +128,6 @@ def lane_kernel(plan, names, ems, rocker, width):
     triads = [e for e in kin if isinstance(e, ClassIIIEmitter)]
     rows = []
     # per-candidate constants: every entry of constants(par)
-    from .generate import constant_names
     consts = constant_names(plan, names, ems)
     rows += consts
     for e in triads:
@@ -305,5 +304,4 @@ def lane_kernel(plan, names, ems, rocker, width):
 
 
 def _split(line, width=90):
-    from .generate import _wrap_line
     return _wrap_line(line, width).split("\n")

@@ -1,0 +1,85 @@
+"""The shape of the package: no import cycles between modules of pipeline/
+(imports inside functions count too), and kernels that import nothing but
+numpy, numba, math and each other."""
+
+import ast
+from pathlib import Path
+
+PKG = Path(__file__).resolve().parent.parent / "pipeline"
+
+
+def _modules():
+    mods = {}
+    for f in PKG.rglob("*.py"):
+        parts = f.relative_to(PKG.parent).with_suffix("").parts
+        name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+        mods[name] = f
+    return mods
+
+
+def _imports(mods, name):
+    f = mods[name]
+    pkg = name if f.name == "__init__.py" else name.rsplit(".", 1)[0]
+    out = set()
+    for node in ast.walk(ast.parse(f.read_text())):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = pkg
+                for _ in range(node.level - 1):
+                    base = base.rsplit(".", 1)[0]
+                base = base + ("." + node.module if node.module else "")
+            else:
+                base = node.module or ""
+            for a in node.names:
+                full = f"{base}.{a.name}"
+                out.add(full if full in mods else base)
+        elif isinstance(node, ast.Import):
+            out.update(a.name for a in node.names)
+    return out
+
+
+def test_no_module_imports_a_module_that_imports_it_back():
+    mods = _modules()
+    edges = {m: {t for t in _imports(mods, m) if t in mods and t != m} for m in mods}
+    # every module reachable from m must not reach m again
+    cycles = []
+    for m in mods:
+        seen, todo = set(), list(edges[m])
+        while todo:
+            t = todo.pop()
+            if t in seen:
+                continue
+            seen.add(t)
+            todo.extend(edges[t])
+        if m in seen:
+            cycles.append(m)
+    assert not cycles, f"modules on an import cycle: {sorted(cycles)}"
+
+
+def test_the_cycle_check_finds_a_cycle(tmp_path, monkeypatch):
+    """The check above can fail: a planted pair of modules importing each other."""
+    global PKG
+    pkg = tmp_path / "pipeline"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "a.py").write_text("def f():\n    from .b import g\n")
+    (pkg / "b.py").write_text("from .a import f\n")
+    monkeypatch.setattr(__import__(__name__), "PKG", pkg)
+    try:
+        test_no_module_imports_a_module_that_imports_it_back()
+    except AssertionError as e:
+        assert "pipeline.a" in str(e)
+    else:
+        raise AssertionError("the planted cycle was not found")
+
+
+def test_kernels_import_only_numpy_numba_math():
+    mods = _modules()
+    allowed = ("numpy", "numba", "math")
+    for m in mods:
+        if not m.startswith("pipeline.kernels"):
+            continue
+        for t in _imports(mods, m):
+            top = t.split(".")[0]
+            assert top in allowed or t.startswith("pipeline.kernels") or top in (
+                "hashlib", "os", "pathlib"), f"{m} imports {t}"
