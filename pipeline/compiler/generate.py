@@ -51,7 +51,7 @@ from pipeline.kernels.continuation import (accept, closes, predict, restore, sta
 from pipeline.kernels.dynamics import drive, lagrange_terms, potential
 from pipeline.kernels.forces import applied_loads, force_work, gauss_solve, kinetostatics
 from pipeline.kernels.groups import attach, crank, rpr, rrp, rrr
-from pipeline.kernels.metrics import dwell_error, relative_angle
+from pipeline.kernels.metrics import dwell_error, dwell_lanes, relative_angle
 from pipeline.kernels.sweep import (M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, M_PEAK_R,
                                     M_PEAK_JOINT, M_PEAK_PHI, M_PEAK_MBAL, M_FAIL_PHI,
                                     M_NEWTON_MEAN, M_FORCES_DONE, N_METRICS, SET_STROKE_RADIUS,
@@ -367,19 +367,20 @@ CAREFUL = '''
         st, margin, iters = careful_positions(par, phis, phi_close, tols, theta, out)
         if st != OK:
             return st
-        return finish(par, constants(par), phis, tols, settings, loads, theta, trail, False,
-                      margin, iters, out)
+        w = int(settings[SET_DWELL_W])
+        n = phis.shape[0]
+        err, start_k, full = dwell_error(theta, w, np.empty(n + w + 1, np.int64),
+                                         np.empty(n + w + 1, np.int64))
+        return finish(par, constants(par), phis, tols, settings, loads, trail, False, err,
+                      start_k, full, margin, iters, out)
 
 
     @njit(**JIT)
-    def finish(par, K, phis, tols, settings, loads, theta, trail, use_trail, margin, iters, out):
-        """Dwell and stroke from the rocker angles ``theta``, then the force stage
-        (from the lane path's solutions ``trail`` where ``use_trail``)."""
+    def finish(par, K, phis, tols, settings, loads, trail, use_trail, err, start_k, full, margin,
+               iters, out):
+        """Stroke, dwell and margin metrics, then the force stage (from the lane
+        path's solutions ``trail`` where ``use_trail``)."""
         n = phis.shape[0]
-        dwell_w = int(settings[SET_DWELL_W])
-        qmax = np.empty(n + dwell_w + 1, np.int64)
-        qmin = np.empty(n + dwell_w + 1, np.int64)
-        err, start_k, full = dwell_error(theta, dwell_w, qmax, qmin)
         out[M_STROKE] = settings[SET_STROKE_RADIUS] * full
         out[M_DWELL] = err
         out[M_DWELL_START] = phis[start_k] if start_k >= 0 else math.nan
@@ -593,31 +594,43 @@ NO_LANES = '''
     ROCKER_POINT = 0
     LANES = 1
     HAS_LANES = False
-    N_LANE_ROWS = 1
+    N_LANE_ROWS = 2
     THETA_COLS = 1
     R_margin = 0
+    R_flag = 1
     NEWTON_STEPS = 0
 
 
     @njit(**JIT)
-    def evaluate_block(pars, i0, phis, phi_close, tols, settings, loads, cph, sph, S, theta,
-                       col, trail, status, metrics):
-        """No output rocker declared: every lane takes the careful path."""
-        return (1 << LANES) - 1
+    def setup_lane(pars, i, l, phis, tols, S, theta, pos, d1, d2, margins, state):
+        """No output rocker declared: every candidate takes the careful path."""
+        return False
+
+
+    @njit(**JIT)
+    def block_walk(S, theta, cph_tab, sph_tab, phis, tols, settings):
+        return
+
+
+    @njit(**JIT)
+    def lanes_apply(phis, tols):
+        return False
 
 '''
 
 PARALLEL = '''
     @njit(**JIT)
     def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metrics):
-        """The sweep's stages for rows lo .. hi - 1 of ``pars`` (lo a multiple of
-        LANES; candidate i is always lane i % LANES of block i // LANES, whatever
-        the thread that runs it).  With lanes, the fast lock-step path runs first
-        and the careful path redoes every lane it cannot vouch for; without,
-        every candidate takes the careful path.  Serial: the caller runs ranges
-        on threads (``pipeline.compiler.parallel``; the kernels release the GIL),
-        so one compiled function serves one thread, all cores and Dask."""
+        """The sweep's stages for rows lo .. hi - 1 of ``pars``.  Candidates that
+        assemble at the first crank position fill the lanes of a block, which
+        walks the revolution in lock-step; the others, and every lane the fast
+        path cannot vouch for, take the careful path.  A lane's numbers do not
+        depend on its neighbours (every lane runs the same vector instructions),
+        so a candidate gets the same numbers whatever the thread, chunk or engine
+        that runs it.  Serial: the caller runs ranges on threads
+        (``pipeline.compiler.parallel``; the kernels release the GIL)."""
         npos = phis.shape[0]
+        w = int(settings[SET_DWELL_W])
         # the crank's cos/sin table, shared by every candidate (the last row is
         # the closing angle)
         ext = np.empty(npos + 1)
@@ -630,45 +643,68 @@ PARALLEL = '''
         theta = np.empty((npos + 1, LANES * THETA_COLS))
         col = np.empty(npos)
         trail = np.empty((npos + 1, max(THETA_COLS - 1, 1)))
-        for i0 in range(lo, hi, LANES):
-            redo = evaluate_block(pars, i0, phis, phi_close, tols, settings, loads, cph, sph,
-                                  S, theta, col, trail, status, metrics)
-            settle(pars, i0, min(hi, pars.shape[0]), redo, phis, phi_close, tols, settings,
-                   loads, S, theta, col, trail, status, metrics)
+        W5 = np.empty((5, npos + w + 1, LANES))
+        err = np.empty(LANES)
+        start_k = np.empty(LANES, np.int64)
+        full = np.empty(LANES)
+        qmax = np.empty(npos + w + 1, np.int64)
+        qmin = np.empty(npos + w + 1, np.int64)
+        idx = np.empty(LANES, np.int64)
+        pos, d1, d2, margins, state, _ = work(N_POINTS, N_GROUPS, N_TRIADS)
+        fast = lanes_apply(phis, tols)
+        filled = 0
+        for i in range(lo, hi + 1):          # i == hi: the last, partial block
+            if i < hi:
+                if fast and setup_lane(pars, i, filled, phis, tols, S, theta, pos, d1, d2,
+                                       margins, state):
+                    idx[filled] = i
+                    filled += 1
+                else:
+                    settle_one(pars, i, -1, phis, phi_close, tols, settings, loads, S, theta,
+                               col, trail, err, start_k, full, qmax, qmin, status, metrics)
+            if filled == LANES or (i == hi and filled > 0):
+                for l in range(filled, LANES):     # pad a partial block with lane 0
+                    for r in range(N_LANE_ROWS):
+                        S[r, l] = S[r, 0]
+                    for q in range(THETA_COLS):
+                        theta[0, q * LANES + l] = theta[0, q * LANES]
+                block_walk(S, theta, cph, sph, phis, tols, settings)
+                dwell_lanes(theta, npos, w, LANES, W5, err, start_k, full)
+                for l in range(filled):
+                    settle_one(pars, idx[l], l, phis, phi_close, tols, settings, loads, S, theta,
+                               col, trail, err, start_k, full, qmax, qmin, status, metrics)
+                filled = 0
 
 
     @njit(**JIT)
-    def settle(pars, i0, n, redo, phis, phi_close, tols, settings, loads, S, theta, col, trail,
-               status, metrics):
-        """Metrics of every lane of a block: the lanes the fast path vouched for
-        from its rocker angles and class III solutions, the others (bit set in
-        ``redo``) on the careful path; then the force stage where it applies.
-        One call site of each stage (numba inlines per call site).  Rows from
-        ``n`` on belong to another range."""
+    def settle_one(pars, i, l, phis, phi_close, tols, settings, loads, S, theta, col, trail,
+                   err, start_k, full, qmax, qmin, status, metrics):
+        """Metrics of candidate i: from lane ``l`` of the block where the fast path
+        vouched for it, else (l < 0, or the lane flagged) on the careful path; then
+        the force stage where it applies."""
         npos = phis.shape[0]
-        for l in range(LANES):
-            i = i0 + l
-            if i >= n:
-                break
-            out = metrics[i]
-            for c in range(N_METRICS):
-                out[c] = math.nan
-            out[M_FORCES_DONE] = 0.0
-            fast = not ((redo >> l) & 1)
-            if fast:
-                st = OK
-                margin = S[R_margin, l]
-                iters = float(NEWTON_STEPS * N_TRIADS * npos)
-                for k in range(npos):
-                    col[k] = theta[k, l]
-                    for q in range(THETA_COLS - 1):
-                        trail[k, q] = theta[k, (1 + q) * LANES + l]
-            else:
-                st, margin, iters = careful_positions(pars[i], phis, phi_close, tols, col, out)
-            if st == OK:
-                st = finish(pars[i], constants(pars[i]), phis, tols, settings, loads, col, trail,
-                            fast, margin, iters, out)
-            status[i] = st
+        out = metrics[i]
+        for c in range(N_METRICS):
+            out[c] = math.nan
+        out[M_FORCES_DONE] = 0.0
+        fast = l >= 0 and S[R_flag, max(l, 0)] == 0.0
+        if fast:
+            st = OK
+            margin = S[R_margin, l]
+            iters = float(NEWTON_STEPS * N_TRIADS * npos)
+            e = err[l]
+            s0 = start_k[l]
+            f = full[l]
+            for k in range(npos):
+                for q in range(THETA_COLS - 1):
+                    trail[k, q] = theta[k, (1 + q) * LANES + l]
+        else:
+            st, margin, iters = careful_positions(pars[i], phis, phi_close, tols, col, out)
+            e, s0, f = dwell_error(col, int(settings[SET_DWELL_W]), qmax, qmin)
+        if st == OK:
+            st = finish(pars[i], constants(pars[i]), phis, tols, settings, loads, trail, fast, e,
+                        s0, f, margin, iters, out)
+        status[i] = st
 
 
     @njit(**JIT)

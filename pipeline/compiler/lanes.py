@@ -26,6 +26,7 @@ increments, atan of a small argument by its series.
 from __future__ import annotations
 
 import re
+import textwrap
 
 from .emit import ClassIIIEmitter, _wrap_line, constant_names, lane
 
@@ -147,11 +148,7 @@ def lane_kernel(plan, names, ems, rocker, width):
     src += [f"R_{r} = {i}" for i, r in enumerate(rows)]
     src.append("")
     if not fast:
-        src += ["", "@njit(**JIT)",
-                "def evaluate_block(pars, i0, phis, phi_close, tols, settings, loads, cph, sph,"
-                " S, theta, col, trail, status, metrics):",
-                '    """A group without a lane form: every lane takes the careful path."""',
-                "    return (1 << LANES) - 1", ""]
+        src += [textwrap.dedent(NO_LANE_FORM)]
         return "\n".join(src) + "\n"
 
     unpack = "(" + ", ".join(consts) + ("," if len(consts) == 1 else "") + ") = K"
@@ -291,17 +288,58 @@ def lane_kernel(plan, names, ems, rocker, width):
             a(f"    dot = S[R_{t}_a0c, l] * S[R_{t}_ca, l] + S[R_{t}_a0s, l] * S[R_{t}_sa, l]")
             a("    if not (abs(ea) <= close and abs(eb) <= close and dot > 0.0):")
             a("        S[R_flag, l] = 1.0")
-    a("for l in range(LANES):")
-    a("    if S[R_flag, l] != 0.0:")
-    a("        redo |= 1 << l")
-    a("return redo")
-    src += [""] + walk + ["", "",
-            "@njit(**JIT)",
-            "def evaluate_block(pars, i0, phis, phi_close, tols, settings, loads, cph_tab, sph_tab, "
-            "S, theta, col, trail, status, metrics):"]
-    src += ["    " + x for x in body]
+    src += [""] + walk + ["", ""]
+    # setup_lane: the per-lane part of ``body`` (between the loop header and the walk)
+    b0 = body.index("for l in range(LANES):")
+    b1 = next(k for k, x in enumerate(body) if x.startswith("# ---- the lock-step walk"))
+    setup = [x[4:] if x.startswith("    ") else x for x in body[b0 + 2:b1]]
+    setup = [x.replace("redo |= 1 << l", "ok = False") for x in setup]
+    src += ["@njit(**JIT)",
+            "def setup_lane(pars, i, l, phis, tols, S, theta, pos, d1, d2, margins, state):",
+            '    """Candidate ``i`` into lane ``l``: its constants, and the careful solve at',
+            "    phis[0] (order 1: the first increment of the class III angles comes from",
+            "    their analogs).  False when it does not assemble there (the careful path",
+            '    then reports it)."""']
+    src += ["    " + x for x in setup] + ["    return ok", "", ""]
+    # block_walk: the walk and the closing checks of a full block
+    w0 = b1
+    closing = body[w0:]
+    src += ["@njit(**JIT)",
+            "def block_walk(S, theta, cph_tab, sph_tab, phis, tols, settings):",
+            '    """The lock-step walk of a full block (every lane set up), then the closing',
+            '    checks; S[R_flag, l] != 0 marks a lane the careful path must redo."""',
+            "    npos = phis.shape[0]",
+            "    margin_safe = settings[SET_MARGIN_SAFE]",
+            "    tol = tols[T_NEWTON_TOL]",
+            "    jump = tols[T_JUMP]",
+            "    step_change = tols[T_STEP_CHANGE]",
+            "    close = tols[T_CLOSE]"]
+    src += ["    " + x for x in closing] + ["", ""]
+    src += ["@njit(**JIT)",
+            "def lanes_apply(phis, tols):",
+            '    """Whether the lane path applies to this crank grid (at least 3 positions, steps',
+            '    no longer than the careful walk\'s largest)."""',
+            "    return phis.shape[0] >= 3 and abs(phis[1] - phis[0]) <= tols[T_SUBSTEP]", ""]
     return "\n".join(src) + "\n\n"
 
 
 def _split(line, width=90):
     return _wrap_line(line, width).split("\n")
+
+
+NO_LANE_FORM = '''
+    @njit(**JIT)
+    def setup_lane(pars, i, l, phis, tols, S, theta, pos, d1, d2, margins, state):
+        """A group without a lane form: every candidate takes the careful path."""
+        return False
+
+
+    @njit(**JIT)
+    def block_walk(S, theta, cph_tab, sph_tab, phis, tols, settings):
+        return
+
+
+    @njit(**JIT)
+    def lanes_apply(phis, tols):
+        return False
+'''

@@ -65,3 +65,75 @@ def relative_angle(x0, y0, x, y):
     """Angle from direction (x0, y0) to (x, y) in (-pi, pi]: a rocker's swing
     measured from its first position, free of the atan2 wrap."""
     return math.atan2(x0 * y - y0 * x, x0 * x + y0 * y)
+
+
+
+
+@njit(**JIT)
+def dwell_lanes(theta, n, w, lanes, W5, err, start, full):
+    """``dwell_error`` of ``lanes`` revolutions at once: theta[k, l] is sample k
+    of lane l (k = 0..n-1).  Branch-free, so the lane loops vectorize: van Herk
+    / Gil-Werman, prefix and suffix extrema in blocks of the window's w + 1
+    samples over the revolution extended by w; the same windows, the same exact
+    extrema and the same tie rule (the first start) as ``dwell_error``, hence
+    the same results.  W5: work array of at least (5, n + w, lanes).  Writes
+    err (NaN where ``dwell_error`` gives NaN), start (-1 there) and full."""
+    b = w + 1
+    m = n + w
+    pmax = W5[0]
+    smax = W5[1]
+    pmin = W5[2]
+    smin = W5[3]
+    hi = W5[4, 0]
+    lo = W5[4, 1]
+    bad = W5[4, 2]
+    for j in range(m):
+        k = j % n
+        if j % b == 0:
+            for l in range(lanes):
+                pmax[j, l] = theta[k, l]
+                pmin[j, l] = theta[k, l]
+        else:
+            for l in range(lanes):
+                pmax[j, l] = max(pmax[j - 1, l], theta[k, l])
+                pmin[j, l] = min(pmin[j - 1, l], theta[k, l])
+    for j in range(m - 1, -1, -1):
+        k = j % n
+        if j % b == b - 1 or j == m - 1:
+            for l in range(lanes):
+                smax[j, l] = theta[k, l]
+                smin[j, l] = theta[k, l]
+        else:
+            for l in range(lanes):
+                smax[j, l] = max(smax[j + 1, l], theta[k, l])
+                smin[j, l] = min(smin[j + 1, l], theta[k, l])
+    for l in range(lanes):
+        hi[l] = theta[0, l]
+        lo[l] = theta[0, l]
+        bad[l] = 0.0
+        err[l] = math.inf
+        start[l] = -1
+    for k in range(n):
+        for l in range(lanes):
+            v = theta[k, l]
+            hi[l] = max(hi[l], v)
+            lo[l] = min(lo[l], v)
+            bad[l] = max(bad[l], 0.0 if v - v == 0.0 else 1.0)    # NaN or inf
+    for s in range(n):      # window s..s+w: suffix of s's block, prefix of (s+w)'s
+        for l in range(lanes):
+            r = max(smax[s, l], pmax[s + w, l]) - min(smin[s, l], pmin[s + w, l])
+            if r < err[l]:
+                err[l] = r
+                start[l] = s
+    for l in range(lanes):
+        f = hi[l] - lo[l]
+        full[l] = f
+        if bad[l] != 0.0:
+            err[l] = math.nan
+            start[l] = -1
+            full[l] = math.nan
+        elif not (f > 0.0) or w < 1 or w >= n:
+            err[l] = math.nan
+            start[l] = -1
+        else:
+            err[l] = err[l] / f
