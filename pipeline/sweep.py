@@ -419,8 +419,18 @@ def _chunks(problem, todo, scheduler, client, n_jobs):
         return
     if n_jobs is not None and n_jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {n_jobs}")
-    for c in todo:
-        yield problem.evaluate_chunk(c, parallel=True, n_jobs=n_jobs)
+    # the next chunk is drawn and evaluated while the caller journals and writes
+    # this one (the kernels run on the worker threads, HDF5 on this one)
+    from concurrent.futures import ThreadPoolExecutor
+    with ThreadPoolExecutor(1, thread_name_prefix="pipeline-chunks") as ahead:
+        pending = None
+        for c in todo:
+            nxt = ahead.submit(problem.evaluate_chunk, c, True, n_jobs)
+            if pending is not None:
+                yield pending.result()
+            pending = nxt
+        if pending is not None:
+            yield pending.result()
 
 
 def _dask_chunks(problem, todo, scheduler, client):
