@@ -47,8 +47,9 @@ def library_digest() -> str:
         here = Path(__file__).resolve().parent
         files = sorted(here.glob("*.py")) + sorted((here.parent / "kernels").glob("*.py"))
         h = hashlib.sha256()
-        from ..kernels.config import FASTMATH
-        h.update(repr(sorted(FASTMATH) if FASTMATH else "strict").encode())   # the flags too
+        from ..kernels.config import FASTMATH, LANE_FASTMATH
+        for flags in (FASTMATH, LANE_FASTMATH):    # the flags too
+            h.update(repr(sorted(flags) if flags else "strict").encode())
         for f in files:
             h.update(f.name.encode())
             h.update(f.read_bytes())

@@ -42,7 +42,7 @@ import math
 import numpy as np
 from numba import njit
 
-from pipeline.kernels.config import (JIT, OK, BRANCH_JUMP, NEWTON_MAXITER,
+from pipeline.kernels.config import (JIT, JIT_LANES, OK, BRANCH_JUMP, NEWTON_MAXITER,
                                      SINGULAR, NO_ASSEMBLY, BAD_GEOMETRY, S_A, S_B, S_DET_SIGN,
                                      S_ITERS, S_MARGIN, T_SINGULAR, T_ASSEMBLY_SLACK, T_SUBSTEP,
                                      T_MIN_STEP, T_NEWTON_TOL, T_JUMP, T_STEP_CHANGE, T_CLOSE)

@@ -236,7 +236,7 @@ def lane_kernel(plan, names, ems, rocker, width):
     a(f"# ---- the lock-step walk: positions 1 .. n - 1{' and the closing position' if triads else ''}")
     a(f"walk(S.reshape(N_LANE_ROWS * LANES), S.shape[1], theta, cph_tab, sph_tab, {last}, tol,")
     a("     jump, step_change, margin_safe)")
-    walk = ["@njit(**JIT)",
+    walk = ["@njit(**JIT_LANES)   # FMA contraction: the one kernel with it",
             "def walk(S, n_lanes, theta, cph_tab, sph_tab, k_end, tol, jump, step_change,",
             "         margin_safe):",
             '    """The lock-step walk over crank positions 1 .. k_end - 1: every lane of the',

@@ -9,22 +9,29 @@ import os
 
 import numpy as np
 
-# Floating-point flags, in one place.  The default allows FMA contraction only
-# ("contract": a*b + c in one rounding), which the vectorised lane kernels need
-# to reach the FMA units; results then differ from strict IEEE in the last
-# bits, identically for every candidate, thread count and engine.  Never
-# 'nnan' or 'ninf': NaN is the failure signal.  PIPELINE_FASTMATH=strict
-# turns contraction off; PIPELINE_FASTMATH=fast selects the wider subset
-# below (used by the speed/accuracy benchmark, which also points
-# NUMBA_CACHE_DIR elsewhere because the cache key does not include these flags).
+# Floating-point flags, in one place.  Never 'nnan' or 'ninf': NaN is the
+# failure signal.
+# * JIT (every kernel but the lane walk): strict IEEE by default, so the careful
+#   path gives the same bits as any other faithful evaluation of its formulas
+#   (near-singular candidates magnify a last-bit difference into a different
+#   status).
+# * JIT_LANES (the sweep's lock-step walk): FMA contraction ("contract": a*b + c
+#   in one rounding) to reach the FMA units; a lane near a singular position is
+#   redone on the careful path anyway.
+# PIPELINE_FASTMATH=strict turns contraction off in the lanes too; =fast selects
+# the wider subset below everywhere (used by the speed/accuracy benchmark, which
+# also points NUMBA_CACHE_DIR elsewhere because the cache key does not include
+# these flags).
 _FAST_FLAGS = {"nsz", "arcp", "contract", "afn", "reassoc"}
-_MODE = os.environ.get("PIPELINE_FASTMATH", "contract")
-FASTMATH = {"strict": False, "fast": _FAST_FLAGS}.get(_MODE, {"contract"})
+_MODE = os.environ.get("PIPELINE_FASTMATH", "default")
+FASTMATH = _FAST_FLAGS if _MODE == "fast" else False
+LANE_FASTMATH = {"strict": False, "fast": _FAST_FLAGS}.get(_MODE, {"contract"})
 
 # error_model="numpy": a division by zero gives inf/nan instead of raising,
 # so a kernel never raises inside prange.
 JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True)
 JIT_PARALLEL = dict(JIT, parallel=True)
+JIT_LANES = dict(JIT, fastmath=LANE_FASTMATH)
 
 # ---- status codes (int8), ordered by how they are reported -----------------
 OK = 0

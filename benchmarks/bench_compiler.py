@@ -1,0 +1,308 @@
+"""The mechanism compiler against the yardstick, the old interpreter and NumPy.
+
+    python benchmarks/bench_compiler.py [--quick] [-o DIR]
+
+Every figure is steady state (each kernel runs once before it is timed) in
+million candidate-positions per second, per core (1 thread) and on all cores,
+and is held as a ratio against:
+
+* the yardstick (``../shared/yardstick/run.sh``: hand-written SIMD C on the
+  same jobs, run here, on this machine, before the measurements);
+* the plan interpreter the product used before the compiler (a frozen copy in
+  ``benchmarks/interpreter/``), on the same candidates, in the same process;
+* the NumPy-vectorised baseline (four-bar positions).
+
+Compile time is measured apart: a new mechanism (an empty cache of generated
+modules, in a fresh process) and a cached one (the same again), per study.
+
+Jobs (360 positions per revolution):
+  B positions stage   dwell-only sweep stage of mechanism B (class III Newton to 1e-12,
+                      rocker swing, dwell window): the default study's candidates, and
+                      the assembled ones only (as the yardstick's triad_simd)
+  A positions stage   the same stage for mechanism A (crank + 3 RRR), +-5 % candidates
+  A full kinematics   positions and both analogs of every point (batch kernel)
+  four-bar positions  the positions stage of the warp let-off four-bar, +-10 % candidates
+  default study       the sweep's full metrics (positions, dwell, forces where feasible)
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from common import ROOT, STUDIES, best_of, hardware  # noqa: E402
+
+YARDSTICK = ROOT.parent / "shared" / "yardstick" / "run.sh"
+
+
+def yardstick():
+    """{job: {threads: M cand-pos/s}} from the yardstick run on this machine."""
+    if not YARDSTICK.exists():
+        return {}
+    out = subprocess.run(["bash", str(YARDSTICK)], capture_output=True, text=True,
+                         timeout=600).stdout
+    res = {}
+    for line in out.splitlines():
+        m = re.match(r"^(\w+)\s+(\d+)\s+([\d.]+)\s*$", line)
+        if m:
+            res.setdefault(m.group(1), {})[int(m.group(2))] = float(m.group(3))
+    return res
+
+
+def _perturbed(plan, n, spread, seed=1):
+    """``n`` rows around the plan's reference row: every length and fixed
+    coordinate that is not zero scaled by U(1 - spread, 1 + spread)."""
+    rng = np.random.default_rng(seed)
+    rows = np.repeat(plan.par[None, :], n, axis=0)
+    for j, name in enumerate(plan.par_names):
+        key = name.rsplit(".", 1)[1]
+        if (key in ("x", "y", "length", "L_AB", "L_CB") or key.startswith("L")) \
+                and not name.startswith("S[") and plan.par[j] != 0.0:
+            rows[:, j] *= 1.0 + spread * rng.uniform(-1.0, 1.0, n)
+    return np.ascontiguousarray(rows)
+
+
+class Stage:
+    """The sweep's positions stage (dwell only) of a mechanism with an output rocker."""
+
+    def __init__(self, study_file, rocker, positions=360, forces=False, problem=None):
+        from pipeline.compiler import kernels_for
+        from pipeline.kernels import config as kc
+        from pipeline.kernels import sweep as ks
+        from pipeline.scene import revolution_angles
+        from pipeline.study import load_study
+        self.study = load_study(study_file)
+        mech = self.study.mechanism
+        self.plan = mech.compile()
+        crank = mech.crank
+        self.phis = revolution_angles(crank, positions)
+        self.phi_close = crank.phi0 + crank.rot * 2.0 * math.pi
+        self.tols = kc.default_tolerances()
+        self.rocker = rocker
+        self.kernels = kernels_for(self.plan, rocker)
+        dwell_w = int(round(self.study.output.dwell_deg * positions / 360))
+        self.settings = ks.settings(1.0, dwell_w, forces, -math.inf, math.inf, -math.inf,
+                                    crank.omega1, crank.eps1)
+        if problem is not None:
+            self.settings = problem.settings()
+        self.loads = np.zeros((positions, len(mech.loads), 3))
+        self.dwell_w = dwell_w
+
+    def run(self, pars, n_jobs):
+        from pipeline.compiler.parallel import run_rows
+        from pipeline.kernels import sweep as ks
+        n = pars.shape[0]
+        status = np.zeros(n, np.int8)
+        metrics = np.full((n, ks.N_METRICS), np.nan)
+        run_rows(self.kernels.evaluate, pars, self.phis, self.phi_close, self.tols,
+                 self.settings, self.loads, status, metrics, n_jobs=n_jobs)
+        return status, metrics
+
+    def interpreter(self, pars, parallel):
+        """The same stage on the frozen interpreter (status, metrics)."""
+        from interpreter import sweep as isw
+        from pipeline.kernels import sweep as ks
+        p, s = self.plan, self.settings
+        n = pars.shape[0]
+        status = np.zeros(n, np.int8)
+        metrics = np.full((n, ks.N_METRICS), np.nan)
+        fn = isw.evaluate_batch_parallel if parallel else isw.evaluate_batch_serial
+        fn(pars, p.codes, p.n_kinematic, p.gidx, p.goff, p.fixed_idx, p.fixed_off, p.n_points,
+           self.phis, self.phi_close, self.tols, p.point(self.rocker[0]),
+           p.point(self.rocker[1]), s[ks.SET_STROKE_RADIUS], int(s[ks.SET_DWELL_W]),
+           bool(s[ks.SET_WANT_FORCES]), s[ks.SET_STROKE_LO], s[ks.SET_STROKE_HI],
+           s[ks.SET_MARGIN_MIN], s[ks.SET_OMEGA1], s[ks.SET_EPS1], p.gravity, p.body_com,
+           p.body_turn, p.body_mass_off, p.joint_point, p.joint_bodies, p.slide_bodies,
+           p.slide_dir, p.slide_angle, p.crank_body, p.load_body, p.load_point, self.loads,
+           status, metrics)
+        return status, metrics
+
+
+def _rate(fn, n_cand, positions, repeat):
+    fn()                                       # warm-up: compile, caches
+    return n_cand * positions / best_of(fn, repeat) / 1e6
+
+
+def measure(quick=False):
+    import numba
+
+    from pipeline.compiler.parallel import default_jobs
+    from pipeline.sweep import build_problem
+    from pipeline.sweep_spec import draw_candidates, parameter_rows
+    cores = default_jobs()
+    numba.set_num_threads(cores)
+    n = 4096 if quick else 32768
+    rep = 2 if quick else 3
+    rows = []
+
+    def row(job, yard_job, project_1, project_all, interp_1=None, numpy_1=None, note=""):
+        rows.append(dict(job=job, yard=yard_job, p1=project_1, pall=project_all,
+                         interp1=interp_1, numpy1=numpy_1, note=note))
+
+    # ---- mechanism B positions stage: the default study's candidates
+    syn_file = STUDIES / "ov7_synthesis.toml"
+    from pipeline.study import load_study
+    syn = load_study(syn_file)
+    spec = dataclasses.replace(syn.sweep, metrics=("dwell_error", "stroke",
+                                                    "singularity_margin"),
+                               objectives=("dwell_error",))
+    pb = build_problem(syn, spec)
+    chunks = max(1, n // spec.chunk_size)
+    x = np.concatenate([draw_candidates(spec, c) for c in range(chunks)])
+    pars_b = parameter_rows(pb.plan, spec, x)
+    stage_b = Stage(syn_file, tuple(syn.output.rocker), problem=pb)
+    status, _ = stage_b.run(pars_b, 1)
+    ok_b = np.ascontiguousarray(pars_b[status == 0])
+    for label, pars, note in (
+            ("B positions stage, default study's candidates", pars_b,
+             f"{100 * np.mean(status == 0):.0f} % assemble; failures redone on the careful path"),
+            ("B positions stage, assembled candidates", ok_b, "as the yardstick's candidates")):
+        r1 = _rate(lambda: stage_b.run(pars, 1), len(pars), 360, rep)
+        ra = _rate(lambda: stage_b.run(pars, cores), len(pars), 360, rep)
+        ri = _rate(lambda: stage_b.interpreter(pars, False), len(pars), 360, rep)
+        row(label, "triad_simd", r1, ra, ri, note=note)
+
+    # ---- mechanism A positions stage and full kinematics
+    base = load_study(STUDIES / "ov7_base.toml")
+    stage_a = Stage(STUDIES / "ov7_base.toml", tuple(base.output.rocker))
+    pars_a = _perturbed(stage_a.plan, n, 0.05)
+    r1 = _rate(lambda: stage_a.run(pars_a, 1), n, 360, rep)
+    ra = _rate(lambda: stage_a.run(pars_a, cores), n, 360, rep)
+    ri = _rate(lambda: stage_a.interpreter(pars_a, False), n, 360, rep)
+    row("A positions stage", "ov7_pos", r1, ra, ri)
+    from pipeline.scene import batch_revolutions
+    nk = n // 4
+    r1 = _rate(lambda: batch_revolutions(base, pars_a[:nk], 360, 2, False, n_jobs=1), nk, 360,
+               rep)
+    ra = _rate(lambda: batch_revolutions(base, pars_a[:nk], 360, 2, False, n_jobs=cores), nk,
+               360, rep)
+    row("A full kinematics (every point, both analogs)", "ov7_kin", r1, ra,
+        note="careful path (libm), no lanes yet")
+
+    # ---- four-bar positions stage
+    fb = STUDIES / "warp_feed_fourbar.toml"
+    stage_f = Stage(fb, ("P4", "P3"))
+    pars_f = _perturbed(stage_f.plan, 4 * n, 0.10)
+    r1 = _rate(lambda: stage_f.run(pars_f, 1), 4 * n, 360, rep)
+    ra = _rate(lambda: stage_f.run(pars_f, cores), 4 * n, 360, rep)
+    ri = _rate(lambda: stage_f.interpreter(pars_f, False), 4 * n, 360, rep)
+    from baselines import fourbar_params, fourbar_positions_numpy
+    fp = fourbar_params(stage_f.plan, pars_f[:n // 4])
+
+    def numpy_fourbar():
+        p = fourbar_positions_numpy(fp, stage_f.phis)
+        np.arctan2(p[:, :, 1, 1], p[:, :, 1, 0] - fp[:, 3:4])    # the rocker angle
+    rn = _rate(numpy_fourbar, n // 4, 360, rep)
+    row("four-bar positions stage", "fourbar_pos", r1, ra, ri, rn,
+        note="incl. per-candidate setup and the dwell window")
+
+    # ---- the default study, full metrics (kernel only; whole process below)
+    pb_full = build_problem(syn, syn.sweep)
+    nf = len(pars_b)
+    t1 = _rate(lambda: pb_full.evaluate_rows(pars_b, n_jobs=1), nf, 1, rep) * 1e6
+    ta = _rate(lambda: pb_full.evaluate_rows(pars_b, n_jobs=cores), nf, 1, rep) * 1e6
+    ti = _rate(lambda: stage_b_full_interp(pb_full, pars_b), nf, 1, rep) * 1e6
+    return rows, dict(full_1=t1, full_all=ta, full_interp_all=ti, cores=cores)
+
+
+def stage_b_full_interp(pb, pars):
+    st = Stage(STUDIES / "ov7_synthesis.toml", tuple(pb.rocker), problem=pb)
+    return st.interpreter(pars, True)
+
+
+def whole_process(candidates):
+    """`pipeline run` of the default study in a fresh process (kernels cached):
+    candidates/s as the run reports it (compile excluded)."""
+    with tempfile.TemporaryDirectory() as d:
+        out = Path(d) / "syn.h5"
+        cmd = [sys.executable, "-m", "pipeline.cli", "run", str(STUDIES / "ov7_synthesis.toml"),
+               "--candidates", str(candidates), "-o", str(out), "-q", "--format", "json"]
+        t = time.perf_counter()
+        subprocess.run(cmd, check=True, capture_output=True, text=True, cwd=ROOT)
+        wall = time.perf_counter() - t
+        import h5py
+        with h5py.File(out) as f:
+            inner = float(f.attrs["wall_time_s"])
+    return candidates / inner, wall
+
+
+def compile_times(studies):
+    """Seconds per study: a new mechanism (fresh cache of generated modules) and
+    a cached one, each in a fresh process (`pipeline compile STUDY`)."""
+    out = {}
+    with tempfile.TemporaryDirectory() as d:
+        env = dict(os.environ, PIPELINE_CACHE_DIR=d)
+        for s in studies:
+            res = []
+            for _ in range(2):
+                p = subprocess.run([sys.executable, "-m", "pipeline.cli", "compile", str(s),
+                                    "--format", "json"], env=env, capture_output=True,
+                                   text=True, check=True, cwd=ROOT)
+                res.append(float(re.search(r"(\d+\.\d+) s", p.stdout).group(1)))
+            out[s.stem] = tuple(res)
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("-o", "--out", default=str(ROOT / "results" / "bench"))
+    a = ap.parse_args(argv)
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    lines = ["# Mechanism compiler: speed against the yardstick", "",
+             f"hardware: {hardware()}", ""]
+    yard = yardstick()
+    rows, full = measure(a.quick)
+    cores = full["cores"]
+    lines += ["M candidate-positions/s; ratios against the yardstick (hand-written SIMD C, "
+              "run here first) and against the old interpreter and NumPy on the same "
+              "candidates, in this process.", "",
+              "| job | project, 1 core | project, all cores | yardstick job, 1 core | "
+              "project / yardstick | project / interpreter | project / NumPy | note |",
+              "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        y = yard.get(r["yard"], {}).get(1)
+        lines.append(
+            f"| {r['job']} | {r['p1']:.1f} | {r['pall']:.1f} | {r['yard']} "
+            f"{y if y else 'n/a'} | {r['p1'] / y:.2f}x | "
+            f"{(r['p1'] / r['interp1']) if r['interp1'] else float('nan'):.1f}x | "
+            f"{(r['p1'] / r['numpy1']) if r['numpy1'] else float('nan'):.1f}x | "
+            f"{r['note']} |" if y else f"| {r['job']} | {r['p1']:.1f} | {r['pall']:.1f} | "
+            f"{r['yard']} n/a | | | | {r['note']} |")
+    lines += ["", f"Default study, full metrics (kernels only): {full['full_1']:,.0f} "
+              f"candidates/s on 1 core, {full['full_all']:,.0f} on {cores} cores; the "
+              f"interpreter {full['full_interp_all']:,.0f} on {cores} cores "
+              f"(x{full['full_all'] / full['full_interp_all']:.1f})."]
+    n_whole = 50_000 if a.quick else 1_000_000
+    rate, wall = whole_process(n_whole)
+    lines += [f"Default study, whole process with HDF5 (`pipeline run`, {n_whole:,} "
+              f"candidates, kernels cached): {rate:,.0f} candidates/s, {wall:.1f} s wall "
+              "for the process.", ""]
+    studies = [STUDIES / f"{s}.toml" for s in ("ov7_synthesis", "ov7_class3", "ov7_base",
+                                                "warp_feed_fourbar", "takeup_dynamics")]
+    ct = compile_times(studies[:2] if a.quick else studies)
+    lines += ["Compile time (fresh process each): a new mechanism / a cached one", "",
+              "| study | new mechanism | cached |", "|---|---|---|"]
+    lines += [f"| {k} | {v[0]:.1f} s | {v[1]:.2f} s |" for k, v in ct.items()]
+    text = "\n".join(lines) + "\n"
+    print(text)
+    (out / "compiler.md").write_text(text)
+    return text
+
+
+if __name__ == "__main__":
+    main()
