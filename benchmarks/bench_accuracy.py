@@ -5,7 +5,9 @@
 (b) the Newton tolerance and iteration cap;
 (c) exact analogs against finite-difference analogs (the Mathcad way);
 (d) the RK4 step for mechanism C;
-(e) strict IEEE against numba fastmath flags (a fresh process, its own cache).
+(e) strict IEEE against numba's floating-point flags: the default (FMA
+    contraction in the sweep's lane walk) and fastmath (fresh processes, their
+    own caches).
 
 Each study is a table (CSV) and a log-log plot of error against time in the
 output folder (``out``; default results/bench/ of the checkout).  Times are
@@ -220,48 +222,64 @@ print(json.dumps(dict(compile_s=compile_s, secs=secs)))
 """
 
 
+# floating-point modes of the kernels (PIPELINE_FASTMATH, pipeline.kernels.config)
+FP_MODES = {"strict": "strict IEEE everywhere",
+            "default": "strict IEEE, FMA contraction in the sweep's lane walk (the default)",
+            "fast": "{nsz, arcp, contract, afn, reassoc} everywhere"}
+
+
+def _fp_mode():
+    """The PIPELINE_FASTMATH mode the kernels of this process are compiled with."""
+    from pipeline.kernels import config
+    if config.FASTMATH:
+        return "fast"
+    return "default" if getattr(config, "LANE_FASTMATH", False) else "strict"
+
+
 def fastmath_study(quick, out=DEFAULT_OUT):
-    """Strict IEEE in this process (its kernels are compiled already); the
-    fastmath build in a fresh process with its own numba cache, because the
-    cache key does not include the fastmath flags."""
+    """The sweep's metrics under each floating-point mode (FP_MODES) against
+    strict IEEE.  The mode of this process runs here (its kernels are compiled
+    already); every other mode runs in a fresh process with its own caches
+    (numba's and the generated modules'), because neither cache key includes
+    the floating-point flags."""
+    here = _fp_mode()
     n = 500 if quick else 10000
     results = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for mode in ("strict", "fast"):
+        for mode in FP_MODES:
             npz = os.path.join(tmp, f"{mode}.npz")
             code = _PROBE.format(bench=str(Path(__file__).resolve().parent),
                                  study=str(STUDIES / "ov7_synthesis.toml"), n=n, npz=npz)
-            if mode == "strict":
-                from pipeline.kernels.config import FASTMATH
-                if FASTMATH:
-                    raise RuntimeError("run the accuracy benchmark without PIPELINE_FASTMATH")
+            if mode == here:
                 ns = {}
                 import contextlib
                 import io
                 buf = io.StringIO()
                 with contextlib.redirect_stdout(buf):
-                    exec(compile(code, "<strict probe>", "exec"), ns)  # noqa: S102 - our own code
+                    exec(compile(code, f"<{mode} probe>", "exec"), ns)  # noqa: S102 - our own code
                 info = json.loads(buf.getvalue().strip().splitlines()[-1])
             else:
                 env = dict(os.environ, PIPELINE_FASTMATH=mode,
-                           NUMBA_CACHE_DIR=os.path.join(tmp, f"cache_{mode}"))
+                           NUMBA_CACHE_DIR=os.path.join(tmp, f"cache_{mode}"),
+                           PIPELINE_CACHE_DIR=os.path.join(tmp, f"modules_{mode}"))
                 r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                                    text=True)
                 if r.returncode:
-                    raise RuntimeError(f"fastmath probe failed:\n{r.stderr[-2000:]}")
+                    raise RuntimeError(f"{mode} floating-point probe failed:\n{r.stderr[-2000:]}")
                 info = json.loads(r.stdout.strip().splitlines()[-1])
             with np.load(npz) as z:
                 info["status"], info["metrics"] = z["status"], z["metrics"]
+            info["fresh_process"] = mode != here
             results[mode] = info
-    s, f = results["strict"], results["fast"]
-    same_status = float(np.mean(s["status"] == f["status"]))
-    both = (s["status"] == 0) & (f["status"] == 0)
+    s = results["strict"]
     rows = []
     from pipeline.kernels.sweep import M_DWELL, M_PEAK_R, M_STROKE
-    for mode in ("strict", "fast"):
+    for mode, flags in FP_MODES.items():
         r = results[mode]
-        row = {"setting": mode, "time_s": r["secs"] / n, "compile_s": r["compile_s"],
-               "status_agreement": same_status}
+        both = (s["status"] == 0) & (r["status"] == 0)
+        row = {"setting": mode, "flags": flags, "time_s": r["secs"] / n,
+               "compile_s": r["compile_s"], "fresh_process": r["fresh_process"],
+               "status_agreement": float(np.mean(s["status"] == r["status"]))}
         for name, col in (("dwell_error", M_DWELL), ("stroke", M_STROKE),
                           ("peak_reaction", M_PEAK_R)):
             a, b = s["metrics"][both, col], r["metrics"][both, col]
@@ -269,12 +287,13 @@ def fastmath_study(quick, out=DEFAULT_OUT):
             row[f"{name}_rel_error"] = float(np.max(np.abs(b[ok] / a[ok] - 1))) if ok.any() else 0.0
         rows.append(row)
     df = pd.DataFrame(rows)
-    df.attrs["note"] = (f"{n} synthesis candidates on one thread; fastmath = "
-                        f"{{nsz, arcp, contract, afn, reassoc}} in a fresh process and cache "
-                        f"(its compile time includes the cold cache); errors against strict IEEE")
-    _plot(df[df.setting == "fast"], "time_s", [("dwell_error_rel_error", "dwell error"),
-                                              ("peak_reaction_rel_error", "peak reaction")],
-          "(e) fastmath against strict IEEE", Path(out) / "e_fastmath.png")
+    df.attrs["note"] = (f"{n} synthesis candidates on one thread; modes of PIPELINE_FASTMATH "
+                        f"(this process: {here}; the others in a fresh process and caches, "
+                        f"their compile time includes the cold caches); errors against "
+                        f"strict IEEE")
+    _plot(df[df.setting != "strict"], "time_s", [("dwell_error_rel_error", "dwell error"),
+                                                 ("peak_reaction_rel_error", "peak reaction")],
+          "(e) floating-point flags against strict IEEE", Path(out) / "e_fastmath.png")
     return df
 
 

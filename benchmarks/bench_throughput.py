@@ -13,13 +13,16 @@ Correct first, then timed: before any steady-state timing every baseline is
 compared with the project on a few candidates (positions to 1e-9 mm, analogs
 to 1e-8 relative, dwell error and stroke to 1e-9, peak reaction to 1e-6
 relative, the same candidates accepted) and the run stops if they disagree;
-after the timing the timed outputs are compared again, in full.  The
-project's first call (compile, or load from numba's cache, plus one tiny
-run) is reported apart from its steady state (best of a few calls, on all
-threads and on one); ``--cold`` adds the compile with an empty numba cache,
-measured in a fresh process.  The project's kernels run on the mechanisms
-without their bodies (no hidden centres of mass) for cases 1 and 2, so that
-both sides compute the same points.
+after the timing the timed outputs are compared again, in full.  The project
+is the mechanism compiler's generated kernels
+(``pipeline.compiler.kernels_for``: one module per mechanism).  The project's
+first call (compile, or load from numba's cache, plus one tiny run) is
+reported apart from its steady state (best of a few calls, on all threads and
+on one); ``--cold`` adds the generation and compile with empty caches
+(``PIPELINE_CACHE_DIR`` and ``NUMBA_CACHE_DIR``), measured in a fresh process.
+The project's kernels run on the mechanisms without their bodies (no hidden
+centres of mass) for cases 1 and 2, so that both sides compute the same
+points.
 
     python benchmarks/bench_throughput.py [--quick] [--cold]
 
@@ -146,7 +149,7 @@ def _relative(x, ref, axis):
 
 # ----------------------------------------------------------------- case 1: four-bar
 def four_bar_case(sizes, repeat, rows):
-    from pipeline.kernels.batch import revolutions_batch
+    from pipeline.compiler import kernels_for
     from pipeline.scene import batch_revolutions, revolution_angles, solve_curves
     from pipeline.study import load_study
     n_proj, n_np, n_py = sizes
@@ -157,7 +160,7 @@ def four_bar_case(sizes, repeat, rows):
     w = int(plan.par[plan.param("RRR[1].W")])
     params = bl.fourbar_params(plan, pars)
     run = lambda p: batch_revolutions(study, p, POSITIONS, 0, False)
-    first, how = _first_call(revolutions_batch, lambda: run(pars[:2]))
+    first, how = _first_call(kernels_for(plan).batch, lambda: run(pars[:2]))
 
     # correct first: the reference and a few perturbed candidates, every position
     case = "four-bar positions"
@@ -204,7 +207,7 @@ def _draw(study, n, seed_chunk=0):
 
 
 def kinematics_case(sizes, repeat, rows):
-    from pipeline.kernels.batch import revolutions_batch
+    from pipeline.compiler import kernels_for
     from pipeline.scene import batch_revolutions, revolution_angles, solve_curves
     from pipeline.study import load_study
     n_proj, n_np, n_py = sizes
@@ -216,9 +219,7 @@ def kinematics_case(sizes, repeat, rows):
     # the sweep's candidates that assemble over the whole revolution
     pb, drawn = _draw(full, int(2.2 * n_proj) + 50)
     drawn = _rows_for(plan, pb.plan, drawn)
-    first, how = _first_call(revolutions_batch, lambda: run(drawn[:2]))
-    if how == "already loaded":
-        how = "already loaded: the four-bar's kernel"
+    first, how = _first_call(kernels_for(plan).batch, lambda: run(drawn[:2]))
     st, _, _ = run(drawn)
     pars = np.ascontiguousarray(drawn[st == 0][:n_proj])
     if pars.shape[0] < n_proj:
@@ -283,7 +284,7 @@ def sweep_case(sizes, repeat, rows):
                           omega1=pb.omega1, eps1=pb.eps1, gravity=pb.plan.gravity,
                           forces=spec.wants_forces)
     run = lambda p: pb.evaluate_rows(p, True)
-    first, how = _first_call(ks.evaluate_batch_parallel, lambda: run(pars[:2]))
+    first, how = _first_call(pb.kernels.evaluate, lambda: run(pars[:2]))
 
     # correct first: candidates of every kind (forces run, constraints missed, failed)
     case = "sweep (synthesis study)"
@@ -340,28 +341,38 @@ def _compare_sweep(case, label, got, status, metrics, ks):
 
 # ----------------------------------------------------------------- cold compile
 def _cold_probe():
-    """(Run in a fresh process with an empty numba cache.)  First calls of the
-    project's two kernels on tiny inputs; prints them as JSON."""
-    from pipeline.kernels import sweep as ks
-    from pipeline.kernels.batch import revolutions_batch
+    """(Run in a fresh process with empty caches.)  First calls of the
+    project's two kernels (the four-bar's generated ``batch`` and the synthesis
+    study's generated ``evaluate``) on tiny inputs, each with the generation
+    of its module; prints them as JSON."""
+    from pipeline.compiler import kernels_for
     from pipeline.scene import batch_revolutions
     from pipeline.study import load_study
     study = _kinematic_study(load_study(STUDIES / "warp_feed_fourbar.toml"))
-    pars = perturbed_rows(study.mechanism.compile(), (), 2)
-    t_batch, how_batch = _first_call(revolutions_batch,
-                                     lambda: batch_revolutions(study, pars, 12, 0, False))
+    plan = study.mechanism.compile()
+    pars = perturbed_rows(plan, (), 2)
+    t = time.perf_counter()
+    batch = kernels_for(plan).batch          # generate and import the module
+    gen_batch = time.perf_counter() - t
+    t_batch, how_batch = _first_call(batch, lambda: batch_revolutions(study, pars, 12, 0, False))
     pb, rows = _draw(load_study(STUDIES / "ov7_synthesis.toml"), 2)
-    t_sweep, how_sweep = _first_call(ks.evaluate_batch_parallel,
-                                     lambda: pb.evaluate_rows(rows, True))
+    t = time.perf_counter()
+    evaluate = pb.kernels.evaluate
+    gen_sweep = time.perf_counter() - t
+    t_sweep, how_sweep = _first_call(evaluate, lambda: pb.evaluate_rows(rows, True))
+    t_batch += gen_batch
+    t_sweep += gen_sweep
     print(json.dumps({"batch": [t_batch, how_batch], "sweep": [t_sweep, how_sweep]}))
 
 
 def cold_compile():
     """Seconds to the first result of each project kernel in a fresh process
-    whose numba cache is empty (the compile a new install pays once)."""
+    whose caches are empty (no generated module, no numba cache: the
+    generation and compile a new install pays once per mechanism)."""
     code = f"import sys; sys.path.insert(0, {str(HERE)!r}); import bench_throughput as b; b._cold_probe()"
     with tempfile.TemporaryDirectory() as cache:
-        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        env = dict(os.environ, NUMBA_CACHE_DIR=os.path.join(cache, "numba"),
+                   PIPELINE_CACHE_DIR=os.path.join(cache, "pipeline"))
         r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                            check=True)
     out = json.loads(r.stdout.strip().splitlines()[-1])

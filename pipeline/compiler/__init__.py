@@ -27,7 +27,7 @@ from pathlib import Path
 
 from .generate import generate
 
-LANES = 8                      # candidates per block in the sweep's lock-step path
+from ..kernels.config import LANE_WIDTH as LANES   # candidates per block of the lane path
 _LOCK = threading.Lock()
 _MODULES: dict[str, object] = {}
 _DIGEST: list[str] = []
@@ -68,13 +68,33 @@ def module_name(source: str) -> str:
     return "pipeline_mech_" + hashlib.sha256(source.encode()).hexdigest()[:20]
 
 
+def structure_key(plan, rocker=None) -> tuple:
+    """What the generated source depends on: the plan's structure (not its
+    parameter values) and the rocker; a cheap key for the modules in memory."""
+    arrays = (plan.codes, plan.gidx, plan.goff, plan.fixed_idx, plan.fixed_off, plan.link_a,
+              plan.link_b, plan.body_com, plan.body_turn, plan.body_mass_off, plan.joint_point,
+              plan.joint_bodies, plan.slide_bodies, plan.slide_dir, plan.slide_angle,
+              plan.load_body, plan.load_point)
+    return (tuple(a.tobytes() for a in arrays), plan.point_names, plan.par_names,
+            plan.group_names, plan.n_visible, plan.n_kinematic, plan.crank_body, plan.gravity,
+            tuple(rocker) if rocker is not None else None)
+
+
+_BY_STRUCTURE: dict[tuple, object] = {}
+
+
 def kernels_for(plan, rocker=None, name=""):
     """The generated kernels of ``plan``, imported (written first if new)."""
+    key = structure_key(plan, rocker)
+    mod = _BY_STRUCTURE.get(key)
+    if mod is not None:
+        return mod
     src = source_for(plan, rocker, name)
     mod_name = module_name(src)
     with _LOCK:
         mod = _MODULES.get(mod_name)
         if mod is not None:
+            _BY_STRUCTURE[key] = mod
             return mod
         folder = cache_dir()
         folder.mkdir(parents=True, exist_ok=True)
@@ -89,4 +109,5 @@ def kernels_for(plan, rocker=None, name=""):
         mod = importlib.import_module(mod_name)
         mod.SOURCE_PATH = str(path)
         _MODULES[mod_name] = mod
+        _BY_STRUCTURE[key] = mod
         return mod

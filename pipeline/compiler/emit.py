@@ -58,7 +58,7 @@ class Emitter:
         return []
 
     def title(self):
-        return f"group {self.g}: {type(self).__name__.lower()} {self.label!r}"
+        return f"group {self.g}: {type(self).__name__[:-len('Emitter')]} {self.label!r}"
 
     def careful(self):
         raise NotImplementedError
@@ -103,9 +103,17 @@ class RRREmitter(Emitter):
                 f"st, m = rrr(pos, d1, d2, {self.p(0)}, {self.p(1)}, {self.p(2)}, "
                 f"{self.k('L_AB')}, {self.k('L_CB')}, {self.k('W')}, order, sing, slack)"]
 
+    def derived(self):
+        # the lane form divides by nothing that is fixed per candidate
+        lab, lcb = self.k("L_AB"), self.k("L_CB")
+        return [(self.k("inv_cb"), f"1.0 / {lcb}"),
+                (self.k("inv_ab_cb"), f"1.0 / ({lab} * {lcb})"),
+                (self.k("k"), f"{lcb} * {lcb} - {lab} * {lab}")]
+
     def lanes(self):
         A, C, B = (self.n.point[self.pname(j)] for j in range(3))
         lab, lcb, w = (lane(self.k(x)) for x in ("L_AB", "L_CB", "W"))
+        inv_cb, inv_ab_cb, kk = (lane(self.k(x)) for x in ("inv_cb", "inv_ab_cb", "k"))
         return [
             f"# {self.title()}: {B} from {A} and {C}, cosine law without acos:",
             f"# C->B = L_CB (cos U r/|r| - W sin U n(r)/|r|), r = A - C, cos U = arg",
@@ -113,7 +121,7 @@ class RRREmitter(Emitter):
             f"ry = {A}y - {C}y",
             "r2 = rx * rx + ry * ry",
             "ir = 1.0 / math.sqrt(r2)",
-            f"cu = (r2 + {lcb} * {lcb} - {lab} * {lab}) * (0.5 * ir / {lcb})",
+            f"cu = (r2 + {kk}) * (0.5 * ir * {inv_cb})",
             "q = 1.0 - cu * cu",
             "bad = bad | (q < 0.0) | (r2 <= 0.0)",
             "su = math.sqrt(max(q, 0.0))",
@@ -121,7 +129,7 @@ class RRREmitter(Emitter):
             f"{B}y = {C}y + {lcb} * ir * (cu * ry - {w} * su * rx)",
             f"# margin |sin| of the angle at {B}",
             f"m = abs(({B}x - {A}x) * ({B}y - {C}y) - ({B}y - {A}y) * ({B}x - {C}x)) "
-            f"/ ({lab} * {lcb})",
+            f"* {inv_ab_cb}",
             "low = low | (not (m >= margin_safe))",
         ]
 

@@ -14,7 +14,8 @@ import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
 
-TASK_ROWS = 256          # candidates per task (a multiple of every lane width)
+TASK_ROWS = 256          # candidates per task (a multiple of every lane width; small: the
+                         # force stage falls unevenly, and threads must not idle)
 _POOLS: dict[int, ThreadPoolExecutor] = {}
 _LOCK = threading.Lock()
 

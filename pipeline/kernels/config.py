@@ -33,6 +33,9 @@ JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True)
 JIT_PARALLEL = dict(JIT, parallel=True)
 JIT_LANES = dict(JIT, fastmath=LANE_FASTMATH)
 
+# Candidates per block of the sweep's lock-step lane path (two AVX vectors).
+LANE_WIDTH = 8
+
 # ---- status codes (int8), ordered by how they are reported -----------------
 OK = 0
 NO_ASSEMBLY = 1       # cosine-law argument outside [-1, 1], block off its guide, ...
