@@ -77,7 +77,7 @@ def structure_key(plan, rocker=None) -> tuple:
               plan.load_body, plan.load_point)
     return (tuple(a.tobytes() for a in arrays), plan.point_names, plan.par_names,
             plan.group_names, plan.n_visible, plan.n_kinematic, plan.crank_body, plan.gravity,
-            tuple(rocker) if rocker is not None else None)
+            tuple(rocker) if rocker is not None else None, str(cache_dir()))
 
 
 _BY_STRUCTURE: dict[tuple, object] = {}
