@@ -273,21 +273,35 @@ class SweepFile:
 
     def write_chunk(self, f, chunk, x, status, metrics):
         lo, hi = self.spec.chunk_bounds(chunk)
-        f["candidates/params"][lo:hi] = x
-        f["candidates/status"][lo:hi] = status
-        f["candidates/fail_phi"][lo:hi] = np.rad2deg(metrics[:, ks.M_FAIL_PHI])
-        f["candidates/forces_evaluated"][lo:hi] = metrics[:, ks.M_FORCES_DONE] == 1.0
+        d = self._datasets(f)
+        d["candidates/params"][lo:hi] = x
+        d["candidates/status"][lo:hi] = status
+        d["candidates/fail_phi"][lo:hi] = np.rad2deg(metrics[:, ks.M_FAIL_PHI])
+        d["candidates/forces_evaluated"][lo:hi] = metrics[:, ks.M_FORCES_DONE] == 1.0
         cols = self._columns(metrics)
         for name, col in cols.items():
-            f[f"metrics/{name}"][lo:hi] = col
+            d[f"metrics/{name}"][lo:hi] = col
         G, cv = constraints(self.spec, metrics[:, ks.M_STROKE], metrics[:, ks.M_MARGIN],
                             status, self.has_margin)
-        f["candidates/constraints"][lo:hi] = G
-        f["candidates/cv"][lo:hi] = cv
+        d["candidates/constraints"][lo:hi] = G
+        d["candidates/cv"][lo:hi] = cv
         objectives = np.stack([cols[o] for o in self.spec.objectives], axis=1)
-        f["candidates/feasible"][lo:hi] = ((status == kc.OK) & (cv == 0)
+        d["candidates/feasible"][lo:hi] = ((status == kc.OK) & (cv == 0)
                                            & np.isfinite(objectives).all(axis=1))
-        f["progress/chunk_done"][chunk] = True
+        d["progress/chunk_done"][chunk] = True
+
+    def _datasets(self, f):
+        """The file's datasets by path, looked up once per open file (a path
+        lookup costs more than writing a chunk's column)."""
+        cache = getattr(self, "_open", None)
+        if cache is None or cache[0] is not f or not f.id.valid:
+            names = ["candidates/params", "candidates/status", "candidates/fail_phi",
+                     "candidates/forces_evaluated", "candidates/constraints", "candidates/cv",
+                     "candidates/feasible", "progress/chunk_done"]
+            names += [f"metrics/{m}" for m in self.spec.metrics]
+            cache = (f, {n: f[n] for n in names})
+            self._open = cache
+        return cache[1]
 
 
 # ----------------------------------------------------------------- running
@@ -374,10 +388,13 @@ def run_sweep(study, out, *, candidates=None, resume=False, scheduler=None, clie
     computed = 0
     try:
         with h5py.File(out, "r+") as f:
+            flushed = time.monotonic()
             for c, x, status, metrics in _chunks(problem, todo, scheduler, client, n_jobs):
-                journal.save(c, x, status, metrics)
+                journal.save(c, x, status, metrics)     # the source of truth, fsynced
                 sf.write_chunk(f, c, x, status, metrics)
-                f.flush()
+                if time.monotonic() - flushed > 1.0:    # the HDF5 file: once a second
+                    f.flush()
+                    flushed = time.monotonic()
                 computed += len(status)
                 bar.update(len(status))
                 if stop_after_chunks is not None and computed >= stop_after_chunks * spec.chunk_size:
