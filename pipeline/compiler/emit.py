@@ -164,13 +164,48 @@ class AttachEmitter(Emitter):
         return self.ix[1] >= 0
 
     def careful(self):
-        ia = self.p(1) if self.ix[1] >= 0 else "-1"
-        ib = self.p(2) if self.ix[2] >= 0 else "-1"
-        along = (f"rot({self.pname(1)}->{self.pname(2)}, angle, length)" if self.ix[1] >= 0
-                 else "length e(angle)")
-        return [f"# {self.title()}: {self.pname(3)} = {self.pname(0)} + {along}",
-                f"st, m = attach(pos, d1, d2, {self.p(0)}, {ia}, {ib}, {self.p(3)}, "
-                f"{self.k('angle')}, {self.k('length')}, order)"]
+        if self.ix[1] < 0:
+            return [f"# {self.title()}: {self.pname(3)} = {self.pname(0)} + length e(angle)",
+                    f"st, m = attach(pos, d1, d2, {self.p(0)}, -1, -1, {self.p(3)}, "
+                    f"{self.k('angle')}, {self.k('length')}, order)"]
+        base, a, b, out = (self.p(j) for j in (0, 1, 2, 3))
+        c, s_, L = f"{self.k('angle')}_cos", f"{self.k('angle')}_sin", self.k("length")
+        return [
+            f"# {self.title()}: {self.pname(3)} = {self.pname(0)} + rot({self.pname(1)}->"
+            f"{self.pname(2)}, angle, length):",
+            "# the link vector v turned by the hoisted cos/sin of the angle and scaled to the",
+            "# length (no library call); analogs from th' = (v x v') / |v|^2 and",
+            "# th'' = (v x v'') / |v|^2 - 2 (v . v') (v x v') / |v|^4",
+            f"vx = pos[{b}, 0] - pos[{a}, 0]",
+            f"vy = pos[{b}, 1] - pos[{a}, 1]",
+            "r2 = vx * vx + vy * vy",
+            "if not (r2 > 0.0):   # the link has no length: no direction",
+            "    for q in range(2):",
+            f"        pos[{out}, q] = math.nan",
+            f"        d1[{out}, q] = math.nan",
+            f"        d2[{out}, q] = math.nan",
+            "    st, m = SINGULAR, 0.0",
+            "else:",
+            f"    f = {L} / math.sqrt(r2)",
+            f"    ex = f * ({c} * vx - {s_} * vy)",
+            f"    ey = f * ({s_} * vx + {c} * vy)",
+            f"    pos[{out}, 0] = pos[{base}, 0] + ex",
+            f"    pos[{out}, 1] = pos[{base}, 1] + ey",
+            "    if order >= 1:",
+            f"        v1x = d1[{b}, 0] - d1[{a}, 0]",
+            f"        v1y = d1[{b}, 1] - d1[{a}, 1]",
+            "        cr1 = vx * v1y - vy * v1x",
+            "        th1 = cr1 / r2",
+            f"        d1[{out}, 0] = d1[{base}, 0] - th1 * ey",
+            f"        d1[{out}, 1] = d1[{base}, 1] + th1 * ex",
+            "        if order >= 2:",
+            f"            v2x = d2[{b}, 0] - d2[{a}, 0]",
+            f"            v2y = d2[{b}, 1] - d2[{a}, 1]",
+            "            th2 = (vx * v2y - vy * v2x) / r2 - 2.0 * (vx * v1x + vy * v1y) * cr1 / (r2 * r2)",
+            f"            d2[{out}, 0] = d2[{base}, 0] - th2 * ey - th1 * th1 * ex",
+            f"            d2[{out}, 1] = d2[{base}, 1] + th2 * ex - th1 * th1 * ey",
+            "    st, m = OK, 1.0",
+        ]
 
     def derived(self):
         return [(f"{self.k('angle')}_cos", f"math.cos({self.k('angle')})"),
