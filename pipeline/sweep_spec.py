@@ -10,6 +10,7 @@ count, the engine or the order in which chunks run.
 from __future__ import annotations
 
 import math
+import threading
 import warnings
 from dataclasses import dataclass
 
@@ -17,6 +18,12 @@ import numpy as np
 from scipy.stats import qmc
 
 SAMPLERS = ("uniform", "lhs", "sobol")
+
+# the Sobol engine of the last chunk drawn, per (seed, dimension): the next chunk
+# continues it (scrambling a new engine and fast-forwarding costs more than the
+# draw); any other chunk starts a fresh engine, so the points are the same
+_SOBOL: dict = {}
+_SOBOL_LOCK = threading.Lock()
 METRICS = {
     # name: (units, long name, needs forces)
     "dwell_error": ("1", "dwell error: best window range / revolution range", False),
@@ -167,12 +174,18 @@ def draw_unit(spec: SweepSpec, chunk: int) -> np.ndarray:
     lo, hi = spec.chunk_bounds(chunk)
     d = len(spec.variables)
     if spec.sampler == "sobol":
-        s = qmc.Sobol(d, scramble=True, seed=np.random.default_rng(spec.seed))
-        if lo:
-            s.fast_forward(lo)
-        with warnings.catch_warnings():  # chunks of one sequence need not be powers of 2
-            warnings.simplefilter("ignore", UserWarning)
-            return s.random(hi - lo)
+        with _SOBOL_LOCK:
+            key = (spec.seed, d)
+            s, at = _SOBOL.get(key, (None, -1))
+            if at != lo:      # not the continuation of the last chunk: a fresh engine
+                s = qmc.Sobol(d, scramble=True, seed=np.random.default_rng(spec.seed))
+                if lo:
+                    s.fast_forward(lo)
+            with warnings.catch_warnings():  # chunks of one sequence need not be powers of 2
+                warnings.simplefilter("ignore", UserWarning)
+                u = s.random(hi - lo)
+            _SOBOL[key] = (s, hi)
+            return u
     child = np.random.SeedSequence(spec.seed).spawn(spec.n_chunks)[chunk]
     rng = np.random.default_rng(child)
     if spec.sampler == "lhs":
