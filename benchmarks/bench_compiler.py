@@ -207,7 +207,12 @@ def measure(quick=False):
         np.arctan2(p[:, :, 1, 1], p[:, :, 1, 0] - fp[:, 3:4])    # the rocker angle
     rn = _rate(numpy_fourbar, n // 4, 360, rep)
     row("four-bar positions stage", "fourbar_pos", r1, ra, ri, rn,
-        note="incl. per-candidate setup and the dwell window")
+        note="the product's stage: setup per candidate, positions, rocker angle, dwell window")
+    # the same job as the yardstick's fourbar_pos and the NumPy baseline: positions and
+    # the rocker angle of every candidate (the lane walk), blocks set up beforehand
+    walk_rate = _walk_rate(stage_f, pars_f[:n], rep)
+    row("four-bar positions (the lane walk: positions + rocker angle)", "fourbar_pos",
+        walk_rate, float("nan"), None, rn, note="the yardstick's and NumPy's job")
 
     # ---- the default study, full metrics (kernel only; whole process below)
     pb_full = build_problem(syn, syn.sweep)
@@ -216,6 +221,30 @@ def measure(quick=False):
     ta = _rate(lambda: pb_full.evaluate_rows(pars_b, n_jobs=cores), nf, 1, rep) * 1e6
     ti = _rate(lambda: stage_b_full_interp(pb_full, pars_b), nf, 1, rep) * 1e6
     return rows, dict(full_1=t1, full_all=ta, full_interp_all=ti, cores=cores)
+
+
+def _walk_rate(stage, pars, rep):
+    """M candidate-positions/s of the generated lane walk alone over ``pars``."""
+    from pipeline.kernels.continuation import work
+    k = stage.kernels
+    L = k.LANES
+    npos = len(stage.phis)
+    blocks = []
+    pos, d1, d2, m, state, _ = work(k.N_POINTS, k.N_GROUPS, k.N_TRIADS)
+    for b in range(len(pars) // L):
+        S = np.empty((k.N_LANE_ROWS, L))
+        th = np.empty((npos + 1, L * k.THETA_COLS))
+        for lane in range(L):
+            k.setup_lane(pars, b * L + lane, lane, stage.phis, stage.tols, S, th, pos, d1, d2, m,
+                         state)
+        blocks.append((S, th))
+    ext = np.append(stage.phis, stage.phis[0])
+    c, s = np.cos(ext), np.sin(ext)
+
+    def run():
+        for S, th in blocks:
+            k.block_walk(S, th, c, s, stage.phis, stage.tols, stage.settings)
+    return _rate(run, len(blocks) * L, npos, rep)
 
 
 def stage_b_full_interp(pb, pars):

@@ -87,9 +87,12 @@ def dwell_lanes(theta, n, w, lanes, W5, err, start, full):
     hi = W5[4, 0]
     lo = W5[4, 1]
     bad = W5[4, 2]
+    # counters instead of j % n and j % b: an integer division per row costs
+    # more than the row's work
+    q = 0                         # j % b
     for j in range(m):
-        k = j % n
-        if j % b == 0:
+        k = j if j < n else j - n
+        if q == 0:
             for l in range(lanes):
                 pmax[j, l] = theta[k, l]
                 pmin[j, l] = theta[k, l]
@@ -97,9 +100,11 @@ def dwell_lanes(theta, n, w, lanes, W5, err, start, full):
             for l in range(lanes):
                 pmax[j, l] = max(pmax[j - 1, l], theta[k, l])
                 pmin[j, l] = min(pmin[j - 1, l], theta[k, l])
+        q = 0 if q == b - 1 else q + 1
+    q = (m - 1) % b
     for j in range(m - 1, -1, -1):
-        k = j % n
-        if j % b == b - 1 or j == m - 1:
+        k = j if j < n else j - n
+        if q == b - 1 or j == m - 1:
             for l in range(lanes):
                 smax[j, l] = theta[k, l]
                 smin[j, l] = theta[k, l]
@@ -107,6 +112,7 @@ def dwell_lanes(theta, n, w, lanes, W5, err, start, full):
             for l in range(lanes):
                 smax[j, l] = max(smax[j + 1, l], theta[k, l])
                 smin[j, l] = min(smin[j + 1, l], theta[k, l])
+        q = b - 1 if q == 0 else q - 1
     for l in range(lanes):
         hi[l] = theta[0, l]
         lo[l] = theta[0, l]
