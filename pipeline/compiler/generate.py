@@ -43,7 +43,6 @@ import numpy as np
 from numba import njit
 
 from pipeline.kernels.config import (JIT, JIT_LANES, OK, BRANCH_JUMP, NEWTON_MAXITER,
-                                     S_SLOPE_A, S_SLOPE_B, S_HAS_SLOPE,
                                      SINGULAR, NO_ASSEMBLY, BAD_GEOMETRY, S_A, S_B, S_DET_SIGN,
                                      S_ITERS, S_MARGIN, T_SINGULAR, T_ASSEMBLY_SLACK, T_SUBSTEP,
                                      T_MIN_STEP, T_NEWTON_TOL, T_JUMP, T_STEP_CHANGE, T_CLOSE)
@@ -318,45 +317,24 @@ CAREFUL = '''
 
 
     @njit(**JIT)
-    def careful_positions(par, phis, phi_close, tols, theta, out, k0, trail, signs, x0, y0,
-                          margin, iters):
+    def careful_positions(par, phis, phi_close, tols, theta, out):
         """Stage 1 of the sweep for one candidate on the careful path: assembly
         over the revolution (triangle, Newton, branch, closure), the rocker
         angles ``theta`` from the first position, the singularity margin and the
         Newton iterations.  Returns (status, margin, iterations); a failure
-        writes its crank angle to out[M_FAIL_PHI].
-
-        k0 = 0: from the start.  k0 >= 2: resume at position k0 from the lane
-        path, which vouched for positions 0 .. k0 - 1: theta[:k0], the class III
-        solutions trail[:k0] (e(a), e(b) per group), their det signs, the
-        rocker's first direction (x0, y0), the margin and the iterations so far;
-        the walk continues from the solution at k0 - 1 with the secant slope of
-        the last step, as it would have from the start."""
+        writes its crank angle to out[M_FAIL_PHI].  Always from the start: a
+        walk resumed midway decides its steps near a fold from another history,
+        and may name a failure differently."""
         n = phis.shape[0]
         K = constants(par)
         pos, d1, d2, margins, state, start_state = work(N_POINTS, N_GROUPS, N_TRIADS)
-        if k0 == 0:
-            phi_prev = walk_start(K, phis[0], state)
-            margin = math.inf
-            iters = 0.0
-        else:
-            phi_prev = phis[k0 - 1]
-            h = phis[k0 - 1] - phis[k0 - 2]
-            for j in range(N_TRIADS):
-                a = math.atan2(trail[k0 - 1, 4 * j + 1], trail[k0 - 1, 4 * j])
-                b = math.atan2(trail[k0 - 1, 4 * j + 3], trail[k0 - 1, 4 * j + 2])
-                start_triad(state, j, a, b)
-                state[j, S_DET_SIGN] = signs[j]
-                state[j, S_SLOPE_A] = wrap(a - math.atan2(trail[k0 - 2, 4 * j + 1],
-                                                          trail[k0 - 2, 4 * j])) / h
-                state[j, S_SLOPE_B] = wrap(b - math.atan2(trail[k0 - 2, 4 * j + 3],
-                                                          trail[k0 - 2, 4 * j + 2])) / h
-                state[j, S_HAS_SLOPE] = 1.0
-                start_triad(start_state, j, math.atan2(trail[0, 4 * j + 1], trail[0, 4 * j]),
-                            math.atan2(trail[0, 4 * j + 3], trail[0, 4 * j + 2]))
-                start_state[j, S_DET_SIGN] = signs[j]
+        phi_prev = walk_start(K, phis[0], state)
+        margin = math.inf
+        iters = 0.0
+        x0 = 0.0
+        y0 = 0.0
         n_steps = n + 1 if (N_TRIADS > 0 and math.isfinite(phi_close)) else n
-        for k in range(k0, n_steps):
+        for k in range(n_steps):
             phi = phis[k] if k < n else phi_close      # the last step closes the revolution
             st = advance(K, phi_prev, phi, 0, tols, state, pos, d1, d2, margins, False)
             phi_prev = phi
@@ -388,8 +366,7 @@ CAREFUL = '''
         for c in range(N_METRICS):
             out[c] = math.nan
         out[M_FORCES_DONE] = 0.0
-        st, margin, iters = careful_positions(par, phis, phi_close, tols, theta, out, 0, trail,
-                                              trail[0], 0.0, 0.0, math.inf, 0.0)
+        st, margin, iters = careful_positions(par, phis, phi_close, tols, theta, out)
         if st != OK:
             return st
         w = int(settings[SET_DWELL_W])
@@ -623,12 +600,6 @@ NO_LANES = '''
     THETA_COLS = 1
     R_margin = 0
     R_flag = 1
-    R_kfail = 0
-    R_rock0_x = 0
-    R_rock0_y = 0
-    R_margin_ok = 0
-    R_SIGN0 = 0
-    SIGN_STRIDE = 1
     NEWTON_STEPS = 0
 
 
@@ -729,15 +700,10 @@ PARALLEL = '''
             out[c] = math.nan
         out[M_FORCES_DONE] = 0.0
         fast = l >= 0 and S[R_flag, max(l, 0)] == 0.0
-        # a flagged lane: the careful path resumes where the lane stopped vouching
-        kf = int(S[R_kfail, l]) if (l >= 0 and not fast) else 0
-        k0 = kf if kf >= 2 else 0
-        n_copy = npos if fast else k0
-        for k in range(n_copy):
-            col[k] = theta[k, l]
-            for q in range(THETA_COLS - 1):
-                trail[k, q] = theta[k, (1 + q) * LANES + l]
         if fast:
+            for k in range(npos):
+                for q in range(THETA_COLS - 1):
+                    trail[k, q] = theta[k, (1 + q) * LANES + l]
             st = OK
             margin = S[R_margin, l]
             iters = float(NEWTON_STEPS * N_TRIADS * npos)
@@ -745,19 +711,7 @@ PARALLEL = '''
             s0 = start_k[l]
             f = full[l]
         else:
-            signs = np.empty(max(N_TRIADS, 1))
-            x0 = 0.0
-            y0 = 0.0
-            margin0 = math.inf
-            if k0 > 0:
-                for j in range(N_TRIADS):
-                    signs[j] = S[R_SIGN0 + SIGN_STRIDE * j, l]
-                x0 = S[R_rock0_x, l]
-                y0 = S[R_rock0_y, l]
-                margin0 = S[R_margin_ok, l]
-            st, margin, iters = careful_positions(pars[i], phis, phi_close, tols, col, out, k0,
-                                                  trail, signs, x0, y0, margin0,
-                                                  float(NEWTON_STEPS * N_TRIADS * k0))
+            st, margin, iters = careful_positions(pars[i], phis, phi_close, tols, col, out)
             e, s0, f = dwell_error(col, int(settings[SET_DWELL_W]), qmax, qmin)
         if st == OK:
             st = finish(pars[i], constants(pars[i]), phis, tols, settings, loads, trail, fast, e,

@@ -135,8 +135,7 @@ def lane_kernel(plan, names, ems, rocker, width):
         t = f"t{e.triad_row}"
         rows += [f"{t}_{x}" for x in ("ca", "sa", "cb", "sb", "dca", "dsa", "dcb", "dsb",
                                       "sign", "a0c", "a0s", "b0c", "b0s")]
-    rows += ["rock_x", "rock_y", "rock0_x", "rock0_y", "theta", "margin", "margin_ok", "flag",
-             "kfail"]
+    rows += ["rock_x", "rock_y", "theta", "margin", "flag"]
     piv, pt = names.point[rocker[0]], names.point[rocker[1]]
     src = [f"ROCKER_PIVOT = {names.I(rocker[0])}",
            f"ROCKER_POINT = {names.I(rocker[1])}",
@@ -147,9 +146,6 @@ def lane_kernel(plan, names, ems, rocker, width):
            f"N_LANE_ROWS = {len(rows)}",
            "# rows of the lane array S[row, lane]"]
     src += [f"R_{r} = {i}" for i, r in enumerate(rows)]
-    per = 13   # rows per class III group, in the order above
-    src += [f"R_SIGN0 = {'R_t0_sign' if triads else 0}   # det sign of group j: R_SIGN0 + SIGN_STRIDE * j",
-            f"SIGN_STRIDE = {per}"]
     src.append("")
     if not fast:
         src += [textwrap.dedent(NO_LANE_FORM)]
@@ -236,10 +232,6 @@ def lane_kernel(plan, names, ems, rocker, width):
     a("        S[R_rock_x, l] = 1.0")
     a("        S[R_rock_y, l] = 0.0")
     a("    S[R_flag, l] = 0.0")
-    a("    S[R_kfail, l] = -1.0")
-    a("    S[R_margin_ok, l] = S[R_margin, l]")
-    a("    S[R_rock0_x, l] = S[R_rock_x, l]")
-    a("    S[R_rock0_y, l] = S[R_rock_y, l]")
     last = "npos + 1" if triads else "npos"
     a(f"# ---- the lock-step walk: positions 1 .. n - 1{' and the closing position' if triads else ''}")
     a(f"walk(S.reshape(N_LANE_ROWS * LANES), S.shape[1], theta, cph_tab, sph_tab, {last}, tol,")
@@ -279,13 +271,7 @@ def lane_kernel(plan, names, ems, rocker, width):
         "S[R_rock_x, l] = ux", "S[R_rock_y, l] = uy", "S[R_theta, l] = th",
         "theta[k, l] = th",
         "S[R_margin, l] = margin",
-        "# the first position the lane cannot vouch for, and the margin before it: the",
-        "# careful path resumes there",
-        "fl = 1.0 if (bad | low | big) else 0.0",
-        "clean = S[R_flag, l] == 0.0",
-        "S[R_kfail, l] = float(k) if (clean & (fl > 0.0)) else S[R_kfail, l]",
-        "S[R_margin_ok, l] = margin if (clean & (fl == 0.0)) else S[R_margin_ok, l]",
-        "S[R_flag, l] = max(S[R_flag, l], fl)",
+        "S[R_flag, l] = max(S[R_flag, l], 1.0 if (bad | low | big) else 0.0)",
     ]
     # the walk sees S flat, rows LANES apart (a constant stride: rows provably
     # apart, so no run-time overlap checks), while the lane count stays a
@@ -301,8 +287,6 @@ def lane_kernel(plan, names, ems, rocker, width):
             a(f"    eb = S[R_{t}_b0c, l] * S[R_{t}_sb, l] - S[R_{t}_b0s, l] * S[R_{t}_cb, l]")
             a(f"    dot = S[R_{t}_a0c, l] * S[R_{t}_ca, l] + S[R_{t}_a0s, l] * S[R_{t}_sa, l]")
             a("    if not (abs(ea) <= close and abs(eb) <= close and dot > 0.0):")
-            a("        if S[R_flag, l] == 0.0:")
-            a("            S[R_kfail, l] = float(npos)     # only the closing step to redo")
             a("        S[R_flag, l] = 1.0")
     src += [""] + walk + ["", ""]
     # setup_lane: the per-lane part of ``body`` (between the loop header and the walk)
