@@ -294,28 +294,4 @@ def solve_revolution(codes, gidx, goff, par, fixed_idx, fixed_off, phis, phi_clo
     return overall
 
 
-@njit(**JIT)
-def link_angles(pos, d1, d2, ia, ib, order, out):
-    """Angle of every link ia[j] -> ib[j] and its analogs, for every position.
-
-    pos/d1/d2: (n_phi, n_points, 2); out: (n_phi, n_links, 3) = (phi, phi', phi'').
-    """
-    for k in range(pos.shape[0]):
-        for j in range(ia.shape[0]):
-            a = ia[j]
-            b = ib[j]
-            dx = pos[k, b, 0] - pos[k, a, 0]
-            dy = pos[k, b, 1] - pos[k, a, 1]
-            if order >= 1:
-                e2x = d2[k, b, 0] - d2[k, a, 0] if order >= 2 else 0.0
-                e2y = d2[k, b, 1] - d2[k, a, 1] if order >= 2 else 0.0
-                th, th1, th2 = angle_analogs(dx, dy, d1[k, b, 0] - d1[k, a, 0],
-                                      d1[k, b, 1] - d1[k, a, 1], e2x, e2y)
-                out[k, j, 0] = th
-                out[k, j, 1] = th1
-                out[k, j, 2] = th2 if order >= 2 else math.nan
-            else:
-                out[k, j, 0] = math.atan2(dy, dx)
-                out[k, j, 1] = math.nan
-                out[k, j, 2] = math.nan
-
+from pipeline.kernels.geometry import link_angles  # noqa: E402,F401  (the product's own)

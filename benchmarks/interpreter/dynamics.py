@@ -48,94 +48,9 @@ from pipeline.kernels.geometry import angle_analogs
 MM = 1e-3
 
 
-# ----------------------------------------------------------------- drive channels
-@njit(**JIT)
-def spline_value(tab, h, periodic, c, x):
-    """Channel c of a cubic spline table at x (nodes 0, h, 2h, ...).  Periodic
-    tables wrap x into [0, n h); the others extrapolate the end cubics."""
-    n = tab.shape[1]
-    if periodic:
-        x = x - n * h * math.floor(x / (n * h))
-    i = int(math.floor(x / h))
-    if i < 0:
-        i = 0
-    elif i > n - 1:
-        i = n - 1
-    u = x - i * h
-    return ((tab[c, i, 0] * u + tab[c, i, 1]) * u + tab[c, i, 2]) * u + tab[c, i, 3]
-
-
-@njit(**JIT)
-def channel(const, tab_phi, h_phi, tab_t, h_t, c, phi, t):
-    v = const[c]
-    if tab_phi.shape[1] > 0:
-        v += spline_value(tab_phi, h_phi, True, c, phi)
-    if tab_t.shape[1] > 0:
-        v += spline_value(tab_t, h_t, False, c, t)
-    return v
-
-
-@njit(**JIT)
-def drive(const, tab_phi, h_phi, tab_t, h_t, phi, t, loads_k):
-    """Fill loads_k (n_loads, 3) at (phi, t); return the driving moment M1."""
-    for k in range(loads_k.shape[0]):
-        for j in range(3):
-            loads_k[k, j] = channel(const, tab_phi, h_phi, tab_t, h_t, 1 + 3 * k + j, phi, t)
-    return channel(const, tab_phi, h_phi, tab_t, h_t, 0, phi, t)
-
-
-# ----------------------------------------------------------------- Lagrange terms
-@njit(**JIT)
-def lagrange_terms(pos, d1, d2, gravity, par, body_com, body_turn, body_mass_off,
-                   load_body, load_point, loads_k):
-    """(J [kg m^2], (1/2) dJ/dphi [kg m^2], Q without M1 [N m]) at one position
-    from its exact analogs (pos/d1/d2 in mm, mm/rad, mm/rad^2)."""
-    J = 0.0
-    half = 0.0
-    Q = 0.0
-    nb = body_com.shape[0]
-    for i in range(nb):
-        s = body_com[i]
-        m = par[body_mass_off[i]]
-        js = par[body_mass_off[i] + 1]
-        s1x = d1[s, 0] * MM
-        s1y = d1[s, 1] * MM
-        s2x = d2[s, 0] * MM
-        s2y = d2[s, 1] * MM
-        J += m * (s1x * s1x + s1y * s1y)
-        half += m * (s1x * s2x + s1y * s2y)
-        Q -= m * gravity * s1y
-        a = body_turn[i, 0]
-        if a >= 0 and js != 0.0:
-            b = body_turn[i, 1]
-            _, w1, w2 = angle_analogs(pos[b, 0] - pos[a, 0], pos[b, 1] - pos[a, 1],
-                                      d1[b, 0] - d1[a, 0], d1[b, 1] - d1[a, 1],
-                                      d2[b, 0] - d2[a, 0], d2[b, 1] - d2[a, 1])
-            J += js * w1 * w1
-            half += js * w1 * w2
-    for k in range(load_body.shape[0]):
-        p = load_point[k]
-        if p >= 0:
-            Q += (loads_k[k, 0] * d1[p, 0] + loads_k[k, 1] * d1[p, 1]) * MM
-        mom = loads_k[k, 2]
-        i = load_body[k]
-        a = body_turn[i, 0]
-        if mom != 0.0 and a >= 0:
-            b = body_turn[i, 1]
-            _, w1, _w2 = angle_analogs(pos[b, 0] - pos[a, 0], pos[b, 1] - pos[a, 1],
-                                       d1[b, 0] - d1[a, 0], d1[b, 1] - d1[a, 1],
-                                       d2[b, 0] - d2[a, 0], d2[b, 1] - d2[a, 1])
-            Q += mom * w1
-    return J, half, Q
-
-
-@njit(**JIT)
-def potential(pos, gravity, par, body_com, body_mass_off):
-    """Gravitational potential energy sum m g y_S [J] (y in mm -> m)."""
-    v = 0.0
-    for i in range(body_com.shape[0]):
-        v += par[body_mass_off[i]] * gravity * pos[body_com[i], 1] * MM
-    return v
+# drive channels, Lagrange terms and the potential: the product's own formulas
+# (unchanged by the compiler), so only the interpreter's walk is frozen here
+from pipeline.kernels.dynamics import drive, lagrange_terms, potential  # noqa: E402,F401
 
 
 # ----------------------------------------------------------------- one evaluation
