@@ -659,8 +659,9 @@ PARALLEL = '''
             if i < hi:
                 code = -1
                 if fast:
-                    code = setup_lane(pars, i, filled, phis, tols, S, theta, pos, d1, d2,
-                                      margins, state)
+                    # np.int64(...): no literal argument, one compiled version
+                    code = setup_lane(pars, i, np.int64(filled), phis, tols, S, theta, pos, d1,
+                                      d2, margins, state)
                 if code == OK:
                     idx[filled] = i
                     filled += 1
@@ -672,8 +673,9 @@ PARALLEL = '''
                     metrics[i, M_FAIL_PHI] = phis[0]
                     status[i] = code
                 else:
-                    settle_one(pars, i, -1, phis, phi_close, tols, settings, loads, S, theta,
-                               col, trail, err, start_k, full, qmax, qmin, status, metrics)
+                    settle_one(pars, i, np.int64(-1), phis, phi_close, tols, settings, loads,
+                               S, theta, col, trail, err, start_k, full, qmax, qmin, status,
+                               metrics)
             if filled == LANES or (i == hi and filled > 0):
                 for l in range(filled, LANES):     # pad a partial block with lane 0
                     for r in range(N_LANE_ROWS):
