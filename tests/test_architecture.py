@@ -58,7 +58,6 @@ def test_no_module_imports_a_module_that_imports_it_back():
 
 def test_the_cycle_check_finds_a_cycle(tmp_path, monkeypatch):
     """The check above can fail: a planted pair of modules importing each other."""
-    global PKG
     pkg = tmp_path / "pipeline"
     pkg.mkdir()
     (pkg / "__init__.py").write_text("")

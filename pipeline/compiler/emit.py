@@ -116,7 +116,7 @@ class RRREmitter(Emitter):
         inv_cb, inv_ab_cb, kk = (lane(self.k(x)) for x in ("inv_cb", "inv_ab_cb", "k"))
         return [
             f"# {self.title()}: {B} from {A} and {C}, cosine law without acos:",
-            f"# C->B = L_CB (cos U r/|r| - W sin U n(r)/|r|), r = A - C, cos U = arg",
+            "# C->B = L_CB (cos U r/|r| - W sin U n(r)/|r|), r = A - C, cos U = arg",
             f"rx = {A}x - {C}x",
             f"ry = {A}y - {C}y",
             "r2 = rx * rx + ry * ry",

@@ -22,7 +22,6 @@ import textwrap
 
 import numpy as np
 
-from ..kernels import config as kc
 from .emit import ClassIIIEmitter, _wrap_line, constants_of, emitters_for, literal
 from .forces import force_kernel
 from .lanes import lane_kernel

@@ -98,7 +98,7 @@ def _triad_lines(e, names):
         f"res = max(abs(f1) / (2.0 * {L46}), abs(f2) / (2.0 * {L57}))",
         f"conv = res <= tol * max({L46}, {L57})",
         f"m = abs(det) / (4.0 * {L23} * {L46} * {L57} * max({L34}, {L35}))",
-        f"sgn = 1.0 if det > 0.0 else -1.0",
+        "sgn = 1.0 if det > 0.0 else -1.0",
         f"big = big | (not conv) | (sgn != {r['sign']}) | (abs(corr_a) > jump) | "
         "(abs(corr_b) > jump)",
         "low = low | (not (m >= margin_safe))",
