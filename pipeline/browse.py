@@ -487,8 +487,6 @@ def _headroom(ax, values, frac=0.45):
 def draw_candidate(run: CandidateRun, path, caption_extra="") -> Path:
     """The design at 12 positions, its output motion over the OV-7 cyclogram and
     against the crank angle, and its joint reactions against the crank angle."""
-    import matplotlib
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.patches import Rectangle
 

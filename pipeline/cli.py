@@ -196,6 +196,8 @@ def build_parser():
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    import matplotlib
+    matplotlib.use("Agg")      # pictures go to files; a notebook keeps its own backend
     logging.basicConfig(level=logging.DEBUG if args.verbose else
                         (logging.WARNING if args.quiet else logging.INFO),
                         format="%(message)s")

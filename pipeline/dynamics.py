@@ -434,8 +434,6 @@ def dynamics_figure(case: CaseResult, path):
     rotation); the title gives the coefficient of non-uniformity."""
     from pathlib import Path
 
-    import matplotlib
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     c = case.case
     s = case.steady()

@@ -1,17 +1,15 @@
-"""Pictures a designer wants to see.  Matplotlib with the Agg backend; every
-function takes computed results and a path, and returns the path."""
+"""Pictures a designer wants to see.  Every function takes computed results and
+a path, and returns the path.  The backend is the caller's: the command line
+chooses Agg, a notebook keeps its own."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from .scene import real_motion  # noqa: E402
+from .scene import real_motion
 
 
 def _links_to_draw(plan, study):

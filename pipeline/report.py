@@ -119,8 +119,7 @@ def _formatters():
 
 
 def pareto_figure(data, ana) -> str:
-    import matplotlib
-    matplotlib.use("Agg")
+    import matplotlib.colors
     import matplotlib.pyplot as plt
     F, rank = data.F, ana.rank
     o = data.objectives
@@ -186,8 +185,6 @@ def pareto_figure(data, ana) -> str:
 
 
 def importance_figure(data, ana) -> str:
-    import matplotlib
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     objs = list(data.objectives)
     fig, axes = plt.subplots(1, len(objs), figsize=(5.2 * len(objs), 3.8), layout="constrained",
@@ -216,8 +213,6 @@ def importance_figure(data, ana) -> str:
 
 
 def design_figure(run) -> str:
-    import matplotlib
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from .plots import draw_positions
     fig, ax = plt.subplots(figsize=(3.6, 4.4), layout="constrained")

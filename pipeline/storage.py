@@ -44,12 +44,18 @@ def write_root_attrs(f, kind, study, **extra):
         f.attrs[k] = v
 
 
+# Compression of every chunked dataset: byte shuffle + gzip (deflate) at a low
+# level, which every HDF5 reader has (h5dump, HDFView, MATLAB, netCDF-C); LZF is
+# readable from h5py alone.
+COMPRESSION = dict(compression="gzip", compression_opts=1, shuffle=True)
+
+
 def put(group, name, data, units, long_name, **attrs):
     """Write one dataset with its units and long name."""
     data = np.asarray(data)
     kw = {}
     if data.ndim >= 1 and data.size > 4096:
-        kw = dict(compression="lzf", chunks=True)
+        kw = dict(COMPRESSION, chunks=True)
     d = group.create_dataset(name, data=data, **kw)
     d.attrs["units"] = units
     d.attrs["long_name"] = long_name

@@ -28,7 +28,7 @@ import numpy as np
 
 from .kernels import config as kc
 from .kernels import sweep as ks
-from .storage import FORMAT, ResultsError, put, status_table, write_root_attrs
+from .storage import COMPRESSION, FORMAT, ResultsError, put, status_table, write_root_attrs
 from .sweep_spec import METRICS, SweepSpec, draw_candidates, parameter_rows
 
 log = logging.getLogger("pipeline")
@@ -213,35 +213,35 @@ class SweepFile:
                              positions_per_revolution=spec.positions,
                              objectives=list(spec.objectives), complete=False)
             c = f.create_group("candidates")
-            d = c.create_dataset("params", (n, nv), "f8", chunks=(ch, nv), compression="lzf",
+            d = c.create_dataset("params", (n, nv), "f8", chunks=(ch, nv), **COMPRESSION,
                                  fillvalue=np.nan)
             d.attrs.update(units=json.dumps([v.units for v in spec.variables]),
                            long_name="design variables", names=[v.name for v in spec.variables],
                            params=[v.param for v in spec.variables],
                            low=[v.low for v in spec.variables],
                            high=[v.high for v in spec.variables])
-            d = c.create_dataset("status", (n,), "i1", chunks=(ch,), compression="lzf",
+            d = c.create_dataset("status", (n,), "i1", chunks=(ch,), **COMPRESSION,
                                  fillvalue=kc.NOT_EVALUATED)
             d.attrs.update(units="1", long_name="candidate status", codes=status_table())
             for name, units, long in (
                     ("fail_phi", "deg", "crank angle phi1 where the candidate failed"),
                     ("cv", "1", "summed constraint violation (0 = feasible, NaN = failed)")):
-                d = c.create_dataset(name, (n,), "f8", chunks=(ch,), compression="lzf",
+                d = c.create_dataset(name, (n,), "f8", chunks=(ch,), **COMPRESSION,
                                      fillvalue=np.nan)
                 d.attrs.update(units=units, long_name=long)
-            d = c.create_dataset("feasible", (n,), "?", chunks=(ch,), compression="lzf")
+            d = c.create_dataset("feasible", (n,), "?", chunks=(ch,), **COMPRESSION)
             d.attrs.update(units="1", long_name="status OK, constraints met, objectives finite")
-            d = c.create_dataset("forces_evaluated", (n,), "?", chunks=(ch,), compression="lzf")
+            d = c.create_dataset("forces_evaluated", (n,), "?", chunks=(ch,), **COMPRESSION)
             d.attrs.update(units="1", long_name="force stage run (skipped for candidates "
                                                 "already infeasible)")
             gnames = constraint_names(self.has_margin)
             d = c.create_dataset("constraints", (n, len(gnames)), "f8",
-                                 chunks=(ch, len(gnames)), compression="lzf", fillvalue=np.nan)
+                                 chunks=(ch, len(gnames)), **COMPRESSION, fillvalue=np.nan)
             d.attrs.update(units="mm, mm, 1", long_name="constraints g <= 0", names=gnames)
             m = f.create_group("metrics")
             for name in spec.metrics:
                 units, long, _ = METRICS[name]
-                d = m.create_dataset(name, (n,), "f8", chunks=(ch,), compression="lzf",
+                d = m.create_dataset(name, (n,), "f8", chunks=(ch,), **COMPRESSION,
                                      fillvalue=np.nan)
                 d.attrs.update(units=units, long_name=long)
             joints = list(plan.joint_names)

@@ -82,3 +82,20 @@ def test_kernels_import_only_numpy_numba_math():
             top = t.split(".")[0]
             assert top in allowed or t.startswith("pipeline.kernels") or top in (
                 "hashlib", "os", "pathlib"), f"{m} imports {t}"
+
+
+def test_importing_the_package_keeps_the_callers_matplotlib_backend():
+    """A notebook's backend is its own: only the command line chooses Agg."""
+    import subprocess
+    import sys
+    mods = sorted(m for m in _modules() if not m.startswith("pipeline.compiler"))
+    code = ("import importlib, matplotlib\n"
+            f"for m in {mods!r}:\n    importlib.import_module(m)\n"
+            "print(matplotlib.get_backend())")
+    env = dict(__import__("os").environ, MPLBACKEND="svg")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out[-1].lower() == "svg"
+    for m, f in _modules().items():
+        if m != "pipeline.cli":
+            assert "matplotlib.use(" not in f.read_text(), m

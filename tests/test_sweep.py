@@ -138,7 +138,7 @@ def test_file_contents(baseline, synthesis):
         p = f["candidates/params"]
         assert p.shape == (N, 9) and list(p.attrs["names"]) == [
             "L12", "P6x", "P6y", "L23", "L34", "L45", "L35", "L46", "L57"]
-        assert p.chunks[0] <= CHUNK and p.compression == "lzf"
+        assert p.chunks[0] <= CHUNK and p.compression == "gzip" and p.shuffle
         st_ = f["candidates/status"][()]
         assert st_.dtype == np.int8 and "NO_ASSEMBLY" in f["candidates/status"].attrs["codes"]
         assert set(np.unique(st_)) <= {kc.OK, kc.NEWTON_MAXITER, kc.BRANCH_JUMP, kc.BAD_GEOMETRY,
