@@ -8,7 +8,7 @@ that lives from one crank position to the next is a row of one array
 ``S[row, lane]`` (a single base pointer: no aliasing to rule out).
 
 The fast path is exact to rounding where it runs, and says where it cannot
-vouch for a lane (``redo`` bit set): an assembly failure or a margin below
+vouch for a lane (S[R_flag, lane] set): an assembly failure or a margin below
 ``settings[SET_MARGIN_SAFE]``, a Newton that did not reach the tolerance in
 its fixed count, a correction or a step larger than the careful walk allows,
 a change of sign of det J, a revolution that does not close, a rocker step
@@ -122,8 +122,9 @@ def _triad_lines(e, names):
 
 
 def lane_kernel(plan, names, ems, rocker, width):
-    """Source of ``evaluate_block`` for ``plan`` with the output rocker
-    ``rocker`` = (pivot, point) names, LANES = ``width``."""
+    """Source of the lane path of ``plan`` (``setup_lane``, ``walk``,
+    ``block_walk``, ``lanes_apply``) with the output rocker ``rocker`` =
+    (pivot, point) names, LANES = ``width``."""
     kin = ems[:plan.n_kinematic]
     fast = all(e.fast for e in kin)
     triads = [e for e in kin if isinstance(e, ClassIIIEmitter)]
@@ -151,89 +152,75 @@ def lane_kernel(plan, names, ems, rocker, width):
         src += [textwrap.dedent(NO_LANE_FORM)]
         return "\n".join(src) + "\n"
 
+    # setup_lane: one candidate into one lane (its constants, the careful solve at
+    # phis[0], the first increment of each class III group from its analogs)
     unpack = "(" + ", ".join(consts) + ("," if len(consts) == 1 else "") + ") = K"
-    body = []
-    a = body.append
-    a('"""Positions stage of the block of LANES candidates starting at row ``i0`` in')
-    a("lock-step; writes status and metrics of every lane it vouches for and returns")
-    a("the bit mask of the lanes to redo on the careful path.  ``theta`` (n + 1,")
-    a("LANES * THETA_COLS) receives the rocker angles and the class III solutions; S keeps")
-    a("each lane's margin.  The last block is padded with its last row.\"\"\"")
-    a("n = pars.shape[0]")
-    a("npos = phis.shape[0]")
-    a("redo = 0")
-    a("margin_safe = settings[SET_MARGIN_SAFE]")
-    a("tol = tols[T_NEWTON_TOL]")
-    a("jump = tols[T_JUMP]")
-    a("step_change = tols[T_STEP_CHANGE]")
-    a("close = tols[T_CLOSE]")
-    a("if npos < 3 or abs(phis[1] - phis[0]) > tols[T_SUBSTEP]:")
-    a("    return (1 << LANES) - 1")
-    a("pos, d1, d2, margins, state, _ = work(N_POINTS, N_GROUPS, N_TRIADS)")
-    a("# ---- per lane, once: the constants, and the careful solve at phis[0] (order 1)")
-    a("for l in range(LANES):")
-    a("    i = min(i0 + l, n - 1)")
-    a("    K = constants(pars[i])")
+    setup = []
+    a = setup.append
+    a("K = constants(pars[i])")
     for line in _split(unpack):
-        a("    " + line)
+        a(line)
     for c in consts:
-        a(f"    S[R_{c}, l] = {c}")
-    a("    st = advance(K, walk_start(K, phis[0], state), phis[0], 1, tols, state, pos, d1, d2,")
-    a("                 margins, False)")
-    a("    ok = st == OK")
+        a(f"S[R_{c}, l] = {c}")
+    a("st = advance(K, walk_start(K, phis[0], state), phis[0], 1, tols, state, pos, d1, d2,")
+    a("             margins, False)")
+    a("ok = st == OK")
     for e in triads:
         t = f"t{e.triad_row}"
         j = e.triad_row
         P2, P3, P4 = (names.I(e.pname(x)) for x in (0, 3, 4))
-        a(f"    # {e.title()}: e(a), e(b) at phis[0] and the first increment from the analogs")
-        a(f"    av = state[{j}, S_A]")
-        a(f"    bv = state[{j}, S_B]")
-        a(f"    S[R_{t}_ca, l] = math.cos(av)")
-        a(f"    S[R_{t}_sa, l] = math.sin(av)")
-        a(f"    S[R_{t}_cb, l] = math.cos(bv)")
-        a(f"    S[R_{t}_sb, l] = math.sin(bv)")
-        a(f"    S[R_{t}_a0c, l] = S[R_{t}_ca, l]")
-        a(f"    S[R_{t}_a0s, l] = S[R_{t}_sa, l]")
-        a(f"    S[R_{t}_b0c, l] = S[R_{t}_cb, l]")
-        a(f"    S[R_{t}_b0s, l] = S[R_{t}_sb, l]")
-        a(f"    S[R_{t}_sign, l] = state[{j}, S_DET_SIGN]")
+        a(f"# {e.title()}: e(a), e(b) at phis[0] and the first increment from the analogs")
+        a(f"av = state[{j}, S_A]")
+        a(f"bv = state[{j}, S_B]")
+        a(f"S[R_{t}_ca, l] = math.cos(av)")
+        a(f"S[R_{t}_sa, l] = math.sin(av)")
+        a(f"S[R_{t}_cb, l] = math.cos(bv)")
+        a(f"S[R_{t}_sb, l] = math.sin(bv)")
+        a(f"S[R_{t}_a0c, l] = S[R_{t}_ca, l]")
+        a(f"S[R_{t}_a0s, l] = S[R_{t}_sa, l]")
+        a(f"S[R_{t}_b0c, l] = S[R_{t}_cb, l]")
+        a(f"S[R_{t}_b0s, l] = S[R_{t}_sb, l]")
+        a(f"S[R_{t}_sign, l] = state[{j}, S_DET_SIGN]")
         for q, v in enumerate(("ca", "sa", "cb", "sb")):
-            a(f"    theta[0, {1 + 4 * j + q} * LANES + l] = S[R_{t}_{v}, l]")
-        a("    # a' = (P3' - P2') . n(a) / L23, b' = (P4' - P3') . n(b) / L34")
-        a(f"    ad = ((d1[{P3}, 1] - d1[{P2}, 1]) * math.cos(av) - (d1[{P3}, 0] - d1[{P2}, 0])"
+            a(f"theta[0, {1 + 4 * j + q} * LANES + l] = S[R_{t}_{v}, l]")
+        a("# a' = (P3' - P2') . n(a) / L23, b' = (P4' - P3') . n(b) / L34")
+        a(f"ad = ((d1[{P3}, 1] - d1[{P2}, 1]) * math.cos(av) - (d1[{P3}, 0] - d1[{P2}, 0])"
           f" * math.sin(av)) / {e.k('L23')}")
-        a(f"    bd = ((d1[{P4}, 1] - d1[{P3}, 1]) * math.cos(bv) - (d1[{P4}, 0] - d1[{P3}, 0])"
+        a(f"bd = ((d1[{P4}, 1] - d1[{P3}, 1]) * math.cos(bv) - (d1[{P4}, 0] - d1[{P3}, 0])"
           f" * math.sin(bv)) / {e.k('L34')}")
-        a("    h = phis[1] - phis[0]")
-        a("    ok = ok and math.isfinite(ad) and math.isfinite(bd)")
-        a("    if not ok:")
-        a("        ad = 0.0")
-        a("        bd = 0.0")
-        a(f"    S[R_{t}_dca, l] = math.cos(ad * h)")
-        a(f"    S[R_{t}_dsa, l] = math.sin(ad * h)")
-        a(f"    S[R_{t}_dcb, l] = math.cos(bd * h)")
-        a(f"    S[R_{t}_dsb, l] = math.sin(bd * h)")
-        a("    if not ok:")
-        a(f"        S[R_{t}_ca, l] = 1.0")
-        a(f"        S[R_{t}_sa, l] = 0.0")
-        a(f"        S[R_{t}_cb, l] = 1.0")
-        a(f"        S[R_{t}_sb, l] = 0.0")
-    a("    S[R_rock_x, l] = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]")
-    a("    S[R_rock_y, l] = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]")
-    a("    S[R_theta, l] = 0.0")
-    a("    theta[0, l] = 0.0")
+        a("h = phis[1] - phis[0]")
+        a("ok = ok and math.isfinite(ad) and math.isfinite(bd)")
+        a("if not ok:")
+        a("    ad = 0.0")
+        a("    bd = 0.0")
+        a(f"S[R_{t}_dca, l] = math.cos(ad * h)")
+        a(f"S[R_{t}_dsa, l] = math.sin(ad * h)")
+        a(f"S[R_{t}_dcb, l] = math.cos(bd * h)")
+        a(f"S[R_{t}_dsb, l] = math.sin(bd * h)")
+        a("if not ok:")
+        a(f"    S[R_{t}_ca, l] = 1.0")
+        a(f"    S[R_{t}_sa, l] = 0.0")
+        a(f"    S[R_{t}_cb, l] = 1.0")
+        a(f"    S[R_{t}_sb, l] = 0.0")
+    a("S[R_rock_x, l] = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]")
+    a("S[R_rock_y, l] = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]")
+    a("S[R_theta, l] = 0.0")
+    a("theta[0, l] = 0.0")
     if triads:
-        a("    S[R_margin, l] = min(" + ", ".join(f"state[{e.triad_row}, S_MARGIN]" for e in triads)
+        a("S[R_margin, l] = min(" + ", ".join(f"state[{e.triad_row}, S_MARGIN]" for e in triads)
           + ("" if len(triads) > 1 else ", math.inf") + ")")
     else:
-        a("    S[R_margin, l] = math.inf")
-    a("    if not ok or not math.isfinite(S[R_rock_x, l]):")
-    a("        redo |= 1 << l")
-    a("        S[R_rock_x, l] = 1.0")
-    a("        S[R_rock_y, l] = 0.0")
-    a("    S[R_flag, l] = 0.0")
+        a("S[R_margin, l] = math.inf")
+    a("if not ok or not math.isfinite(S[R_rock_x, l]):")
+    a("    ok = False")
+    a("    S[R_rock_x, l] = 1.0")
+    a("    S[R_rock_y, l] = 0.0")
+    a("S[R_flag, l] = 0.0")
+    # block_walk: the walk of a full block, then the closing checks
+    closing = []
+    a = closing.append
     last = "npos + 1" if triads else "npos"
-    a(f"# ---- the lock-step walk: positions 1 .. n - 1{' and the closing position' if triads else ''}")
+    a(f"# the lock-step walk: positions 1 .. n - 1{' and the closing position' if triads else ''}")
     a(f"walk(S.reshape(N_LANE_ROWS * LANES), S.shape[1], theta, cph_tab, sph_tab, {last}, tol,")
     a("     jump, step_change, margin_safe)")
     walk = ["@njit(**JIT_LANES)   # FMA contraction: the one kernel with it",
@@ -279,7 +266,7 @@ def lane_kernel(plan, names, ems, rocker, width):
     walk += ["            " + re.sub(r"S\[(R_\w+), l\]", r"S[\1 * LANES + l]", line)
              for line in inner]
     if triads:
-        a("# ---- the revolution closes on its start (the last row is phi_close)")
+        a("# the revolution closes on its start (the last row is phi_close)")
         a("for l in range(LANES):")
         for e in triads:
             t = f"t{e.triad_row}"
@@ -289,11 +276,6 @@ def lane_kernel(plan, names, ems, rocker, width):
             a("    if not (abs(ea) <= close and abs(eb) <= close and dot > 0.0):")
             a("        S[R_flag, l] = 1.0")
     src += [""] + walk + ["", ""]
-    # setup_lane: the per-lane part of ``body`` (between the loop header and the walk)
-    b0 = body.index("for l in range(LANES):")
-    b1 = next(k for k, x in enumerate(body) if x.startswith("# ---- the lock-step walk"))
-    setup = [x[4:] if x.startswith("    ") else x for x in body[b0 + 2:b1]]
-    setup = [x.replace("redo |= 1 << l", "ok = False") for x in setup]
     src += ["@njit(**JIT)",
             "def setup_lane(pars, i, l, phis, tols, S, theta, pos, d1, d2, margins, state):",
             '    """Candidate ``i`` into lane ``l``: its constants, and the careful solve at',
@@ -303,9 +285,6 @@ def lane_kernel(plan, names, ems, rocker, width):
     src += ["    # OK (0): in the lane; a failure at phis[0] is the careful path's own first",
             "    # step, reported as it is; -1: assembled, but the lane cannot start (careful)",
             "    return (0 if ok else -1) if st == OK else st", "", ""]
-    # block_walk: the walk and the closing checks of a full block
-    w0 = b1
-    closing = body[w0:]
     src += ["@njit(**JIT)",
             "def block_walk(S, theta, cph_tab, sph_tab, phis, tols, settings):",
             '    """The lock-step walk of a full block (every lane set up), then the closing',
