@@ -64,13 +64,12 @@ class SweepProblem:
     omega1: float
     eps1: float
     loads: np.ndarray
-    name: str = ""
 
     @property
     def kernels(self):
         """The mechanism's generated kernels (compiled on first use, then cached)."""
         from .compiler import kernels_for
-        return kernels_for(self.plan, self.rocker, self.name)
+        return kernels_for(self.plan, self.rocker)
 
     def settings(self):
         s = self.spec
@@ -111,7 +110,7 @@ def build_problem(study, spec: SweepSpec, tols=None) -> SweepProblem:
     return SweepProblem(
         spec=spec, plan=plan, phis=phis, phi_close=crank.phi0 + crank.rot * 2 * math.pi,
         tols=kc.default_tolerances() if tols is None else tols,
-        rocker=(out.rocker[0], out.rocker[1]), name=mech.name,
+        rocker=(out.rocker[0], out.rocker[1]),
         dwell_w=int(round(out.dwell_deg * spec.positions / 360)),
         omega1=crank.omega1, eps1=crank.eps1,
         loads=sample_loads(mech, phis) if mech.loads else np.zeros((len(phis), 0, 3)))

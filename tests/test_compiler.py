@@ -92,9 +92,10 @@ def _careful(problem, pars):
     metrics = np.full((n, ks.N_METRICS), np.nan)
     col = np.empty(len(problem.phis))
     trail = np.empty((len(problem.phis) + 1, 4))
+    q1, q2 = (np.empty(len(problem.phis) + problem.dwell_w + 1, np.int64) for _ in range(2))
     for i in range(n):
         status[i] = k.evaluate_careful(pars[i], problem.phis, problem.phi_close, problem.tols,
-                                       problem.settings(), problem.loads, col, trail,
+                                       problem.settings(), problem.loads, col, trail, q1, q2,
                                        metrics[i])
     return status, metrics
 

@@ -25,9 +25,9 @@ import sys
 import threading
 from pathlib import Path
 
+from ..kernels.config import LANE_WIDTH as LANES   # candidates per block of the lane path
 from .generate import generate
 
-from ..kernels.config import LANE_WIDTH as LANES   # candidates per block of the lane path
 _LOCK = threading.Lock()
 _MODULES: dict[str, object] = {}
 _DIGEST: list[str] = []
@@ -57,11 +57,10 @@ def library_digest() -> str:
     return _DIGEST[0]
 
 
-def source_for(plan, rocker=None, name="") -> str:
+def source_for(plan, rocker=None) -> str:
     """The generated source of ``plan``'s kernels (``rocker``: the output
     rocker's (pivot, point) names, for the sweep's positions stage)."""
-    return generate(plan, rocker=rocker, digest=library_digest(), lanes_width=LANES,
-                    mechanism=name)
+    return generate(plan, rocker=rocker, digest=library_digest(), lanes_width=LANES)
 
 
 def module_name(source: str) -> str:
@@ -83,13 +82,13 @@ def structure_key(plan, rocker=None) -> tuple:
 _BY_STRUCTURE: dict[tuple, object] = {}
 
 
-def kernels_for(plan, rocker=None, name=""):
+def kernels_for(plan, rocker=None):
     """The generated kernels of ``plan``, imported (written first if new)."""
     key = structure_key(plan, rocker)
     mod = _BY_STRUCTURE.get(key)
     if mod is not None:
         return mod
-    src = source_for(plan, rocker, name)
+    src = source_for(plan, rocker)
     mod_name = module_name(src)
     with _LOCK:
         mod = _MODULES.get(mod_name)

@@ -67,7 +67,7 @@ def _array(name, a, dtype):
     return f"{name} = np.array({body}, dtype=np.{dtype}).reshape({shape})"
 
 
-def generate(plan, rocker=None, digest="", lanes_width=8, mechanism="") -> str:
+def generate(plan, rocker=None, digest="", lanes_width=8) -> str:
     """Python source of the kernels of ``plan`` (``rocker``: the output
     rocker's (pivot, point) names, for the sweep's dwell and stroke)."""
     n = Names(plan)
@@ -359,19 +359,18 @@ CAREFUL = '''
 
 
     @njit(**JIT)
-    def evaluate_careful(par, phis, phi_close, tols, settings, loads, theta, trail, out):
+    def evaluate_careful(par, phis, phi_close, tols, settings, loads, theta, trail, qmax, qmin,
+                         out):
         """The sweep's stages for one candidate on the careful path; writes
-        ``out`` (N_METRICS) and returns its status."""
+        ``out`` (N_METRICS) and returns its status.  theta, trail, qmax, qmin:
+        work arrays (n, (n + 1, 4 N_TRIADS), and n + w + 1 integers twice)."""
         for c in range(N_METRICS):
             out[c] = math.nan
         out[M_FORCES_DONE] = 0.0
         st, margin, iters = careful_positions(par, phis, phi_close, tols, theta, out)
         if st != OK:
             return st
-        w = int(settings[SET_DWELL_W])
-        n = phis.shape[0]
-        err, start_k, full = dwell_error(theta, w, np.empty(n + w + 1, np.int64),
-                                         np.empty(n + w + 1, np.int64))
+        err, start_k, full = dwell_error(theta, int(settings[SET_DWELL_W]), qmax, qmin)
         return finish(par, constants(par), phis, tols, settings, loads, trail, False, err,
                       start_k, full, margin, iters, out)
 
@@ -582,10 +581,7 @@ CAREFUL = '''
             out_half[k] = half
             out_Q[k] = Q
             out_M1[k] = m1
-            pv = 0.0
-            for i in range(N_BODIES):
-                pv += par[BODY_MASS_OFF[i]] * GRAVITY * pos[BODY_COM[i], 1] * 1e-3
-            out_V[k] = pv
+            out_V[k] = potential(pos, GRAVITY, par, BODY_COM, BODY_MASS_OFF)
         return worst
 
 '''
@@ -695,28 +691,21 @@ PARALLEL = '''
         """Metrics of candidate i: from lane ``l`` of the block where the fast path
         vouched for it, else (l < 0, or the lane flagged) on the careful path; then
         the force stage where it applies."""
+        if not (l >= 0 and S[R_flag, max(l, 0)] == 0.0):
+            status[i] = evaluate_careful(pars[i], phis, phi_close, tols, settings, loads, col,
+                                         trail, qmax, qmin, metrics[i])
+            return
         npos = phis.shape[0]
         out = metrics[i]
         for c in range(N_METRICS):
             out[c] = math.nan
         out[M_FORCES_DONE] = 0.0
-        fast = l >= 0 and S[R_flag, max(l, 0)] == 0.0
-        if fast:
-            for k in range(npos):
-                for q in range(THETA_COLS - 1):
-                    trail[k, q] = theta[k, (1 + q) * LANES + l]
-            st = OK
-            margin = S[R_margin, l]
-            iters = float(NEWTON_STEPS * N_TRIADS * npos)
-            e = err[l]
-            s0 = start_k[l]
-            f = full[l]
-        else:
-            st, margin, iters = careful_positions(pars[i], phis, phi_close, tols, col, out)
-            e, s0, f = dwell_error(col, int(settings[SET_DWELL_W]), qmax, qmin)
-        if st == OK:
-            st = finish(pars[i], constants(pars[i]), phis, tols, settings, loads, trail, fast, e,
-                        s0, f, margin, iters, out)
+        for k in range(npos):
+            for q in range(THETA_COLS - 1):
+                trail[k, q] = theta[k, (1 + q) * LANES + l]
+        st = finish(pars[i], constants(pars[i]), phis, tols, settings, loads, trail, True,
+                    err[l], start_k[l], full[l], S[R_margin, l],
+                    float(NEWTON_STEPS * N_TRIADS * npos), out)
         status[i] = st
 
 
