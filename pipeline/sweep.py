@@ -270,9 +270,9 @@ class SweepFile:
     def _columns(self, metrics):
         return {name: metrics[:, COLUMN[name][0]] * COLUMN[name][1] for name in self.spec.metrics}
 
-    def write_chunk(self, f, chunk, x, status, metrics):
+    def write_chunk(self, d, chunk, x, status, metrics):
+        """Write one chunk's rows into the datasets ``d`` (``datasets(f)``)."""
         lo, hi = self.spec.chunk_bounds(chunk)
-        d = self._datasets(f)
         d["candidates/params"][lo:hi] = x
         d["candidates/status"][lo:hi] = status
         d["candidates/fail_phi"][lo:hi] = np.rad2deg(metrics[:, ks.M_FAIL_PHI])
@@ -289,18 +289,14 @@ class SweepFile:
                                            & np.isfinite(objectives).all(axis=1))
         d["progress/chunk_done"][chunk] = True
 
-    def _datasets(self, f):
-        """The file's datasets by path, looked up once per open file (a path
-        lookup costs more than writing a chunk's column)."""
-        cache = getattr(self, "_open", None)
-        if cache is None or cache[0] is not f or not f.id.valid:
-            names = ["candidates/params", "candidates/status", "candidates/fail_phi",
-                     "candidates/forces_evaluated", "candidates/constraints", "candidates/cv",
-                     "candidates/feasible", "progress/chunk_done"]
-            names += [f"metrics/{m}" for m in self.spec.metrics]
-            cache = (f, {n: f[n] for n in names})
-            self._open = cache
-        return cache[1]
+    def datasets(self, f):
+        """The open file's datasets by path, looked up once (a path lookup costs
+        more than writing a chunk's column)."""
+        names = ["candidates/params", "candidates/status", "candidates/fail_phi",
+                 "candidates/forces_evaluated", "candidates/constraints", "candidates/cv",
+                 "candidates/feasible", "progress/chunk_done"]
+        names += [f"metrics/{m}" for m in self.spec.metrics]
+        return {n: f[n] for n in names}
 
 
 # ----------------------------------------------------------------- running
@@ -377,8 +373,9 @@ def run_sweep(study, out, *, candidates=None, resume=False, scheduler=None, clie
     finished = set(journal.done())
     t0 = time.perf_counter()
     with h5py.File(out, "r+") as f:
+        d = sf.datasets(f)
         for c in sorted(finished):
-            sf.write_chunk(f, c, *journal.load(c))
+            sf.write_chunk(d, c, *journal.load(c))
         f.flush()
     todo = [c for c in range(spec.n_chunks) if c not in finished]
     if finished:
@@ -387,10 +384,11 @@ def run_sweep(study, out, *, candidates=None, resume=False, scheduler=None, clie
     computed = 0
     try:
         with h5py.File(out, "r+") as f:
+            d = sf.datasets(f)
             flushed = time.monotonic()
             for c, x, status, metrics in _chunks(problem, todo, scheduler, client, n_jobs):
                 journal.save(c, x, status, metrics)     # the source of truth, fsynced
-                sf.write_chunk(f, c, x, status, metrics)
+                sf.write_chunk(d, c, x, status, metrics)
                 if time.monotonic() - flushed > 1.0:    # the HDF5 file: once a second
                     f.flush()
                     flushed = time.monotonic()

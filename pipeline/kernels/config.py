@@ -30,7 +30,6 @@ LANE_FASTMATH = {"strict": False, "fast": _FAST_FLAGS}.get(_MODE, {"contract"})
 # error_model="numpy": a division by zero gives inf/nan instead of raising,
 # so a kernel never raises inside prange.
 JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True)
-JIT_PARALLEL = dict(JIT, parallel=True)
 JIT_LANES = dict(JIT, fastmath=LANE_FASTMATH)
 
 # Candidates per block of the sweep's lock-step lane path (two AVX vectors).
