@@ -11,13 +11,11 @@ import h5py
 import numpy as np
 
 from . import __version__
+from .errors import ResultsError  # noqa: F401  (raised by every reader of results)
 from .kernels import config as kc
 
 FORMAT = "pipeline-results"
 FORMAT_VERSION = "1.0"
-
-
-from .errors import ResultsError  # noqa: E402  (raised by every reader of results)
 
 
 def attr_text(v):
