@@ -158,7 +158,7 @@ def measure(quick=False):
     syn = load_study(syn_file)
     spec = dataclasses.replace(syn.sweep, metrics=("dwell_error", "stroke",
                                                     "singularity_margin"),
-                               objectives=("dwell_error",))
+                               objectives=("dwell_error",), chunk_size=1024)
     pb = build_problem(syn, spec)
     chunks = max(1, n // spec.chunk_size)
     x = np.concatenate([draw_candidates(spec, c) for c in range(chunks)])

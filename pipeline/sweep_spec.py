@@ -154,7 +154,7 @@ def parse_sweep(root, mech, output) -> SweepSpec:
         seed=sec.integer("seed", 0, minimum=0),
         sampler=sec.string("sampler", "sobol", choices=SAMPLERS),
         positions=positions,
-        chunk_size=sec.integer("chunk_size", 1024, minimum=1),
+        chunk_size=sec.integer("chunk_size", 10000, minimum=1),
         metrics=metrics, objectives=objectives,
         stroke_radius=sec.number("stroke_radius", positive=True),
         stroke_bounds=stroke, margin_min=margin_min,

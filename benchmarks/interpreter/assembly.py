@@ -27,7 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
-from pipeline.kernels.config import (JIT, OK, G_CRANK, G_RRR, G_RRP, G_RPR, G_CLASS3, G_ATTACH,
+from pipeline.kernels.config import (JIT_ALLOC as JIT, OK, G_CRANK, G_RRR, G_RRP, G_RPR, G_CLASS3, G_ATTACH,
                      S_A, S_B, S_ITERS, S_MARGIN, N_STATE,
                      T_SINGULAR, T_ASSEMBLY_SLACK, T_SUBSTEP, T_CLOSE, T_MIN_STEP,
                      BRANCH_JUMP, NEWTON_MAXITER, T_STEP_CHANGE, T_FIRST_STEP, S_SLOPE_A,

@@ -11,7 +11,7 @@ import numpy as np
 from numba import njit, prange
 
 from .assembly import advance, has_newton, init_state, kinematic_work, start_angle
-from pipeline.kernels.config import JIT, OK
+from pipeline.kernels.config import JIT_ALLOC as JIT, OK
 
 JIT_PARALLEL = dict(JIT, parallel=True)   # the interpreter's parfor batches
 from pipeline.kernels.forces import force_work, kinetostatics

@@ -42,7 +42,7 @@ import numpy as np
 from numba import njit
 
 from .assembly import advance, has_newton, init_state, kinematic_work, start_angle
-from pipeline.kernels.config import ACCELERATIONS, JIT, OK, SINGULAR
+from pipeline.kernels.config import ACCELERATIONS, JIT_ALLOC as JIT, OK, SINGULAR
 from pipeline.kernels.geometry import angle_analogs
 
 MM = 1e-3

@@ -41,11 +41,11 @@ import math
 import numpy as np
 from numba import njit
 
-from pipeline.kernels.config import (JIT, JIT_LANES, OK, BRANCH_JUMP, NEWTON_MAXITER,
+from pipeline.kernels.config import (JIT, JIT_ALLOC, JIT_LANES, OK, BRANCH_JUMP, NEWTON_MAXITER,
                                      SINGULAR, NO_ASSEMBLY, BAD_GEOMETRY, S_A, S_B, S_DET_SIGN,
                                      S_ITERS, S_MARGIN, T_SINGULAR, T_ASSEMBLY_SLACK, T_SUBSTEP,
                                      T_MIN_STEP, T_NEWTON_TOL, T_JUMP, T_STEP_CHANGE, T_CLOSE)
-from pipeline.kernels.continuation import (accept, closes, predict, restore, start_triad,
+from pipeline.kernels.continuation import (accept, closes, copy2, predict, restore, start_triad,
                                            step_limit, work, wrap)
 from pipeline.kernels.dynamics import drive, lagrange_terms, potential
 from pipeline.kernels.forces import applied_loads, force_work, gauss_solve, kinetostatics
@@ -265,7 +265,7 @@ CAREFUL = '''
         return phi0 if math.isnan(s) else s
 
 
-    @njit(**JIT)
+    @njit(**JIT_ALLOC)
     def revolution(par, phis, phi_close, order, tols, pos_out, d1_out, d2_out, status_out,
                    margin_out, iters_out):
         """The mechanism at the crank angles ``phis`` (rad) by continuation.
@@ -284,7 +284,7 @@ CAREFUL = '''
             st = advance(K, phi_prev, phis[k], order, tols, state, pos, d1, d2, margins, True)
             phi_prev = phis[k]
             if k == 0:
-                start_state[:, :] = state
+                copy2(state, start_state)
             status_out[k] = st
             it = 0.0
             for g in range(N_GROUPS):
@@ -292,11 +292,11 @@ CAREFUL = '''
             for j in range(N_TRIADS):
                 it += state[j, S_ITERS]
             iters_out[k] = it
-            pos_out[k] = pos
+            copy2(pos, pos_out[k])
             if order >= 1:
-                d1_out[k] = d1
+                copy2(d1, d1_out[k])
             if order >= 2:
-                d2_out[k] = d2
+                copy2(d2, d2_out[k])
             if overall == OK and st != OK:
                 overall = st
         if N_TRIADS > 0 and math.isfinite(phi_close):
@@ -306,7 +306,7 @@ CAREFUL = '''
         return overall
 
 
-    @njit(**JIT)
+    @njit(**JIT_ALLOC)
     def forces_curve(par, pos, d1, d2, omega1, eps1, loads, loads_out, r_out, slide_out, m_out):
         """forces_at every position k of pos/d1/d2 (n, n_points, 2); loads (n, n_loads, 3)."""
         work_a, work_b, _l, _r, _s = force_work(N_BODIES, N_JOINTS, N_SLIDES)
@@ -316,17 +316,16 @@ CAREFUL = '''
 
 
     @njit(**JIT)
-    def careful_positions(par, phis, phi_close, tols, theta, out):
+    def careful_positions(K, phis, phi_close, tols, theta, out, wk):
         """Stage 1 of the sweep for one candidate on the careful path: assembly
         over the revolution (triangle, Newton, branch, closure), the rocker
         angles ``theta`` from the first position, the singularity margin and the
         Newton iterations.  Returns (status, margin, iterations); a failure
         writes its crank angle to out[M_FAIL_PHI].  Always from the start: a
         walk resumed midway decides its steps near a fold from another history,
-        and may name a failure differently."""
+        and may name a failure differently.  wk: the walk's work arrays (work)."""
         n = phis.shape[0]
-        K = constants(par)
-        pos, d1, d2, margins, state, start_state = work(N_POINTS, N_GROUPS, N_TRIADS)
+        pos, d1, d2, margins, state, start_state = wk
         phi_prev = walk_start(K, phis[0], state)
         margin = math.inf
         iters = 0.0
@@ -348,7 +347,7 @@ CAREFUL = '''
             rx = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]
             ry = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]
             if k == 0:
-                start_state[:, :] = state
+                copy2(state, start_state)
                 x0 = rx
                 y0 = ry
             for j in range(N_TRIADS):
@@ -358,29 +357,40 @@ CAREFUL = '''
         return OK, margin, iters
 
 
-    @njit(**JIT)
+    @njit(**JIT_ALLOC)
     def evaluate_careful(par, phis, phi_close, tols, settings, loads, theta, trail, qmax, qmin,
                          out):
         """The sweep's stages for one candidate on the careful path; writes
         ``out`` (N_METRICS) and returns its status.  theta, trail, qmax, qmin:
-        work arrays (n, (n + 1, 4 N_TRIADS), and n + w + 1 integers twice)."""
-        for c in range(N_METRICS):
-            out[c] = math.nan
-        out[M_FORCES_DONE] = 0.0
-        st, margin, iters = careful_positions(par, phis, phi_close, tols, theta, out)
-        if st != OK:
-            return st
-        err, start_k, full = dwell_error(theta, int(settings[SET_DWELL_W]), qmax, qmin)
-        return finish(par, constants(par), phis, tols, settings, loads, trail, False, err,
-                      start_k, full, margin, iters, out)
+        work arrays (n, (n + 1, 4 N_TRIADS), and n + w + 1 integers twice).
+        One candidate alone (tests, tools); ``evaluate`` calls ``settle``."""
+        return settle(par, np.int64(-1), phis, phi_close, tols, settings, loads, theta,
+                      trail, qmax, qmin, 0.0, np.int64(-1), 0.0, 0.0,
+                      work(N_POINTS, N_GROUPS, N_TRIADS),
+                      force_work(N_BODIES, N_JOINTS, N_SLIDES), out)
 
 
     @njit(**JIT)
-    def finish(par, K, phis, tols, settings, loads, trail, use_trail, err, start_k, full, margin,
-               iters, out):
-        """Stroke, dwell and margin metrics, then the force stage (from the lane
-        path's solutions ``trail`` where ``use_trail``)."""
+    def settle(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qmax, qmin,
+               err, start_k, full, margin, wk, fw, out):
+        """Metrics of one candidate into ``out`` (N_METRICS); returns its status.
+        Where ``vouched`` (> 0) the lane path's dwell (err, start_k, full),
+        margin and class III solutions ``trail`` are taken; otherwise the
+        careful path walks the revolution first.  Then stroke, dwell and margin
+        metrics, and the force stage where it applies.  col, trail, qmax, qmin,
+        wk (work), fw (force_work): work arrays of the caller, so nothing is
+        allocated per candidate."""
+        for c in range(N_METRICS):
+            out[c] = math.nan
+        out[M_FORCES_DONE] = 0.0
         n = phis.shape[0]
+        K = constants(par)
+        iters = float(NEWTON_STEPS * N_TRIADS * n)
+        if vouched <= 0:
+            st, margin, iters = careful_positions(K, phis, phi_close, tols, col, out, wk)
+            if st != OK:
+                return st
+            err, start_k, full = dwell_error(col, int(settings[SET_DWELL_W]), qmax, qmin)
         out[M_STROKE] = settings[SET_STROKE_RADIUS] * full
         out[M_DWELL] = err
         out[M_DWELL_START] = phis[start_k] if start_k >= 0 else math.nan
@@ -397,24 +407,24 @@ CAREFUL = '''
         for attempt in range(2):
             # with the lane path's solutions first; if a direct solve refuses, the
             # careful walk (one call site: numba inlines per call site)
-            trail_ok = use_trail and attempt == 0
-            st = force_stage(par, K, phis, tols, settings, loads, out, trail, trail_ok)
+            trail_ok = vouched > 0 and attempt == 0
+            st = force_stage(par, K, phis, tols, settings, loads, out, trail, trail_ok, wk, fw)
             if st == OK or not trail_ok:
                 break
         return st
 
 
     @njit(**JIT)
-    def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail):
+    def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, fw):
         """Second analogs and kinetostatics at every position: the peaks.  With
         ``use_trail`` every position is solved directly from the class III
         solution the lane path found there (trail[k] = e(a), e(b) per group:
         Newton confirms it, the branch checks still apply); otherwise by the
-        careful continuation."""
+        careful continuation.  wk, fw: work arrays (work, force_work)."""
         omega1 = settings[SET_OMEGA1]
         eps1 = settings[SET_EPS1]
-        pos, d1, d2, margins, state, _ = work(N_POINTS, N_GROUPS, N_TRIADS)
-        work_a, work_b, loads_out, r_out, slide_out = force_work(N_BODIES, N_JOINTS, N_SLIDES)
+        pos, d1, d2, margins, state, _ = wk
+        work_a, work_b, loads_out, r_out, slide_out = fw
         phi_prev = walk_start(K, phis[0], state)
         peak = -1.0
         peak_j = -1
@@ -476,7 +486,7 @@ CAREFUL = '''
         return OK, eps
 
 
-    @njit(**JIT)
+    @njit(**JIT_ALLOC)
     def rk4(par, tols, const, tab_phi, h_phi, tab_t, h_t, damping, phi0, omega0, dt, n_sub,
             out_t, out_phi, out_omega, out_eps, tail_t, tail_phi, tail_omega, tail_eps):
         """Classical fixed-step RK4 for y = (phi1, omega1) from t = 0.
@@ -556,7 +566,7 @@ CAREFUL = '''
         return st, recorded
 
 
-    @njit(**JIT)
+    @njit(**JIT_ALLOC)
     def terms_curve(par, tols, const, tab_phi, h_phi, tab_t, h_t, phis, ts, out_J, out_half,
                     out_Q, out_M1, out_V, out_status):
         """J, (1/2) J', Q (without M1), M1 and V at the crank angles ``phis`` (and
@@ -616,7 +626,7 @@ NO_LANES = '''
 '''
 
 PARALLEL = '''
-    @njit(**JIT)
+    @njit(**JIT_ALLOC)
     def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metrics):
         """The sweep's stages for rows lo .. hi - 1 of ``pars``.  Candidates that
         assemble at the first crank position fill the lanes of a block, which
@@ -630,11 +640,12 @@ PARALLEL = '''
         w = int(settings[SET_DWELL_W])
         # the crank's cos/sin table, shared by every candidate (the last row is
         # the closing angle)
-        ext = np.empty(npos + 1)
-        ext[:npos] = phis
-        ext[npos] = phi_close if math.isfinite(phi_close) else phis[0]
-        cph = np.cos(ext)
-        sph = np.sin(ext)
+        cph = np.empty(npos + 1)
+        sph = np.empty(npos + 1)
+        for k in range(npos + 1):
+            phi = phis[k] if k < npos else (phi_close if math.isfinite(phi_close) else phis[0])
+            cph[k] = math.cos(phi)
+            sph[k] = math.sin(phi)
         # work arrays: once per call, never per candidate
         S = np.empty((N_LANE_ROWS, LANES))
         theta = np.empty((npos + 1, LANES * THETA_COLS))
@@ -647,7 +658,9 @@ PARALLEL = '''
         qmax = np.empty(npos + w + 1, np.int64)
         qmin = np.empty(npos + w + 1, np.int64)
         idx = np.empty(LANES, np.int64)
-        pos, d1, d2, margins, state, _ = work(N_POINTS, N_GROUPS, N_TRIADS)
+        wk = work(N_POINTS, N_GROUPS, N_TRIADS)
+        fw = force_work(N_BODIES, N_JOINTS, N_SLIDES)
+        pos, d1, d2, margins, state, _ = wk
         fast = lanes_apply(phis, tols)
         filled = 0
         for i in range(lo, hi + 1):          # i == hi: the last, partial block
@@ -668,9 +681,9 @@ PARALLEL = '''
                     metrics[i, M_FAIL_PHI] = phis[0]
                     status[i] = code
                 else:
-                    settle_one(pars, i, np.int64(-1), phis, phi_close, tols, settings, loads,
-                               S, theta, col, trail, err, start_k, full, qmax, qmin, status,
-                               metrics)
+                    status[i] = settle(pars[i], np.int64(-1), phis, phi_close, tols, settings,
+                                       loads, col, trail, qmax, qmin, 0.0, np.int64(-1), 0.0,
+                                       0.0, wk, fw, metrics[i])
             if filled == LANES or (i == hi and filled > 0):
                 for l in range(filled, LANES):     # pad a partial block with lane 0
                     for r in range(N_LANE_ROWS):
@@ -680,36 +693,19 @@ PARALLEL = '''
                 block_walk(S, theta, cph, sph, phis, tols, settings)
                 dwell_lanes(theta, npos, w, LANES, W5, err, start_k, full)
                 for l in range(filled):
-                    settle_one(pars, idx[l], l, phis, phi_close, tols, settings, loads, S, theta,
-                               col, trail, err, start_k, full, qmax, qmin, status, metrics)
+                    # the lane vouches for its candidate unless it flagged itself
+                    vouched = np.int64(1) if S[R_flag, l] == 0.0 else np.int64(0)
+                    for k in range(npos):
+                        for q in range(THETA_COLS - 1):
+                            trail[k, q] = theta[k, (1 + q) * LANES + l]
+                    status[idx[l]] = settle(pars[idx[l]], vouched, phis, phi_close, tols,
+                                            settings, loads, col, trail, qmax, qmin, err[l],
+                                            start_k[l], full[l], S[R_margin, l], wk, fw,
+                                            metrics[idx[l]])
                 filled = 0
 
 
-    @njit(**JIT)
-    def settle_one(pars, i, l, phis, phi_close, tols, settings, loads, S, theta, col, trail,
-                   err, start_k, full, qmax, qmin, status, metrics):
-        """Metrics of candidate i: from lane ``l`` of the block where the fast path
-        vouched for it, else (l < 0, or the lane flagged) on the careful path; then
-        the force stage where it applies."""
-        if not (l >= 0 and S[R_flag, max(l, 0)] == 0.0):
-            status[i] = evaluate_careful(pars[i], phis, phi_close, tols, settings, loads, col,
-                                         trail, qmax, qmin, metrics[i])
-            return
-        npos = phis.shape[0]
-        out = metrics[i]
-        for c in range(N_METRICS):
-            out[c] = math.nan
-        out[M_FORCES_DONE] = 0.0
-        for k in range(npos):
-            for q in range(THETA_COLS - 1):
-                trail[k, q] = theta[k, (1 + q) * LANES + l]
-        st = finish(pars[i], constants(pars[i]), phis, tols, settings, loads, trail, True,
-                    err[l], start_k[l], full[l], S[R_margin, l],
-                    float(NEWTON_STEPS * N_TRIADS * npos), out)
-        status[i] = st
-
-
-    @njit(**JIT)
+    @njit(**JIT_ALLOC)
     def batch(pars, lo, hi, phis, order, tols, point, with_forces, omega1, eps1, loads, status,
               peak_acc, peak_reaction):
         """For each parameter row: status over the revolution, the peak
@@ -717,12 +713,11 @@ PARALLEL = '''
         peak joint reaction (N).  NaN peaks with an OK status would be an
         unflagged failure (the stress suite checks there are none).  Rows lo ..
         hi - 1; the caller runs ranges on threads."""
+        pos, d1, d2, margins, state, _ = work(N_POINTS, N_GROUPS, N_TRIADS)
+        work_a, work_b, loads_out, r_out, slide_out = force_work(N_BODIES, N_JOINTS, N_SLIDES)
         for i in range(lo, hi):
             par = pars[i]
             K = constants(par)
-            pos, d1, d2, margins, state, _ = work(N_POINTS, N_GROUPS, N_TRIADS)
-            work_a, work_b, loads_out, r_out, slide_out = force_work(N_BODIES, N_JOINTS,
-                                                                     N_SLIDES)
             phi_prev = walk_start(K, phis[0], state)
             st = OK
             acc = 0.0

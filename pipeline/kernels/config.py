@@ -28,9 +28,16 @@ FASTMATH = _FAST_FLAGS if _MODE == "fast" else False
 LANE_FASTMATH = {"strict": False, "fast": _FAST_FLAGS}.get(_MODE, {"contract"})
 
 # error_model="numpy": a division by zero gives inf/nan instead of raising,
-# so a kernel never raises inside prange.
-JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True)
+# so a kernel never raises on a worker thread.
+# _nrt=False: a kernel allocates nothing and works on the arrays it is given,
+# so numba's reference counting is left out (every array passed to or unpacked
+# in a kernel was an atomic increment and decrement: 40 % of the careful walk's
+# time, seen with perf at NRT_incref/NRT_decref).  numba refuses to compile an
+# allocation in such a kernel, so the rule is checked, not trusted.
+# JIT_ALLOC: the few entry points that allocate work arrays, once per call.
+JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True, _nrt=False)
 JIT_LANES = dict(JIT, fastmath=LANE_FASTMATH)
+JIT_ALLOC = dict(JIT, _nrt=True)
 
 # Candidates per block of the sweep's lock-step lane path (two AVX vectors).
 LANE_WIDTH = 8

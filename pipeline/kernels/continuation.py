@@ -14,7 +14,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .config import (JIT, N_STATE, S_A, S_B, S_DET_SIGN, S_HAS_SLOPE, S_MARGIN, S_SLOPE_A,
+from .config import (JIT, JIT_ALLOC, N_STATE, S_A, S_B, S_DET_SIGN, S_HAS_SLOPE, S_MARGIN, S_SLOPE_A,
                      S_SLOPE_B, S_A_OLD, S_B_OLD, S_SIGN_OLD, T_CLOSE, T_FIRST_STEP,
                      T_STEP_CHANGE, T_SUBSTEP)
 
@@ -25,11 +25,20 @@ def wrap(x):
     return x - 2.0 * math.pi * math.floor((x + math.pi) / (2.0 * math.pi))
 
 
-@njit(**JIT)
+@njit(**JIT_ALLOC)
 def work(n_points, n_groups, n_triads):
     """Work arrays of one candidate's walk: (pos, d1, d2, margins, state, start_state)."""
     return (np.empty((n_points, 2)), np.empty((n_points, 2)), np.empty((n_points, 2)),
             np.empty(n_groups), np.empty((n_triads, N_STATE)), np.empty((n_triads, N_STATE)))
+
+
+@njit(**JIT)
+def copy2(src, dst):
+    """dst[:, :] = src by loops: a slice assignment would compile numba's
+    broadcast-error path (string formatting), seconds of compile time."""
+    for i in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[i, j] = src[i, j]
 
 
 @njit(**JIT)

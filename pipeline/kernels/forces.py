@@ -19,7 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .config import JIT
+from .config import JIT, JIT_ALLOC
 from .geometry import angle_analogs
 
 MM = 1e-3
@@ -61,7 +61,7 @@ def gauss_solve(a, b, n):
     return True
 
 
-@njit(**JIT)
+@njit(**JIT_ALLOC)
 def force_work(nb, nj, ns):
     """Work arrays of ``kinetostatics`` for nb bodies, nj joints, ns slides:
     (work_a, work_b, loads_out, r_out, slide_out); allocate once per candidate."""

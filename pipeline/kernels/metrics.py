@@ -8,6 +8,12 @@ from .config import JIT
 
 
 @njit(**JIT)
+def _sample(j, n):
+    """Sample of index j (0 <= j < 2n) of a cyclic revolution of n samples."""
+    return j if j < n else j - n
+
+
+@njit(**JIT)
 def dwell_error(theta, w, qmax, qmin):
     """Best dwell window of ``theta`` (n samples of one revolution, cyclic).
 
@@ -37,13 +43,15 @@ def dwell_error(theta, w, qmax, qmin):
     tmin = 0
     best = math.inf
     best_start = -1
+    # (j < n + w < 2n: the sample of j is j or j - n; no integer division in the
+    # loop, whose latency dominated the careful path)
     for j in range(n + w):
-        v = theta[j % n]
-        while tmax > hmax and theta[qmax[tmax - 1] % n] <= v:
+        v = theta[j if j < n else j - n]
+        while tmax > hmax and theta[_sample(qmax[tmax - 1], n)] <= v:
             tmax -= 1
         qmax[tmax] = j
         tmax += 1
-        while tmin > hmin and theta[qmin[tmin - 1] % n] >= v:
+        while tmin > hmin and theta[_sample(qmin[tmin - 1], n)] >= v:
             tmin -= 1
         qmin[tmin] = j
         tmin += 1
@@ -53,7 +61,7 @@ def dwell_error(theta, w, qmax, qmin):
                 hmax += 1
             while qmin[hmin] < start:
                 hmin += 1
-            r = theta[qmax[hmax] % n] - theta[qmin[hmin] % n]
+            r = theta[_sample(qmax[hmax], n)] - theta[_sample(qmin[hmin], n)]
             if r < best:
                 best = r
                 best_start = start
