@@ -221,7 +221,8 @@ def force_kernel(plan, names) -> str:
         body += [f"slide_out[{k}, 0] = x{2 * nj + 2 * k}",
                  f"slide_out[{k}, 1] = x{2 * nj + 2 * k + 1}"]
     body.append(f"return x{col_m}")
-    src = ["@njit(**JIT)", sig,
+    src = ["# inline='always': one call site in the sweep; as its own function numba would", '# build and link a library of everything it calls once more (compile time)',
+           "@njit(inline='always', **JIT)", sig,
            '    """Kinetostatics at one position: reactions r_out (n_joints, 2) [N], slides',
            "    (N [N], C [N*m]), loads at the centres of mass; returns M_bal [N*m] (NaN",
            "    everywhere when the system is singular or the kinematics is NaN).  The",

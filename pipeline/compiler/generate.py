@@ -315,7 +315,9 @@ CAREFUL = '''
                                  work_b, loads_out[k], r_out[k], slide_out[k])
 
 
-    @njit(**JIT)
+    # inline='always': one call site in the sweep; as its own function numba would
+    # build and link a library of everything it calls once more (compile time)
+    @njit(inline='always', **JIT)
     def careful_positions(K, phis, phi_close, tols, theta, out, wk):
         """Stage 1 of the sweep for one candidate on the careful path: assembly
         over the revolution (triangle, Newton, branch, closure), the rocker
@@ -414,7 +416,9 @@ CAREFUL = '''
         return st
 
 
-    @njit(**JIT)
+    # inline='always': one call site in the sweep; as its own function numba would
+    # build and link a library of everything it calls once more (compile time)
+    @njit(inline='always', **JIT)
     def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, fw):
         """Second analogs and kinetostatics at every position: the peaks.  With
         ``use_trail`` every position is solved directly from the class III

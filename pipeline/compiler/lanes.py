@@ -276,7 +276,8 @@ def lane_kernel(plan, names, ems, rocker, width):
             a("    if not (abs(ea) <= close and abs(eb) <= close and dot > 0.0):")
             a("        S[R_flag, l] = 1.0")
     src += [""] + walk + ["", ""]
-    src += ["@njit(**JIT)",
+    src += ["# inline='always': one call site in the sweep; as its own function numba would", '# build and link a library of everything it calls once more (compile time)',
+            "@njit(inline='always', **JIT)",
             "def setup_lane(pars, i, l, phis, tols, S, theta, pos, d1, d2, margins, state):",
             '    """Candidate ``i`` into lane ``l``: its constants, and the careful solve at',
             "    phis[0] (order 1: the first increment of the class III angles comes from",
@@ -285,7 +286,8 @@ def lane_kernel(plan, names, ems, rocker, width):
     src += ["    # OK (0): in the lane; a failure at phis[0] is the careful path's own first",
             "    # step, reported as it is; -1: assembled, but the lane cannot start (careful)",
             "    return (0 if ok else -1) if st == OK else st", "", ""]
-    src += ["@njit(**JIT)",
+    src += ["# inline='always': one call site in the sweep; as its own function numba would", '# build and link a library of everything it calls once more (compile time)',
+            "@njit(inline='always', **JIT)",
             "def block_walk(S, theta, cph_tab, sph_tab, phis, tols, settings):",
             '    """The lock-step walk of a full block (every lane set up), then the closing',
             '    checks; S[R_flag, l] != 0 marks a lane the careful path must redo."""',
