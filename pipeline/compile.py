@@ -36,21 +36,21 @@ def compile_study(study) -> Compiled:
     import numpy as np
 
     from .compiler import kernels_for
-    t = time.perf_counter()
+    from .dynamics import integrate, with_changes
+    from .scene import run_scene
+    from .sweep import build_problem
+    t = time.perf_counter()     # the kernels' generation, import and compilation (or load)
     mech = study.mechanism
     plan = mech.compile()
     if study.kind == "sweep":
-        from .sweep import build_problem
         pb = build_problem(study, dataclasses.replace(study.sweep, positions=36))
         pb.evaluate_rows(np.ascontiguousarray(plan.par[None, :]), parallel=False)
         mod = pb.kernels
     else:
-        from .scene import run_scene
         run_scene(dataclasses.replace(study, output=dataclasses.replace(
             study.output, table_positions=12, dense_positions=36)))
         mod = kernels_for(plan)
         if getattr(study, "dynamics", None) is not None and study.dynamics.cases:
-            from .dynamics import integrate, with_changes
             case = study.dynamics.cases[0]
             integrate(plan, mech, with_changes(case, t_end=case.sample_dt))
     return Compiled(study.name, study.kind, Path(mod.SOURCE_PATH), time.perf_counter() - t)
