@@ -36,6 +36,7 @@ import h5py
 import numpy as np
 
 from . import __version__
+from .files import replacing
 from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank
 from .storage import ResultsError, attr_text, open_results, put
@@ -297,90 +298,92 @@ def compute(data: SweepData, n_representatives=5, *, max_samples=MAX_MODEL_SAMPL
 
 
 def write(path, data: SweepData, res: dict, elapsed: float):
-    """Write (or replace) ``/analysis`` in the results file."""
+    """Write (or replace) ``/analysis`` of the results file: on a copy, renamed
+    over the file when complete, so a failure (a full disk, a kill) leaves the
+    sweep as it was."""
+    path = Path(path)
+    with replacing(path, copy_of=path) as tmp, h5py.File(tmp, "r+") as f:
+        _write_group(f, data, res, elapsed)
+
+
+def _write_group(f, data: SweepData, res: dict, elapsed: float):
     names, units = data.names, data.units
     obj, ou = list(data.objectives), data.objective_units
-    try:
-        f = h5py.File(path, "r+")
-    except OSError as e:
-        raise ResultsError(path, f"cannot write the analysis into the file ({e}); is it "
-                                 "read-only, or open in another program?") from None
-    with f:
-        if GROUP in f:
-            del f[GROUP]
-        g = f.create_group(GROUP)
-        g.attrs.update(
-            long_name="Pareto fronts, parameter importances and representative designs",
-            objectives=obj, sense="minimize", seed=data.seed, software="pipeline",
-            software_version=__version__,
-            created=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-            n_candidates=data.n, n_feasible=int(data.feasible.sum()),
-            n_fronts=int(res["rank"].max(initial=0)), elapsed_s=elapsed, complete=False)
-        put(g, "pareto_rank", res["rank"].astype(np.int32), "1",
-            "Pareto front of the candidate (1 = non-dominated; 0 = infeasible)")
-        put(g, "crowding", res["crowding"], "1",
-            "NSGA-II crowding distance within the candidate's front (inf at the ends)")
-        put(g, "knee", np.int64(res["knee"]), "1",
-            "candidate index of the knee of front 1 (-1: empty front)")
+    if GROUP in f:
+        del f[GROUP]
+    g = f.create_group(GROUP)
+    g.attrs.update(
+        long_name="Pareto fronts, parameter importances and representative designs",
+        objectives=obj, sense="minimize", seed=data.seed, software="pipeline",
+        software_version=__version__,
+        created=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        n_candidates=data.n, n_feasible=int(data.feasible.sum()),
+        n_fronts=int(res["rank"].max(initial=0)), elapsed_s=elapsed, complete=False)
+    put(g, "pareto_rank", res["rank"].astype(np.int32), "1",
+        "Pareto front of the candidate (1 = non-dominated; 0 = infeasible)")
+    put(g, "crowding", res["crowding"], "1",
+        "NSGA-II crowding distance within the candidate's front (inf at the ends)")
+    put(g, "knee", np.int64(res["knee"]), "1",
+        "candidate index of the knee of front 1 (-1: empty front)")
 
-        fr = g.create_group("front1")
-        fr.attrs["long_name"] = "non-dominated feasible designs, sorted by the first objective"
-        idx = res["front1"]
-        put(fr, "index", idx, "1", "candidate index")
-        put(fr, "objectives", data.F[idx].reshape(len(idx), len(obj)), json.dumps(ou),
-            "objectives (minimised)", names=obj)
-        put(fr, "params", data.params[idx].reshape(len(idx), len(names)), json.dumps(units),
-            "design variables", names=names)
-        put(fr, "crowding", res["crowding"][idx], "1", "crowding distance within front 1")
+    fr = g.create_group("front1")
+    fr.attrs["long_name"] = "non-dominated feasible designs, sorted by the first objective"
+    idx = res["front1"]
+    put(fr, "index", idx, "1", "candidate index")
+    put(fr, "objectives", data.F[idx].reshape(len(idx), len(obj)), json.dumps(ou),
+        "objectives (minimised)", names=obj)
+    put(fr, "params", data.params[idx].reshape(len(idx), len(names)), json.dumps(units),
+        "design variables", names=names)
+    put(fr, "crowding", res["crowding"][idx], "1", "crowding distance within front 1")
 
-        ref = res["reference"]
-        rg = g.create_group("reference")
-        rg.attrs["long_name"] = "the study's reference design among the candidates"
-        rg.attrs["feasibility"] = ref["note"]
-        put(rg, "objectives", ref["objectives"], json.dumps(ou), "objectives of the reference "
-            "design", names=obj)
-        put(rg, "feasible", np.bool_(ref["feasible"]), "1",
-            "the reference design meets the study's constraints")
-        put(rg, "rank", np.int32(ref["rank"]), "1", "front the reference design would join "
-            "among the feasible candidates (1 = nobody dominates it; 0 = objectives not finite)")
-        put(rg, "dominated_by_count", np.int64(len(ref["dominated_by"])), "1",
-            "number of feasible candidates that dominate the reference design")
-        put(rg, "dominated_by", ref["dominated_by"], "1",
-            "indices of the feasible candidates that dominate the reference design")
-        put(rg, "dominators_front1", ref["dominators_front1"], "1",
-            "indices of the front-1 members that dominate the reference design")
+    ref = res["reference"]
+    rg = g.create_group("reference")
+    rg.attrs["long_name"] = "the study's reference design among the candidates"
+    rg.attrs["feasibility"] = ref["note"]
+    put(rg, "objectives", ref["objectives"], json.dumps(ou), "objectives of the reference "
+        "design", names=obj)
+    put(rg, "feasible", np.bool_(ref["feasible"]), "1",
+        "the reference design meets the study's constraints")
+    put(rg, "rank", np.int32(ref["rank"]), "1", "front the reference design would join "
+        "among the feasible candidates (1 = nobody dominates it; 0 = objectives not finite)")
+    put(rg, "dominated_by_count", np.int64(len(ref["dominated_by"])), "1",
+        "number of feasible candidates that dominate the reference design")
+    put(rg, "dominated_by", ref["dominated_by"], "1",
+        "indices of the feasible candidates that dominate the reference design")
+    put(rg, "dominators_front1", ref["dominators_front1"], "1",
+        "indices of the front-1 members that dominate the reference design")
 
-        ig = g.create_group("importance")
-        ig.attrs["long_name"] = ("gradient-boosted tree model of each objective on the design "
-                                 "variables (feasible candidates): held-out R^2 and permutation "
-                                 "importances")
-        ig.attrs["variables"] = names
-        for o, m in res["models"].items():
-            og = ig.create_group(o)
-            og.attrs["fitted"] = m["fitted"]
-            og.attrs["reason"] = m.get("reason", "")
-            og.attrs["n_available"] = m["n_available"]
-            if not m["fitted"]:
-                continue
-            og.attrs.update(model=m["model"], target=m["target"], n_train=m["n_train"],
-                            n_test=m["n_test"], n_permutation=m["n_permutation"],
-                            n_repeats=N_REPEATS)
-            put(og, "mean", m["importance_mean"], "1", "permutation importance: mean drop of "
-                "the held-out R^2 when the variable is shuffled", names=names)
-            put(og, "std", m["importance_std"], "1", "permutation importance: standard "
-                "deviation over the repeats", names=names)
-            put(og, "r2_test", np.float64(m["r2_test"]), "1",
-                f"held-out R^2 of the model ({m['target']} target)")
-            put(og, "r2_train", np.float64(m["r2_train"]), "1",
-                f"training R^2 of the model ({m['target']} target)")
+    ig = g.create_group("importance")
+    ig.attrs["long_name"] = ("gradient-boosted tree model of each objective on the design "
+                             "variables (feasible candidates): held-out R^2 and permutation "
+                             "importances")
+    ig.attrs["variables"] = names
+    for o, m in res["models"].items():
+        og = ig.create_group(o)
+        og.attrs["fitted"] = m["fitted"]
+        og.attrs["reason"] = m.get("reason", "")
+        og.attrs["n_available"] = m["n_available"]
+        if not m["fitted"]:
+            continue
+        og.attrs.update(model=m["model"], target=m["target"], n_train=m["n_train"],
+                        n_test=m["n_test"], n_permutation=m["n_permutation"],
+                        n_repeats=N_REPEATS)
+        put(og, "mean", m["importance_mean"], "1", "permutation importance: mean drop of "
+            "the held-out R^2 when the variable is shuffled", names=names)
+        put(og, "std", m["importance_std"], "1", "permutation importance: standard "
+            "deviation over the repeats", names=names)
+        put(og, "r2_test", np.float64(m["r2_test"]), "1",
+            f"held-out R^2 of the model ({m['target']} target)")
+        put(og, "r2_train", np.float64(m["r2_train"]), "1",
+            f"training R^2 of the model ({m['target']} target)")
 
-        rp = g.create_group("representatives")
-        rp.attrs["long_name"] = ("front-1 designs nearest the k-means centroids of the "
-                                 "normalised front-1 objectives")
-        rp.attrs["method"] = f"KMeans(n_init={KMEANS_N_INIT}, random_state=seed)"
-        put(rp, "index", res["representatives"], "1", "candidate index")
-        put(rp, "cluster_size", res["cluster_size"], "1", "front-1 members in its cluster")
-        g.attrs["complete"] = True
+    rp = g.create_group("representatives")
+    rp.attrs["long_name"] = ("front-1 designs nearest the k-means centroids of the "
+                             "normalised front-1 objectives")
+    rp.attrs["method"] = f"KMeans(n_init={KMEANS_N_INIT}, random_state=seed)"
+    put(rp, "index", res["representatives"], "1", "candidate index")
+    put(rp, "cluster_size", res["cluster_size"], "1", "front-1 members in its cluster")
+    g.attrs["complete"] = True
 
 
 def summary(data: SweepData, res: dict, elapsed: float) -> dict:

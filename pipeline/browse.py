@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from .analysis import read_analysis, sweep_objectives, variable_units
+from .files import save_figure
 from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank
 from .storage import ResultsError, attr_text, open_results
@@ -615,9 +616,7 @@ def draw_candidate(run: CandidateRun, path, caption_extra="") -> Path:
         fig.text(0.5, 0.0, caption, ha="center", va="bottom", fontsize=9, style="italic",
                  wrap=True)
         fig.get_layout_engine().set(rect=(0, 0.025, 1, 0.975))
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
+    path = save_figure(fig, path, dpi=100)
     plt.close(fig)
     return path
 

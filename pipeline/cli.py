@@ -206,9 +206,15 @@ def main(argv=None) -> int:
     except _user_errors() as e:
         print(f"pipeline {args.command}: error: {e}", file=sys.stderr)
         return EXIT_USER_ERROR
+    except OSError as e:
+        # the operating system's word (no space left, read-only, locked): one line
+        # naming the file; every write is atomic, so earlier results are intact
+        from .files import os_error_text
+        print(f"pipeline {args.command}: error: {os_error_text(e)}", file=sys.stderr)
+        return EXIT_USER_ERROR
     except KeyboardInterrupt as e:
         # a sweep says how much is saved and how to resume
-        print(f"pipeline {args.command}: {e or 'interrupted'}", file=sys.stderr)
+        print(f"pipeline {args.command}: {str(e) or 'interrupted'}", file=sys.stderr)
         return 130
 
 

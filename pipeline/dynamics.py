@@ -36,6 +36,7 @@ import numpy as np
 from .kernels import config as kc
 from .compiler import kernels_for
 from .errors import StudyError
+from .files import safe_name, save_figure
 
 log = logging.getLogger("pipeline")
 
@@ -423,7 +424,7 @@ def motion_tables(group) -> dict:
     out = {}
     for name in group:
         g = group[name]
-        out[f"motion_{name}.csv"] = pd.DataFrame({
+        out[f"motion_{safe_name(name, 'case')}.csv"] = pd.DataFrame({
             "t_s": g["t"][()], "phi1_deg": g["phi1"][()], "omega1": g["omega1"][()],
             "eps1": g["eps1"][()]})
     return out
@@ -477,7 +478,7 @@ def dynamics_figure(case: CaseResult, path):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.suptitle(head, fontsize=10)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return Path(path)
 

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from .files import replacing
 from .storage import ResultsError, open_results
 
 
@@ -60,6 +61,7 @@ def export_csv(path, outdir) -> list[Path]:
 
 
 def _write(df, path):
-    df.to_csv(path, index=False, float_format="%.12g")
+    with replacing(path) as tmp:
+        df.to_csv(tmp, index=False, float_format="%.12g")
     return path
 

@@ -10,6 +10,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from .scene import real_motion
+from .files import save_figure
 
 
 def _links_to_draw(plan, study):
@@ -101,7 +102,7 @@ def scene_figure(res, path):
             axr.legend(fontsize=8, ncol=3)
             axr.set_title(f"omega1 = {crank.omega1:g} rad/s", fontsize=10)
     axr.set_xlabel("crank angle phi1 [deg]")
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return Path(path)
 
@@ -149,7 +150,7 @@ def forces_figure(res, path):
     axp.set_ylabel("Ry [N]")
     axp.grid(alpha=0.3)
     axp.set_title(f"Polar diagram of {fr.joint_names[j]} (most loaded joint)", fontsize=10)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return Path(path)
 

@@ -23,6 +23,7 @@ import numpy as np
 from . import __version__
 from .analysis import analyze, has_analysis, read_analysis, read_sweep
 from .browse import design_table, ranking, rerun_candidate
+from .files import write_text
 from .storage import attr_text, open_results
 from .sweep import status_counts
 
@@ -402,9 +403,6 @@ def write_report(path, out=None, top=20) -> dict:
         analyze(path)
     page = build_html(path, top=top)
     out = Path(out) if out else default_report_output(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_name(out.name + ".tmp")
-    tmp.write_text(page, encoding="utf-8")
-    tmp.replace(out)
+    write_text(out, page)
     info.update(report=str(out), size=f"{out.stat().st_size / 1024:.0f} KiB")
     return info

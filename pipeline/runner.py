@@ -6,6 +6,7 @@ import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .files import safe_name
 from .study import load_study
 
 log = logging.getLogger("pipeline")
@@ -20,7 +21,10 @@ class RunOutcome:
 
 
 def default_output(study):
-    return Path("results") / f"{study.name}.h5"
+    """results/<the study file's name>.h5: the study's ``name`` is a label,
+    never a path (only -o writes elsewhere)."""
+    stem = Path(study.path).stem if getattr(study, "path", None) else study.name
+    return Path("results") / f"{safe_name(stem, 'study')}.h5"
 
 
 def run_study(path, out=None, *, candidates=None, resume=False, scheduler=None, n_jobs=None,
@@ -55,7 +59,8 @@ def run_scene_study(study, out, pictures=True) -> RunOutcome:
             pics.append(plots.forces_figure(res, out.with_name(out.stem + "_forces.png")))
         for case in res.dynamics or ():
             from .dynamics import dynamics_figure
-            pics.append(dynamics_figure(case, out.with_name(f"{out.stem}_{case.name}.png")))
+            pics.append(dynamics_figure(
+                case, out.with_name(f"{out.stem}_{safe_name(case.name, 'case')}.png")))
     summary = {"status": kc.STATUS_NAMES[res.status],
                "table_positions": int(res.table.phi.shape[0]),
                "dense_positions": int(res.dense.phi.shape[0])}

@@ -10,6 +10,7 @@ import h5py
 import numpy as np
 
 from .kernels import config as kc
+from .files import replacing
 from .scene import real_motion
 from .storage import put, status_table, write_root_attrs
 
@@ -40,9 +41,8 @@ def write_scene(res, path):
     """Write a scene result; returns the path."""
     study = res.study
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     plan = res.plan
-    with h5py.File(path, "w") as f:
+    with replacing(path) as tmp, h5py.File(tmp, "w") as f:
         write_root_attrs(f, "scene", study, status=kc.STATUS_NAMES[res.status])
         m = f.create_group("mechanism")
         m.attrs["point_names"] = list(plan.point_names[:plan.n_visible])

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .errors import StudyError
+from .limits import MAX_POSITIONS, POSITIONS_WHY
 from .model import (RPR, RRP, RRR, Attach, Body, CentreOfMass, ClassIII, Crank, Load,
                     Mechanism, Slide)
 
@@ -55,7 +56,10 @@ class Section:
         v = self.raw(key, default)
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise self.error(key, f"expected a number, got {_show(v)}")
-        v = float(v)
+        try:
+            v = float(v)
+        except OverflowError:
+            raise self.error(key, "beyond the range of a 64-bit float (about 1.8e308)") from None
         if not math.isfinite(v):
             raise self.error(key, f"must be finite, got {v}")
         if positive and not v > 0:
@@ -64,12 +68,18 @@ class Section:
             raise self.error(key, "must not be zero")
         return v
 
-    def integer(self, key, default=_MISSING, minimum=None, choices=None):
+    def integer(self, key, default=_MISSING, minimum=None, choices=None, maximum=None,
+                why=""):
+        """An integer; ``maximum`` with ``why``: a limit and the reason for it."""
         v = self.raw(key, default)
         if isinstance(v, bool) or not isinstance(v, int):
             raise self.error(key, f"expected an integer, got {_show(v)}")
+        if not -2**63 <= v < 2**63:
+            raise self.error(key, f"{v} is beyond the range of a 64-bit integer")
         if minimum is not None and v < minimum:
             raise self.error(key, f"must be at least {minimum}, got {v}")
+        if maximum is not None and v > maximum:
+            raise self.error(key, f"at most {maximum:,} ({why}), got {v:,}")
         if choices is not None and v not in choices:
             raise self.error(key, f"must be one of {', '.join(map(str, choices))}, got {v}")
         return v
@@ -462,8 +472,10 @@ def parse_output(sec: Section, mech: Mechanism) -> OutputSpec:
     if analysis == "forces" and not mech.bodies:
         raise sec.error("analysis", "force analysis needs mass data: declare [[mechanism.bodies]]")
     out = OutputSpec(working_point=wp, links=links, link_labels=tuple(labels),
-                     table_positions=sec.integer("table_positions", 12, minimum=2),
-                     dense_positions=sec.integer("dense_positions", 360, minimum=4),
+                     table_positions=sec.integer("table_positions", 12, minimum=2,
+                                                 maximum=MAX_POSITIONS, why=POSITIONS_WHY),
+                     dense_positions=sec.integer("dense_positions", 360, minimum=4,
+                                                 maximum=MAX_POSITIONS, why=POSITIONS_WHY),
                      analysis=analysis, rocker=rocker,
                      dwell_deg=sec.number("dwell", 150.0, positive=True))
     if not out.dwell_deg < 360:

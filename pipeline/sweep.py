@@ -20,6 +20,7 @@ import math
 import os
 import shutil
 import time
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,6 +29,7 @@ import numpy as np
 
 from .kernels import config as kc
 from .kernels import sweep as ks
+from .limits import CHUNK_WHY, MAX_CHUNK
 from .storage import COMPRESSION, FORMAT, ResultsError, put, status_table, write_root_attrs
 from .sweep_spec import METRICS, SweepSpec, draw_candidates, parameter_rows
 
@@ -176,8 +178,13 @@ class Journal:
         return sorted(out)
 
     def load(self, chunk):
-        with np.load(self.dir / f"chunk_{chunk:07d}.npz") as z:
-            return z["x"], z["status"], z["metrics"]
+        p = self.dir / f"chunk_{chunk:07d}.npz"
+        try:
+            with np.load(p) as z:
+                return z["x"], z["status"], z["metrics"]
+        except (OSError, ValueError, KeyError, zipfile.BadZipFile) as e:
+            raise ResultsError(p, f"damaged journal chunk ({e}); delete it and run again with "
+                                  "--resume: only that chunk is computed again") from None
 
     def remove(self):
         shutil.rmtree(self.dir, ignore_errors=True)
@@ -354,11 +361,46 @@ def run_sweep(study, out, *, candidates=None, resume=False, scheduler=None, clie
             raise ValueError(f"--candidates must be at least 1, got {candidates}")
         spec = spec.with_candidates(candidates)
     if chunk_size is not None:
-        if chunk_size < 1:
-            raise ValueError(f"--chunk-size must be at least 1, got {chunk_size}")
+        if not 1 <= chunk_size <= MAX_CHUNK:
+            raise ValueError(f"--chunk-size must be between 1 and {MAX_CHUNK:,} ({CHUNK_WHY}), "
+                             f"got {chunk_size:,}")
         spec = replace(spec, chunk_size=chunk_size)
     scheduler = scheduler or spec.scheduler
     out = Path(out)
+    with RunLock(out):
+        return _run_locked(study, spec, out, resume, scheduler, client, n_jobs, progress,
+                           stop_after_chunks)
+
+
+class RunLock:
+    """One run per output file: a second run on the same file is refused at
+    once (an advisory lock on a hidden file beside it, released when the
+    process ends, however it ends)."""
+
+    def __init__(self, out: Path):
+        self.out = out
+        self.path = out.with_name(f".{out.name}.lock")
+
+    def __enter__(self):
+        import fcntl
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(self.fd)
+            raise ResultsError(self.out, "another run is writing this file; wait for it to "
+                                         "finish, or write to another file with -o") from None
+        return self
+
+    def __exit__(self, *exc):
+        import fcntl
+        fcntl.flock(self.fd, fcntl.LOCK_UN)
+        os.close(self.fd)
+
+
+def _run_locked(study, spec, out, resume, scheduler, client, n_jobs, progress,
+                stop_after_chunks):
     journal = Journal(out)
     _check_existing(out, journal, study, spec, resume)
     if resume and not journal.exists() and out.exists():
@@ -367,8 +409,31 @@ def run_sweep(study, out, *, candidates=None, resume=False, scheduler=None, clie
 
     problem = build_problem(study, spec)
     sf = SweepFile(out, study, problem)
-    if not journal.exists():
-        journal.start(manifest_for(study, spec))
+    fresh = not journal.exists()
+    own = scheduler is not None and client is None
+    if own:
+        client = _connect(scheduler)     # before anything is written
+    try:
+        if fresh:
+            journal.start(manifest_for(study, spec))
+        return _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress,
+                           stop_after_chunks)
+    except BaseException as e:
+        # a run that fails or is stopped before its first chunk leaves nothing behind
+        if fresh and not journal.done():
+            journal.remove()
+            out.unlink(missing_ok=True)
+            if isinstance(e, KeyboardInterrupt):
+                raise SweepInterrupted(f"{out}: interrupted before the first chunk finished; "
+                                       "nothing was written") from None
+        raise
+    finally:
+        if own:
+            client.close()
+
+
+def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress,
+                stop_after_chunks):
     sf.create()   # fresh, or rebuilt from the journal below
     finished = set(journal.done())
     t0 = time.perf_counter()
@@ -386,7 +451,7 @@ def run_sweep(study, out, *, candidates=None, resume=False, scheduler=None, clie
         with h5py.File(out, "r+") as f:
             d = sf.datasets(f)
             flushed = time.monotonic()
-            for c, x, status, metrics in _chunks(problem, todo, scheduler, client, n_jobs):
+            for c, x, status, metrics in _chunks(problem, todo, client, n_jobs):
                 journal.save(c, x, status, metrics)     # the source of truth, fsynced
                 sf.write_chunk(d, c, x, status, metrics)
                 if time.monotonic() - flushed > 1.0:    # the HDF5 file: once a second
@@ -406,7 +471,7 @@ def run_sweep(study, out, *, candidates=None, resume=False, scheduler=None, clie
     with h5py.File(out, "r+") as f:
         f.attrs["complete"] = True
         f.attrs["wall_time_s"] = wall
-        f.attrs["engine"] = "dask" if (scheduler or client) else "local"
+        f.attrs["engine"] = "dask" if client is not None else "local"
     journal.remove()
     summary = summarize(out)
     summary["wall_time"] = f"{wall:.1f} s"
@@ -426,10 +491,10 @@ def _progress(spec, done, enabled):
                 desc="sweep", dynamic_ncols=True)
 
 
-def _chunks(problem, todo, scheduler, client, n_jobs):
+def _chunks(problem, todo, client, n_jobs):
     """Yield (chunk, x, status, metrics) as chunks finish."""
-    if scheduler or client:
-        yield from _dask_chunks(problem, todo, scheduler, client)
+    if client is not None:
+        yield from _dask_chunks(problem, todo, client)
         return
     if n_jobs is not None and n_jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {n_jobs}")
@@ -447,26 +512,28 @@ def _chunks(problem, todo, scheduler, client, n_jobs):
             yield pending.result()
 
 
-def _dask_chunks(problem, todo, scheduler, client):
-    """The same kernels on a Dask cluster; dask is imported only here."""
+CONNECT_TIMEOUT = "20s"     # how long to wait for a Dask scheduler to answer
+
+
+def _connect(scheduler):
+    """A client of the Dask scheduler at ``scheduler``; dask is imported only here."""
     try:
-        from dask.distributed import Client, as_completed
+        from dask.distributed import Client
     except ImportError:  # pragma: no cover - depends on the installation
         raise ValueError("--scheduler needs dask: pip install 'pipeline[dask]'") from None
-    own = client is None
-    if own:
-        try:
-            client = Client(scheduler, timeout="20s")
-        except OSError as e:
-            raise ValueError(f"cannot reach the Dask scheduler {scheduler}: {e}") from None
     try:
-        remote = client.scatter(problem, broadcast=True)
-        futures = [client.submit(evaluate_chunk_task, remote, c, pure=False) for c in todo]
-        for fut in as_completed(futures):
-            yield fut.result()
-    finally:
-        if own:
-            client.close()
+        return Client(scheduler, timeout=CONNECT_TIMEOUT)
+    except (OSError, TimeoutError) as e:
+        raise ValueError(f"cannot reach the Dask scheduler {scheduler}: {e}") from None
+
+
+def _dask_chunks(problem, todo, client):
+    """The same kernels on the workers of a Dask ``client``."""
+    from dask.distributed import as_completed
+    remote = client.scatter(problem, broadcast=True)
+    futures = [client.submit(evaluate_chunk_task, remote, c, pure=False) for c in todo]
+    for fut in as_completed(futures):
+        yield fut.result()
 
 
 def status_counts(f) -> dict:

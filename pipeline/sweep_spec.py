@@ -17,6 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import qmc
 
+from .limits import (CANDIDATES_WHY, CHUNK_WHY, MAX_CANDIDATES, MAX_CHUNK, MAX_POSITIONS,
+                     POSITIONS_WHY)
+
 SAMPLERS = ("uniform", "lhs", "sobol")
 
 # the Sobol engine of the last chunk drawn, per (seed, dimension): the next chunk
@@ -86,7 +89,23 @@ class SweepSpec:
 
     def with_candidates(self, n):
         from dataclasses import replace
-        return replace(self, candidates=int(n))
+        n = int(n)
+        if not 1 <= n <= MAX_CANDIDATES:
+            raise ValueError(f"--candidates must be between 1 and {MAX_CANDIDATES:,} "
+                             f"({CANDIDATES_WHY}), got {n:,}")
+        return replace(self, candidates=n)
+
+
+def parameter_domain(name):
+    """(bound, inclusive, words) that a mechanism parameter's values must
+    respect, or None (coordinates, angles, offsets: any finite value)."""
+    key = name.rsplit(".", 1)[-1]
+    if key in ("mass", "J_S") or (name.startswith("S[") and key == "length"):
+        return (0.0, True, "a mass, a moment of inertia or a centre-of-mass distance (>= 0)")
+    if key in ("length", "guide_length", "W") or (key.startswith("L") and key[1:2] in
+                                                   "0123456789_"):
+        return (0.0, False, "a length (> 0)")
+    return None
 
 
 def parse_sweep(root, mech, output) -> SweepSpec:
@@ -109,6 +128,13 @@ def parse_sweep(root, mech, output) -> SweepSpec:
         high = v.number("max", ref + spread * abs(ref))
         if not low < high:
             raise v.error("max", f"the bounds are empty: min {low:g} >= max {high:g}")
+        domain = parameter_domain(param)
+        if domain is not None and not (low >= domain[0] if domain[1] else low > domain[0]):
+            if "min" in v.data:
+                raise v.error("min", f"{param} is {domain[2]}, but min is {low:g}")
+            raise sec.error("spread", f"{param} is {domain[2]}, but its default bounds reach "
+                                      f"{low:g} (reference {ref:g} -/+ spread {spread:g}); "
+                                      f"give variables.{name}.min and max")
         units = v.string("units", "deg" if param.endswith(("phiM0", "angle")) else "mm")
         v.done()
         variables.append(Variable(name, param, low, high, units))
@@ -143,18 +169,25 @@ def parse_sweep(root, mech, output) -> SweepSpec:
             p = mm.string(body)
             if p not in plan.par_names:
                 raise mm.error(body, f"no mechanism parameter {p!r}")
+            if not float(plan.par[plan.param(p)]) > 0.0:
+                raise mm.error(body, f"the masses scale with {p} / its reference value, which "
+                                     f"is {float(plan.par[plan.param(p)]):g}: choose a length "
+                                     "whose reference value is positive")
             mass_model.append(MassScaling(body, p))
         mm.done()
     if any(METRICS[m][2] for m in metrics) and not mech.bodies:
         raise sec.error("metrics", "force metrics need mass data: declare [[mechanism.bodies]]")
-    positions = sec.integer("positions", 360, minimum=12)
+    positions = sec.integer("positions", 360, minimum=12, maximum=MAX_POSITIONS,
+                            why=POSITIONS_WHY)
     spec = SweepSpec(
         variables=tuple(variables),
-        candidates=sec.integer("candidates", 10000, minimum=1),
+        candidates=sec.integer("candidates", 10000, minimum=1, maximum=MAX_CANDIDATES,
+                               why=CANDIDATES_WHY),
         seed=sec.integer("seed", 0, minimum=0),
         sampler=sec.string("sampler", "sobol", choices=SAMPLERS),
         positions=positions,
-        chunk_size=sec.integer("chunk_size", 10000, minimum=1),
+        chunk_size=sec.integer("chunk_size", 10000, minimum=1, maximum=MAX_CHUNK,
+                               why=CHUNK_WHY),
         metrics=metrics, objectives=objectives,
         stroke_radius=sec.number("stroke_radius", positive=True),
         stroke_bounds=stroke, margin_min=margin_min,

@@ -1,0 +1,290 @@
+"""Faults and hostile inputs: a full disk, a read-only folder, kill -9, a second
+run on the same file, damaged files, hostile names and impossible bounds.
+After each fault the earlier result reads back bit for bit, and the command
+line says what happened in one line (exit code 2, no traceback)."""
+
+import errno
+import hashlib
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import pytest
+
+import pipeline.files as files
+from pipeline.cli import main
+from pipeline.study import load_study
+from pipeline.sweep import RunLock, run_sweep
+
+ROOT = Path(__file__).resolve().parent.parent
+N = 2000
+
+
+def digest(path):
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def one_line_error(capsys, *needles):
+    err = capsys.readouterr().err.strip()
+    assert "Traceback" not in err
+    assert len(err.splitlines()) == 1, err
+    for n in needles:
+        assert n in err, (n, err)
+    return err
+
+
+@pytest.fixture(scope="module")
+def sweep_file(tmp_path_factory, studies):
+    study = load_study(studies / "ov7_synthesis.toml")
+    out = tmp_path_factory.mktemp("faults") / "sweep.h5"
+    run_sweep(study, out, candidates=N, chunk_size=500, progress=False)
+    return out
+
+
+@pytest.fixture
+def sweep_copy(sweep_file, tmp_path):
+    dst = tmp_path / "sweep.h5"
+    shutil.copy(sweep_file, dst)
+    return dst
+
+
+def study_variant(studies, tmp_path, name, edits, file_name=None):
+    """A copy of a shipped study with text replacements (old, new)."""
+    text = (studies / name).read_text()
+    for old, new in edits:
+        assert old in text, old
+        text = text.replace(old, new)
+    p = tmp_path / (file_name or name)
+    p.write_text(text)
+    return p
+
+
+def full_disk(monkeypatch, after=0):
+    """Every write through the atomic writer fails with ENOSPC (``after``
+    writes of the temporary file succeed first: the failure comes midway)."""
+    calls = {"n": 0}
+    real_fsync = files._fsync
+
+    def fsync(path):
+        calls["n"] += 1
+        if calls["n"] > after:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+        return real_fsync(path)
+    monkeypatch.setattr(files, "_fsync", fsync)
+
+
+# ------------------------------------------------------------ full disk, read-only folder
+def test_analyze_on_a_full_disk_keeps_the_sweep(sweep_copy, monkeypatch, capsys):
+    before = digest(sweep_copy)
+    full_disk(monkeypatch)
+    assert main(["analyze", str(sweep_copy)]) == 2
+    one_line_error(capsys, "No space left on device")
+    assert digest(sweep_copy) == before
+    assert not [p for p in sweep_copy.parent.iterdir() if ".partial" in p.name]
+
+
+def test_analyze_failing_midway_in_hdf5_keeps_the_sweep(sweep_copy, monkeypatch, capsys):
+    """The disk fills while HDF5 writes the analysis (inside h5py, not at the flush)."""
+    import pipeline.analysis as an
+    before = digest(sweep_copy)
+    real = an.put
+    count = {"n": 0}
+
+    def put(*a, **k):
+        count["n"] += 1
+        if count["n"] == 3:
+            raise OSError(errno.ENOSPC, "Unable to write dataset (errno = 28, error message = "
+                                        "'No space left on device')")
+        return real(*a, **k)
+    monkeypatch.setattr(an, "put", put)
+    assert main(["analyze", str(sweep_copy)]) == 2
+    one_line_error(capsys, "No space left on device")
+    assert digest(sweep_copy) == before
+
+
+def test_report_on_a_full_disk_keeps_the_sweep(sweep_copy, monkeypatch, capsys):
+    before = digest(sweep_copy)
+    full_disk(monkeypatch)
+    assert main(["report", str(sweep_copy)]) == 2      # it analyses first: that write fails
+    one_line_error(capsys, "No space left on device")
+    assert digest(sweep_copy) == before
+    assert not list(sweep_copy.parent.glob("*_report.html"))
+
+
+def test_scene_overwritten_on_a_full_disk_keeps_the_old_result(studies, tmp_path, monkeypatch,
+                                                               capsys):
+    out = tmp_path / "base.h5"
+    assert main(["run", str(studies / "ov7_base.toml"), "-o", str(out), "-q"]) == 0
+    before = {p.name: digest(p) for p in tmp_path.iterdir()}
+    full_disk(monkeypatch)
+    assert main(["run", str(studies / "ov7_base.toml"), "-o", str(out), "-q"]) == 2
+    one_line_error(capsys, "No space left on device", str(out.parent))
+    assert {p.name: digest(p) for p in tmp_path.iterdir()} == before
+    monkeypatch.undo()
+    assert main(["export", str(out), "--csv", str(tmp_path / "csv"), "-q"]) == 0
+
+
+def test_read_only_folder_is_one_line(studies, tmp_path, monkeypatch, capsys):
+    """A read-only file system refuses the rename (root ignores chmod, so the
+    refusal is injected where the operating system would give it)."""
+    def refuse(src, dst):
+        raise OSError(errno.EROFS, os.strerror(errno.EROFS), str(dst))
+    monkeypatch.setattr(files.os, "replace", refuse)
+    out = tmp_path / "ro" / "base.h5"
+    assert main(["run", str(studies / "ov7_base.toml"), "-o", str(out), "-q"]) == 2
+    one_line_error(capsys, "Read-only file system", "base.h5")
+    assert not out.exists()
+
+
+def test_export_into_a_full_disk_is_one_line(studies, tmp_path, monkeypatch, capsys):
+    out = tmp_path / "base.h5"
+    assert main(["run", str(studies / "ov7_base.toml"), "-o", str(out), "-q",
+                 "--no-pictures"]) == 0
+    full_disk(monkeypatch)
+    assert main(["export", str(out), "--csv", str(tmp_path / "csv"), "-q"]) == 2
+    one_line_error(capsys, "No space left on device", "points.csv")
+    assert not list((tmp_path / "csv").glob("*.csv"))
+
+
+# ------------------------------------------------------------ kill -9
+@pytest.mark.parametrize("delay", [0.5, 2.0, 3.5])
+def test_kill_during_analyze_leaves_a_readable_sweep(sweep_copy, delay):
+    """kill -9 at some point of `pipeline analyze`: the file is either the old
+    one (bit for bit) or the complete new one."""
+    before = digest(sweep_copy)
+    p = subprocess.Popen([sys.executable, "-m", "pipeline.cli", "analyze", str(sweep_copy),
+                          "-q"], cwd=sweep_copy.parent, stdout=subprocess.DEVNULL,
+                         stderr=subprocess.DEVNULL)
+    time.sleep(delay)
+    p.send_signal(signal.SIGKILL)
+    p.wait()
+    if digest(sweep_copy) != before:
+        with h5py.File(sweep_copy, "r") as f:
+            assert f["analysis"].attrs["complete"]
+    with h5py.File(sweep_copy, "r") as f:
+        assert f["candidates/status"].shape == (N,)
+
+
+# ------------------------------------------------------------ runs and journals
+def test_second_run_on_the_same_file_is_refused_at_once(studies, tmp_path, capsys):
+    out = tmp_path / "s.h5"
+    with RunLock(out):
+        t = time.perf_counter()
+        assert main(["run", str(studies / "ov7_synthesis.toml"), "-o", str(out),
+                     "--candidates", "100", "-q"]) == 2
+        assert time.perf_counter() - t < 5.0
+    one_line_error(capsys, "another run is writing")
+    assert not out.exists()
+
+
+def test_unreachable_scheduler_leaves_nothing(studies, tmp_path, monkeypatch, capsys):
+    pytest.importorskip("distributed")
+    import pipeline.sweep as sw
+    monkeypatch.setattr(sw, "CONNECT_TIMEOUT", "1s")
+    out = tmp_path / "s.h5"
+    assert main(["run", str(studies / "ov7_synthesis.toml"), "-o", str(out), "--candidates",
+                 "100", "--scheduler", "tcp://127.0.0.1:9", "-q"]) == 2
+    one_line_error(capsys, "cannot reach the Dask scheduler")
+    assert sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith(".")) == []
+    # and the retry is not blocked
+    assert main(["run", str(studies / "ov7_synthesis.toml"), "-o", str(out), "--candidates",
+                 "100", "-q"]) == 0
+
+
+def test_damaged_journal_chunk_is_one_line(studies, tmp_path, capsys):
+    study = load_study(studies / "ov7_synthesis.toml")
+    out = tmp_path / "s.h5"
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(study, out, candidates=1000, chunk_size=250, progress=False,
+                  stop_after_chunks=2)
+    chunk = sorted((tmp_path / "s.h5.parts").glob("chunk_*.npz"))[0]
+    chunk.write_bytes(chunk.read_bytes()[:100])
+    assert main(["run", str(studies / "ov7_synthesis.toml"), "-o", str(out), "--candidates",
+                 "1000", "--chunk-size", "250", "--resume", "-q"]) == 2
+    one_line_error(capsys, "damaged journal chunk", chunk.name)
+
+
+def test_damaged_results_file_is_one_line(tmp_path, capsys):
+    bad = tmp_path / "bad.h5"
+    bad.write_bytes(b"\x89HDF\r\n\x1a\n" + b"\0" * 64)
+    for cmd in (["browse", str(bad)], ["show", str(bad), "--candidate", "0"],
+                ["analyze", str(bad)], ["export", str(bad), "--csv", str(tmp_path)]):
+        assert main(cmd) == 2, cmd
+        one_line_error(capsys, "bad.h5")
+
+
+# ------------------------------------------------------------ where files go
+@pytest.mark.parametrize("name", ["../../escaped", "/tmp/abs_escaped", ""])
+def test_hostile_study_names_write_only_under_results(studies, tmp_path, monkeypatch, name):
+    study = study_variant(studies, tmp_path, "ov7_base.toml",
+                          [('name = "ov7_base"', f'name = "{name}"')], file_name="hostile.toml")
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    assert main(["run", str(study), "-q"]) == 0
+    written = sorted(str(p.relative_to(work)) for p in work.rglob("*") if p.is_file())
+    assert written and all(w.startswith("results/hostile") for w in written), written
+    assert not Path("/tmp/abs_escaped.h5").exists()
+    assert not (tmp_path / "escaped.h5").exists()
+
+
+def test_hostile_dynamics_case_name_is_refused(studies, tmp_path, capsys):
+    study = study_variant(studies, tmp_path, "takeup_dynamics.toml",
+                          [('name = "runup"', 'name = "../../runup"')])
+    assert main(["run", str(study), "-o", str(tmp_path / "r" / "t.h5"), "-q"]) == 2
+    one_line_error(capsys, "dynamics.cases[0].name")
+    assert not list(tmp_path.rglob("*.png")) and not list(tmp_path.parent.glob("runup*"))
+
+
+# ------------------------------------------------------------ inputs against physics
+@pytest.mark.parametrize("edits, needles", [
+    ([('L12 = { param = "crank.length" }',
+       'L12 = { param = "crank.length", min = -60.0, max = 60.0 }')],
+     ["sweep.variables.L12.min", "a length (> 0)", "-60"]),
+    ([('L12 = { param = "crank.length" }',
+       'L12 = { param = "crank.length", min = 0.0, max = 60.0 }')],
+     ["sweep.variables.L12.min", "a length (> 0)"]),
+    ([("spread = 0.2 ", "spread = 5.0 ")], ["sweep.spread", "a length (> 0)"]),
+    ([('"crank 1-2" = "crank.length"', '"crank 1-2" = "P1.x"')],
+     ["sweep.mass_model", "reference value", "is 0"]),
+    ([("candidates = 250000 ", "candidates = 1000000000000 ")],
+     ["sweep.candidates", "at most 1,000,000,000"]),
+    ([("positions = 360 ", "positions = 1000000000 ")], ["sweep.positions", "at most 100,000"]),
+    ([("chunk_size = 10000 ", "chunk_size = 100000000 ")], ["sweep.chunk_size", "at most"]),
+    ([("seed = 20261121", "seed = 100000000000000000000")], ["sweep.seed", "64-bit integer"]),
+    ([("spread = 0.2 ", "spread = 1e400 ")], ["spread"]),
+])
+def test_impossible_sweeps_are_refused_at_once(studies, tmp_path, capsys, edits, needles):
+    study = study_variant(studies, tmp_path, "ov7_synthesis.toml", edits)
+    t = time.perf_counter()
+    assert main(["run", str(study), "-o", str(tmp_path / "x.h5"), "-q"]) == 2
+    assert time.perf_counter() - t < 1.0
+    one_line_error(capsys, str(study), *needles)
+    assert not (tmp_path / "x.h5").exists()
+
+
+def test_too_many_candidates_on_the_command_line(studies, tmp_path, capsys):
+    t = time.perf_counter()
+    assert main(["run", str(studies / "ov7_synthesis.toml"), "-o", str(tmp_path / "x.h5"),
+                 "--candidates", str(10 ** 12), "-q"]) == 2
+    assert time.perf_counter() - t < 1.0
+    one_line_error(capsys, "--candidates", "1,000,000,000")
+
+
+def test_scene_positions_limit(studies, tmp_path, capsys):
+    text = (studies / "ov7_base.toml").read_text()
+    m = re.search(r"^dense_positions = \d+", text, re.M)
+    if m:
+        text = text.replace(m.group(0), "dense_positions = 1000000000")
+    else:
+        text = text.replace("[output]\n", "[output]\ndense_positions = 1000000000\n")
+    study = tmp_path / "big.toml"
+    study.write_text(text)
+    assert main(["run", str(study), "-o", str(tmp_path / "x.h5"), "-q"]) == 2
+    one_line_error(capsys, "dense_positions", "at most 100,000")
