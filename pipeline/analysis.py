@@ -258,7 +258,7 @@ def representatives(F, front_idx, k, seed) -> tuple[np.ndarray, np.ndarray]:
 def _study_spec(data: SweepData):
     """The study's sweep spec, rebuilt from the TOML stored in the file (None if
     the file has none)."""
-    study = stored_study(data.attrs)
+    study = stored_study(data.attrs, data.path)
     return study.sweep if study is not None else None
 
 

@@ -415,7 +415,7 @@ class CandidateRun:
 
 def load_study_from_results(f):
     """The study rebuilt from the TOML stored verbatim in the results file."""
-    study = stored_study(f.attrs)
+    study = stored_study(f.attrs, f.filename)
     if study is None:
         raise ResultsError(f.filename, "has no stored study (attribute study_toml)")
     return study

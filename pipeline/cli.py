@@ -114,7 +114,7 @@ def build_parser():
 
     r = sub.add_parser("run", parents=[common], help="run a study (scene or sweep)")
     r.add_argument("study", help="study TOML file")
-    r.add_argument("-o", "--output", help="results HDF5 file (default results/<name>.h5)")
+    r.add_argument("-o", "--output", help="results HDF5 file (default results/<study file name>.h5)")
     r.add_argument("--candidates", type=int, help="sweep: number of candidates (overrides study)")
     r.add_argument("--resume", action="store_true", help="sweep: continue an interrupted run")
     r.add_argument("--scheduler", help="sweep: Dask scheduler address tcp://HOST:PORT")
@@ -205,6 +205,14 @@ def main(argv=None) -> int:
         return args.func(args)
     except _user_errors() as e:
         print(f"pipeline {args.command}: error: {e}", file=sys.stderr)
+        return EXIT_USER_ERROR
+    except (KeyError, IndexError) as e:
+        path = getattr(args, "results", None)
+        if path is None:
+            raise
+        # a results file that opens but lacks what its kind must hold
+        print(f"pipeline {args.command}: error: {path}: damaged or incomplete results file "
+              f"({type(e).__name__}: {e})", file=sys.stderr)
         return EXIT_USER_ERROR
     except OSError as e:
         # the operating system's word (no space left, read-only, locked): one line

@@ -54,6 +54,7 @@ __all__ = [
 MAX_LENGTH = 500
 #: Deepest accepted nesting, counted both in brackets and in syntax-tree levels.
 MAX_DEPTH = 40
+MAX_TERMS = 200     # operands of one chain a + b + c ... (evaluated by recursion)
 
 _Fn = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
@@ -346,7 +347,16 @@ class _Compiler:
         if op is None:
             symbol = _REJECTED_BINARY_OPS.get(type(node.op), type(node.op).__name__)
             raise self.error(symbol, f"operator '{symbol}' is not allowed")
-        left = self.compile(node.left, depth)
+        # a + b + c + ... is a flat chain in the source (a left-leaning tree here):
+        # its length is limited, not counted as nesting
+        terms, x = 1, node
+        while isinstance(x, ast.BinOp):
+            terms, x = terms + 1, x.left
+        if terms > MAX_TERMS:
+            token = self.segment(node)
+            raise self.error(token, f"more than {MAX_TERMS} terms in one chain of operators "
+                                    f"at '{token}'")
+        left = self.compile(node.left, depth - 1 if isinstance(node.left, ast.BinOp) else depth)
         right = self.compile(node.right, depth)
         return _binary(op, left, right)
 

@@ -53,6 +53,18 @@ def temporary_beside(target) -> Path:
     return target.with_name(f".{target.stem}.{os.getpid()}.partial{target.suffix}")
 
 
+def _remove_stale(target: Path):
+    """Temporary files of ``target`` left by a process that was killed."""
+    for p in target.parent.glob(f".{target.stem}.*.partial{target.suffix}"):
+        try:
+            pid = int(p.name[len(target.stem) + 2:].split(".")[0])
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            p.unlink(missing_ok=True)
+        except (ValueError, PermissionError, OSError):
+            continue
+
+
 @contextmanager
 def replacing(target, copy_of=None):
     """Yield a temporary path to write ``target`` to; on success it is flushed
@@ -62,6 +74,7 @@ def replacing(target, copy_of=None):
     the analysis of a sweep, is made on the copy and swapped in)."""
     target = Path(target)
     target.parent.mkdir(parents=True, exist_ok=True)
+    _remove_stale(target)
     tmp = temporary_beside(target)
     try:
         if copy_of is not None:

@@ -79,4 +79,20 @@ def open_results(path, kind=None):
         got = f.attrs.get("kind")
         f.close()
         raise ResultsError(path, f"is a {got} result, this command needs a {kind} result")
+    missing = [n for n in REQUIRED.get(attr_text(f.attrs.get("kind")), ()) if n not in f]
+    n = {f[k].shape[0] for k in ("candidates/status", "candidates/params", "candidates/feasible")
+         if k in f} if attr_text(f.attrs.get("kind")) == "sweep" else set()
+    if missing or len(n) > 1:
+        f.close()
+        what = f"missing {', '.join(missing)}" if missing else "datasets of different lengths"
+        raise ResultsError(path, f"damaged or incomplete results file ({what})")
     return f
+
+
+# what every reader of a kind of results file relies on
+REQUIRED = {
+    "sweep": ("candidates/status", "candidates/params", "candidates/feasible", "metrics",
+              "reference", "progress/chunk_done"),
+    "scene": ("mechanism/parameters", "table/phi1", "table/position", "dense/phi1",
+              "dense/position"),
+}

@@ -109,9 +109,14 @@ class Section:
             raise self.error(key, f"expected a list of numbers, got {_show(v)}")
         if n is not None and len(v) != n:
             raise self.error(key, f"expected {n} numbers, got {len(v)}")
-        if not all(math.isfinite(x) for x in v):
+        try:
+            out = tuple(float(x) for x in v)
+        except OverflowError:
+            raise self.error(key, "a number is beyond the range of a 64-bit float "
+                                  "(about 1.8e308)") from None
+        if not all(math.isfinite(x) for x in out):
             raise self.error(key, "numbers must be finite")
-        return tuple(float(x) for x in v)
+        return out
 
     def table(self, key, default=_MISSING):
         v = self.raw(key, default)
@@ -524,11 +529,15 @@ def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
     return DynamicsSpec(cases=tuple(cases), method=method)
 
 
-def stored_study(attrs, default_path="<stored study>"):
+def stored_study(attrs, results_path=None):
     """The study rebuilt from the TOML stored verbatim in a results file's root
-    attributes; None if the file has none."""
+    attributes; None if the file has none.  Its errors name the results file
+    (the stored copy is what is wrong, not the study file it came from)."""
     from .storage import attr_text
     text = attrs.get("study_toml")
     if not text:
         return None
-    return parse_study(attr_text(text), attr_text(attrs.get("study_file", default_path)))
+    origin = attr_text(attrs.get("study_file", "?"))
+    label = f"{results_path} (the study stored from {origin})" if results_path else origin
+    study = parse_study(attr_text(text), label)
+    return replace(study, path=Path(origin))

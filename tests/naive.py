@@ -616,7 +616,10 @@ def naive_forces_d(phi1, omega1=60.0, eps1=0.0, h=DEFAULT_H):
 
 def naive_dwell_error(theta, delta_deg=150.0):
     """Brute force: w = round(Delta*n/360) intervals, w+1 cyclic samples, every
-    start tried.  Returns (error, best_start_index)."""
+    start tried.  Returns (error, best_start_index): the first start of the
+    smallest window range, divided by the full range.  (Comparing the ranges,
+    not the quotients: two different ranges can round to one quotient, as
+    5e-324 / 2 and 0 / 2 do, and the flatter window is the dwell.)"""
     theta = [float(t) for t in theta]
     n = len(theta)
     w = int(round(delta_deg * n / 360.0))
@@ -624,10 +627,10 @@ def naive_dwell_error(theta, delta_deg=150.0):
     best, best_k = math.inf, -1
     for k in range(n):
         window = [theta[(k + j) % n] for j in range(w + 1)]
-        err = (max(window) - min(window)) / full
-        if err < best:
-            best, best_k = err, k
-    return best, best_k
+        r = max(window) - min(window)
+        if r < best:
+            best, best_k = r, k
+    return best / full, best_k
 
 
 def _unwrap_list(angles):

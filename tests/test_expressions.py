@@ -28,6 +28,7 @@ from hypothesis import strategies as st
 from pipeline import expressions
 from pipeline.expressions import (
     MAX_DEPTH,
+    MAX_TERMS,
     MAX_LENGTH,
     Expression,
     ExpressionError,
@@ -387,7 +388,7 @@ REJECTED = [
     ("x" * (MAX_LENGTH + 1), f"{MAX_LENGTH + 1} characters"),
     ("(" * (MAX_DEPTH + 1) + "phi" + ")" * (MAX_DEPTH + 1), "("),
     ("-" * (MAX_DEPTH + 5) + "phi", "-" * 10),
-    ("+".join(["phi"] * (MAX_DEPTH + 5)), "phi+phi"),
+    ("+".join(["1"] * (MAX_TERMS + 1)), f"more than {MAX_TERMS} terms"),
     ("sin(" * (MAX_DEPTH + 1) + "phi" + ")" * (MAX_DEPTH + 1), "("),
 ]
 
@@ -401,6 +402,14 @@ def test_rejections_name_field_and_token(text, token):
     assert err.field == FIELD
     assert err.token in message
     assert isinstance(err, ValueError)
+
+
+def test_long_flat_sums_are_accepted():
+    """A sum of many terms is not nesting (it was refused as "nested too deeply")."""
+    text = "+".join(f"{k}*phi" for k in range(1, MAX_DEPTH + 30))
+    phi = np.array([0.3, 1.1])
+    want = sum(k * phi for k in range(1, MAX_DEPTH + 30))
+    np.testing.assert_allclose(parse_expression(text, FIELD).evaluate(phi), want, rtol=1e-13)
 
 
 def test_rejections_are_short_for_long_inputs():
@@ -892,8 +901,12 @@ T_GRID = np.array([0.0, 0.25, 1.0, 3.0])
 
 
 def _tree_depth(node: ast.AST) -> int:
+    """Nesting depth as the parser counts it: a chain a + b + c is flat (the
+    left operand of a binary operator that is itself one adds no level)."""
     children = [c for c in ast.iter_child_nodes(node) if isinstance(c, ast.expr)]
-    return 1 + max((_tree_depth(c) for c in children), default=0)
+    return 1 + max((_tree_depth(c) - (isinstance(node, ast.BinOp) and c is node.left
+                                      and isinstance(c, ast.BinOp)) for c in children),
+                   default=0)
 
 
 def _assert_close(got: float, want: float, err: float, context: str) -> None:

@@ -153,22 +153,44 @@ def test_export_into_a_full_disk_is_one_line(studies, tmp_path, monkeypatch, cap
 
 
 # ------------------------------------------------------------ kill -9
-@pytest.mark.parametrize("delay", [0.5, 2.0, 3.5])
-def test_kill_during_analyze_leaves_a_readable_sweep(sweep_copy, delay):
-    """kill -9 at some point of `pipeline analyze`: the file is either the old
-    one (bit for bit) or the complete new one."""
-    before = digest(sweep_copy)
-    p = subprocess.Popen([sys.executable, "-m", "pipeline.cli", "analyze", str(sweep_copy),
-                          "-q"], cwd=sweep_copy.parent, stdout=subprocess.DEVNULL,
-                         stderr=subprocess.DEVNULL)
+def _kill_after(cmd, cwd, delay):
+    p = subprocess.Popen([sys.executable, "-m", "pipeline.cli", *cmd, "-q"], cwd=cwd,
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     time.sleep(delay)
     p.send_signal(signal.SIGKILL)
     p.wait()
+
+
+@pytest.mark.parametrize("command", ["analyze", "report"])
+@pytest.mark.parametrize("delay", [0.5, 2.0, 3.5])
+def test_kill_during_analyze_or_report_leaves_a_readable_sweep(sweep_copy, command, delay):
+    """kill -9 at some point of `pipeline analyze` or `report`: the sweep file
+    is either the old one (bit for bit) or the complete new one, and the
+    report either absent or whole."""
+    before = digest(sweep_copy)
+    _kill_after([command, str(sweep_copy)], sweep_copy.parent, delay)
     if digest(sweep_copy) != before:
         with h5py.File(sweep_copy, "r") as f:
             assert f["analysis"].attrs["complete"]
     with h5py.File(sweep_copy, "r") as f:
         assert f["candidates/status"].shape == (N,)
+    for html in sweep_copy.parent.glob("*.html"):
+        assert html.read_text().rstrip().endswith("</html>")
+    # the next write of the file clears what the killed process left
+    assert main(["analyze", str(sweep_copy), "-q"]) == 0
+    assert not [p for p in sweep_copy.parent.iterdir() if ".partial" in p.name]
+
+
+@pytest.mark.parametrize("delay", [1.5, 3.0])
+def test_kill_during_a_scene_run_keeps_the_previous_result(studies, tmp_path, delay):
+    out = tmp_path / "base.h5"
+    assert main(["run", str(studies / "ov7_base.toml"), "-o", str(out), "-q"]) == 0
+    before = digest(out)
+    _kill_after(["run", str(studies / "ov7_base.toml"), "-o", str(out)], tmp_path, delay)
+    if digest(out) != before:                 # the new run finished its file: whole
+        with h5py.File(out, "r") as f:
+            assert f["dense/position"].shape[0] > 0
+    assert main(["export", str(out), "--csv", str(tmp_path / "csv"), "-q"]) == 0
 
 
 # ------------------------------------------------------------ runs and journals
@@ -219,6 +241,35 @@ def test_damaged_results_file_is_one_line(tmp_path, capsys):
         one_line_error(capsys, "bad.h5")
 
 
+@pytest.mark.parametrize("damage", ["drop status", "truncate params", "drop metric"])
+def test_results_file_missing_data_is_one_line(sweep_copy, capsys, damage):
+    with h5py.File(sweep_copy, "r+") as f:
+        if damage == "drop status":
+            del f["candidates/status"]
+        elif damage == "truncate params":
+            p = f["candidates/params"][:10]
+            del f["candidates/params"]
+            f["candidates/params"] = p
+        else:
+            del f["metrics/dwell_error"]
+    for cmd in (["browse", str(sweep_copy)], ["show", str(sweep_copy), "--candidate", "0"],
+                ["analyze", str(sweep_copy)], ["report", str(sweep_copy)]):
+        rc = main(cmd)
+        if damage == "drop metric" and rc == 0:    # a command that does not need it
+            capsys.readouterr()
+            continue
+        assert rc == 2, cmd
+        one_line_error(capsys, "sweep.h5", "damaged")
+
+
+def test_bad_stored_study_is_blamed_on_the_results_file(sweep_copy, capsys):
+    with h5py.File(sweep_copy, "r+") as f:
+        f.attrs["study_toml"] = f.attrs["study_toml"].replace('kind = "sweep"', 'kind = "swep"')
+    assert main(["show", str(sweep_copy), "--candidate", "0"]) == 2
+    err = one_line_error(capsys, f"{sweep_copy} (the study stored from", "study.kind")
+    assert not err.split("error: ")[1].startswith("studies/")
+
+
 # ------------------------------------------------------------ where files go
 @pytest.mark.parametrize("name", ["../../escaped", "/tmp/abs_escaped", ""])
 def test_hostile_study_names_write_only_under_results(studies, tmp_path, monkeypatch, name):
@@ -259,6 +310,8 @@ def test_hostile_dynamics_case_name_is_refused(studies, tmp_path, capsys):
     ([("chunk_size = 10000 ", "chunk_size = 100000000 ")], ["sweep.chunk_size", "at most"]),
     ([("seed = 20261121", "seed = 100000000000000000000")], ["sweep.seed", "64-bit integer"]),
     ([("spread = 0.2 ", "spread = 1e400 ")], ["spread"]),
+    ([("stroke = [11.0, 15.0]", "stroke = [11.0, 1" + "0" * 400 + "]")],
+     ["sweep.constraints.stroke", "64-bit float"]),
 ])
 def test_impossible_sweeps_are_refused_at_once(studies, tmp_path, capsys, edits, needles):
     study = study_variant(studies, tmp_path, "ov7_synthesis.toml", edits)
