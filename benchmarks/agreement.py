@@ -54,6 +54,8 @@ from pathlib import Path
 import numpy as np
 from numba import njit, prange
 
+from pipeline.files import write_text
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))                 # interpreter, common
@@ -655,7 +657,7 @@ def main(argv=None):
     text = "\n".join(md) + "\n"
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "agreement.md").write_text(text)
+    write_text(out / "agreement.md", text)
     print(text)
     print(f"written {out / 'agreement.md'}", file=sys.stderr)
     return 0 if all(c.passed for c in cases) else 1

@@ -32,6 +32,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from pipeline.files import save_figure
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import ROOT, STUDIES, best_of, hardware  # noqa: E402
 
@@ -72,7 +74,7 @@ def _plot(df, x, ys, title, path, xlabel="time per candidate [s]"):
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
 
 

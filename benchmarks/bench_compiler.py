@@ -40,6 +40,8 @@ from pathlib import Path
 
 import numpy as np
 
+from pipeline.files import write_text
+
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
@@ -329,7 +331,7 @@ def main(argv=None):
     lines += [f"| {k} | {v[0]:.1f} s | {v[1]:.2f} s |" for k, v in ct.items()]
     text = "\n".join(lines) + "\n"
     print(text)
-    (out / "compiler.md").write_text(text)
+    write_text(out / "compiler.md", text)
     return text
 
 

@@ -9,6 +9,8 @@ command line).  --quick shrinks every study so the whole run fits in CI
 
 from __future__ import annotations
 
+from pipeline.files import write_text
+
 import sys
 import time
 from pathlib import Path
@@ -49,7 +51,7 @@ def run(quick=False, echo=print, out=None):
         lines += ["## throughput", "", "```", df.to_string(index=False), "```", ""]
     both(f"\nwritten to {out} in {time.perf_counter() - t0:.0f} s")
     out.mkdir(parents=True, exist_ok=True)
-    (out / "summary.md").write_text("\n".join(lines) + "\n")
+    write_text(out / "summary.md", "\n".join(lines) + "\n")
     return out
 
 

@@ -72,10 +72,23 @@ def _power(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out.reshape(a_b.shape)
 
 
+_POLE = 4.0 * np.finfo(np.float64).eps
+
+
+def _tan(x: np.ndarray) -> np.ndarray:
+    """tan, infinite where the argument lies within its own rounding of a pole
+    (there the library gives a large finite number that means nothing:
+    tan(pi/2) = 1.6e16), so a load with a pole is reported, not used."""
+    x = np.asarray(x, dtype=np.float64)
+    r = np.tan(x)
+    pole = np.abs(np.cos(x)) <= _POLE * np.maximum(1.0, np.abs(x))
+    return np.where(pole, np.copysign(np.inf, r), r)
+
+
 _UNARY_FUNCTIONS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
     "sin": np.sin,
     "cos": np.cos,
-    "tan": np.tan,
+    "tan": _tan,
     "exp": np.exp,
     "log": np.log,
     "sqrt": np.sqrt,

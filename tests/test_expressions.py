@@ -404,6 +404,14 @@ def test_rejections_name_field_and_token(text, token):
     assert isinstance(err, ValueError)
 
 
+def test_tan_at_its_pole_is_reported_not_1e16():
+    expr = parse_expression("100 * tan(phi)", FIELD)
+    with pytest.raises(ExpressionError, match="non-finite value at phi="):
+        expr.evaluate(np.array([0.0, math.pi / 2]))
+    phi = np.array([0.3, math.pi / 2 - 1e-9, -1.2])
+    np.testing.assert_array_equal(expr.evaluate(phi), 100 * np.tan(phi))
+
+
 def test_long_flat_sums_are_accepted():
     """A sum of many terms is not nesting (it was refused as "nested too deeply")."""
     text = "+".join(f"{k}*phi" for k in range(1, MAX_DEPTH + 30))
@@ -753,6 +761,8 @@ class _Ref:
     def f_tan(a, ea):
         if not math.isfinite(a):
             return math.nan, 0.0
+        if abs(math.cos(a)) <= 4.0 * 2.0 ** -52 * max(1.0, abs(a)):
+            raise Ambiguous  # within the argument's rounding of a pole: the product says inf
         r = math.tan(a)
         if ea == 0.0:
             return r, U * abs(r)
