@@ -89,22 +89,25 @@ def test_analyze_on_a_full_disk_keeps_the_sweep(sweep_copy, monkeypatch, capsys)
     assert not [p for p in sweep_copy.parent.iterdir() if ".partial" in p.name]
 
 
-def test_analyze_failing_midway_in_hdf5_keeps_the_sweep(sweep_copy, monkeypatch, capsys):
-    """The disk fills while HDF5 writes the analysis (inside h5py, not at the flush)."""
+@pytest.mark.parametrize("k", [1, 2, 5, 9, 14])
+def test_analyze_failing_midway_in_hdf5_keeps_the_sweep(sweep_copy, monkeypatch, capsys, k):
+    """The disk fills while HDF5 writes the analysis (inside h5py, at its k-th
+    dataset, not at the flush)."""
     import pipeline.analysis as an
     before = digest(sweep_copy)
     real = an.put
     count = {"n": 0}
 
-    def put(*a, **k):
+    def put(*a, **kw):
         count["n"] += 1
-        if count["n"] == 3:
+        if count["n"] == k:
             raise OSError(errno.ENOSPC, "Unable to write dataset (errno = 28, error message = "
                                         "'No space left on device')")
-        return real(*a, **k)
+        return real(*a, **kw)
     monkeypatch.setattr(an, "put", put)
     assert main(["analyze", str(sweep_copy)]) == 2
     one_line_error(capsys, "No space left on device")
+    assert count["n"] == k
     assert digest(sweep_copy) == before
 
 
