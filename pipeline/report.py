@@ -179,7 +179,8 @@ def pareto_figure(data, ana) -> str:
     ax.set_xlabel(f"{o[0]} [{data.objective_units[0]}] (minimised)")
     ax.set_ylabel(f"{o[1]} [{data.objective_units[1]}] (minimised)")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8, loc="upper right", markerscale=0.7, framealpha=0.9)
+    if ax.get_legend_handles_labels()[0]:     # nothing to label when nothing is feasible
+        ax.legend(fontsize=8, loc="upper right", markerscale=0.7, framealpha=0.9)
     ax.set_title(f"{int(data.feasible.sum())} feasible of {data.n} candidates in {nf} fronts",
                  fontsize=10)
     return _png(fig)
