@@ -30,14 +30,25 @@ def _print(obj, fmt):
 def cmd_run(a):
     from .runner import run_study
     res = run_study(a.study, a.output, candidates=a.candidates, resume=a.resume,
-                    scheduler=a.scheduler, n_jobs=a.jobs, chunk_size=a.chunk_size,
-                    progress=not a.quiet, pictures=not a.no_pictures)
+                    overwrite=a.overwrite, scheduler=a.scheduler, n_jobs=a.jobs,
+                    chunk_size=a.chunk_size, progress=not a.quiet, pictures=not a.no_pictures)
     info = {"results": str(res.results), **res.summary}
     if res.pictures:
         info["pictures"] = ", ".join(str(p) for p in res.pictures)
+    if res.kind == "sweep":
+        q = _quote(res.results)
+        info["next"] = (f"pipeline analyze {q}; pipeline browse {q}; "
+                        f"pipeline report {q}")
+    elif res.kind == "scene":
+        info["next"] = f"pipeline export {_quote(res.results)} --csv tables/"
     if not a.quiet:
         _print(info, a.format)
     return EXIT_OK
+
+
+def _quote(path):
+    import shlex
+    return shlex.quote(str(path))
 
 
 def cmd_export(a):
@@ -116,7 +127,11 @@ def build_parser():
     r.add_argument("study", help="study TOML file")
     r.add_argument("-o", "--output", help="results HDF5 file (default results/<study file name>.h5)")
     r.add_argument("--candidates", type=int, help="sweep: number of candidates (overrides study)")
-    r.add_argument("--resume", action="store_true", help="sweep: continue an interrupted run")
+    r.add_argument("--resume", action="store_true", help=(
+        "sweep: continue an interrupted run (its candidate count and chunk size come from "
+        "its journal)"))
+    r.add_argument("--overwrite", action="store_true",
+                   help="replace a finished results file of the same name")
     r.add_argument("--scheduler", help="sweep: Dask scheduler address tcp://HOST:PORT")
     r.add_argument("-j", "--jobs", type=int, help="sweep: threads (default: all cores)")
     r.add_argument("--chunk-size", type=int, help="sweep: candidates per chunk")

@@ -27,8 +27,9 @@ def default_output(study):
     return Path("results") / f"{safe_name(stem, 'study')}.h5"
 
 
-def run_study(path, out=None, *, candidates=None, resume=False, scheduler=None, n_jobs=None,
-              chunk_size=None, progress=True, pictures=True) -> RunOutcome:
+def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
+              scheduler=None, n_jobs=None, chunk_size=None, progress=True,
+              pictures=True) -> RunOutcome:
     """Run a scene or a sweep study and write its results file (and pictures)."""
     study = load_study(path)
     out = Path(out) if out else default_output(study)
@@ -38,8 +39,9 @@ def run_study(path, out=None, *, candidates=None, resume=False, scheduler=None, 
                              "this study is a scene")
         return run_scene_study(study, out, pictures=pictures)
     from .sweep import run_sweep
-    return run_sweep(study, out, candidates=candidates, resume=resume, scheduler=scheduler,
-                     n_jobs=n_jobs, chunk_size=chunk_size, progress=progress)
+    return run_sweep(study, out, candidates=candidates, resume=resume, overwrite=overwrite,
+                     scheduler=scheduler, n_jobs=n_jobs, chunk_size=chunk_size,
+                     progress=progress)
 
 
 def run_scene_study(study, out, pictures=True) -> RunOutcome:

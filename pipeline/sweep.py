@@ -19,6 +19,7 @@ import logging
 import math
 import os
 import shutil
+import threading
 import time
 import zipfile
 from dataclasses import dataclass
@@ -30,7 +31,8 @@ import numpy as np
 from .kernels import config as kc
 from .kernels import sweep as ks
 from .limits import CHUNK_WHY, MAX_CHUNK
-from .storage import COMPRESSION, FORMAT, ResultsError, put, status_table, write_root_attrs
+from .storage import (COMPRESSION, FORMAT, ResultsError, attr_text, put, status_table,
+                      write_root_attrs)
 from .sweep_spec import METRICS, SweepSpec, draw_candidates, parameter_rows
 
 log = logging.getLogger("pipeline")
@@ -315,13 +317,16 @@ class SweepOutcome:
     summary: dict
 
 
-def _check_existing(out: Path, journal: Journal, study, spec, resume: bool):
+def _check_existing(out: Path, journal: Journal, study, spec, resume: bool,
+                    overwrite: bool = False):
     """Refuse anything that would overwrite or mix results silently."""
     if not resume:
-        if out.exists() or journal.exists():
-            what = out if out.exists() else journal.dir
-            raise ResultsError(what, "already exists; use --resume to continue that run, or "
-                                     "choose another output with -o (nothing is overwritten)")
+        if journal.exists():
+            raise ResultsError(journal.dir, "holds an unfinished run; continue it with --resume "
+                                            "(or delete the folder to start again)")
+        if out.exists() and not overwrite:
+            raise ResultsError(out, "already exists; --overwrite replaces it, -o writes "
+                                    "another file, --resume continues an interrupted run")
         return
     if journal.exists():
         man = journal.manifest()
@@ -351,11 +356,17 @@ def _check_existing(out: Path, journal: Journal, study, spec, resume: bool):
                                     "run again into a new file")
 
 
-def run_sweep(study, out, *, candidates=None, resume=False, scheduler=None, client=None,
-              n_jobs=None, chunk_size=None, progress=True, stop_after_chunks=None) -> SweepOutcome:
-    """Run (or resume) a sweep study into ``out``."""
+def run_sweep(study, out, *, candidates=None, resume=False, overwrite=False, scheduler=None,
+              client=None, n_jobs=None, chunk_size=None, progress=True,
+              stop_after_chunks=None) -> SweepOutcome:
+    """Run (or resume) a sweep study into ``out``.  With ``resume`` the
+    candidate count and chunk size come from the interrupted run's journal
+    (or the finished file) unless given; ``overwrite`` replaces a finished
+    file."""
     from dataclasses import replace
     spec: SweepSpec = study.sweep
+    if resume and candidates is None and chunk_size is None:
+        candidates, chunk_size = _run_sizes(Path(out))
     if candidates is not None:
         if candidates < 1:
             raise ValueError(f"--candidates must be at least 1, got {candidates}")
@@ -368,8 +379,25 @@ def run_sweep(study, out, *, candidates=None, resume=False, scheduler=None, clie
     scheduler = scheduler or spec.scheduler
     out = Path(out)
     with RunLock(out):
-        return _run_locked(study, spec, out, resume, scheduler, client, n_jobs, progress,
-                           stop_after_chunks)
+        return _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs,
+                           progress, stop_after_chunks)
+
+
+def _run_sizes(out: Path):
+    """(candidates, chunk size) of the run that wrote ``out``: from its journal
+    if it was interrupted, else from the file; (None, None) if neither says."""
+    journal = Journal(out)
+    if journal.exists():
+        man = journal.manifest()
+        return man.get("candidates"), man.get("chunk_size")
+    if out.exists():
+        try:
+            with h5py.File(out, "r") as f:
+                n, ch = f.attrs.get("n_candidates"), f.attrs.get("chunk_size")
+                return (int(n) if n is not None else None), (int(ch) if ch is not None else None)
+        except OSError:
+            pass
+    return None, None
 
 
 class RunLock:
@@ -399,10 +427,12 @@ class RunLock:
         os.close(self.fd)
 
 
-def _run_locked(study, spec, out, resume, scheduler, client, n_jobs, progress,
+def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, progress,
                 stop_after_chunks):
     journal = Journal(out)
-    _check_existing(out, journal, study, spec, resume)
+    _check_existing(out, journal, study, spec, resume, overwrite)
+    if overwrite and out.exists() and not resume:
+        log.info("replacing %s", out)
     if resume and not journal.exists() and out.exists():
         log.info("%s is already complete; nothing to resume", out)
         return SweepOutcome("sweep", out, [], summarize(out))
@@ -434,7 +464,20 @@ def _run_locked(study, spec, out, resume, scheduler, client, n_jobs, progress,
 
 def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress,
                 stop_after_chunks):
-    sf.create()   # fresh, or rebuilt from the journal below
+    # the file, fresh or rebuilt from the journal below; its reference design is the
+    # first evaluation, which compiles a new mechanism's kernels (once, then cached)
+    t_prep = time.perf_counter()
+    notice = threading.Timer(1.0, log.info, ("compiling the kernels of this mechanism "
+                                             "(its first run only; about 10 s)...",))
+    notice.daemon = True
+    notice.start()
+    try:
+        sf.create()
+    finally:
+        notice.cancel()
+    prep = time.perf_counter() - t_prep
+    if prep > 1.0:
+        log.info("kernels ready after %.1f s", prep)
     finished = set(journal.done())
     t0 = time.perf_counter()
     with h5py.File(out, "r+") as f:
@@ -475,6 +518,8 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
     journal.remove()
     summary = summarize(out)
     summary["wall_time"] = f"{wall:.1f} s"
+    if prep > 1.0:
+        summary["compile_time"] = f"{prep:.1f} s (not in the wall time; cached from now on)"
     if computed:
         summary["throughput"] = f"{computed / wall:,.0f} candidates/s"
     return SweepOutcome("sweep", out, [], summary)
@@ -564,11 +609,14 @@ def summarize(out) -> dict:
             if name in counts:
                 s[f"status {name}"] = f"{counts[name]['count']} ({counts[name]['percent']:.1f}%)"
         s["feasible"] = f"{counts['feasible']['count']} ({counts['feasible']['percent']:.1f}%)"
+        def unit(name):
+            u = attr_text(f[f"metrics/{name}"].attrs.get("units", ""))
+            return "" if u in ("", "1") else f" {u}"
         for o in f.attrs["objectives"]:
             v = f[f"metrics/{o}"][()][feas]
             if v.size:
-                s[f"best {o}"] = f"{v.min():.4g} {f['metrics/' + o].attrs['units']}"
+                s[f"best {o}"] = f"{v.min():.4g}{unit(o)}"
         ref = f["reference"]
         s["reference design"] = ", ".join(
-            f"{o} {ref[o][()][0]:.4g}" for o in f.attrs["objectives"] if o in ref)
+            f"{o} {ref[o][()][0]:.4g}{unit(o)}" for o in f.attrs["objectives"] if o in ref)
     return s

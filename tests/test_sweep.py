@@ -169,10 +169,19 @@ def test_interrupted_then_resumed_equals_uninterrupted(baseline, synthesis, tmp_
                   stop_after_chunks=2)
     with h5py.File(out, "r") as f:
         assert f["progress/chunk_done"][()].sum() == 2 and not f.attrs["complete"]
-    with pytest.raises(ResultsError, match="already exists"):
+    with pytest.raises(ResultsError, match="unfinished run; continue it with --resume"):
         run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False)
-    run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False, resume=True)
+    # --resume alone: the candidate count and chunk size come from the journal
+    run_sweep(synthesis, out, progress=False, resume=True)
     assert_same_results(baseline, out)
+    # a finished file: --resume says so, without repeating --candidates either
+    assert run_sweep(synthesis, out, progress=False, resume=True).results == out
+    with pytest.raises(ResultsError, match="--overwrite replaces it"):
+        run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False)
+    run_sweep(synthesis, out, candidates=N // 2, chunk_size=CHUNK, progress=False,
+              overwrite=True)
+    with h5py.File(out, "r") as f:
+        assert f["candidates/status"].shape == (N // 2,) and f.attrs["complete"]
 
 
 def test_kill_9_then_resume_equals_uninterrupted(baseline, synthesis, tmp_path):
