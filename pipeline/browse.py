@@ -269,8 +269,11 @@ def candidate_details(path, cid) -> dict:
             for m in f["metrics"]:
                 metrics.append((m, float(f["metrics"][m][i]), f["metrics"][m].attrs))
             rk = ranking(f)
+            reason = _reason(status, fail, G, cn, feas)
+            if status == kc.BAD_GEOMETRY:
+                reason = "; ".join(_geometry_problems(f, x)) or reason
             out = {"candidate": i, "status": kc.STATUS_NAMES.get(status, status),
-                   "feasible": feas, "reason": _reason(status, fail, G, cn, feas),
+                   "feasible": feas, "reason": reason,
                    "fail_phi_deg": fail, "cv": float(f["candidates/cv"][i]),
                    "constraints": {n: float(g) for n, g in zip(cn, G)},
                    "front": int(rk.rank[i]), "crowding": float(rk.crowding[i]),
@@ -286,6 +289,16 @@ def candidate_details(path, cid) -> dict:
             rows.append(row)
         out["metrics"] = rows
         return out
+
+
+def _geometry_problems(f, x) -> list:
+    """Which length or triangle inequality a BAD_GEOMETRY candidate breaks."""
+    from .sweep_spec import geometry_problems, parameter_rows
+    study = stored_study(f.attrs, f.filename)
+    if study is None:
+        return []
+    plan = study.mechanism.compile()
+    return geometry_problems(plan, parameter_rows(plan, study.sweep, np.asarray(x)[None, :])[0])
 
 
 # ----------------------------------------------------------------- formatting

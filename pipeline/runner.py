@@ -66,6 +66,9 @@ def run_scene_study(study, out, pictures=True) -> RunOutcome:
     summary = {"status": kc.STATUS_NAMES[res.status],
                "table_positions": int(res.table.phi.shape[0]),
                "dense_positions": int(res.dense.phi.shape[0])}
+    if res.status == kc.BAD_GEOMETRY:
+        from .sweep_spec import geometry_problems
+        summary["reason"] = "; ".join(geometry_problems(res.plan, res.plan.par))
     if res.dense.forces is not None:
         summary.update(res.dense.forces.summary())
     for case in res.dynamics or ():

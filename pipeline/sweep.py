@@ -33,11 +33,11 @@ from .kernels import sweep as ks
 from .limits import CHUNK_WHY, MAX_CHUNK
 from .storage import (COMPRESSION, FORMAT, ResultsError, attr_text, put, status_table,
                       write_root_attrs)
-from .sweep_spec import METRICS, SweepSpec, draw_candidates, parameter_rows
+from .sweep_spec import METRICS, SweepSpec, draw_candidates, draw_checked, parameter_rows
 
 log = logging.getLogger("pipeline")
 
-JOURNAL_VERSION = 1
+JOURNAL_VERSION = 2        # 2: chunks carry the draws rejected before solving
 
 # kernel metric column of each stored metric, and a conversion to its units
 COLUMN = {
@@ -94,10 +94,11 @@ class SweepProblem:
         return status, metrics
 
     def evaluate_chunk(self, chunk, parallel=True, n_jobs=None):
-        x = self.draw(chunk)
+        """(chunk, x, status, metrics, rejected draws per triangle)."""
+        x, rejected = draw_checked(self.spec, chunk)
         status, metrics = self.evaluate_rows(parameter_rows(self.plan, self.spec, x), parallel,
                                              n_jobs)
-        return chunk, x, status, metrics
+        return chunk, x, status, metrics, rejected
 
     def draw(self, chunk):
         return draw_candidates(self.spec, chunk)
@@ -167,10 +168,10 @@ class Journal:
             os.fsync(f.fileno())
         os.replace(tmp, path)
 
-    def save(self, chunk, x, status, metrics):
+    def save(self, chunk, x, status, metrics, rejected):
         import io
         buf = io.BytesIO()
-        np.savez(buf, x=x, status=status, metrics=metrics)
+        np.savez(buf, x=x, status=status, metrics=metrics, rejected=rejected)
         self._atomic(self.dir / f"chunk_{chunk:07d}.npz", buf.getvalue())
 
     def done(self):
@@ -183,7 +184,7 @@ class Journal:
         p = self.dir / f"chunk_{chunk:07d}.npz"
         try:
             with np.load(p) as z:
-                return z["x"], z["status"], z["metrics"]
+                return z["x"], z["status"], z["metrics"], z["rejected"]
         except (OSError, ValueError, KeyError, zipfile.BadZipFile) as e:
             raise ResultsError(p, f"damaged journal chunk ({e}); delete it and run again with "
                                   "--resume: only that chunk is computed again") from None
@@ -257,6 +258,10 @@ class SweepFile:
             p = f.create_group("progress")
             d = p.create_dataset("chunk_done", (spec.n_chunks,), "?")
             d.attrs.update(units="1", long_name="chunk written")
+            d = p.create_dataset("rejected", (spec.n_chunks, len(spec.triangles)), "i8")
+            d.attrs.update(units="1", long_name="draws redrawn because they broke a triangle "
+                                                "inequality (known before solving), per chunk",
+                           triangles=[t.label for t in spec.triangles] or [""])
             self._reference(f)
         os.replace(tmp, self.path)
 
@@ -279,9 +284,11 @@ class SweepFile:
     def _columns(self, metrics):
         return {name: metrics[:, COLUMN[name][0]] * COLUMN[name][1] for name in self.spec.metrics}
 
-    def write_chunk(self, d, chunk, x, status, metrics):
+    def write_chunk(self, d, chunk, x, status, metrics, rejected):
         """Write one chunk's rows into the datasets ``d`` (``datasets(f)``)."""
         lo, hi = self.spec.chunk_bounds(chunk)
+        if len(rejected):
+            d["progress/rejected"][chunk] = rejected
         d["candidates/params"][lo:hi] = x
         d["candidates/status"][lo:hi] = status
         d["candidates/fail_phi"][lo:hi] = np.rad2deg(metrics[:, ks.M_FAIL_PHI])
@@ -303,7 +310,7 @@ class SweepFile:
         more than writing a chunk's column)."""
         names = ["candidates/params", "candidates/status", "candidates/fail_phi",
                  "candidates/forces_evaluated", "candidates/constraints", "candidates/cv",
-                 "candidates/feasible", "progress/chunk_done"]
+                 "candidates/feasible", "progress/chunk_done", "progress/rejected"]
         names += [f"metrics/{m}" for m in self.spec.metrics]
         return {n: f[n] for n in names}
 
@@ -494,9 +501,9 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
         with h5py.File(out, "r+") as f:
             d = sf.datasets(f)
             flushed = time.monotonic()
-            for c, x, status, metrics in _chunks(problem, todo, client, n_jobs):
-                journal.save(c, x, status, metrics)     # the source of truth, fsynced
-                sf.write_chunk(d, c, x, status, metrics)
+            for c, x, status, metrics, rejected in _chunks(problem, todo, client, n_jobs):
+                journal.save(c, x, status, metrics, rejected)   # the source of truth, fsynced
+                sf.write_chunk(d, c, x, status, metrics, rejected)
                 if time.monotonic() - flushed > 1.0:    # the HDF5 file: once a second
                     f.flush()
                     flushed = time.monotonic()
@@ -596,6 +603,11 @@ def status_counts(f) -> dict:
                                        "percent": round(100.0 * ok_infeasible / max(n, 1), 2)}
     out["feasible"] = {"count": int(feas.sum()), "percent": round(100.0 * feas.mean(), 2)
                        if n else 0.0}
+    if "progress/rejected" in f and f["progress/rejected"].size:
+        k = int(f["progress/rejected"][()].sum())
+        if k:   # draws that could not be built, replaced before solving (not candidates)
+            out["redrawn before solving"] = {"count": k,
+                                             "percent": round(100.0 * k / max(n, 1), 2)}
     return out
 
 
@@ -616,6 +628,13 @@ def summarize(out) -> dict:
             v = f[f"metrics/{o}"][()][feas]
             if v.size:
                 s[f"best {o}"] = f"{v.min():.4g}{unit(o)}"
+        if "progress/rejected" in f and f["progress/rejected"].size:
+            rej = f["progress/rejected"][()].sum(axis=0)
+            labels = f["progress/rejected"].attrs["triangles"]
+            if rej.sum():
+                s["redrawn before solving"] = "; ".join(
+                    f"{int(k):,} draws broke the {attr_text(lab)}"
+                    for k, lab in zip(rej, labels) if k)
         ref = f["reference"]
         s["reference design"] = ", ".join(
             f"{o} {ref[o][()][0]:.4g}{unit(o)}" for o in f.attrs["objectives"] if o in ref)

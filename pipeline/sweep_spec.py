@@ -60,6 +60,27 @@ class MassScaling:
 
 
 @dataclass(frozen=True)
+class Triangle:
+    """A rigid triangular link (the ternary link of a class III group) whose
+    sides must satisfy the strict triangle inequality.  Known before solving,
+    so a draw that breaks it is redrawn instead of evaluated (it could only be
+    BAD_GEOMETRY).  Each side is a design variable's column or a fixed value."""
+    label: str
+    names: tuple        # parameter names of the three sides
+    columns: tuple      # design-variable column of each side, -1 where fixed
+    fixed: tuple        # the side's value where it is fixed
+
+    def sides(self, x):
+        return [x[:, c] if c >= 0 else np.full(x.shape[0], v)
+                for c, v in zip(self.columns, self.fixed)]
+
+    def broken(self, x):
+        """Rows of ``x`` (design variables) whose triangle cannot be built."""
+        a, b, c = self.sides(x)
+        return ~((a < b + c) & (b < a + c) & (c < a + b))
+
+
+@dataclass(frozen=True)
 class SweepSpec:
     variables: tuple
     candidates: int
@@ -74,6 +95,7 @@ class SweepSpec:
     margin_min: float
     mass_model: tuple
     scheduler: str | None
+    triangles: tuple = ()     # Triangle: known before solving; draws that break one are redrawn
 
     @property
     def n_chunks(self):
@@ -193,7 +215,18 @@ def parse_sweep(root, mech, output) -> SweepSpec:
         stroke_bounds=stroke, margin_min=margin_min,
         mass_model=tuple(mass_model),
         scheduler=sec.string("scheduler", "") or None,
+        triangles=triangles_of(plan, variables),
     )
+    for t in spec.triangles:
+        # rejection sampling needs designs that can be built: at least 1 % of the box
+        probe = np.random.default_rng(0).random((20000, len(variables)))
+        lo = np.array([v.low for v in variables])
+        hi = np.array([v.high for v in variables])
+        ok = 1.0 - t.broken(lo + probe * (hi - lo)).mean()
+        if ok < 0.01:
+            raise sec.error("variables", f"only {100 * ok:.2g} % of the bounds give a buildable "
+                                         f"{t.label}; narrow the bounds of "
+                                         + ", ".join(t.names))
     w = round(output.dwell_deg * positions / 360)
     if not 1 <= w < positions:
         raise StudyError(root.file, "output.dwell",
@@ -226,12 +259,90 @@ def draw_unit(spec: SweepSpec, chunk: int) -> np.ndarray:
     return rng.random((hi - lo, d))
 
 
+REDRAW_ROUNDS = 200     # rejection rounds per chunk (acceptance >= 1 % is checked at parse time)
+
+
 def draw_candidates(spec: SweepSpec, chunk: int) -> np.ndarray:
     """Design variables of chunk ``chunk`` (n, n_vars) in their units."""
+    return draw_checked(spec, chunk)[0]
+
+
+def draw_checked(spec: SweepSpec, chunk: int):
+    """(x, rejected): chunk ``chunk``'s design variables, every row a buildable
+    design (``spec.triangles``), and the number of draws rejected per triangle.
+
+    Rows that break a triangle are redrawn uniformly in the bounds from a
+    stream of their own, seeded by (seed, chunk): rejection sampling, so the
+    accepted designs are distributed as the sampler's over the buildable part
+    of the box, and the same on any number of threads or workers."""
     u = draw_unit(spec, chunk)
     low = np.array([v.low for v in spec.variables])
     high = np.array([v.high for v in spec.variables])
-    return low + u * (high - low)
+    x = low + u * (high - low)
+    rejected = np.zeros(len(spec.triangles), np.int64)
+    if not spec.triangles:
+        return x, rejected
+    rng = None
+    for _ in range(REDRAW_ROUNDS):
+        bad = np.zeros(x.shape[0], bool)
+        for k, t in enumerate(spec.triangles):
+            b = t.broken(x) & ~bad       # counted once, for the first triangle it breaks
+            rejected[k] += int(b.sum())
+            bad |= b
+        if not bad.any():
+            return x, rejected
+        if rng is None:
+            rng = np.random.default_rng([spec.seed, chunk, 0x7EDA])
+        x[bad] = low + rng.random((int(bad.sum()), len(low))) * (high - low)
+    raise ValueError(f"chunk {chunk}: designs still break a triangle inequality after "
+                     f"{REDRAW_ROUNDS} redraws; narrow the bounds of "
+                     + ", ".join(n for t in spec.triangles for n in t.names))
+
+
+def geometry_problems(plan, par) -> list:
+    """What makes the parameter row ``par`` impossible to build before any
+    solving (the BAD_GEOMETRY status), in words with the lengths: a length
+    that is not positive, a ternary triangle inequality that fails."""
+    out = []
+    for j, name in enumerate(plan.par_names):
+        dom = parameter_domain(name)
+        v = float(par[j])
+        if dom is not None and not (v >= dom[0] if dom[1] else v > dom[0]):
+            out.append(f"{name} = {v:.6g} mm is not {dom[2]}")
+    for name in plan.par_names:
+        if not name.endswith(".L34"):
+            continue
+        g = name[:-4]
+        try:
+            a, b, c = (float(par[plan.param(f"{g}.{k}")]) for k in ("L34", "L45", "L35"))
+        except (KeyError, ValueError):
+            continue
+        for (la, x), (lb, y), (lc, z) in ((("L45", b), ("L34", a), ("L35", c)),
+                                          (("L34", a), ("L45", b), ("L35", c)),
+                                          (("L35", c), ("L34", a), ("L45", b))):
+            if not x < y + z:
+                out.append(f"ternary link of {g!r}: {la} = {x:.6g} mm >= {lb} + {lc} = "
+                           f"{y:.6g} + {z:.6g} = {y + z:.6g} mm (no triangle)")
+    return out
+
+
+def triangles_of(plan, variables):
+    """The ternary links of the plan's class III groups whose sides are design
+    variables (Triangle each)."""
+    out = []
+    cols = {v.param: j for j, v in enumerate(variables)}
+    for name in plan.par_names:
+        if not name.endswith(".L34"):
+            continue
+        g = name[:-4]
+        names = (f"{g}.L34", f"{g}.L45", f"{g}.L35")
+        if not all(n in plan.par_names for n in names) or not any(n in cols for n in names):
+            continue
+        out.append(Triangle(
+            label=f"ternary link of {g!r}: L34 < L45 + L35, L45 < L34 + L35, L35 < L34 + L45",
+            names=names, columns=tuple(cols.get(n, -1) for n in names),
+            fixed=tuple(float(plan.par[plan.param(n)]) for n in names)))
+    return tuple(out)
 
 
 def scaled_mass_data(m0, J0, lS0, ratio):

@@ -243,7 +243,7 @@ def test_commands_succeed_on_the_main_job_file(cli_run):
         assert code == 0, (key, err)
     out = cli_run["browse_before"][1]
     assert "pipeline analyze" in out and "ranked on the fly" in out
-    for word in ("/candidates/params", "mm (all 9)", "BAD_GEOMETRY", "feasible", "knee",
+    for word in ("/candidates/params", "mm (all 9)", "redrawn before solving", "feasible", "knee",
                  "front 1", "best dwell_error", "best peak_reaction"):
         assert word in out, word
     info = json.loads(cli_run["analyze"][1])

@@ -3,6 +3,7 @@
 import dataclasses
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -19,7 +20,7 @@ from pipeline.kernels import config as kc
 from pipeline.kernels.metrics import dwell_error
 from pipeline.scene import revolution_angles, solve_curves
 from pipeline.storage import ResultsError
-from pipeline.study import load_study
+from pipeline.study import StudyError, load_study
 from pipeline.sweep import SweepInterrupted, build_problem, run_sweep
 from pipeline.sweep_spec import apply_design, draw_candidates, parameter_rows
 from sweep_helpers import assert_same_results
@@ -143,7 +144,9 @@ def test_file_contents(baseline, synthesis):
         assert st_.dtype == np.int8 and "NO_ASSEMBLY" in f["candidates/status"].attrs["codes"]
         assert set(np.unique(st_)) <= {kc.OK, kc.NEWTON_MAXITER, kc.BRANCH_JUMP, kc.BAD_GEOMETRY,
                                        kc.SINGULAR, kc.NO_ASSEMBLY}
-        assert (st_ == kc.BAD_GEOMETRY).any() and (st_ == kc.OK).any()
+        # impossible ternary triangles are redrawn before solving, and counted
+        assert not (st_ == kc.BAD_GEOMETRY).any() and (st_ == kc.OK).any()
+        assert f["progress/rejected"][()].sum() > 0.2 * N
         for name in ("dwell_error", "peak_reaction", "stroke", "singularity_margin"):
             d = f[f"metrics/{name}"]
             assert d.attrs["units"] and d.attrs["long_name"]
@@ -284,3 +287,53 @@ def test_samplers_stay_in_bounds_and_chunks_are_independent(synthesis):
         allx = np.concatenate(chunks)
         assert ((allx >= lo) & (allx <= hi)).all()
         assert len(np.unique(allx[:, 0])) == 1000
+
+
+# ---------------------------------------------------------------- no wasted candidates
+def test_redrawn_designs_follow_rejection_sampling(synthesis):
+    """Draws that break the ternary triangle are redrawn: every row buildable,
+    deterministic per chunk, and distributed as plain rejection sampling
+    (two-sample Kolmogorov-Smirnov per variable, fixed seeds)."""
+    from scipy.stats import ks_2samp
+
+    from pipeline.sweep_spec import draw_checked
+    spec = dataclasses.replace(synthesis.sweep, sampler="uniform", candidates=40000,
+                               chunk_size=40000)
+    x, rejected = draw_checked(spec, 0)
+    t = spec.triangles[0]
+    assert not t.broken(x).any() and rejected[0] > 0.2 * len(x)
+    x2, rejected2 = draw_checked(spec, 0)
+    np.testing.assert_array_equal(x, x2)
+    assert rejected2[0] == rejected[0]
+    rng = np.random.default_rng(12345)
+    lo = np.array([v.low for v in spec.variables])
+    hi = np.array([v.high for v in spec.variables])
+    ref = lo + rng.random((120000, len(lo))) * (hi - lo)
+    ref = ref[~t.broken(ref)][:len(x)]
+    for j in range(len(lo)):
+        assert ks_2samp(x[:, j], ref[:, j]).pvalue > 1e-3, spec.variables[j].name
+
+
+def test_narrow_bounds_that_cannot_build_the_triangle_are_refused(studies, tmp_path):
+    text = (studies / "ov7_synthesis.toml").read_text().replace(
+        'L45 = { param = "triad.L45" }', 'L45 = { param = "triad.L45", min = 300.0, max = 310.0 }')
+    p = tmp_path / "narrow.toml"
+    p.write_text(text)
+    with pytest.raises(StudyError, match="buildable ternary link"):
+        load_study(p)
+
+
+def test_bad_geometry_names_the_inequality(synthesis):
+    """The words behind a BAD_GEOMETRY status (browse, scene summaries): which
+    inequality, with the three lengths; a non-positive length by name."""
+    from pipeline.sweep_spec import geometry_problems
+    plan = synthesis.mechanism.compile()
+    assert geometry_problems(plan, plan.par) == []
+    par = plan.par.copy()
+    par[plan.param("triad.L35")] = 400.0
+    assert geometry_problems(plan, par) == [
+        "ternary link of 'triad': L35 = 400 mm >= L34 + L45 = 81 + 104.5 = 185.5 mm "
+        "(no triangle)"]
+    par = plan.par.copy()
+    par[plan.param("crank.length")] = 0.0
+    assert geometry_problems(plan, par) == ["crank.length = 0 mm is not a length (> 0)"]
