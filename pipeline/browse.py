@@ -302,10 +302,11 @@ def _geometry_problems(f, x) -> list:
 
 
 # ----------------------------------------------------------------- formatting
-def _table(df: pd.DataFrame) -> str:
+def _table(df: pd.DataFrame, width=None) -> str:
+    """``df`` as text; with ``width``, the columns wrap into blocks that fit."""
     if df.empty:
         return "  (none)"
-    return df.to_string(index=False, float_format=lambda v: _g(v))
+    return df.to_string(index=False, float_format=lambda v: _g(v), line_width=width)
 
 
 def _short_units(u: str) -> str:
@@ -330,7 +331,25 @@ def _tree_lines(rows) -> list[str]:
     return out
 
 
-def format_overview(ov: dict, fmt="table") -> str:
+WIDTH = 100     # columns of the text output unless --wide
+
+
+def _fit(lines):
+    """Lines longer than WIDTH wrapped, continued under their text."""
+    import textwrap
+    out = []
+    for ln in lines:
+        if len(ln) <= WIDTH:
+            out.append(ln)
+            continue
+        body = ln.lstrip()
+        m = len(ln) - len(body) + (body.find(": ") + 2 if ": " in body[:40] else 2)
+        out += textwrap.wrap(ln, WIDTH, subsequent_indent=" " * min(m, 40),
+                             break_on_hyphens=False)
+    return out
+
+
+def format_overview(ov: dict, fmt="table", wide=False) -> str:
     if fmt == "json":
         d = dict(ov)
         d["designs"] = [_clean(r) for r in ov["designs"].to_dict(orient="records")]
@@ -343,8 +362,11 @@ def format_overview(ov: dict, fmt="table") -> str:
     lines = [f"{ov['file']}: sweep of study {info.get('study_name', '?')!r} "
              f"({info.get('n_candidates', '?')} candidates, seed {info.get('seed', '?')}, "
              f"sampler {info.get('sampler', '?')}"
-             + ("" if info.get("complete", True) else ", UNFINISHED") + ")", "", "Contents:"]
-    lines += ["  " + s for s in _tree_lines(ov["tree"])]
+             + ("" if info.get("complete", True) else ", UNFINISHED") + ")"]
+    if wide:
+        lines += ["", "Contents:"] + ["  " + s for s in _tree_lines(ov["tree"])]
+    else:
+        lines += ["  (the file's datasets, units and descriptions: --wide)"]
     lines += ["", "Candidates by status:"]
     for k, v in ov["status"].items():
         lines.append(f"  {k:>26}: {v['count']:>9}  ({v['percent']:.1f}%)")
@@ -359,11 +381,12 @@ def format_overview(ov: dict, fmt="table") -> str:
     lines += ["", "Best designs:"]
     for sel, df in ov["designs"].groupby("selection", sort=False):
         lines += ["", f"  {sel}:"]
-        lines += ["  " + s for s in _table(df.drop(columns="selection")).splitlines()]
-    return "\n".join(lines)
+        lines += ["  " + s for s in _table(df.drop(columns="selection"),
+                                           None if wide else WIDTH - 2).splitlines()]
+    return "\n".join(lines if wide else _fit(lines))
 
 
-def format_candidate(d: dict, fmt="table") -> str:
+def format_candidate(d: dict, fmt="table", wide=False) -> str:
     if fmt == "json":
         return json.dumps(_clean(d), indent=2)
     rows = [{"section": "design variable", "name": p["name"], "value": p["value"],
@@ -388,16 +411,17 @@ def format_candidate(d: dict, fmt="table") -> str:
         extra = f" ({m['joint']})" if "joint" in m else ""
         head.append(f"    {m['name']:>20} = {_g(m['value'], 6):>10} {m['units']:<4}{extra}  "
                     f"{m['long_name']}")
-    return "\n".join(head)
+    return "\n".join(head if wide else _fit(head))
 
 
-def browse(path, top=10, candidate=None, fmt="table") -> str:
-    """The text `pipeline browse` prints."""
+def browse(path, top=10, candidate=None, fmt="table", wide=False) -> str:
+    """The text `pipeline browse` prints: at most 100 columns, unless ``wide``
+    (which also lists the file's datasets)."""
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}; known: {', '.join(FORMATS)}")
     if candidate is not None:
-        return format_candidate(candidate_details(path, candidate), fmt)
-    return format_overview(overview(path, top), fmt)
+        return format_candidate(candidate_details(path, candidate), fmt, wide)
+    return format_overview(overview(path, top), fmt, wide)
 
 
 # ----------------------------------------------------------------- re-running a design

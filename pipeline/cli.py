@@ -94,7 +94,7 @@ def cmd_analyze(a):
 
 def cmd_browse(a):
     from .browse import browse
-    print(browse(a.results, top=a.top, candidate=a.candidate, fmt=a.format))
+    print(browse(a.results, top=a.top, candidate=a.candidate, fmt=a.format, wide=a.wide))
     return EXIT_OK
 
 
@@ -176,6 +176,8 @@ def build_parser():
                         "objective (default 10)")
     b.add_argument("--candidate", metavar="ID",
                    help="one candidate: an index, 'knee' or 'reference'")
+    b.add_argument("--wide", action="store_true",
+                   help="full-width tables and the file's datasets (default: 100 columns)")
     b.set_defaults(func=cmd_browse)
 
     s = sub.add_parser("show", parents=[common], help=(

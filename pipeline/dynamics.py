@@ -203,6 +203,13 @@ def _round(x, digits=6):
     return float(f"{x:.{digits}g}") if math.isfinite(x) else None
 
 
+# the units of CaseResult.summary's figures (dimensionless ones: none)
+SUMMARY_UNITS = {"omega_mean": " rad/s", "rpm": " 1/min", "delta": "", "omega_min": " rad/s",
+                 "omega_max": " rad/s", "omega_mean_change": " rad/s", "phi1_end_deg": " deg",
+                 "omega1_end": " rad/s", "phi_mid_deg": " deg", "amplitude_deg": " deg",
+                 "period_s": " s"}
+
+
 @dataclass
 class CaseResult:
     """The motion of one case: samples every sample_dt and a fine tail."""
@@ -272,6 +279,11 @@ class CaseResult:
             return None
         out["period_s"] = float(np.mean(np.diff(tp))) if tp.size >= 2 else math.nan
         return out
+
+    def summary_lines(self) -> dict:
+        """The summary with the unit of every figure, one entry per figure."""
+        return {k: (f"{v:g}{SUMMARY_UNITS.get(k, '')}" if isinstance(v, float) else str(v))
+                for k, v in self.summary().items()}
 
     def summary(self):
         out = {"status": kc.STATUS_NAMES[self.status], "method": self.method}

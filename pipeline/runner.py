@@ -72,5 +72,6 @@ def run_scene_study(study, out, pictures=True) -> RunOutcome:
     if res.dense.forces is not None:
         summary.update(res.dense.forces.summary())
     for case in res.dynamics or ():
-        summary[f"dynamics.{case.name}"] = case.summary()
+        for k, v in case.summary_lines().items():
+            summary[f"{case.name} {k}"] = v
     return RunOutcome("scene", out, pics, summary)

@@ -71,7 +71,7 @@ def cli_run(sweep_file, tmp_path_factory):
             code = main([str(a) for a in argv])
         return code, buf.getvalue(), err.getvalue()
 
-    out["browse_before"] = run("browse", p)
+    out["browse_before"] = run("browse", p, "--wide")
     out["analyze"] = run("analyze", p, "--format", "json")
     out["browse"] = run("browse", p, "--top", "4")
     out["json"] = run("browse", p, "--format", "json", "--top", "3")
@@ -249,6 +249,10 @@ def test_commands_succeed_on_the_main_job_file(cli_run):
     info = json.loads(cli_run["analyze"][1])
     assert info["candidates"] == N and info["front 1"] >= 1
     assert "ranked on the fly" not in cli_run["browse"][1]
+    # without --wide everything fits 100 columns, and the dataset listing waits for --wide
+    for key in ("browse", "candidate"):
+        assert max(len(ln) for ln in cli_run[key][1].splitlines()) <= 100, key
+    assert "/candidates/params" not in cli_run["browse"][1] and "--wide" in cli_run["browse"][1]
     assert "representative" in cli_run["browse"][1]
 
 

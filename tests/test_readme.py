@@ -71,3 +71,13 @@ def test_a_finished_sweep_says_what_comes_next(tmp_path, capsys, studies):
     assert not re.search(r"best dwell_error: \S+ 1$", text, re.M)
     ref = [ln for ln in text.splitlines() if "reference design" in ln][0]
     assert "peak_reaction" in ref and ref.rstrip().endswith(" N")
+
+
+def test_dynamics_summary_is_a_table_with_units(tmp_path, capsys, studies):
+    assert main(["run", str(studies / "takeup_dynamics.toml"), "-o", str(tmp_path / "t.h5"),
+                 "--no-pictures"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    row = {ln.split(":", 1)[0].strip(): ln.split(":", 1)[1].strip() for ln in lines if ":" in ln}
+    assert row["runup omega_mean"].endswith(" rad/s") and row["runup rpm"].endswith(" 1/min")
+    assert row["free period_s"].endswith(" s") and row["free amplitude_deg"].endswith(" deg")
+    assert not any("{" in ln for ln in lines)
