@@ -1,8 +1,13 @@
-"""pipeline: exact analysis and Monte-Carlo synthesis of planar hinged-lever mechanisms."""
+"""pipeline: exact analysis and Monte-Carlo synthesis of planar hinged-lever mechanisms.
 
-from importlib.metadata import PackageNotFoundError, version as _version
+The Python API (``pipeline.api``; see docs/api.md): ``load_study``, ``run``,
+``open`` (a results file as pandas DataFrames), ``candidates``,
+``scene_tables``, ``with_units``.  Importing the package loads no kernels and
+leaves matplotlib's backend alone.
+"""
 
-try:
-    __version__ = _version("pipeline")
-except PackageNotFoundError:  # running from a source tree that is not installed
-    __version__ = "0.1.0"
+from .api import candidates, load_study, open, run, scene_tables, with_units  # noqa: A004
+from .version import __version__
+
+__all__ = ["__version__", "load_study", "run", "open", "candidates", "scene_tables",
+           "with_units"]

@@ -35,7 +35,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from . import __version__
+from .version import __version__
 from .files import replacing
 from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank

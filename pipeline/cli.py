@@ -52,8 +52,11 @@ def _quote(path):
 
 
 def cmd_export(a):
-    from .export import export_csv
-    files = export_csv(a.results, a.csv)
+    from .export import export
+    if (a.csv is None) == (a.parquet is None):
+        raise ValueError("give the output folder with --csv DIR or --parquet DIR")
+    files = export(a.results, a.csv or a.parquet, every=a.every, feasible=a.feasible,
+                   front=a.front, parquet=a.parquet is not None)
     if not a.quiet:
         for f in files:
             print(f)
@@ -138,9 +141,17 @@ def build_parser():
     r.add_argument("--no-pictures", action="store_true", help="scene: skip the PNG pictures")
     r.set_defaults(func=cmd_run)
 
-    e = sub.add_parser("export", parents=[common], help="write a scene's tables as CSV")
-    e.add_argument("results", help="results HDF5 file of a scene")
-    e.add_argument("--csv", required=True, metavar="DIR", help="output directory")
+    e = sub.add_parser("export", parents=[common], help=(
+        "a results file's tables: a scene's points, links, reactions (every computed "
+        "position), a sweep's candidates"))
+    e.add_argument("results", help="results HDF5 file (scene or sweep)")
+    e.add_argument("--csv", metavar="DIR", help="write CSV files (headers with units) into DIR")
+    e.add_argument("--parquet", metavar="DIR", help="write Parquet files into DIR (pyarrow)")
+    e.add_argument("--every", type=int, default=1, metavar="N",
+                   help="scene: every N-th computed position (default: all)")
+    e.add_argument("--feasible", action="store_true", help="sweep: the feasible candidates only")
+    e.add_argument("--front", type=int, metavar="N",
+                   help="sweep: the candidates of Pareto fronts 1 .. N only")
     e.set_defaults(func=cmd_export)
 
     c = sub.add_parser("compile", parents=[common], help=(

@@ -430,15 +430,16 @@ def run_dynamics(study, plan, method=None) -> list[CaseResult]:
 
 # ----------------------------------------------------------------- tables and pictures
 def motion_tables(group) -> dict:
-    """{"motion_<case>.csv": DataFrame(t_s, phi1_deg, omega1, eps1)} from the
-    stored dynamics group."""
+    """{"motion_<case>": DataFrame(t, phi1, omega1, eps1)} from the stored
+    dynamics group (units in ``df.attrs["units"]``)."""
     import pandas as pd
     out = {}
     for name in group:
         g = group[name]
-        out[f"motion_{safe_name(name, 'case')}.csv"] = pd.DataFrame({
-            "t_s": g["t"][()], "phi1_deg": g["phi1"][()], "omega1": g["omega1"][()],
-            "eps1": g["eps1"][()]})
+        df = pd.DataFrame({"t": g["t"][()], "phi1": g["phi1"][()], "omega1": g["omega1"][()],
+                           "eps1": g["eps1"][()]})
+        df.attrs["units"] = {c: str(g[c].attrs.get("units", "")) for c in df.columns}
+        out[f"motion_{safe_name(name, 'case')}"] = df
     return out
 
 

@@ -7,7 +7,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 
 
 PIN_LENGTH_MM = 10.0       # DOMAIN.md section 5: pin of length 10 mm in bending
@@ -104,22 +103,3 @@ def scene_forces(mechanism, plan, curves) -> Reactions:
                                    crank.eps1, loads, body_loads, R, S, M)
     return Reactions(curves.phi, R, S, M, body_loads, plan.joint_names, plan.slide_names,
                      plan.body_names)
-
-
-def reaction_tables(g, dense) -> dict:
-    """reactions.csv (the table positions) and peaks.csv (peaks over the dense
-    revolution) frames from the stored groups."""
-    phi = g["phi1"][()]
-    R = g["reactions"][()]
-    joints = list(g["reactions"].attrs["joints"])
-    cols = {"phi1_deg": phi}
-    mag = np.hypot(R[..., 0], R[..., 1])
-    for j, name in enumerate(joints):
-        cols[f"{name}_x"] = R[:, j, 0]
-        cols[f"{name}_y"] = R[:, j, 1]
-        cols[name] = mag[:, j]
-    cols["M_bal"] = g["M_bal"][()]
-    R = dense["reactions"][()]
-    peaks = pd.DataFrame(joint_peaks(dense["phi1"][()], np.hypot(R[..., 0], R[..., 1]), joints),
-                         columns=["joint", "R_max", "phi1_deg", "d_min_mm"])
-    return {"reactions.csv": pd.DataFrame(cols), "peaks.csv": peaks}

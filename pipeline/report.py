@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from .version import __version__
 from .analysis import analyze, has_analysis, read_analysis, read_sweep
 from .browse import design_table, ranking, rerun_candidate
 from .files import write_text

@@ -10,7 +10,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from . import __version__
+from .version import __version__
 from .errors import ResultsError  # noqa: F401  (raised by every reader of results)
 from .kernels import config as kc
 

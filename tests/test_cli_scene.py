@@ -32,26 +32,42 @@ def test_hdf5_describes_itself(class3_run, studies):
             assert d.attrs["units"] and d.attrs["long_name"], d.name
 
 
-def test_csv_tables_match_hdf5(class3_run):
+def test_csv_tables_match_hdf5(class3_run, tmp_path):
+    """Every computed position, units in the headers, the rows equal to the HDF5
+    datasets; --every thins the rows."""
     out, csv = class3_run
     pts = pd.read_csv(csv / "points.csv")
     links = pd.read_csv(csv / "links.csv")
-    assert list(pts.phi1_deg) == list(range(0, -361, -30))
-    for col in ("P8_x", "P8_y", "V8_x", "V8_y", "A8_x", "A8_y", "P3_x"):
+    with h5py.File(out, "r") as f:
+        n = f["dense/phi1"].shape[0]
+        assert n == 360 and len(pts) == n
+        # CSV keeps 12 significant digits
+        np.testing.assert_allclose(pts["phi1 [deg]"].values, f["dense/phi1"][()], rtol=1e-12,
+                                   atol=1e-12)
+        i = list(f["mechanism"].attrs["point_names"]).index("P8")
+        np.testing.assert_allclose(pts["V8_x [m/s]"].values, f["dense/velocity"][:, i, 0],
+                                   rtol=1e-11)
+        np.testing.assert_allclose(pts["P8_y [mm]"].values, f["dense/position"][:, i, 1],
+                                   rtol=1e-11)
+        # velocity in m/s = analog [mm/rad] * omega1 / 1000
+        np.testing.assert_allclose(f["dense/velocity"][:, i, 0],
+                                   f["dense/position_analog"][:, i, 0] * -94.4 / 1000,
+                                   rtol=1e-15)
+    for col in ("P8_x [mm]", "A8_y [m/s^2]", "P3_x [mm]"):
         assert col in pts.columns
     assert [c for c in links.columns if c.startswith("phi_")] == [
-        "phi_2_3", "phi_3_4", "phi_6_4", "phi_7_5"]
-    with h5py.File(out, "r") as f:
-        i = list(f["mechanism"].attrs["point_names"]).index("P8")
-        np.testing.assert_allclose(pts.V8_x.values, f["table/velocity"][:, i, 0], rtol=1e-11)
-        # velocity in m/s = analog [mm/rad] * omega1 / 1000
-        np.testing.assert_allclose(f["table/velocity"][:, i, 0],
-                                   f["table/position_analog"][:, i, 0] * -94.4 / 1000, rtol=1e-15)
+        "phi_2_3 [deg]", "phi_3_4 [deg]", "phi_6_4 [deg]", "phi_7_5 [deg]"]
+    assert "omega_2_3 [1/s]" in links.columns and "eps_7_5 [1/s^2]" in links.columns
     r = pd.read_csv(csv / "reactions.csv")
-    assert list(r.columns[1:4]) == ["R1_x", "R1_y", "R1"] and r.columns[-1] == "M_bal"
+    assert list(r.columns[1:4]) == ["R1_x [N]", "R1_y [N]", "R1 [N]"]
+    assert r.columns[-1] == "M_bal [N*m]" and len(r) == 360
     peaks = pd.read_csv(csv / "peaks.csv")
-    assert list(peaks.columns) == ["joint", "R_max", "phi1_deg", "d_min_mm"]
+    assert list(peaks.columns) == ["joint", "R_max [N]", "phi1 [deg]", "d_min [mm]"]
     assert list(peaks.joint) == [f"R{k}" for k in range(1, 8)]
+    assert main(["export", str(out), "--csv", str(tmp_path / "thin"), "--every", "30",
+                 "-q"]) == 0
+    thin = pd.read_csv(tmp_path / "thin" / "points.csv")
+    assert list(thin["phi1 [deg]"]) == list(range(0, -360, -30))
 
 
 def test_pictures_written(class3_run):

@@ -253,8 +253,8 @@ def test_cli_run_and_export_motion_tables(studies, tmp_path):
     assert main(["export", str(out), "--csv", str(csv), "-q"]) == 0
     for case, phi0 in (("runup", 269.18), ("free", 280.0)):
         df = pd.read_csv(csv / f"motion_{case}.csv")
-        assert list(df.columns) == ["t_s", "phi1_deg", "omega1", "eps1"]
+        assert list(df.columns) == ["t [s]", "phi1 [deg]", "omega1 [rad/s]", "eps1 [rad/s^2]"]
         assert len(df) == 1001
-        np.testing.assert_allclose(df["t_s"], np.arange(1001) * 0.01, atol=1e-9)
-        assert df["phi1_deg"][0] == pytest.approx(phi0) and df["omega1"][0] == 0.0
+        np.testing.assert_allclose(df["t [s]"], np.arange(1001) * 0.01, atol=1e-9)
+        assert df["phi1 [deg]"][0] == pytest.approx(phi0) and df["omega1 [rad/s]"][0] == 0.0
         assert np.isfinite(df.to_numpy()).all()

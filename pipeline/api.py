@@ -1,0 +1,51 @@
+"""The Python API (re-exported by ``pipeline``): load a study, run it, open a
+results file as tables.
+
+    import pipeline
+    study = pipeline.load_study("studies/ov7_synthesis.toml")
+    res = pipeline.run(study, "results/s.h5", candidates=20000)
+    df = pipeline.open(res.results)          # one row per candidate
+    df[df.feasible].sort_values("peak_reaction").head()
+
+Arrays and tables are in the units of the results file (mm, deg, N, m/s, ...);
+``df.attrs["units"]`` names them per column.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .study import Study, load_study as _load_study
+from .tables import candidates, scene_tables, with_units
+
+__all__ = ["load_study", "run", "open", "candidates", "scene_tables", "with_units"]
+
+
+def load_study(path) -> Study:
+    """Read and check a study file (errors name the file, the field and the reason)."""
+    return _load_study(path)
+
+
+def run(study, output=None, *, candidates=None, resume=False, overwrite=False, n_jobs=None,
+        scheduler=None, progress=False, pictures=True):
+    """Run a study (a path or a loaded ``Study``): a scene (with its dynamics
+    cases) or a sweep.  Returns the outcome: ``.results`` (the HDF5 file),
+    ``.pictures``, ``.summary``."""
+    from .runner import default_output, run_scene_study
+    from .sweep import run_sweep
+    if not isinstance(study, Study):
+        study = _load_study(study)
+    out = Path(output) if output else default_output(study)
+    if study.kind == "scene":
+        return run_scene_study(study, out, pictures=pictures)
+    return run_sweep(study, out, candidates=candidates, resume=resume, overwrite=overwrite,
+                     scheduler=scheduler, n_jobs=n_jobs, progress=progress)
+
+
+def open(path):  # noqa: A001 - pipeline.open, as the users asked for it
+    """A results file as tables: a sweep's candidates as one DataFrame
+    (``candidates``), a scene's tables as {name: DataFrame} (``scene_tables``)."""
+    from .storage import attr_text, open_results
+    with open_results(path) as f:
+        kind = attr_text(f.attrs["kind"])
+    return candidates(path) if kind == "sweep" else scene_tables(path)

@@ -1,0 +1,144 @@
+"""Results files as tables (pandas DataFrames), for the Python API and for
+`pipeline export`.
+
+* a sweep: one row per candidate (design variables, status name, feasibility,
+  constraint violation, Pareto front, metrics, constraints);
+* a scene: its points, links, reactions, peaks and dynamics motion tables, at
+  every computed position.
+
+Column names are plain (``L12``, ``P8_x``); the units of every column are in
+``df.attrs["units"]``, and ``with_units(df)`` gives headers such as
+``V8_x [m/s]`` for files meant for people.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .kernels import config as kc
+from .storage import ResultsError, attr_text, open_results
+
+
+def with_units(df: pd.DataFrame) -> pd.DataFrame:
+    """A copy whose headers carry their units: ``name [unit]`` (none for text
+    columns and counts)."""
+    units = df.attrs.get("units", {})
+    return df.rename(columns={c: f"{c} [{units[c]}]" for c in df.columns if units.get(c)})
+
+
+def _frame(cols: dict, units: dict) -> pd.DataFrame:
+    df = pd.DataFrame(cols)
+    df.attrs["units"] = {c: units.get(c, "") for c in df.columns}
+    return df
+
+
+# ----------------------------------------------------------------- sweeps
+def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
+    """The candidates of a sweep file: all, only the feasible ones, or those of
+    Pareto fronts 1 .. ``front``.  The rows equal the HDF5 datasets."""
+    from .browse import ranking
+    from .analysis import variable_units
+    with open_results(path, "sweep") as f:
+        p = f["candidates/params"]
+        names = [str(attr_text(x)) for x in p.attrs["names"]]
+        vunits = variable_units(p)
+        X = p[()]
+        status = f["candidates/status"][()]
+        feas = f["candidates/feasible"][()]
+        rk = ranking(f)
+        cols = {"candidate": np.arange(len(status)),
+                "status": pd.Categorical.from_codes(
+                    np.where(status >= 0, status, kc.NOT_EVALUATED).astype(int),
+                    [kc.STATUS_NAMES[k] for k in sorted(kc.STATUS_NAMES)]),
+                "feasible": feas, "cv": f["candidates/cv"][()],
+                "front": rk.rank, "fail_phi": f["candidates/fail_phi"][()]}
+        units = {"cv": "1", "front": "", "fail_phi": "deg"}
+        for j, n in enumerate(names):
+            cols[n] = X[:, j]
+            units[n] = vunits[j]
+        for m in f["metrics"]:
+            cols[m] = f[f"metrics/{m}"][()]
+            units[m] = str(attr_text(f[f"metrics/{m}"].attrs.get("units", "")))
+        g = f["candidates/constraints"]
+        cn = [str(attr_text(n)) for n in g.attrs.get("names", [])]
+        cu = [u.strip() for u in str(attr_text(g.attrs.get("units", ""))).split(",")]
+        G = g[()]
+        for j, n in enumerate(cn):
+            cols[f"g_{n}"] = G[:, j]
+            units[f"g_{n}"] = cu[j] if j < len(cu) else ""
+    df = _frame(cols, units)
+    if feasible:
+        df = df[df["feasible"]]
+    if front is not None:
+        if front < 1:
+            raise ValueError(f"--front must be at least 1, got {front}")
+        df = df[(df["front"] >= 1) & (df["front"] <= front)]
+    df.attrs["units"] = units | {"candidate": "", "status": "", "feasible": ""}
+    return df
+
+
+# ----------------------------------------------------------------- scenes
+def _short(name, letter):
+    """P9 -> V9 (velocity columns), other names -> V[name]."""
+    if name.startswith("P") and name[1:].isdigit():
+        return f"{letter}{name[1:]}"
+    return f"{letter}[{name}]"
+
+
+def scene_tables(path, every=1) -> dict:
+    """{name: DataFrame} of a scene file at every computed position (every
+    ``every``-th): points, links, and reactions, peaks, motion_<case> where the
+    file has them."""
+    if every < 1:
+        raise ValueError(f"--every must be at least 1, got {every}")
+    out = {}
+    with open_results(path) as f:
+        if attr_text(f.attrs["kind"]) != "scene":
+            raise ResultsError(path, f"is a {attr_text(f.attrs['kind'])} result; its table is "
+                                     "`pipeline export FILE --csv DIR` (candidates.csv)")
+        m = f["mechanism"]
+        names = [str(attr_text(x)) for x in m.attrs["point_names"]]
+        links = [str(attr_text(x)) for x in m.attrs["link_labels"]]
+        d = f["dense"]
+        rows = slice(None, None, every)
+        phi = d["phi1"][rows]
+        cols, units = {"phi1": phi}, {"phi1": "deg"}
+        pos, vel, acc = d["position"][rows], d["velocity"][rows], d["acceleration"][rows]
+        for i, n in enumerate(names):
+            for key, arr, unit in ((n, pos, "mm"), (_short(n, "V"), vel, "m/s"),
+                                   (_short(n, "A"), acc, "m/s^2")):
+                for k, ax in enumerate("xy"):
+                    cols[f"{key}_{ax}"] = arr[:, i, k]
+                    units[f"{key}_{ax}"] = unit
+        out["points"] = _frame(cols, units)
+        cols, units = {"phi1": phi}, {"phi1": "deg"}
+        ang, om, ep = d["link_angle"][rows], d["link_omega"][rows], d["link_eps"][rows]
+        for j, lab in enumerate(links):
+            for key, arr, unit in (("phi", ang, "deg"), ("omega", om, "1/s"),
+                                   ("eps", ep, "1/s^2")):
+                cols[f"{key}_{lab}"] = arr[:, j]
+                units[f"{key}_{lab}"] = unit
+        out["links"] = _frame(cols, units)
+        if "reactions" in d:
+            from .forces import joint_peaks
+            R = d["reactions"][()]
+            joints = [str(attr_text(x)) for x in d["reactions"].attrs["joints"]]
+            cols, units = {"phi1": phi}, {"phi1": "deg"}
+            mag = np.hypot(R[..., 0], R[..., 1])
+            for j, name in enumerate(joints):
+                cols[f"{name}_x"] = R[rows, j, 0]
+                cols[f"{name}_y"] = R[rows, j, 1]
+                cols[name] = mag[rows, j]
+                units.update({f"{name}_x": "N", f"{name}_y": "N", name: "N"})
+            cols["M_bal"] = d["M_bal"][rows]
+            units["M_bal"] = "N*m"
+            out["reactions"] = _frame(cols, units)
+            peaks = pd.DataFrame(joint_peaks(d["phi1"][()], mag, joints),
+                                 columns=["joint", "R_max", "phi1", "d_min"])
+            peaks.attrs["units"] = {"joint": "", "R_max": "N", "phi1": "deg", "d_min": "mm"}
+            out["peaks"] = peaks
+        if "dynamics" in f:
+            from .dynamics import motion_tables
+            out.update(motion_tables(f["dynamics"]))
+    return out

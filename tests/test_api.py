@@ -1,0 +1,94 @@
+"""The Python API (pipeline.load_study / run / open) and the tables behind
+`pipeline export`: rows equal to the HDF5 datasets, units with every column."""
+
+import h5py
+import numpy as np
+import pandas as pd
+import pytest
+
+import pipeline
+from pipeline.cli import main
+from pipeline.kernels import config as kc
+
+N = 1500
+
+
+@pytest.fixture(scope="module")
+def sweep(tmp_path_factory, studies):
+    out = tmp_path_factory.mktemp("api") / "s.h5"
+    res = pipeline.run(pipeline.load_study(studies / "ov7_synthesis.toml"), out, candidates=N)
+    assert res.results == out
+    return out
+
+
+def test_the_package_offers_its_api():
+    for name in ("load_study", "run", "open", "candidates", "scene_tables", "with_units"):
+        assert name in dir(pipeline) and callable(getattr(pipeline, name))
+
+
+def test_open_a_sweep_gives_the_datasets_row_for_row(sweep):
+    df = pipeline.open(sweep)
+    assert isinstance(df, pd.DataFrame) and len(df) == N
+    with h5py.File(sweep, "r") as f:
+        names = [n.decode() if isinstance(n, bytes) else n
+                 for n in f["candidates/params"].attrs["names"]]
+        np.testing.assert_array_equal(df[names].to_numpy(), f["candidates/params"][()])
+        codes = f["candidates/status"][()]
+        assert list(df["status"]) == [kc.STATUS_NAMES[c] for c in codes]
+        np.testing.assert_array_equal(df["feasible"], f["candidates/feasible"][()])
+        for m in f["metrics"]:
+            np.testing.assert_array_equal(df[m], f[f"metrics/{m}"][()])
+        np.testing.assert_array_equal(df["g_stroke_min"], f["candidates/constraints"][:, 0])
+    assert df.attrs["units"]["L12"] == "mm" and df.attrs["units"]["peak_reaction"] == "N"
+    front1 = df[df["front"] == 1]
+    assert len(front1) >= 1 and front1["feasible"].all()
+
+
+def test_export_a_sweep(sweep, tmp_path):
+    assert main(["export", str(sweep), "--csv", str(tmp_path / "all"), "-q"]) == 0
+    assert main(["export", str(sweep), "--csv", str(tmp_path / "feas"), "--feasible",
+                 "-q"]) == 0
+    assert main(["export", str(sweep), "--csv", str(tmp_path / "f1"), "--front", "1",
+                 "-q"]) == 0
+    everything = pd.read_csv(tmp_path / "all" / "candidates.csv")
+    feas = pd.read_csv(tmp_path / "feas" / "candidates.csv")
+    f1 = pd.read_csv(tmp_path / "f1" / "candidates.csv")
+    df = pipeline.open(sweep)
+    assert len(everything) == N and len(feas) == int(df["feasible"].sum())
+    assert len(f1) == int((df["front"] == 1).sum()) and (f1["front"] == 1).all()
+    for col in ("L12 [mm]", "peak_reaction [N]", "dwell_start [deg]", "status", "feasible"):
+        assert col in everything.columns, col
+    np.testing.assert_allclose(everything["peak_reaction [N]"], df["peak_reaction"],
+                               rtol=1e-11)
+
+
+def test_parquet_needs_pyarrow_or_round_trips(sweep, tmp_path, capsys):
+    rc = main(["export", str(sweep), "--parquet", str(tmp_path / "pq"), "-q"])
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        assert rc == 2 and "pip install pyarrow" in capsys.readouterr().err
+        return
+    assert rc == 0
+    back = pd.read_parquet(tmp_path / "pq" / "candidates.parquet")
+    np.testing.assert_array_equal(back["peak_reaction"], pipeline.open(sweep)["peak_reaction"])
+
+
+def test_open_a_scene(tmp_path, studies):
+    res = pipeline.run(studies / "ov7_base.toml", tmp_path / "a.h5", pictures=False)
+    tables = pipeline.open(res.results)
+    assert set(tables) == {"points", "links"}
+    pts = tables["points"]
+    with h5py.File(res.results, "r") as f:
+        np.testing.assert_array_equal(pts["phi1"], f["dense/phi1"][()])
+        i = [n.decode() if isinstance(n, bytes) else n
+             for n in f["mechanism"].attrs["point_names"]].index("P9")
+        np.testing.assert_array_equal(pts["P9_x"], f["dense/position"][:, i, 0])
+    assert pipeline.with_units(pts).columns[1].endswith("[mm]")
+
+
+def test_export_options_that_do_not_apply_are_refused(sweep, tmp_path, capsys):
+    assert main(["export", str(sweep), "--csv", str(tmp_path), "--every", "3"]) == 2
+    assert "--every" in capsys.readouterr().err
+    assert main(["export", str(sweep)]) == 2
+    assert "--csv DIR or --parquet DIR" in capsys.readouterr().err
