@@ -26,7 +26,6 @@ All objectives are minimised (DOMAIN.md section 9).  Every random choice
 from __future__ import annotations
 
 import datetime as _dt
-import json
 import logging
 import time
 from dataclasses import dataclass, field
@@ -39,7 +38,8 @@ from .version import __version__
 from .files import replacing
 from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank
-from .storage import ResultsError, attr_text, open_results, put
+from .storage import (ResultsError, attr_text, coordinate, open_results, put, read_units,
+                      remove_group, variables)
 from .study import stored_study
 
 log = logging.getLogger("pipeline")
@@ -94,15 +94,8 @@ def sweep_objectives(f) -> tuple:
 
 
 def variable_units(d) -> list:
-    """Units of the design variables (attribute ``units``: a JSON list)."""
-    u = d.attrs.get("units", "[]")
-    try:
-        units = json.loads(attr_text(u))
-    except (TypeError, ValueError):
-        units = [str(u)] * d.shape[1]
-    if not isinstance(units, list) or len(units) != d.shape[1]:
-        units = ["?"] * d.shape[1]
-    return [str(x) for x in units]
+    """Units of the design variables (one per column)."""
+    return read_units(d, d.shape[-1])
 
 
 def read_sweep(path) -> SweepData:
@@ -119,7 +112,7 @@ def read_sweep(path) -> SweepData:
         ref = {}
         if "reference" in f:
             g = f["reference"]
-            for k in g:
+            for k in variables(g):
                 ref[k] = g[k][()]
         return SweepData(
             path=Path(path), attrs={k: f.attrs[k] for k in f.attrs}, names=names,
@@ -309,8 +302,7 @@ def write(path, data: SweepData, res: dict, elapsed: float):
 def _write_group(f, data: SweepData, res: dict, elapsed: float):
     names, units = data.names, data.units
     obj, ou = list(data.objectives), data.objective_units
-    if GROUP in f:
-        del f[GROUP]
+    remove_group(f, GROUP)
     g = f.create_group(GROUP)
     g.attrs.update(
         long_name="Pareto fronts, parameter importances and representative designs",
@@ -319,39 +311,51 @@ def _write_group(f, data: SweepData, res: dict, elapsed: float):
         created=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         n_candidates=data.n, n_feasible=int(data.feasible.sum()),
         n_fronts=int(res["rank"].max(initial=0)), elapsed_s=elapsed, complete=False)
+    if "objective" not in g:
+        coordinate(g, "objective", obj, "1", "objective (minimised)")
     put(g, "pareto_rank", res["rank"].astype(np.int32), "1",
-        "Pareto front of the candidate (1 = non-dominated; 0 = infeasible)")
+        "Pareto front of the candidate (1 = non-dominated; 0 = infeasible)",
+        dims=("candidate",))
     put(g, "crowding", res["crowding"], "1",
-        "NSGA-II crowding distance within the candidate's front (inf at the ends)")
+        "NSGA-II crowding distance within the candidate's front (inf at the ends)",
+        dims=("candidate",))
     put(g, "knee", np.int64(res["knee"]), "1",
         "candidate index of the knee of front 1 (-1: empty front)")
 
     fr = g.create_group("front1")
     fr.attrs["long_name"] = "non-dominated feasible designs, sorted by the first objective"
     idx = res["front1"]
-    put(fr, "index", idx, "1", "candidate index")
-    put(fr, "objectives", data.F[idx].reshape(len(idx), len(obj)), json.dumps(ou),
-        "objectives (minimised)", names=obj)
-    put(fr, "params", data.params[idx].reshape(len(idx), len(names)), json.dumps(units),
-        "design variables", names=names)
-    put(fr, "crowding", res["crowding"][idx], "1", "crowding distance within front 1")
+    coordinate(fr, "member", np.arange(len(idx)), "1", "member of front 1")
+    put(fr, "index", idx, "1", "candidate index", dims=("member",))
+    put(fr, "objectives", data.F[idx].reshape(len(idx), len(obj)), list(ou),
+        "objectives (minimised)", dims=("member", "objective"), names=obj)
+    put(fr, "params", data.params[idx].reshape(len(idx), len(names)), list(units),
+        "design variables", dims=("member", "variable"), names=names)
+    put(fr, "crowding", res["crowding"][idx], "1", "crowding distance within front 1",
+        dims=("member",))
 
     ref = res["reference"]
     rg = g.create_group("reference")
     rg.attrs["long_name"] = "the study's reference design among the candidates"
     rg.attrs["feasibility"] = ref["note"]
-    put(rg, "objectives", ref["objectives"], json.dumps(ou), "objectives of the reference "
-        "design", names=obj)
+    put(rg, "objectives", ref["objectives"], list(ou), "objectives of the reference "
+        "design", dims=("objective",), names=obj)
     put(rg, "feasible", np.bool_(ref["feasible"]), "1",
         "the reference design meets the study's constraints")
     put(rg, "rank", np.int32(ref["rank"]), "1", "front the reference design would join "
         "among the feasible candidates (1 = nobody dominates it; 0 = objectives not finite)")
     put(rg, "dominated_by_count", np.int64(len(ref["dominated_by"])), "1",
         "number of feasible candidates that dominate the reference design")
+    coordinate(rg, "dominator", np.arange(len(ref["dominated_by"])), "1",
+               "feasible candidate that dominates the reference design")
+    coordinate(rg, "front1_dominator", np.arange(len(ref["dominators_front1"])), "1",
+               "front-1 member that dominates the reference design")
     put(rg, "dominated_by", ref["dominated_by"], "1",
-        "indices of the feasible candidates that dominate the reference design")
+        "indices of the feasible candidates that dominate the reference design",
+        dims=("dominator",))
     put(rg, "dominators_front1", ref["dominators_front1"], "1",
-        "indices of the front-1 members that dominate the reference design")
+        "indices of the front-1 members that dominate the reference design",
+        dims=("front1_dominator",))
 
     ig = g.create_group("importance")
     ig.attrs["long_name"] = ("gradient-boosted tree model of each objective on the design "
@@ -369,9 +373,9 @@ def _write_group(f, data: SweepData, res: dict, elapsed: float):
                         n_test=m["n_test"], n_permutation=m["n_permutation"],
                         n_repeats=N_REPEATS)
         put(og, "mean", m["importance_mean"], "1", "permutation importance: mean drop of "
-            "the held-out R^2 when the variable is shuffled", names=names)
+            "the held-out R^2 when the variable is shuffled", dims=("variable",), names=names)
         put(og, "std", m["importance_std"], "1", "permutation importance: standard "
-            "deviation over the repeats", names=names)
+            "deviation over the repeats", dims=("variable",), names=names)
         put(og, "r2_test", np.float64(m["r2_test"]), "1",
             f"held-out R^2 of the model ({m['target']} target)")
         put(og, "r2_train", np.float64(m["r2_train"]), "1",
@@ -381,8 +385,11 @@ def _write_group(f, data: SweepData, res: dict, elapsed: float):
     rp.attrs["long_name"] = ("front-1 designs nearest the k-means centroids of the "
                              "normalised front-1 objectives")
     rp.attrs["method"] = f"KMeans(n_init={KMEANS_N_INIT}, random_state=seed)"
-    put(rp, "index", res["representatives"], "1", "candidate index")
-    put(rp, "cluster_size", res["cluster_size"], "1", "front-1 members in its cluster")
+    coordinate(rp, "representative", np.arange(len(res["representatives"])), "1",
+               "representative design")
+    put(rp, "index", res["representatives"], "1", "candidate index", dims=("representative",))
+    put(rp, "cluster_size", res["cluster_size"], "1", "front-1 members in its cluster",
+        dims=("representative",))
     g.attrs["complete"] = True
 
 
@@ -465,7 +472,7 @@ def read_analysis(f) -> Analysis | None:
         for k in og:
             m[k] = og[k][()]
         models[o] = m
-    ref = {k: g["reference"][k][()] for k in g["reference"]}
+    ref = {k: g["reference"][k][()] for k in variables(g["reference"])}
     ref["note"] = attr_text(g["reference"].attrs.get("feasibility", ""))
     return Analysis(rank=g["pareto_rank"][()], crowding=g["crowding"][()],
                     knee=int(g["knee"][()]), front1=g["front1/index"][()],

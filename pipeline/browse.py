@@ -23,7 +23,7 @@ from .analysis import read_analysis, sweep_objectives, variable_units
 from .files import save_figure
 from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank
-from .storage import ResultsError, attr_text, open_results
+from .storage import ResultsError, attr_text, open_results, read_units
 from .study import stored_study
 from .sweep import status_counts
 
@@ -82,7 +82,9 @@ def tree(f) -> list[dict]:
         if isinstance(obj, h5py.Dataset):
             rows.append({"path": "/" + name, "kind": "dataset",
                          "shape": "x".join(map(str, obj.shape)) or "scalar",
-                         "dtype": str(obj.dtype), "units": str(attr_text(a.get("units", ""))),
+                         "dtype": str(obj.dtype),
+                         "units": _short_units(read_units(obj, obj.shape[-1]
+                                                          if obj.ndim > 1 else 1)),
                          "long_name": str(attr_text(a.get("long_name", "")))})
         else:
             rows.append({"path": "/" + name, "kind": "group", "shape": "", "dtype": "",
@@ -309,22 +311,18 @@ def _table(df: pd.DataFrame, width=None) -> str:
     return df.to_string(index=False, float_format=lambda v: _g(v), line_width=width)
 
 
-def _short_units(u: str) -> str:
-    """A JSON list of units as "mm (all 9)" or "mm, deg, ..."."""
-    try:
-        v = json.loads(u)
-    except ValueError:
-        return u
-    if isinstance(v, list) and v:
-        return f"{v[0]} (all {len(v)})" if len(set(v)) == 1 else ", ".join(map(str, v))
-    return u
+def _short_units(units: list) -> str:
+    """Units per column as "mm (all 9)" or "mm, deg, ..."."""
+    if len(units) > 1 and len(set(units)) == 1:
+        return f"{units[0]} (all {len(units)})"
+    return ", ".join(units)
 
 
 def _tree_lines(rows) -> list[str]:
     cols = [("path", 36), ("shape", 10), ("dtype", 8), ("units", 12), ("long_name", 64)]
     out = ["  ".join(c.ljust(w) for c, w in cols).rstrip()]
     for r in rows:
-        r = dict(r, units=_short_units(r["units"]))
+        r = dict(r)
         if r["kind"] == "group":
             r["shape"] = "(group)"
         out.append("  ".join(str(r[c])[:w].ljust(w) for c, w in cols).rstrip())

@@ -322,10 +322,10 @@ class CaseResult:
         for grp, (t, p, w, e) in ((g, (self.t, self.phi1, self.omega1, self.eps1)),
                                   (g.create_group("tail"), (self.tail_t, self.tail_phi1,
                                                             self.tail_omega1, self.tail_eps1))):
-            put(grp, "t", t, "s", "time")
-            put(grp, "phi1", np.rad2deg(p), "deg", "crank angle phi1")
-            put(grp, "omega1", w, "rad/s", "crank angular velocity omega1")
-            put(grp, "eps1", e, "rad/s^2", "crank angular acceleration eps1")
+            put(grp, "t", t, "s", "time", dims=("t",))
+            put(grp, "phi1", np.rad2deg(p), "deg", "crank angle phi1", dims=("t",))
+            put(grp, "omega1", w, "rad/s", "crank angular velocity omega1", dims=("t",))
+            put(grp, "eps1", e, "rad/s^2", "crank angular acceleration eps1", dims=("t",))
         g["tail"].attrs["description"] = "every integration step of the last seconds"
         return g
 

@@ -78,14 +78,16 @@ class Reactions:
     def write(self, g):
         from .storage import put
         put(g, "reactions", self.R, "N", "joint reaction (force of the first body on the second)",
-            joints=list(self.joint_names))
-        put(g, "M_bal", self.M_bal, "N*m", "balancing moment on the crank")
+            dims=("phi1", "joint", "axis"), joints=list(self.joint_names))
+        put(g, "M_bal", self.M_bal, "N*m", "balancing moment on the crank", dims=("phi1",))
         if self.slide.shape[1]:
-            put(g, "slide_reactions", self.slide, "N, N*m",
-                "prismatic pair: normal force and couple", slides=list(self.slide_names))
-        put(g, "body_loads", self.body_loads, "N, N*m",
+            put(g, "slide_reactions", self.slide, ["N", "N*m"],
+                "prismatic pair: normal force and couple", dims=("phi1", "slide",
+                                                                  "slide_component"),
+                slides=list(self.slide_names))
+        put(g, "body_loads", self.body_loads, ["N", "N", "N*m"],
             "applied and inertia loads reduced to the centre of mass",
-            bodies=list(self.body_names))
+            dims=("phi1", "body", "load_component"), bodies=list(self.body_names))
 
 
 def scene_forces(mechanism, plan, curves) -> Reactions:

@@ -12,7 +12,7 @@ import numpy as np
 from .kernels import config as kc
 from .files import replacing
 from .scene import real_motion
-from .storage import put, status_table, write_root_attrs
+from .storage import STATUS_ENUM, coordinate, put, status_table, write_root_attrs
 
 
 def _curves(g, res, curves, study):
@@ -20,21 +20,59 @@ def _curves(g, res, curves, study):
     crank = study.mechanism.crank
     v, a, om, ep = real_motion(curves, crank.omega1, crank.eps1)
     nv = plan.n_visible
-    put(g, "phi1", np.rad2deg(curves.phi), "deg", "crank angle phi1")
-    put(g, "status", curves.status, "1", "position status", codes=status_table())
-    put(g, "position", curves.pos[:, :nv], "mm", "point position")
-    put(g, "position_analog", curves.d1[:, :nv], "mm/rad", "velocity analog dr/dphi1")
+    put(g, "phi1", np.rad2deg(curves.phi), "deg", "crank angle phi1", dims=("phi1",))
+    put(g, "status", curves.status.astype(STATUS_ENUM), "1", "position status",
+        dims=("phi1",), codes=status_table())
+    xy = ("phi1", "point", "axis")
+    put(g, "position", curves.pos[:, :nv], "mm", "point position", dims=xy)
+    put(g, "position_analog", curves.d1[:, :nv], "mm/rad", "velocity analog dr/dphi1", dims=xy)
     put(g, "acceleration_analog", curves.d2[:, :nv], "mm/rad^2",
-        "acceleration analog d2r/dphi1^2")
-    put(g, "velocity", v[:, :nv], "m/s", "point velocity")
-    put(g, "acceleration", a[:, :nv], "m/s^2", "point acceleration")
-    put(g, "link_angle", np.rad2deg(curves.links[:, :, 0]), "deg", "link angle")
-    put(g, "link_omega", om, "1/s", "link angular velocity")
-    put(g, "link_eps", ep, "1/s^2", "link angular acceleration")
-    put(g, "margin", curves.margin, "1", "distance from a toggle position per group")
-    put(g, "newton_iterations", curves.iterations, "1", "Newton iterations (class III groups)")
+        "acceleration analog d2r/dphi1^2", dims=xy)
+    put(g, "velocity", v[:, :nv], "m/s", "point velocity", dims=xy)
+    put(g, "acceleration", a[:, :nv], "m/s^2", "point acceleration", dims=xy)
+    put(g, "link_angle", np.rad2deg(curves.links[:, :, 0]), "deg", "link angle",
+        dims=("phi1", "link"))
+    put(g, "link_omega", om, "1/s", "link angular velocity", dims=("phi1", "link"))
+    put(g, "link_eps", ep, "1/s^2", "link angular acceleration", dims=("phi1", "link"))
+    put(g, "margin", curves.margin, "1", "distance from a toggle position per group",
+        dims=("phi1", "group"))
+    put(g, "newton_iterations", curves.iterations, "1", "Newton iterations (class III groups)",
+        dims=("phi1",))
     if curves.forces is not None:
         curves.forces.write(g)
+
+
+# the tolerance vector's entries (kernels.config T_*), named, with their units
+TOLERANCES = (("newton_tol", "1"), ("newton_maxiter", "1"), ("newton_step", "rad"),
+              ("singular", "1"), ("jump", "rad"), ("substep", "rad"), ("close", "rad"),
+              ("assembly_slack", "1"), ("step_change", "rad"), ("min_step", "1"),
+              ("first_step", "1"))
+
+
+def parameter_units(name) -> str:
+    """The unit of a compiled mechanism parameter (angles in the plan are rad)."""
+    key = name.rsplit(".", 1)[-1]
+    if key in ("x", "y", "length", "offset", "guide_length") or (
+            key.startswith("L") and key[1:2] in "0123456789_"):
+        return "mm"
+    if key in ("angle", "phiM0", "a0", "b0", "phi_start", "guide_angle"):
+        return "rad"
+    return {"mass": "kg", "J_S": "kg*m^2"}.get(key, "1")
+
+
+def _coordinates(f, plan, study):
+    """The file's named dimensions (dimension scales at the root)."""
+    coordinate(f, "point", list(plan.point_names[:plan.n_visible]), "1", "point")
+    coordinate(f, "axis", ["x", "y"], "1", "component")
+    coordinate(f, "link", list(study.output.link_labels), "1", "link")
+    coordinate(f, "group", list(plan.group_names), "1", "structural group")
+    coordinate(f, "joint", list(plan.joint_names), "1", "joint")
+    coordinate(f, "slide", list(plan.slide_names), "1", "prismatic pair")
+    coordinate(f, "body", list(plan.body_names), "1", "body")
+    coordinate(f, "load_component", ["Fx", "Fy", "M"], "1", "force x, force y, moment")
+    coordinate(f, "slide_component", ["N", "C"], "1", "normal force, couple")
+    coordinate(f, "parameter", list(plan.par_names), "1", "compiled mechanism parameter")
+    coordinate(f, "tolerance", [n for n, _ in TOLERANCES], "1", "solver tolerance")
 
 
 def write_scene(res, path):
@@ -50,9 +88,11 @@ def write_scene(res, path):
         m.attrs["working_point"] = study.output.working_point
         m.attrs["omega1"] = study.mechanism.crank.omega1
         m.attrs["eps1"] = study.mechanism.crank.eps1
-        put(m, "parameters", plan.par, "mixed", "compiled parameter vector",
-            names=list(plan.par_names))
-        put(m, "tolerances", res.tolerances, "mixed", "solver tolerances")
+        _coordinates(f, plan, study)
+        put(m, "parameters", plan.par, [parameter_units(n) for n in plan.par_names],
+            "compiled parameter vector", dims=("parameter",), names=list(plan.par_names))
+        put(m, "tolerances", res.tolerances, [u for _, u in TOLERANCES], "solver tolerances",
+            dims=("tolerance",))
         for name, curves in (("table", res.table), ("dense", res.dense)):
             _curves(f.create_group(name), res, curves, study)
         if res.dynamics:

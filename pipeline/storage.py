@@ -15,7 +15,7 @@ from .errors import ResultsError  # noqa: F401  (raised by every reader of resul
 from .kernels import config as kc
 
 FORMAT = "pipeline-results"
-FORMAT_VERSION = "1.0"
+FORMAT_VERSION = "1.1"     # 1.1: status enums, units per column, dimension scales
 
 
 def attr_text(v):
@@ -48,17 +48,117 @@ def write_root_attrs(f, kind, study, **extra):
 COMPRESSION = dict(compression="gzip", compression_opts=1, shuffle=True)
 
 
-def put(group, name, data, units, long_name, **attrs):
-    """Write one dataset with its units and long name."""
+# The status of a candidate or a position as an HDF5 enumeration: h5dump,
+# HDFView and netCDF readers show the names; h5py and NumPy read int8 codes.
+STATUS_ENUM = h5py.enum_dtype({name: code for code, name in kc.STATUS_NAMES.items()},
+                              basetype="i1")
+
+
+def units_attr(units):
+    """One form for units: a UDUNITS string, or one per column (a list)."""
+    if isinstance(units, (list, tuple)):
+        units = [str(u) for u in units]
+        return units[0] if len(set(units)) == 1 else np.array(units, dtype=h5py.string_dtype())
+    return str(units)
+
+
+def read_units(d, n=None) -> list:
+    """The units of each column of dataset ``d`` (``n`` columns): a string
+    attribute for all, a list per column; format 1.0 wrote JSON lists or
+    comma-separated text, which are read too."""
+    import json
+    u = d.attrs.get("units", "")
+    if isinstance(u, np.ndarray):
+        out = [attr_text(x) for x in u]
+    else:
+        u = attr_text(u)
+        try:
+            out = json.loads(u) if u.startswith("[") else None
+        except ValueError:
+            out = None
+        if out is None:
+            out = [x.strip() for x in u.split(",")] if "," in u else [u]
+    n = n if n is not None else (d.shape[1] if d.ndim > 1 else 1)
+    if len(out) == 1 and n > 1:
+        out = out * n
+    return [str(x) for x in out] if len(out) == n else ["?"] * n
+
+
+def coordinate(group, name, values, units, long_name):
+    """A dimension scale ``name`` in ``group`` (names or numbers along a
+    dimension): netCDF readers (xarray) see a named dimension with these
+    coordinates, h5dump a DIMENSION_LIST."""
+    values = list(values)
+    if values and isinstance(values[0], str):
+        data = np.array(values, dtype=h5py.string_dtype())
+    else:
+        data = np.asarray(values)
+    d = group.create_dataset(name, data=data)
+    d.attrs["units"] = units
+    d.attrs["long_name"] = long_name
+    d.make_scale(name)
+    return d
+
+
+def attach(d, dims):
+    """Name the dimensions of dataset ``d``: each entry the name of a dimension
+    scale in its group or a group above it (or a dataset of its group, which
+    becomes the scale: phi1 of a curves group, t of a dynamics case)."""
+    for i, name in enumerate(dims):
+        if name is None:
+            continue
+        g = d.parent
+        while True:
+            if name in g and isinstance(g[name], h5py.Dataset):
+                s = g[name]
+                if not h5py.h5ds.is_scale(s.id):
+                    s.make_scale(name)
+                break
+            if g.name == "/":
+                raise KeyError(f"no dimension scale {name!r} above {d.name}")
+            g = g.parent
+        if s.id != d.id:
+            d.dims[i].attach_scale(s)
+
+
+def variables(group) -> list:
+    """Names of the group's datasets that hold data (its dimension scales,
+    the coordinates, left out)."""
+    return [k for k, v in group.items()
+            if isinstance(v, h5py.Dataset) and not (h5py.h5ds.is_scale(v.id)
+                                                    and k not in ("phi1", "t"))]
+
+
+def remove_group(f, name):
+    """Delete group ``name`` of ``f`` after detaching its datasets from the
+    dimension scales they use (a deleted dataset must not stay listed by a
+    scale that outlives it)."""
+    if name not in f:
+        return
+
+    def detach(_, obj):
+        if isinstance(obj, h5py.Dataset) and not h5py.h5ds.is_scale(obj.id):
+            for i, dim in enumerate(obj.dims):
+                for s in list(dim.values()):
+                    obj.dims[i].detach_scale(s)
+    f[name].visititems(detach)
+    del f[name]
+
+
+def put(group, name, data, units, long_name, dims=None, **attrs):
+    """Write one dataset with its units (``units_attr``), long name and named
+    dimensions (``attach``)."""
     data = np.asarray(data)
     kw = {}
     if data.ndim >= 1 and data.size > 4096:
         kw = dict(COMPRESSION, chunks=True)
     d = group.create_dataset(name, data=data, **kw)
-    d.attrs["units"] = units
+    d.attrs["units"] = units_attr(units)
     d.attrs["long_name"] = long_name
     for k, v in attrs.items():
         d.attrs[k] = v
+    if dims:
+        attach(d, dims)
     return d
 
 

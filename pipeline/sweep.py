@@ -31,8 +31,8 @@ import numpy as np
 from .kernels import config as kc
 from .kernels import sweep as ks
 from .limits import CHUNK_WHY, MAX_CHUNK
-from .storage import (COMPRESSION, FORMAT, ResultsError, attr_text, put, status_table,
-                      write_root_attrs)
+from .storage import (COMPRESSION, FORMAT, STATUS_ENUM, ResultsError, attach, attr_text,
+                      coordinate, put, status_table, units_attr, write_root_attrs)
 from .sweep_spec import METRICS, SweepSpec, draw_candidates, draw_checked, parameter_rows
 
 log = logging.getLogger("pipeline")
@@ -221,47 +221,69 @@ class SweepFile:
                              n_candidates=n, chunk_size=spec.chunk_size,
                              positions_per_revolution=spec.positions,
                              objectives=list(spec.objectives), complete=False)
+            # the dimensions, named (netCDF readers: xarray, h5dump's DIMENSION_LIST)
+            k = f.create_dataset("candidate", data=np.arange(n), chunks=(ch,), **COMPRESSION)
+            k.attrs.update(units="1", long_name="candidate index")
+            k.make_scale("candidate")
+            gnames = constraint_names(self.has_margin)
+            coordinate(f, "variable", [v.name for v in spec.variables], "1", "design variable")
+            coordinate(f, "constraint", gnames, "1", "constraint g <= 0")
+            coordinate(f, "chunk", np.arange(spec.n_chunks), "1", "chunk of candidates")
+            coordinate(f, "triangle", [t.label for t in spec.triangles], "1",
+                       "triangle inequality checked before solving")
             c = f.create_group("candidates")
             d = c.create_dataset("params", (n, nv), "f8", chunks=(ch, nv), **COMPRESSION,
                                  fillvalue=np.nan)
-            d.attrs.update(units=json.dumps([v.units for v in spec.variables]),
+            attach(d, ("candidate", "variable"))
+            d.attrs.update(units=units_attr([v.units for v in spec.variables]),
                            long_name="design variables", names=[v.name for v in spec.variables],
                            params=[v.param for v in spec.variables],
                            low=[v.low for v in spec.variables],
                            high=[v.high for v in spec.variables])
-            d = c.create_dataset("status", (n,), "i1", chunks=(ch,), **COMPRESSION,
+            d = c.create_dataset("status", (n,), STATUS_ENUM, chunks=(ch,), **COMPRESSION,
                                  fillvalue=kc.NOT_EVALUATED)
             d.attrs.update(units="1", long_name="candidate status", codes=status_table())
+            attach(d, ("candidate",))
             for name, units, long in (
                     ("fail_phi", "deg", "crank angle phi1 where the candidate failed"),
                     ("cv", "1", "summed constraint violation (0 = feasible, NaN = failed)")):
                 d = c.create_dataset(name, (n,), "f8", chunks=(ch,), **COMPRESSION,
                                      fillvalue=np.nan)
                 d.attrs.update(units=units, long_name=long)
+                attach(d, ("candidate",))
             d = c.create_dataset("feasible", (n,), "?", chunks=(ch,), **COMPRESSION)
             d.attrs.update(units="1", long_name="status OK, constraints met, objectives finite")
+            attach(d, ("candidate",))
             d = c.create_dataset("forces_evaluated", (n,), "?", chunks=(ch,), **COMPRESSION)
             d.attrs.update(units="1", long_name="force stage run (skipped for candidates "
                                                 "already infeasible)")
-            gnames = constraint_names(self.has_margin)
+            attach(d, ("candidate",))
             d = c.create_dataset("constraints", (n, len(gnames)), "f8",
                                  chunks=(ch, len(gnames)), **COMPRESSION, fillvalue=np.nan)
-            d.attrs.update(units="mm, mm, 1", long_name="constraints g <= 0", names=gnames)
+            d.attrs.update(units=units_attr(["mm", "mm", "1"][:len(gnames)]),
+                           long_name="constraints g <= 0", names=gnames)
+            attach(d, ("candidate", "constraint"))
             m = f.create_group("metrics")
             for name in spec.metrics:
                 units, long, _ = METRICS[name]
                 d = m.create_dataset(name, (n,), "f8", chunks=(ch,), **COMPRESSION,
                                      fillvalue=np.nan)
                 d.attrs.update(units=units, long_name=long)
+                attach(d, ("candidate",))
             joints = list(plan.joint_names)
             m.attrs["joint_names"] = joints
             p = f.create_group("progress")
             d = p.create_dataset("chunk_done", (spec.n_chunks,), "?")
             d.attrs.update(units="1", long_name="chunk written")
+            attach(d, ("chunk",))
             d = p.create_dataset("rejected", (spec.n_chunks, len(spec.triangles)), "i8")
             d.attrs.update(units="1", long_name="draws redrawn because they broke a triangle "
                                                 "inequality (known before solving), per chunk",
                            triangles=[t.label for t in spec.triangles] or [""])
+            if spec.triangles:
+                attach(d, ("chunk", "triangle"))
+            else:
+                attach(d, ("chunk",))
             self._reference(f)
         os.replace(tmp, self.path)
 
@@ -276,10 +298,13 @@ class SweepFile:
         st, met = self.problem.evaluate_rows(np.ascontiguousarray(plan.par[None, :]), False)
         g = f.create_group("reference")
         g.attrs["long_name"] = "the study's reference design, evaluated like every candidate"
-        put(g, "params", x[0], "mixed", "design variables", names=[v.name for v in spec.variables])
-        put(g, "status", st, "1", "status", codes=status_table())
+        coordinate(g, "design", ["reference"], "1", "the reference design")
+        put(g, "params", x[0], [v.units for v in spec.variables], "design variables",
+            dims=("variable",), names=[v.name for v in spec.variables])
+        put(g, "status", st.astype(STATUS_ENUM), "1", "status", dims=("design",),
+            codes=status_table())
         for name, col in self._columns(met).items():
-            put(g, name, col, METRICS[name][0], METRICS[name][1])
+            put(g, name, col, METRICS[name][0], METRICS[name][1], dims=("design",))
 
     def _columns(self, metrics):
         return {name: metrics[:, COLUMN[name][0]] * COLUMN[name][1] for name in self.spec.metrics}

@@ -124,7 +124,7 @@ def parameter_domain(name):
     key = name.rsplit(".", 1)[-1]
     if key in ("mass", "J_S") or (name.startswith("S[") and key == "length"):
         return (0.0, True, "a mass, a moment of inertia or a centre-of-mass distance (>= 0)")
-    if key in ("length", "guide_length", "W") or (key.startswith("L") and key[1:2] in
+    if key in ("length", "guide_length") or (key.startswith("L") and key[1:2] in
                                                    "0123456789_"):
         return (0.0, False, "a length (> 0)")
     return None

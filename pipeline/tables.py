@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from .kernels import config as kc
-from .storage import ResultsError, attr_text, open_results
+from .storage import ResultsError, attr_text, open_results, read_units
 
 
 def with_units(df: pd.DataFrame) -> pd.DataFrame:
@@ -62,7 +62,7 @@ def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
             units[m] = str(attr_text(f[f"metrics/{m}"].attrs.get("units", "")))
         g = f["candidates/constraints"]
         cn = [str(attr_text(n)) for n in g.attrs.get("names", [])]
-        cu = [u.strip() for u in str(attr_text(g.attrs.get("units", ""))).split(",")]
+        cu = read_units(g, len(cn))
         G = g[()]
         for j, n in enumerate(cn):
             cols[f"g_{n}"] = G[:, j]

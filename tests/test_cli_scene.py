@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 
 from pipeline.cli import main
-from pipeline.storage import FORMAT, ResultsError, open_results
+from pipeline.storage import FORMAT, ResultsError, open_results, read_units
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +29,7 @@ def test_hdf5_describes_itself(class3_run, studies):
         f.visititems(lambda n, o: datasets.append(o) if isinstance(o, h5py.Dataset) else None)
         assert len(datasets) > 10
         for d in datasets:
-            assert d.attrs["units"] and d.attrs["long_name"], d.name
+            assert all(read_units(d)) and d.attrs["long_name"], d.name
 
 
 def test_csv_tables_match_hdf5(class3_run, tmp_path):
