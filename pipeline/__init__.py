@@ -1,13 +1,15 @@
 """pipeline: exact analysis and Monte-Carlo synthesis of planar hinged-lever mechanisms.
 
 The Python API (``pipeline.api``; see docs/api.md): ``load_study``, ``run``,
-``open`` (a results file as pandas DataFrames), ``candidates``,
-``scene_tables``, ``with_units``.  Importing the package loads no kernels and
+``solve_scene`` (a scene solved in memory), ``open`` (a results file as pandas
+DataFrames), ``candidates``, ``scene_tables``, ``with_units``; pictures from
+``pipeline.plots`` as matplotlib Figures.  Importing the package loads no kernels and
 leaves matplotlib's backend alone.
 """
 
-from .api import candidates, load_study, open, run, scene_tables, with_units  # noqa: A004
+from .api import (candidates, load_study, open, run, scene_tables, solve_scene,  # noqa: A004
+                  with_units)
 from .version import __version__
 
-__all__ = ["__version__", "load_study", "run", "open", "candidates", "scene_tables",
-           "with_units"]
+__all__ = ["__version__", "load_study", "run", "solve_scene", "open", "candidates",
+           "scene_tables", "with_units"]

@@ -18,7 +18,7 @@ from pathlib import Path
 from .study import Study, load_study as _load_study
 from .tables import candidates, scene_tables, with_units
 
-__all__ = ["load_study", "run", "open", "candidates", "scene_tables", "with_units"]
+__all__ = ["load_study", "run", "solve_scene", "open", "candidates", "scene_tables", "with_units"]
 
 
 def load_study(path) -> Study:
@@ -40,6 +40,24 @@ def run(study, output=None, *, candidates=None, resume=False, overwrite=False, n
         return run_scene_study(study, out, pictures=pictures)
     return run_sweep(study, out, candidates=candidates, resume=resume, overwrite=overwrite,
                      scheduler=scheduler, n_jobs=n_jobs, progress=progress)
+
+
+def solve_scene(study):
+    """Solve a scene study in memory, writing nothing: its table and dense
+    curves (positions, analogs, forces) and its dynamics cases.  Draw it with
+    ``pipeline.plots.scene_figure(result)``, ``forces_figure``, and
+    ``pipeline.dynamics.dynamics_figure(case)``."""
+    from .dynamics import run_dynamics
+    from .scene import run_scene
+    if not isinstance(study, Study):
+        study = _load_study(study)
+    if study.kind != "scene":
+        raise ValueError(f"{study.path}: pipeline.solve_scene solves a scene; this study is a "
+                         f"{study.kind} (use pipeline.run)")
+    res = run_scene(study)
+    if study.dynamics is not None:
+        res.dynamics = run_dynamics(study, res.plan)
+    return res
 
 
 def open(path):  # noqa: A001 - pipeline.open, as the users asked for it

@@ -520,9 +520,10 @@ def _headroom(ax, values, frac=0.45):
     ax.set_ylim(lo - 0.05 * span, hi + frac * span)
 
 
-def draw_candidate(run: CandidateRun, path, caption_extra="") -> Path:
+def candidate_figure(run: CandidateRun, caption_extra=""):
     """The design at 12 positions, its output motion over the OV-7 cyclogram and
-    against the crank angle, and its joint reactions against the crank angle."""
+    against the crank angle, and its joint reactions against the crank angle.
+    Returns the Figure."""
     import matplotlib.pyplot as plt
     from matplotlib.patches import Rectangle
 
@@ -651,9 +652,7 @@ def draw_candidate(run: CandidateRun, path, caption_extra="") -> Path:
         fig.text(0.5, 0.0, caption, ha="center", va="bottom", fontsize=9, style="italic",
                  wrap=True)
         fig.get_layout_engine().set(rect=(0, 0.025, 1, 0.975))
-    path = save_figure(fig, path, dpi=100)
-    plt.close(fig)
-    return path
+    return fig
 
 
 def default_show_output(path, index) -> Path:
@@ -674,7 +673,10 @@ def show(path, cid, out=None) -> dict:
             st = int(f["candidates/status"][run.index])
         else:
             st = int(f["reference/status"][0])
-    draw_candidate(run, out)
+    import matplotlib.pyplot as plt
+    fig = candidate_figure(run)
+    save_figure(fig, out, dpi=100)
+    plt.close(fig)
     info = {"candidate": run.index, "status": kc.STATUS_NAMES.get(run.status, run.status),
             "stored status": kc.STATUS_NAMES.get(st, st), "picture": str(out)}
     if np.isfinite(run.dwell_error):

@@ -36,7 +36,7 @@ import numpy as np
 from .kernels import config as kc
 from .compiler import kernels_for
 from .errors import StudyError
-from .files import safe_name, save_figure
+from .files import safe_name
 
 log = logging.getLogger("pipeline")
 
@@ -443,11 +443,10 @@ def motion_tables(group) -> dict:
     return out
 
 
-def dynamics_figure(case: CaseResult, path):
+def dynamics_figure(case: CaseResult):
     """phi1(t), omega1(t), eps1(t) and omega1 against phi1 (mod 360 deg for a
-    rotation); the title gives the coefficient of non-uniformity."""
-    from pathlib import Path
-
+    rotation); the title gives the coefficient of non-uniformity.  Returns the
+    Figure."""
     import matplotlib.pyplot as plt
     c = case.case
     s = case.steady()
@@ -491,9 +490,7 @@ def dynamics_figure(case: CaseResult, path):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.suptitle(head, fontsize=10)
-    save_figure(fig, path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return fig
 
 
 def with_changes(case, **changes):

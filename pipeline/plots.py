@@ -1,16 +1,14 @@
 """Pictures a designer wants to see.  Every function takes computed results and
-a path, and returns the path.  The backend is the caller's: the command line
+returns a matplotlib Figure: saving it (``files.save_figure``) or showing it
+is the caller's choice.  The backend is the caller's too: the command line
 chooses Agg, a notebook keeps its own."""
 
 from __future__ import annotations
-
-from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 
 from .scene import real_motion
-from .files import save_figure
 
 
 def _links_to_draw(plan, study):
@@ -68,9 +66,10 @@ def draw_positions(ax, res, curves, highlight=None):
     ax.grid(alpha=0.3)
 
 
-def scene_figure(res, path):
+def scene_figure(res):
     """Mechanism at its table positions with trajectories, and the working
-    point's displacement, velocity and acceleration against crank angle."""
+    point's displacement, velocity and acceleration against crank angle.
+    Returns the Figure (saving it is the caller's choice)."""
     study = res.study
     crank = study.mechanism.crank
     wp = study.output.working_point
@@ -102,9 +101,7 @@ def scene_figure(res, path):
             axr.legend(fontsize=8, ncol=3)
             axr.set_title(f"omega1 = {crank.omega1:g} rad/s", fontsize=10)
     axr.set_xlabel("crank angle phi1 [deg]")
-    save_figure(fig, path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return fig
 
 
 def _without_closing_row(curves):
@@ -115,9 +112,9 @@ def _without_closing_row(curves):
                    d2=curves.d2[:n])
 
 
-def forces_figure(res, path):
+def forces_figure(res):
     """Joint reactions and balancing moment against crank angle, and the polar
-    diagram of the reaction in the most loaded joint."""
+    diagram of the reaction in the most loaded joint.  Returns the Figure."""
     fr = res.dense.forces
     crank = res.study.mechanism.crank
     phi = np.rad2deg(res.dense.phi)
@@ -150,7 +147,5 @@ def forces_figure(res, path):
     axp.set_ylabel("Ry [N]")
     axp.grid(alpha=0.3)
     axp.set_title(f"Polar diagram of {fr.joint_names[j]} (most loaded joint)", fontsize=10)
-    save_figure(fig, path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return fig
 

@@ -6,7 +6,7 @@ import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .files import safe_name
+from .files import safe_name, save_figure
 from .study import load_study
 
 log = logging.getLogger("pipeline")
@@ -55,14 +55,19 @@ def run_scene_study(study, out, pictures=True) -> RunOutcome:
     write_scene(res, out)
     pics = []
     if pictures:
+        import matplotlib.pyplot as plt
+
         from . import plots
-        pics.append(plots.scene_figure(res, out.with_suffix(".png")))
+        from .dynamics import dynamics_figure
+        figures = [(plots.scene_figure(res), out.with_suffix(".png"))]
         if res.dense.forces is not None:
-            pics.append(plots.forces_figure(res, out.with_name(out.stem + "_forces.png")))
+            figures.append((plots.forces_figure(res), out.with_name(out.stem + "_forces.png")))
         for case in res.dynamics or ():
-            from .dynamics import dynamics_figure
-            pics.append(dynamics_figure(
-                case, out.with_name(f"{out.stem}_{safe_name(case.name, 'case')}.png")))
+            figures.append((dynamics_figure(case), out.with_name(
+                f"{out.stem}_{safe_name(case.name, 'case')}.png")))
+        for fig, path in figures:
+            pics.append(save_figure(fig, path, dpi=110))
+            plt.close(fig)
     summary = {"status": kc.STATUS_NAMES[res.status],
                "table_positions": int(res.table.phi.shape[0]),
                "dense_positions": int(res.dense.phi.shape[0])}

@@ -22,7 +22,8 @@ def sweep(tmp_path_factory, studies):
 
 
 def test_the_package_offers_its_api():
-    for name in ("load_study", "run", "open", "candidates", "scene_tables", "with_units"):
+    for name in ("load_study", "run", "solve_scene", "open", "candidates", "scene_tables",
+                 "with_units"):
         assert name in dir(pipeline) and callable(getattr(pipeline, name))
 
 
@@ -92,3 +93,24 @@ def test_export_options_that_do_not_apply_are_refused(sweep, tmp_path, capsys):
     assert "--every" in capsys.readouterr().err
     assert main(["export", str(sweep)]) == 2
     assert "--csv DIR or --parquet DIR" in capsys.readouterr().err
+
+
+def test_pictures_are_figures_the_caller_saves(studies, tmp_path):
+    """Plot functions return a matplotlib Figure and save nothing themselves."""
+    import matplotlib
+    from matplotlib.figure import Figure
+
+    from pipeline import plots
+    from pipeline.dynamics import dynamics_figure
+    before = set(tmp_path.iterdir())
+    res = pipeline.solve_scene(studies / "ov7_class3.toml")
+    for fig in (plots.scene_figure(res), plots.forces_figure(res)):
+        assert isinstance(fig, Figure) and fig.axes
+        matplotlib.pyplot.close(fig)
+    dyn = pipeline.solve_scene(studies / "takeup_dynamics.toml")
+    fig = dynamics_figure(dyn.dynamics[0])
+    assert isinstance(fig, Figure)
+    matplotlib.pyplot.close(fig)
+    assert set(tmp_path.iterdir()) == before
+    with pytest.raises(ValueError, match="pipeline.run"):
+        pipeline.solve_scene(studies / "ov7_synthesis.toml")
