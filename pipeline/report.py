@@ -53,10 +53,82 @@ pre { background: #f7f7f7; border: 1px solid #ddd; padding: 0.8em; font-size: 0.
       overflow-x: auto; }
 .note { color: #555; font-size: 0.9em; }
 tr.knee td { background: #fff4d6; }
+table.sortable th { cursor: pointer; }
+table.sortable th:hover { background: #e6eef8; }
+#explorer { display: flex; flex-wrap: wrap; gap: 16px; align-items: flex-start; }
+#explorer svg { border: 1px solid #ddd; background: #fff; }
+#explorer circle.pt { fill: #9ab; fill-opacity: 0.55; cursor: pointer; }
+#explorer circle.f1 { fill: #c22; fill-opacity: 0.9; }
+#explorer circle.sel { stroke: #000; stroke-width: 2; }
+#tip { position: absolute; pointer-events: none; background: #fffbe8; border: 1px solid #cc9;
+       padding: 3px 6px; font-size: 0.8em; display: none; }
+#design-panel { min-width: 320px; max-width: 520px; font-size: 0.9em; }
 """
 
 SCRIPT = """
 (function () {
+  // sortable tables: a click on a header sorts by that column (again: reversed)
+  function cellValue(td) {
+    var t = td.textContent.trim(), v = parseFloat(t);
+    return isNaN(v) ? t : v;
+  }
+  Array.prototype.forEach.call(document.querySelectorAll('table.sortable'), function (table) {
+    Array.prototype.forEach.call(table.tHead.rows[0].cells, function (th, col) {
+      th.addEventListener('click', function () {
+        var body = table.tBodies[0], rows = Array.prototype.slice.call(body.rows);
+        var asc = th.dataset.order !== 'asc';
+        rows.sort(function (a, b) {
+          var x = cellValue(a.cells[col]), y = cellValue(b.cells[col]);
+          return (x < y ? -1 : x > y ? 1 : 0) * (asc ? 1 : -1);
+        });
+        rows.forEach(function (r) { body.appendChild(r); });
+        th.dataset.order = asc ? 'asc' : 'desc';
+      });
+    });
+  });
+  // the front explorer: hover a point for its numbers, click it for the design
+  var data = document.getElementById('explorer-data');
+  if (data) {
+    var d = JSON.parse(data.textContent), tip = document.getElementById('tip');
+    var panel = document.getElementById('design-panel');
+    function label(k) {
+      var p = d.points[k];
+      return '#' + p.i + ' (front ' + (p.f || '-') + '): ' + d.objectives.map(function (o, j) {
+        return o + ' ' + p.m[j].toPrecision(4) + (d.objective_units[j] && d.objective_units[j] !== '1' ? ' ' + d.objective_units[j] : '');
+      }).join(', ');
+    }
+    function show(k, circle) {
+      var p = d.points[k], rows = [];
+      d.objectives.forEach(function (o, j) {
+        rows.push('<tr><td>' + o + ' [' + d.objective_units[j] + ']</td><td>' + p.m[j].toPrecision(5) + '</td></tr>');
+      });
+      d.names.forEach(function (n, j) {
+        rows.push('<tr><td>' + n + ' [' + d.units[j] + ']</td><td>' + p.v[j].toPrecision(5) + '</td></tr>');
+      });
+      var pic = d.drawings[String(p.i)];
+      panel.innerHTML = '<h3>Candidate ' + p.i + (p.f ? ', front ' + p.f : '') + '</h3>' +
+        (pic ? '' : '<p class="note">Its drawing and curves: <code>pipeline show ' + d.file +
+         ' --candidate ' + p.i + '</code></p>') + '<table class="kv">' + rows.join('') + '</table>';
+      if (pic) {   // the embedded drawing and curves of a front-1 design
+        var img = document.createElement('img');
+        img.alt = 'design ' + p.i;
+        img.setAttribute('src', pic);
+        panel.insertBefore(img, panel.children[1]);
+      }
+      panel.dataset.candidate = String(p.i);
+      Array.prototype.forEach.call(document.querySelectorAll('#explorer circle.sel'), function (c) { c.classList.remove('sel'); });
+      circle.classList.add('sel');
+    }
+    Array.prototype.forEach.call(document.querySelectorAll('#explorer circle.pt'), function (c) {
+      var k = Number(c.dataset.k);
+      c.addEventListener('mouseenter', function (e) {
+        tip.textContent = label(k); tip.style.display = 'block';
+        tip.style.left = (e.pageX + 12) + 'px'; tip.style.top = (e.pageY + 12) + 'px';
+      });
+      c.addEventListener('mouseleave', function () { tip.style.display = 'none'; });
+      c.addEventListener('click', function () { show(k, c); });
+    });
+  }
   window.addEventListener('error', function () {
     document.body.dataset.jsErrors = String(Number(document.body.dataset.jsErrors || 0) + 1);
   });
@@ -225,10 +297,80 @@ def design_figure(run) -> str:
     return _png(fig, dpi=90)
 
 
+EXPLORER_POINTS = 3000      # feasible designs in the interactive plot (front 1 always)
+EXPLORER_DRAWINGS = 12      # front-1 designs whose drawing and curves are embedded
+
+
+def explorer_html(path, data, ana) -> str:
+    """The interactive front: an SVG of the feasible designs (front 1 in red)
+    over the first two objectives; hover shows a design's numbers, a click its
+    variables, metrics and (for the first front-1 designs) its drawing and
+    curves.  Plain SVG and a few lines of script: one offline file."""
+    import json
+
+    from .browse import candidate_figure
+    feas = np.nonzero(data.feasible & np.isfinite(data.F).all(axis=1))[0]
+    if feas.size == 0 or data.F.shape[1] < 2:
+        return '<p class="note">No feasible design to explore.</p>'
+    front1 = set(int(i) for i in ana.front1)
+    rest = np.array([i for i in feas if int(i) not in front1], np.int64)
+    rng = np.random.default_rng(data.seed)
+    if rest.size > EXPLORER_POINTS:
+        rest = np.sort(rng.choice(rest, EXPLORER_POINTS, replace=False))
+    idx = np.concatenate([rest, np.array(sorted(front1), np.int64)])
+    F = data.F[idx, :2]
+    lo, hi = F.min(axis=0), F.max(axis=0)
+    span = np.where(hi > lo, hi - lo, 1.0)
+    W, H, M = 620, 420, 56
+    X = M + (F[:, 0] - lo[0]) / span[0] * (W - 1.5 * M)
+    Y = H - M + (F[:, 1] - lo[1]) / span[1] * -(H - 1.5 * M)
+    points, circles = [], []
+    for k, (i, x, y) in enumerate(zip(idx, X, Y)):
+        f1 = int(i) in front1
+        points.append({"i": int(i), "f": int(ana.rank[i]), "m": [float(v) for v in data.F[i]],
+                       "v": [float(v) for v in data.params[i]]})
+        circles.append(f'<circle class="pt{" f1" if f1 else ""}" data-k="{k}" '
+                       f'cx="{x:.1f}" cy="{y:.1f}" r="{4.5 if f1 else 2.6}"/>')
+    ticks = []
+    for t in np.linspace(0.0, 1.0, 5):
+        x = M + t * (W - 1.5 * M)
+        y = H - M - t * (H - 1.5 * M)
+        ticks.append(f'<text x="{x:.0f}" y="{H - M + 16}" font-size="10" text-anchor="middle">'
+                     f"{lo[0] + t * span[0]:.4g}</text>")
+        ticks.append(f'<text x="{M - 6}" y="{y + 3:.0f}" font-size="10" text-anchor="end">'
+                     f"{lo[1] + t * span[1]:.4g}</text>")
+    o, u = data.objectives, data.objective_units
+    svg = (f'<svg width="{W}" height="{H}" viewBox="0 0 {W} {H}" role="img">'
+           f'<line x1="{M}" y1="{H - M}" x2="{W - M / 2}" y2="{H - M}" stroke="#444"/>'
+           f'<line x1="{M}" y1="{H - M}" x2="{M}" y2="{M / 2}" stroke="#444"/>'
+           + "".join(ticks) +
+           f'<text x="{W / 2:.0f}" y="{H - 14}" font-size="12" text-anchor="middle">'
+           f"{html.escape(o[0])} [{html.escape(u[0])}]</text>"
+           f'<text x="14" y="{H / 2:.0f}" font-size="12" text-anchor="middle" '
+           f'transform="rotate(-90 14 {H / 2:.0f})">{html.escape(o[1])} '
+           f"[{html.escape(u[1])}]</text>" + "".join(circles) + "</svg>")
+    drawings = {}
+    for i in list(ana.front1[np.argsort(data.F[ana.front1, 0])])[:EXPLORER_DRAWINGS]:
+        try:
+            fig = candidate_figure(rerun_candidate(path, int(i)))
+        except Exception as e:   # a design the scene path cannot redraw: say so, go on
+            log.warning("report: candidate %d not drawn (%s)", int(i), e)
+            continue
+        drawings[str(int(i))] = _png(fig, dpi=60)
+    payload = {"points": points, "objectives": list(o), "objective_units": list(u),
+               "names": list(data.names), "units": list(data.units),
+               "file": html.escape(Path(path).name), "drawings": drawings}
+    text = json.dumps(payload).replace("</", "<\\/")
+    return (f'<div id="explorer">{svg}<div id="design-panel"><p class="note">Hover a point '
+            "for its objectives; click it for the design (front-1 designs with their drawing "
+            "and curves).</p></div></div><div id=\"tip\"></div>"
+            f'<script type="application/json" id="explorer-data">{text}</script>')
+
+
 # ----------------------------------------------------------------- page parts
 def _table_html(df, knee=None) -> str:
     cols = list(df.columns)
-    out = ["<table><thead><tr>"]
+    out = ['<table class="sortable"><thead><tr>']
     out += [f'<th class="{"l" if c in ("selection", "mark") else ""}">{html.escape(str(c))}</th>'
             for c in cols]
     out.append("</tr></thead><tbody>")
@@ -322,7 +464,8 @@ def build_html(path, top=20) -> str:
               "joined by a line); grey: candidates that violate a constraint but have both "
               "objectives; diamond: the knee of front 1; star: the study's reference design; "
               "letters: the representative designs below.</p>",
-              _img(pareto_figure(data, ana), "Pareto plot")]
+              _img(pareto_figure(data, ana), "Pareto plot"),
+              "<h3>Explore the designs</h3>", explorer_html(path, data, ana)]
 
     parts += ["<h2>What drives each objective</h2>",
               '<p class="note">A gradient-boosted tree model of each objective on the design '

@@ -366,3 +366,111 @@ def test_report_renders_in_chromium(cli_run, tmp_path):
     r = subprocess.run([exe, *flags, "--window-size=1280,3000", f"--screenshot={shot}", url],
                        capture_output=True, text=True, timeout=120, env=env)
     assert r.returncode == 0 and shot.exists() and shot.stat().st_size > 50_000
+
+
+def _devtools(exe, url, tmp_path):
+    """A headless Chromium showing ``url``, driven over the DevTools protocol
+    (its own WebSocket: no extra driver).  Yields (call, events)."""
+    import asyncio
+    import json as _json
+    import urllib.request
+
+    from tornado.websocket import websocket_connect
+
+    flags = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+             "--disable-background-networking", "--disable-component-update", "--disable-sync",
+             f"--user-data-dir={tmp_path / 'cdp-profile'}", "--remote-debugging-port=0",
+             "--window-size=1280,1800", url]
+    proc = subprocess.Popen([exe, *flags], stderr=subprocess.PIPE, text=True,
+                            env=dict(os.environ, HOME=str(tmp_path)))
+    port = None
+    for _ in range(200):
+        line = proc.stderr.readline()
+        m = re.search(r"DevTools listening on ws://[^:]+:(\d+)/", line)
+        if m:
+            port = int(m.group(1))
+            break
+    assert port, "Chromium did not open its DevTools port"
+    pages = _json.loads(urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list").read())
+    ws_url = [p for p in pages if p.get("type") == "page"][0]["webSocketDebuggerUrl"]
+    return proc, ws_url
+
+
+def test_report_click_on_a_front_point_shows_that_design(cli_run, tmp_path):
+    """In a real headless Chromium: the page loads without console errors; a
+    mouse click on a front-1 point of the explorer shows that design; a header
+    click sorts a table."""
+    import asyncio
+    import json as _json
+
+    from tornado.websocket import websocket_connect
+
+    exe = chromium()
+    url = (cli_run["dir"] / "report.html").resolve().as_uri()
+    proc, ws_url = _devtools(exe, url, tmp_path)
+
+    async def drive():
+        ws = await websocket_connect(ws_url, max_message_size=64 << 20)
+        seq, events = [0], []
+
+        async def call(method, **params):
+            seq[0] += 1
+            ws.write_message(_json.dumps({"id": seq[0], "method": method, "params": params}))
+            while True:
+                msg = _json.loads(await ws.read_message())
+                if msg.get("id") == seq[0]:
+                    return msg.get("result", {})
+                events.append(msg)
+
+        async def js(expr):
+            r = await call("Runtime.evaluate", expression=expr, returnByValue=True)
+            return r["result"].get("value")
+
+        await call("Runtime.enable")
+        for _ in range(100):
+            if await js("document.readyState") == "complete":
+                break
+            await asyncio.sleep(0.1)
+        target = _json.loads(await js("""(function () {
+            var c = document.querySelector('#explorer circle.f1');
+            c.scrollIntoView({block: 'center'});
+            var r = c.getBoundingClientRect(), k = Number(c.dataset.k);
+            var d = JSON.parse(document.getElementById('explorer-data').textContent);
+            return JSON.stringify({x: r.left + r.width / 2, y: r.top + r.height / 2,
+                                   i: d.points[k].i});
+        })()"""))
+        x, y = target["x"], target["y"]
+        await call("Input.dispatchMouseEvent", type="mouseMoved", x=x, y=y)
+        tip = await js("document.getElementById('tip').style.display + '|' + "
+                       "document.getElementById('tip').textContent")
+        for kind in ("mousePressed", "mouseReleased"):
+            await call("Input.dispatchMouseEvent", type=kind, x=x, y=y, button="left",
+                       clickCount=1)
+        shown = await js("document.getElementById('design-panel').dataset.candidate + '|' + "
+                         "document.getElementById('design-panel').textContent")
+        sorted_ok = await js("""(function () {
+            var t = document.querySelector('table.sortable'), th = t.tHead.rows[0].cells;
+            var col = Array.prototype.findIndex.call(th, function (h) {
+                return h.textContent.indexOf('peak_reaction') === 0; });
+            th[col].click();
+            var v = Array.prototype.map.call(t.tBodies[0].rows, function (r) {
+                return parseFloat(r.cells[col].textContent); });
+            for (var j = 1; j < v.length; j++) { if (v[j] < v[j - 1]) return false; }
+            return v.length > 1;
+        })()""")
+        errors = await js("document.body.dataset.jsErrors || ''")
+        ws.close()
+        return target, tip, shown, sorted_ok, errors, events
+
+    try:
+        target, tip, shown, sorted_ok, errors, events = asyncio.run(drive())
+    finally:
+        proc.kill()
+        proc.wait()
+    assert tip.startswith("block|#" + str(target["i"])), tip
+    cid, text = shown.split("|", 1)
+    assert cid == str(target["i"]) and f"Candidate {target['i']}" in text, shown
+    assert sorted_ok
+    bad = [e for e in events if e.get("method") == "Runtime.exceptionThrown" or (
+        e.get("method") == "Runtime.consoleAPICalled" and e["params"].get("type") == "error")]
+    assert not bad and not errors, (bad, errors)
