@@ -517,6 +517,11 @@ def build_html(path, top=20) -> str:
     if "wall_time_s" in a:
         prov.append(("sweep wall time", f"{float(a['wall_time_s']):.1f} s "
                                         f"({html.escape(str(a.get('engine', '')))})"))
+    study_n = _study_candidates(a.get("study_toml", ""))
+    run_n = int(a.get("n_candidates", data.n))
+    prov.insert(1, ("candidates in this run", f"{run_n:,}" + (
+        f" (the study below says {study_n:,}; the run's --candidates replaced it)"
+        if study_n is not None and study_n != run_n else "")))
     parts.append(_kv(prov))
     parts.append("<p>The study, as stored verbatim in the results file:</p>")
     parts.append(f"<pre>{html.escape(str(a.get('study_toml', '')))}</pre>")
@@ -526,6 +531,15 @@ def build_html(path, top=20) -> str:
             f"<title>{html.escape(str(title))}: sweep report</title>\n"
             f"<style>{CSS}</style>\n</head>\n<body>\n" + "\n".join(parts)
             + f"\n<script>{SCRIPT}</script>\n</body>\n</html>\n")
+
+
+def _study_candidates(text):
+    """The candidate count the stored study asks for (None if it says none)."""
+    import tomllib
+    try:
+        return int(tomllib.loads(str(text)).get("sweep", {}).get("candidates"))
+    except (tomllib.TOMLDecodeError, TypeError, ValueError):
+        return None
 
 
 def default_report_output(path) -> Path:

@@ -342,6 +342,8 @@ def test_report_is_self_contained(cli_run):
     for words in ("Pareto fronts", "held-out", "Representative designs", "Front 1",
                   "Candidates by status", "Provenance", "[sweep]", "20261121", "sobol"):
         assert words in page, words
+    # the stored study asks for 250,000; this run had N (--candidates): both said
+    assert f"candidates in this run</td><td>{N:,} (the study below says 250,000" in page
 
 
 def test_report_renders_in_chromium(cli_run, tmp_path):

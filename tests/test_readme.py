@@ -81,3 +81,29 @@ def test_dynamics_summary_is_a_table_with_units(tmp_path, capsys, studies):
     assert row["runup omega_mean"].endswith(" rad/s") and row["runup rpm"].endswith(" 1/min")
     assert row["free period_s"].endswith(" s") and row["free amplitude_deg"].endswith(" deg")
     assert not any("{" in ln for ln in lines)
+
+
+def test_a_first_run_says_it_is_compiling(tmp_path, studies, monkeypatch, caplog):
+    """A run whose kernels take more than a second to be ready says so while
+    it waits, and reports the compile time apart from the wall time."""
+    import logging
+    import time
+
+    import pipeline.sweep as sw
+    real = sw.SweepFile.create
+
+    def slow_create(self):
+        time.sleep(1.6)          # as a first compile would
+        return real(self)
+    monkeypatch.setattr(sw.SweepFile, "create", slow_create)
+    study = pipeline_load(studies)
+    with caplog.at_level(logging.INFO, logger="pipeline"):
+        out = sw.run_sweep(study, tmp_path / "s.h5", candidates=300, progress=False)
+    text = caplog.text
+    assert "compiling the kernels of this mechanism" in text and "kernels ready after" in text
+    assert "compile_time" in out.summary and float(out.summary["wall_time"].split()[0]) < 1.6
+
+
+def pipeline_load(studies):
+    from pipeline.study import load_study
+    return load_study(studies / "ov7_synthesis.toml")
