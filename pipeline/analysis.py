@@ -35,7 +35,7 @@ import h5py
 import numpy as np
 
 from .version import __version__
-from .files import replacing
+from .files import RunLock, replacing
 from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank
 from .storage import (ResultsError, attr_text, coordinate, open_results, put, read_units,
@@ -295,7 +295,8 @@ def write(path, data: SweepData, res: dict, elapsed: float):
     over the file when complete, so a failure (a full disk, a kill) leaves the
     sweep as it was."""
     path = Path(path)
-    with replacing(path, copy_of=path) as tmp, h5py.File(tmp, "r+") as f:
+    with RunLock(path, "a sweep or another analysis is writing this file"), \
+            replacing(path, copy_of=path) as tmp, h5py.File(tmp, "r+") as f:
         _write_group(f, data, res, elapsed)
 
 

@@ -11,11 +11,14 @@ folder.
 
 from __future__ import annotations
 
+import glob
 import os
 import re
 import shutil
 from contextlib import contextmanager
 from pathlib import Path
+
+from .errors import ResultsError
 
 
 def safe_name(label: str, fallback: str = "results") -> str:
@@ -54,15 +57,49 @@ def temporary_beside(target) -> Path:
 
 
 def _remove_stale(target: Path):
-    """Temporary files of ``target`` left by a process that was killed."""
-    for p in target.parent.glob(f".{target.stem}.*.partial{target.suffix}"):
+    """Temporary files of ``target`` left by a process that was killed (their
+    process id is gone); the whole name must match, so another file's
+    temporary file is never touched."""
+    pattern = re.compile(rf"\.{re.escape(target.stem)}\.(\d+)\.partial{re.escape(target.suffix)}")
+    for p in target.parent.glob(f".{glob.escape(target.stem)}.*.partial{glob.escape(target.suffix)}"):
+        m = pattern.fullmatch(p.name)
+        if not m:
+            continue
         try:
-            pid = int(p.name[len(target.stem) + 2:].split(".")[0])
-            os.kill(pid, 0)
+            os.kill(int(m.group(1)), 0)
         except ProcessLookupError:
             p.unlink(missing_ok=True)
-        except (ValueError, PermissionError, OSError):
+        except OSError:
             continue
+
+
+class RunLock:
+    """One writer per results file: a second run on the same file, or an
+    analysis while a sweep writes it, is refused at once (an advisory lock on
+    a hidden file beside it, released when the process ends, however it
+    ends)."""
+
+    def __init__(self, out, what="another run is writing this file"):
+        self.out = Path(out)
+        self.path = self.out.with_name(f".{self.out.name}.lock")
+        self.what = what
+
+    def __enter__(self):
+        import fcntl
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(self.fd)
+            raise ResultsError(self.out, f"{self.what}; wait for it to finish, or write to "
+                                         "another file with -o") from None
+        return self
+
+    def __exit__(self, *exc):
+        import fcntl
+        fcntl.flock(self.fd, fcntl.LOCK_UN)
+        os.close(self.fd)
 
 
 @contextmanager
@@ -106,27 +143,24 @@ def save_figure(fig, target, **kw):
 
 
 def os_error_text(e: OSError) -> str:
-    """One line for an operating-system error: the file and the reason
-    (h5py folds errno and its message into a long text; keep the reason)."""
-    name = e.filename or ""
-    if isinstance(e, BlockingIOError) or "unable to lock file" in str(e):
-        m = re.search(r"name = '([^']*)'", str(e))
-        name = name or (m.group(1) if m else "")
+    """One line for an operating-system error: the file and the reason.
+    h5py folds errno and the file name into a long text; a temporary name is
+    given as the file it stands for."""
+    msg = str(e)
+    name = str(e.filename or "")
+    m = re.search(r"name = '([^']*)'", msg)
+    if m and not name:
+        name = m.group(1)
+    if isinstance(e, BlockingIOError) or "unable to lock file" in msg:
         return (f"{name}: another run or program has this file open for writing" if name
                 else "a file is open for writing in another run or program")
-    reason = e.strerror
-    if not reason:
-        msg = str(e)
-        m = re.search(r"errno = (\d+)", msg)
-        if m:
-            reason = os.strerror(int(m.group(1)))
-        else:
-            m = re.search(r"name = '([^']*)'", msg)
-            if m and not name:
-                name = m.group(1)
-            reason = msg.splitlines()[0] if msg else type(e).__name__
-        m = re.search(r"name = '([^']*)'", msg)
-        if m and not name:
-            name = m.group(1)
-    name = re.sub(r"(^|/)\.([^/]+)\.\d+\.partial(\.[^/]*)?$", r"\1\2\3", str(name))
+    m = re.search(r"errno = (\d+)", msg)
+    if m:
+        reason = os.strerror(int(m.group(1)))
+    elif e.strerror and "(" not in e.strerror:
+        reason = e.strerror
+    else:
+        reason = msg.splitlines()[0] if msg else type(e).__name__
+    name = re.sub(r"(^|/)\.([^/]+)\.\d+\.partial(\.[^/]*)?$", r"\1\2\3", name)
+    name = re.sub(r"\.tmp$", "", name)
     return f"{name}: {reason}" if name else reason

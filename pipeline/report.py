@@ -97,24 +97,35 @@ SCRIPT = """
         return o + ' ' + p.m[j].toPrecision(4) + (d.objective_units[j] && d.objective_units[j] !== '1' ? ' ' + d.objective_units[j] : '');
       }).join(', ');
     }
+    function el(tag, text, cls) {   // text only: names and units never become markup
+      var e = document.createElement(tag);
+      if (text !== undefined) { e.textContent = text; }
+      if (cls) { e.className = cls; }
+      return e;
+    }
     function show(k, circle) {
-      var p = d.points[k], rows = [];
+      var p = d.points[k], table = el('table', undefined, 'kv');
+      function row(label, value) {
+        var tr = el('tr'); tr.appendChild(el('td', label)); tr.appendChild(el('td', value));
+        table.appendChild(tr);
+      }
       d.objectives.forEach(function (o, j) {
-        rows.push('<tr><td>' + o + ' [' + d.objective_units[j] + ']</td><td>' + p.m[j].toPrecision(5) + '</td></tr>');
+        row(o + ' [' + d.objective_units[j] + ']', p.m[j].toPrecision(5));
       });
-      d.names.forEach(function (n, j) {
-        rows.push('<tr><td>' + n + ' [' + d.units[j] + ']</td><td>' + p.v[j].toPrecision(5) + '</td></tr>');
-      });
+      d.names.forEach(function (n, j) { row(n + ' [' + d.units[j] + ']', p.v[j].toPrecision(5)); });
       var pic = d.drawings[String(p.i)];
-      panel.innerHTML = '<h3>Candidate ' + p.i + (p.f ? ', front ' + p.f : '') + '</h3>' +
-        (pic ? '' : '<p class="note">Its drawing and curves: <code>pipeline show ' + d.file +
-         ' --candidate ' + p.i + '</code></p>') + '<table class="kv">' + rows.join('') + '</table>';
+      panel.textContent = '';
+      panel.appendChild(el('h3', 'Candidate ' + p.i + (p.f ? ', front ' + p.f : '')));
       if (pic) {   // the embedded drawing and curves of a front-1 design
-        var img = document.createElement('img');
+        var img = el('img');
         img.alt = 'design ' + p.i;
         img.setAttribute('src', pic);
-        panel.insertBefore(img, panel.children[1]);
+        panel.appendChild(img);
+      } else {
+        panel.appendChild(el('p', 'Its drawing and curves: pipeline show ' + d.file +
+                                  ' --candidate ' + p.i, 'note'));
       }
+      panel.appendChild(table);
       panel.dataset.candidate = String(p.i);
       Array.prototype.forEach.call(document.querySelectorAll('#explorer circle.sel'), function (c) { c.classList.remove('sel'); });
       circle.classList.add('sel');
@@ -359,8 +370,10 @@ def explorer_html(path, data, ana) -> str:
         drawings[str(int(i))] = _png(fig, dpi=60)
     payload = {"points": points, "objectives": list(o), "objective_units": list(u),
                "names": list(data.names), "units": list(data.units),
-               "file": html.escape(Path(path).name), "drawings": drawings}
-    text = json.dumps(payload).replace("</", "<\\/")
+               "file": Path(path).name, "drawings": drawings}
+    # inside <script>: no character that the HTML parser reads as markup
+    text = (json.dumps(payload).replace("&", "\\u0026").replace("<", "\\u003c")
+            .replace(">", "\\u003e"))
     return (f'<div id="explorer">{svg}<div id="design-panel"><p class="note">Hover a point '
             "for its objectives; click it for the design (front-1 designs with their drawing "
             "and curves).</p></div></div><div id=\"tip\"></div>"

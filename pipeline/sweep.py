@@ -30,6 +30,7 @@ import numpy as np
 
 from .kernels import config as kc
 from .kernels import sweep as ks
+from .files import RunLock, replacing
 from .limits import CHUNK_WHY, MAX_CHUNK
 from .storage import (COMPRESSION, FORMAT, STATUS_ENUM, ResultsError, attach, attr_text,
                       coordinate, put, status_table, units_attr, write_root_attrs)
@@ -214,9 +215,7 @@ class SweepFile:
         spec, plan = self.spec, self.problem.plan
         n, nv = spec.candidates, len(spec.variables)
         ch = min(spec.chunk_size, n)
-        tmp = self.path.with_name(self.path.name + ".tmp")
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        with h5py.File(tmp, "w") as f:
+        with replacing(self.path) as tmp, h5py.File(tmp, "w") as f:
             write_root_attrs(f, "sweep", self.study, seed=spec.seed, sampler=spec.sampler,
                              n_candidates=n, chunk_size=spec.chunk_size,
                              positions_per_revolution=spec.positions,
@@ -285,7 +284,6 @@ class SweepFile:
             else:
                 attach(d, ("chunk",))
             self._reference(f)
-        os.replace(tmp, self.path)
 
     @property
     def has_margin(self):
@@ -397,8 +395,10 @@ def run_sweep(study, out, *, candidates=None, resume=False, overwrite=False, sch
     file."""
     from dataclasses import replace
     spec: SweepSpec = study.sweep
-    if resume and candidates is None and chunk_size is None:
-        candidates, chunk_size = _run_sizes(Path(out))
+    if resume:
+        n, ch = _run_sizes(Path(out))
+        candidates = n if candidates is None else candidates
+        chunk_size = ch if chunk_size is None else chunk_size
     if candidates is not None:
         if candidates < 1:
             raise ValueError(f"--candidates must be at least 1, got {candidates}")
@@ -413,6 +413,11 @@ def run_sweep(study, out, *, candidates=None, resume=False, overwrite=False, sch
     with RunLock(out):
         return _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs,
                            progress, stop_after_chunks)
+
+
+def _replaced(out: Path) -> Path:
+    """Where a finished file waits while --overwrite replaces it."""
+    return out.with_name(f".{out.name}.replaced")
 
 
 def _run_sizes(out: Path):
@@ -432,39 +437,16 @@ def _run_sizes(out: Path):
     return None, None
 
 
-class RunLock:
-    """One run per output file: a second run on the same file is refused at
-    once (an advisory lock on a hidden file beside it, released when the
-    process ends, however it ends)."""
-
-    def __init__(self, out: Path):
-        self.out = out
-        self.path = out.with_name(f".{out.name}.lock")
-
-    def __enter__(self):
-        import fcntl
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            os.close(self.fd)
-            raise ResultsError(self.out, "another run is writing this file; wait for it to "
-                                         "finish, or write to another file with -o") from None
-        return self
-
-    def __exit__(self, *exc):
-        import fcntl
-        fcntl.flock(self.fd, fcntl.LOCK_UN)
-        os.close(self.fd)
-
-
 def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, progress,
                 stop_after_chunks):
     journal = Journal(out)
     _check_existing(out, journal, study, spec, resume, overwrite)
     if overwrite and out.exists() and not resume:
-        log.info("replacing %s", out)
+        # the finished file steps aside until the new run has saved work (a new
+        # run that fails or is stopped before that puts it back)
+        log.info("replacing %s (kept aside as %s until the new run has saved its first "
+                 "chunk)", out, _replaced(out).name)
+        os.replace(out, _replaced(out))
     if resume and not journal.exists() and out.exists():
         log.info("%s is already complete; nothing to resume", out)
         return SweepOutcome("sweep", out, [], summarize(out))
@@ -482,9 +464,12 @@ def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, 
                            stop_after_chunks)
     except BaseException as e:
         # a run that fails or is stopped before its first chunk leaves nothing behind
+        # (and a file it was to replace comes back)
         if fresh and not journal.done():
             journal.remove()
             out.unlink(missing_ok=True)
+            if _replaced(out).exists():
+                os.replace(_replaced(out), out)
             if isinstance(e, KeyboardInterrupt):
                 raise SweepInterrupted(f"{out}: interrupted before the first chunk finished; "
                                        "nothing was written") from None
@@ -548,6 +533,7 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
         f.attrs["wall_time_s"] = wall
         f.attrs["engine"] = "dask" if client is not None else "local"
     journal.remove()
+    _replaced(out).unlink(missing_ok=True)     # the new run is complete: the old one goes
     summary = summarize(out)
     summary["wall_time"] = f"{wall:.1f} s"
     if prep > 1.0:
@@ -631,8 +617,8 @@ def status_counts(f) -> dict:
     if "progress/rejected" in f and f["progress/rejected"].size:
         k = int(f["progress/rejected"][()].sum())
         if k:   # draws that could not be built, replaced before solving (not candidates)
-            out["redrawn before solving"] = {"count": k,
-                                             "percent": round(100.0 * k / max(n, 1), 2)}
+            out["redrawn before solving"] = {  # percent of all draws, not of the candidates
+                "count": k, "percent": round(100.0 * k / max(n + k, 1), 2)}
     return out
 
 

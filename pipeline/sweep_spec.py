@@ -217,16 +217,22 @@ def parse_sweep(root, mech, output) -> SweepSpec:
         scheduler=sec.string("scheduler", "") or None,
         triangles=triangles_of(plan, variables),
     )
-    for t in spec.triangles:
-        # rejection sampling needs designs that can be built: at least 1 % of the box
-        probe = np.random.default_rng(0).random((20000, len(variables)))
+    if spec.triangles:
+        # rejection sampling needs designs that can be built: at least 1 % of the box,
+        # every triangle at once
+        probe = np.random.default_rng(0).random((40000, len(variables)))
         lo = np.array([v.low for v in variables])
         hi = np.array([v.high for v in variables])
-        ok = 1.0 - t.broken(lo + probe * (hi - lo)).mean()
+        x = lo + probe * (hi - lo)
+        bad = np.zeros(len(x), bool)
+        for t in spec.triangles:
+            bad |= t.broken(x)
+        ok = 1.0 - bad.mean()
         if ok < 0.01:
-            raise sec.error("variables", f"only {100 * ok:.2g} % of the bounds give a buildable "
-                                         f"{t.label}; narrow the bounds of "
-                                         + ", ".join(t.names))
+            names = ", ".join(n for t in spec.triangles for n in t.names)
+            raise sec.error("variables", f"only {100 * ok:.2g} % of the bounds give buildable "
+                                         f"{'; '.join(t.label for t in spec.triangles)}; "
+                                         f"narrow the bounds of {names}")
     w = round(output.dwell_deg * positions / 360)
     if not 1 <= w < positions:
         raise StudyError(root.file, "output.dwell",
@@ -259,7 +265,9 @@ def draw_unit(spec: SweepSpec, chunk: int) -> np.ndarray:
     return rng.random((hi - lo, d))
 
 
-REDRAW_ROUNDS = 200     # rejection rounds per chunk (acceptance >= 1 % is checked at parse time)
+# rejection rounds per chunk: with the acceptance >= 1 % that parse_sweep checks, a draw
+# is still broken after 5,000 rounds with probability 0.99^5000 = 1.5e-22
+REDRAW_ROUNDS = 5000
 
 
 def draw_candidates(spec: SweepSpec, chunk: int) -> np.ndarray:
@@ -308,7 +316,8 @@ def geometry_problems(plan, par) -> list:
         dom = parameter_domain(name)
         v = float(par[j])
         if dom is not None and not (v >= dom[0] if dom[1] else v > dom[0]):
-            out.append(f"{name} = {v:.6g} mm is not {dom[2]}")
+            unit = " mm" if "length" in dom[2] and not dom[1] else ""
+            out.append(f"{name} = {v:.6g}{unit} is not {dom[2]}")
     for name in plan.par_names:
         if not name.endswith(".L34"):
             continue

@@ -20,7 +20,8 @@ import pytest
 import pipeline.files as files
 from pipeline.cli import main
 from pipeline.study import load_study
-from pipeline.sweep import RunLock, run_sweep
+from pipeline.files import RunLock
+from pipeline.sweep import run_sweep
 
 ROOT = Path(__file__).resolve().parent.parent
 N = 2000
@@ -344,3 +345,66 @@ def test_scene_positions_limit(studies, tmp_path, capsys):
     study.write_text(text)
     assert main(["run", str(study), "-o", str(tmp_path / "x.h5"), "-q"]) == 2
     one_line_error(capsys, "dense_positions", "at most 100,000")
+
+
+# ------------------------------------------------------------ found in review
+def test_overwrite_that_fails_before_its_first_chunk_keeps_the_old_file(studies, tmp_path,
+                                                                         monkeypatch):
+    import pipeline.sweep as sw
+    study = load_study(studies / "ov7_synthesis.toml")
+    out = tmp_path / "s.h5"
+    run_sweep(study, out, candidates=300, progress=False)
+    before = digest(out)
+
+    def interrupted(self):
+        raise KeyboardInterrupt       # Ctrl-C while the new run compiles
+    monkeypatch.setattr(sw.SweepFile, "create", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(study, out, candidates=400, progress=False, overwrite=True)
+    assert digest(out) == before
+    assert sorted(p.name for p in tmp_path.iterdir() if not p.name.endswith(".lock")) == ["s.h5"]
+    monkeypatch.undo()
+    run_sweep(study, out, candidates=400, progress=False, overwrite=True)
+    with h5py.File(out, "r") as f:
+        assert f["candidates/status"].shape == (400,)
+    assert not list(tmp_path.glob(".s.h5.replaced"))
+
+
+def test_stale_cleanup_never_touches_another_files_temporary(tmp_path):
+    other = tmp_path / ".sweep.2.999999999.partial.h5"     # sweep.2.h5's, pid 999999999
+    other.write_bytes(b"x")
+    bracket = tmp_path / ".run1.999999999.partial.h5"      # run1.h5's, not run[1].h5's
+    bracket.write_bytes(b"x")
+    files.write_text(tmp_path / "sweep.h5", "a")
+    files.write_text(tmp_path / "run[1].h5", "b")
+    assert other.exists() and bracket.exists()
+    files.write_text(tmp_path / "run1.h5", "c")            # its own stale file goes
+    assert not bracket.exists()
+
+
+def test_analysis_waits_for_no_one_while_a_run_writes(sweep_copy, capsys):
+    before = digest(sweep_copy)
+    with RunLock(sweep_copy):
+        assert main(["analyze", str(sweep_copy)]) == 2
+    one_line_error(capsys, "a sweep or another analysis is writing this file")
+    assert digest(sweep_copy) == before
+
+
+def test_h5py_error_texts_name_the_target_file():
+    e = OSError("Unable to synchronously create file (unable to open file: name = "
+                "'/x/.out.123.partial.h5', errno = 28, error message = 'No space left on "
+                "device', flags = 13, o_flags = 242)")
+    assert files.os_error_text(e) == "/x/out.h5: No space left on device"
+
+
+def test_names_and_units_never_become_markup_in_the_report(studies, tmp_path):
+    study = study_variant(studies, tmp_path, "ov7_synthesis.toml",
+                          [('L12 = { param = "crank.length" }',
+                            'L12 = { param = "crank.length", units = "<img src=x onerror=alert(1)>" }')])
+    out = tmp_path / "s.h5"
+    assert main(["run", str(study), "-o", str(out), "--candidates", "600", "-q"]) == 0
+    assert main(["report", str(out), "-o", str(tmp_path / "r.html"), "-q"]) == 0
+    page = (tmp_path / "r.html").read_text()
+    data = page.split('id="explorer-data">', 1)[1].split("</script>", 1)[0]
+    assert "<" not in data and ">" not in data and "\\u003cimg" in data
+    assert "<img src=x" not in page
