@@ -321,7 +321,9 @@ def explorer_html(path, data, ana) -> str:
 
     from .browse import candidate_figure
     feas = np.nonzero(data.feasible & np.isfinite(data.F).all(axis=1))[0]
-    if feas.size == 0 or data.F.shape[1] < 2:
+    if data.F.shape[1] < 2:
+        return '<p class="note">The explorer plots two objectives; this study has one.</p>'
+    if feas.size == 0:
         return '<p class="note">No feasible design to explore.</p>'
     front1 = set(int(i) for i in ana.front1)
     rest = np.array([i for i in feas if int(i) not in front1], np.int64)
