@@ -44,11 +44,33 @@ def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
                      progress=progress)
 
 
+def peak_summary(res) -> dict:
+    """The peaks a designer reads first: the working point's speed and
+    acceleration, the largest joint reaction and balancing moment (refined
+    between grid positions, with their crank angles)."""
+    out = {}
+    wp = res.study.output.working_point
+    for p in res.peaks or ():
+        where = f"at phi1 = {p.phi1:.4f} deg"
+        if p.item == wp and p.quantity in ("velocity", "acceleration"):
+            out[f"peak {p.quantity} {wp}"] = f"{p.value:.6g} {p.unit} {where}"
+    reactions = [p for p in res.peaks or () if p.quantity == "reaction"]
+    if reactions:
+        p = max(reactions, key=lambda q: q.value)
+        out["peak_reaction"] = f"{p.value:.1f} N at {p.item}, phi1 = {p.phi1:.4f} deg"
+    for p in res.peaks or ():
+        if p.quantity == "M_bal":
+            out["peak_M_bal"] = f"{p.value:.3f} N*m at phi1 = {p.phi1:.4f} deg"
+    return out
+
+
 def run_scene_study(study, out, pictures=True) -> RunOutcome:
     from .kernels import config as kc
     from .scene import run_scene
     from .scene_file import write_scene
     res = run_scene(study)
+    from .peaks import scene_peaks
+    res.peaks = scene_peaks(res)
     if study.dynamics is not None:
         from .dynamics import run_dynamics
         res.dynamics = run_dynamics(study, res.plan)
@@ -74,8 +96,7 @@ def run_scene_study(study, out, pictures=True) -> RunOutcome:
     if res.status == kc.BAD_GEOMETRY:
         from .sweep_spec import geometry_problems
         summary["reason"] = "; ".join(geometry_problems(res.plan, res.plan.par))
-    if res.dense.forces is not None:
-        summary.update(res.dense.forces.summary())
+    summary.update(peak_summary(res))
     for case in res.dynamics or ():
         for k, v in case.summary_lines().items():
             summary[f"{case.name} {k}"] = v

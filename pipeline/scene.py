@@ -69,6 +69,7 @@ class SceneResult:
     dense: Curves
     tolerances: np.ndarray
     dynamics: list | None = None     # pipeline.dynamics.CaseResult per case, if the study asks
+    peaks: list | None = None        # pipeline.peaks.Peak, refined between grid positions
 
     @property
     def status(self):

@@ -75,6 +75,29 @@ def _coordinates(f, plan, study):
     coordinate(f, "tolerance", [n for n, _ in TOLERANCES], "1", "solver tolerance")
 
 
+PEAK_DIMS = {"velocity": "point", "acceleration": "point", "omega": "link", "eps": "link",
+             "reaction": "joint"}
+
+
+def _peaks(g, peaks):
+    """Per quantity: the peak of every point, link or joint, its crank angle
+    and the largest grid sample it was refined from."""
+    g.attrs["long_name"] = ("peaks over the revolution, refined between the dense positions "
+                            "by a bounded 1-D maximiser on the exact kinematics")
+    by = {}
+    for p in peaks:
+        by.setdefault(p.quantity, []).append(p)
+    for q, ps in by.items():
+        dims = (PEAK_DIMS[q],) if q in PEAK_DIMS else None
+        val = np.array([p.value for p in ps]) if dims else np.float64(ps[0].value)
+        phi = np.array([p.phi1 for p in ps]) if dims else np.float64(ps[0].phi1)
+        grid = np.array([p.grid_value for p in ps]) if dims else np.float64(ps[0].grid_value)
+        put(g, q, val, ps[0].unit, f"peak |{q}|", dims=dims)
+        put(g, f"{q}_phi1", phi, "deg", f"crank angle phi1 of the peak |{q}|", dims=dims)
+        put(g, f"{q}_grid", grid, ps[0].unit, f"largest |{q}| among the dense positions",
+            dims=dims)
+
+
 def write_scene(res, path):
     """Write a scene result; returns the path."""
     study = res.study
@@ -98,4 +121,6 @@ def write_scene(res, path):
         if res.dynamics:
             for case in res.dynamics:
                 case.write(f.require_group("dynamics"))
+        if res.peaks:
+            _peaks(f.create_group("peaks"), res.peaks)
     return path

@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from .kernels import config as kc
-from .storage import ResultsError, attr_text, open_results, read_units
+from .storage import ResultsError, attr_text, open_results, read_units, variables
 
 
 def with_units(df: pd.DataFrame) -> pd.DataFrame:
@@ -79,6 +79,33 @@ def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
 
 
 # ----------------------------------------------------------------- scenes
+def _peaks_table(f) -> pd.DataFrame:
+    """Every stored peak: quantity, item, value, unit, crank angle, the largest
+    grid sample it was refined from, and for a joint the pin diameter."""
+    from .forces import pin_diameter
+    g = f["peaks"]
+    rows = []
+    for q in variables(g):
+        if q.endswith(("_phi1", "_grid")):
+            continue
+        d = g[q]
+        unit = str(attr_text(d.attrs.get("units", "")))
+        if d.ndim == 0:
+            items, vals = ["crank"], [float(d[()])]
+            phis, grid = [float(g[f"{q}_phi1"][()])], [float(g[f"{q}_grid"][()])]
+        else:
+            scale = d.dims[0][0]
+            items = [str(attr_text(x)) for x in scale[()]]
+            vals, phis, grid = d[()], g[f"{q}_phi1"][()], g[f"{q}_grid"][()]
+        for it, v, ph, gv in zip(items, vals, phis, grid):
+            rows.append((q, it, float(v), unit, float(ph), float(gv),
+                         float(pin_diameter(v)) if q == "reaction" else float("nan")))
+    df = pd.DataFrame(rows, columns=["quantity", "item", "value", "unit", "phi1", "grid_value",
+                                     "d_min"])
+    df.attrs["units"] = {"phi1": "deg", "d_min": "mm"}
+    return df
+
+
 def _short(name, letter):
     """P9 -> V9 (velocity columns), other names -> V[name]."""
     if name.startswith("P") and name[1:].isdigit():
@@ -134,10 +161,13 @@ def scene_tables(path, every=1) -> dict:
             cols["M_bal"] = d["M_bal"][rows]
             units["M_bal"] = "N*m"
             out["reactions"] = _frame(cols, units)
-            peaks = pd.DataFrame(joint_peaks(d["phi1"][()], mag, joints),
-                                 columns=["joint", "R_max", "phi1", "d_min"])
-            peaks.attrs["units"] = {"joint": "", "R_max": "N", "phi1": "deg", "d_min": "mm"}
-            out["peaks"] = peaks
+            if "peaks" not in f:       # a file written before refined peaks: grid peaks
+                peaks = pd.DataFrame(joint_peaks(d["phi1"][()], mag, joints),
+                                     columns=["joint", "R_max", "phi1", "d_min"])
+                peaks.attrs["units"] = {"joint": "", "R_max": "N", "phi1": "deg", "d_min": "mm"}
+                out["peaks"] = peaks
+        if "peaks" in f:
+            out["peaks"] = _peaks_table(f)
         if "dynamics" in f:
             from .dynamics import motion_tables
             out.update(motion_tables(f["dynamics"]))

@@ -78,7 +78,7 @@ def test_parquet_needs_pyarrow_or_round_trips(sweep, tmp_path, capsys):
 def test_open_a_scene(tmp_path, studies):
     res = pipeline.run(studies / "ov7_base.toml", tmp_path / "a.h5", pictures=False)
     tables = pipeline.open(res.results)
-    assert set(tables) == {"points", "links"}
+    assert set(tables) == {"points", "links", "peaks"}
     pts = tables["points"]
     with h5py.File(res.results, "r") as f:
         np.testing.assert_array_equal(pts["phi1"], f["dense/phi1"][()])

@@ -62,8 +62,12 @@ def test_csv_tables_match_hdf5(class3_run, tmp_path):
     assert list(r.columns[1:4]) == ["R1_x [N]", "R1_y [N]", "R1 [N]"]
     assert r.columns[-1] == "M_bal [N*m]" and len(r) == 360
     peaks = pd.read_csv(csv / "peaks.csv")
-    assert list(peaks.columns) == ["joint", "R_max [N]", "phi1 [deg]", "d_min [mm]"]
-    assert list(peaks.joint) == [f"R{k}" for k in range(1, 8)]
+    assert list(peaks.columns) == ["quantity", "item", "value", "unit", "phi1 [deg]",
+                                   "grid_value", "d_min [mm]"]
+    reactions = peaks[peaks.quantity == "reaction"]
+    assert list(reactions["item"]) == [f"R{k}" for k in range(1, 8)]
+    assert (reactions["value"] >= reactions["grid_value"]).all()
+    assert reactions["d_min [mm]"].notna().all()
     assert main(["export", str(out), "--csv", str(tmp_path / "thin"), "--every", "30",
                  "-q"]) == 0
     thin = pd.read_csv(tmp_path / "thin" / "points.csv")
