@@ -81,23 +81,40 @@ def scene_peaks(res) -> list[Peak]:
 
     out = []
     for key, values in grid.items():
-        k = int(np.nanargmax(values))
-        lo = phis[k - 1] if k > 0 else phis[0]
-        hi = phis[k + 1] if k + 1 < n else phi_end
-        start = max(k - 1, 0)
+        kmax = int(np.nanargmax(values))
+        best_phi, best = phis[kmax], float(values[kmax])
+        for k in _rivals(values):
+            lo = phis[k - 1] if k > 0 else phis[0]
+            hi = phis[k + 1] if k + 1 < n else phi_end
+            start = max(k - 1, 0)
 
-        def neg(phi, key=key, start=start):
-            st, mags = at(start, phi)
-            v = mags[key][0]
-            return -v if st == 0 and math.isfinite(v) else math.inf
+            def neg(phi, key=key, start=start):
+                st, mags = at(start, phi)
+                v = mags[key][0]
+                return -v if st == 0 and math.isfinite(v) else math.inf
 
-        a, b = min(lo, hi), max(lo, hi)
-        r = minimize_scalar(neg, bounds=(a, b), method="bounded", options={"xatol": XATOL})
-        best_phi, best = phis[k], float(values[k])
-        if r.success and -r.fun > best:
-            best_phi, best = float(r.x), float(-r.fun)
-        out.append(Peak(key[0], key[1], best, key[2], math.degrees(best_phi), float(values[k])))
+            r = minimize_scalar(neg, bounds=(min(lo, hi), max(lo, hi)), method="bounded",
+                                options={"xatol": XATOL})
+            if r.success and -r.fun > best:
+                best_phi, best = float(r.x), float(-r.fun)
+        out.append(Peak(key[0], key[1], best, key[2], math.degrees(best_phi),
+                        float(values[kmax])))
     return out
+
+
+RIVALS = 4            # local maxima refined per quantity (two humps of nearly one height)
+RIVAL_SHARE = 0.999   # ... those within 0.1 % of the largest sample
+
+
+def _rivals(values):
+    """Indices of the grid's local maxima (cyclic) within RIVAL_SHARE of the
+    largest sample, the largest first: the true peak lies next to one of them."""
+    v = np.nan_to_num(np.asarray(values, float), nan=-np.inf)
+    if not np.isfinite(v).any() or np.nanmax(v) <= 0.0:
+        return [int(np.argmax(v))]
+    local = (v >= np.roll(v, 1)) & (v >= np.roll(v, -1)) & (v >= RIVAL_SHARE * v.max())
+    idx = np.nonzero(local)[0]
+    return [int(i) for i in idx[np.argsort(-v[idx])][:RIVALS]] or [int(np.argmax(v))]
 
 
 def _row(curves, k):
