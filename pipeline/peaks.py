@@ -43,6 +43,16 @@ def _magnitudes(study, plan, curves, forces=None):
     for j, lab in enumerate(study.output.link_labels):
         out[("omega", lab, "1/s")] = np.abs(om[:, j])
         out[("eps", lab, "1/s^2")] = np.abs(ep[:, j])
+    from .model import RRR
+    for g in study.mechanism.groups:
+        if isinstance(g, RRR):
+            # transmission angle at the middle joint B, as its deviation from 90 deg
+            ia, ib, ic = (plan.point_names.index(p) for p in (g.A, g.B, g.C))
+            ux, uy = curves.pos[:, ia, 0] - curves.pos[:, ib, 0], curves.pos[:, ia, 1] - curves.pos[:, ib, 1]
+            wx, wy = curves.pos[:, ic, 0] - curves.pos[:, ib, 0], curves.pos[:, ic, 1] - curves.pos[:, ib, 1]
+            mu = np.degrees(np.arctan2(np.abs(ux * wy - uy * wx), ux * wx + uy * wy))
+            out[("transmission_deviation", g.name or f"{g.A}-{g.B}-{g.C}", "deg")] = \
+                90.0 - np.minimum(mu, 180.0 - mu)
     if forces is not None:
         mag = forces.magnitude
         for j, name in enumerate(forces.joint_names):
@@ -97,9 +107,35 @@ def scene_peaks(res) -> list[Peak]:
                                 options={"xatol": XATOL})
             if r.success and -r.fun > best:
                 best_phi, best = float(r.x), float(-r.fun)
-        out.append(Peak(key[0], key[1], best, key[2], math.degrees(best_phi),
-                        float(values[kmax])))
+        if key[0] == "transmission_deviation":     # stored as what designers read
+            out.append(Peak("min_transmission_angle", key[1], 90.0 - best, key[2],
+                            math.degrees(best_phi), 90.0 - float(values[kmax])))
+        else:
+            out.append(Peak(key[0], key[1], best, key[2], math.degrees(best_phi),
+                            float(values[kmax])))
     return out
+
+
+def scene_motion(res) -> dict:
+    """Dwell error and stroke of a scene with an output rocker (DOMAIN.md
+    section 9, as the sweep computes them): {} without one."""
+    from .kernels.metrics import dwell_error, relative_angle
+    out_spec = res.study.output
+    if out_spec.rocker is None or res.dense.overall != 0:
+        return {}
+    plan, pos = res.plan, res.dense.pos
+    ip, iq = (plan.point_names.index(p) for p in out_spec.rocker)
+    rx, ry = pos[:, iq, 0] - pos[:, ip, 0], pos[:, iq, 1] - pos[:, ip, 1]
+    theta = np.array([relative_angle(rx[0], ry[0], x, y) for x, y in zip(rx, ry)])
+    n = len(theta)
+    w = int(round(out_spec.dwell_deg * n / 360))
+    q = np.empty(n + w + 1, np.int64)
+    err, start, full = dwell_error(theta, w, q, q.copy())
+    iw = plan.point_names.index(out_spec.working_point)
+    radius = math.hypot(pos[0, iw, 0] - pos[0, ip, 0], pos[0, iw, 1] - pos[0, ip, 1])
+    return {"dwell_error": float(err), "dwell_start": float(np.degrees(res.dense.phi[start]))
+            if start >= 0 else math.nan, "stroke": radius * float(full), "dwell_deg":
+            out_spec.dwell_deg}
 
 
 RIVALS = 4            # local maxima refined per quantity (two humps of nearly one height)

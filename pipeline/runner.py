@@ -61,6 +61,15 @@ def peak_summary(res) -> dict:
     for p in res.peaks or ():
         if p.quantity == "M_bal":
             out["peak_M_bal"] = f"{p.value:.3f} N*m at phi1 = {p.phi1:.4f} deg"
+    for p in res.peaks or ():
+        if p.quantity == "min_transmission_angle":
+            out[f"min transmission angle {p.item}"] = f"{p.value:.3f} deg at phi1 = " \
+                                                      f"{p.phi1:.4f} deg"
+    m = res.motion or {}
+    if m:
+        out["dwell_error"] = (f"{m['dwell_error']:.4g} (best {m['dwell_deg']:g} deg window from "
+                              f"phi1 = {m['dwell_start']:g} deg)")
+        out["stroke"] = f"{m['stroke']:.4g} mm"
     return out
 
 
@@ -69,8 +78,9 @@ def run_scene_study(study, out, pictures=True) -> RunOutcome:
     from .scene import run_scene
     from .scene_file import write_scene
     res = run_scene(study)
-    from .peaks import scene_peaks
+    from .peaks import scene_motion, scene_peaks
     res.peaks = scene_peaks(res)
+    res.motion = scene_motion(res)
     if study.dynamics is not None:
         from .dynamics import run_dynamics
         res.dynamics = run_dynamics(study, res.plan)

@@ -70,6 +70,7 @@ class SceneResult:
     tolerances: np.ndarray
     dynamics: list | None = None     # pipeline.dynamics.CaseResult per case, if the study asks
     peaks: list | None = None        # pipeline.peaks.Peak, refined between grid positions
+    motion: dict | None = None       # dwell error and stroke of the output rocker
 
     @property
     def status(self):

@@ -73,10 +73,13 @@ def _coordinates(f, plan, study):
     coordinate(f, "slide_component", ["N", "C"], "1", "normal force, couple")
     coordinate(f, "parameter", list(plan.par_names), "1", "compiled mechanism parameter")
     coordinate(f, "tolerance", [n for n, _ in TOLERANCES], "1", "solver tolerance")
+    from .model import RRR
+    coordinate(f, "dyad", [g.name or f"{g.A}-{g.B}-{g.C}" for g in study.mechanism.groups
+                           if isinstance(g, RRR)], "1", "RRR dyad (A-B-C, B the middle joint)")
 
 
 PEAK_DIMS = {"velocity": "point", "acceleration": "point", "omega": "link", "eps": "link",
-             "reaction": "joint"}
+             "reaction": "joint", "min_transmission_angle": "dyad"}
 
 
 def _peaks(g, peaks):
@@ -92,9 +95,10 @@ def _peaks(g, peaks):
         val = np.array([p.value for p in ps]) if dims else np.float64(ps[0].value)
         phi = np.array([p.phi1 for p in ps]) if dims else np.float64(ps[0].phi1)
         grid = np.array([p.grid_value for p in ps]) if dims else np.float64(ps[0].grid_value)
-        put(g, q, val, ps[0].unit, f"peak |{q}|", dims=dims)
-        put(g, f"{q}_phi1", phi, "deg", f"crank angle phi1 of the peak |{q}|", dims=dims)
-        put(g, f"{q}_grid", grid, ps[0].unit, f"largest |{q}| among the dense positions",
+        what = q.replace("_", " ") if q.startswith("min_") else f"peak |{q}|"
+        put(g, q, val, ps[0].unit, what, dims=dims)
+        put(g, f"{q}_phi1", phi, "deg", f"crank angle phi1 of the {what}", dims=dims)
+        put(g, f"{q}_grid", grid, ps[0].unit, f"{what} among the dense positions only",
             dims=dims)
 
 
@@ -123,4 +127,14 @@ def write_scene(res, path):
                 case.write(f.require_group("dynamics"))
         if res.peaks:
             _peaks(f.create_group("peaks"), res.peaks)
+        if res.motion:
+            g = f.create_group("motion")
+            g.attrs["long_name"] = "the output rocker's dwell and stroke (DOMAIN.md section 9)"
+            g.attrs["dwell_deg"] = res.motion["dwell_deg"]
+            put(g, "dwell_error", np.float64(res.motion["dwell_error"]), "1",
+                "dwell error: best window range / revolution range")
+            put(g, "dwell_start", np.float64(res.motion["dwell_start"]), "deg",
+                "crank angle phi1 where the best dwell window starts")
+            put(g, "stroke", np.float64(res.motion["stroke"]), "mm",
+                "stroke of the working point: radius x rocker swing")
     return path

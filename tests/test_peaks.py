@@ -30,6 +30,11 @@ def test_refined_peaks_match_a_100x_finer_revolution(studies, name):
     ref = _magnitudes(res.study, res.plan, fine, forces)
     step = 360.0 / FINE
     for p in peaks:
+        if p.quantity == "min_transmission_angle":     # refined as the deviation from 90 deg
+            dev = ref[("transmission_deviation", p.item, p.unit)]
+            low = 90.0 - float(np.nanmax(dev))
+            assert p.value <= p.grid_value and low - 1e-7 <= p.value <= low + 1e-12, (p, low)
+            continue
         values = ref[(p.quantity, p.item, p.unit)]
         top = float(np.nanmax(values))
         assert p.value >= p.grid_value
@@ -63,3 +68,35 @@ def test_scene_summary_and_file_give_the_refined_peaks(studies, tmp_path, capsys
         v = g["velocity"][i]
         assert f"peak velocity P8: {v:.6g} m/s" in text
         assert g["velocity"].dims[0][0].name == "/point"
+
+
+def test_scene_dwell_and_stroke_equal_the_sweeps_reference_design(studies, tmp_path):
+    """Mechanism B as a scene (ov7_class3) and as the synthesis study's reference
+    design: the same dwell error and stroke, by two paths."""
+    import h5py
+
+    from pipeline.peaks import scene_motion
+    res = pipeline.solve_scene(studies / "ov7_class3.toml")
+    m = scene_motion(res)
+    out = tmp_path / "s.h5"
+    pipeline.run(studies / "ov7_synthesis.toml", out, candidates=50)
+    with h5py.File(out, "r") as f:
+        ref_dwell = float(f["reference/dwell_error"][0])
+        ref_stroke = float(f["reference/stroke"][0])
+    assert m["dwell_error"] == pytest.approx(ref_dwell, rel=1e-9)
+    assert m["stroke"] == pytest.approx(ref_stroke, rel=1e-9)
+    assert m["dwell_error"] == pytest.approx(0.0721, abs=1e-4)     # DOMAIN.md section 9
+
+
+def test_transmission_angle_of_a_dyad_by_hand(studies):
+    """The first dyad's transmission angle at its refined minimum, from the
+    positions by the cosine law (an independent formula)."""
+    res = pipeline.solve_scene(studies / "ov7_base.toml")
+    p = [q for q in scene_peaks(res) if q.quantity == "min_transmission_angle"][0]
+    g = [x for x in res.study.mechanism.groups if hasattr(x, "L_AB")][0]
+    c = solve_curves(res.plan, np.array([res.dense.phi[0], np.radians(p.phi1)]), 0,
+                     res.tolerances)
+    A, B, C = (c.pos[-1, res.plan.point_names.index(n)] for n in (g.A, g.B, g.C))
+    ab, cb, ac = np.linalg.norm(A - B), np.linalg.norm(C - B), np.linalg.norm(A - C)
+    mu = np.degrees(np.arccos((ab ** 2 + cb ** 2 - ac ** 2) / (2 * ab * cb)))
+    assert min(mu, 180 - mu) == pytest.approx(p.value, abs=1e-9)
