@@ -38,6 +38,16 @@ def _curves(g, res, curves, study):
         dims=("phi1", "group"))
     put(g, "newton_iterations", curves.iterations, "1", "Newton iterations (class III groups)",
         dims=("phi1",))
+    com = np.asarray(plan.body_com, np.int64)
+    if com.size:   # the centres of mass (the thesis's PS, VS, AS tables)
+        sb = ("phi1", "body", "axis")
+        put(g, "com_position", curves.pos[:, com], "mm", "centre-of-mass position", dims=sb)
+        put(g, "com_position_analog", curves.d1[:, com], "mm/rad",
+            "centre-of-mass velocity analog dS/dphi1", dims=sb)
+        put(g, "com_acceleration_analog", curves.d2[:, com], "mm/rad^2",
+            "centre-of-mass acceleration analog d2S/dphi1^2", dims=sb)
+        put(g, "com_velocity", v[:, com], "m/s", "centre-of-mass velocity", dims=sb)
+        put(g, "com_acceleration", a[:, com], "m/s^2", "centre-of-mass acceleration", dims=sb)
     if curves.forces is not None:
         curves.forces.write(g)
 

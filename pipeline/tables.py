@@ -147,6 +147,23 @@ def scene_tables(path, every=1) -> dict:
                 cols[f"{key}_{lab}"] = arr[:, j]
                 units[f"{key}_{lab}"] = unit
         out["links"] = _frame(cols, units)
+        if "com_position" in d:
+            bodies = [str(attr_text(x)) for x in d["com_position"].dims[1][0][()]]
+            cols, units = {"phi1": phi}, {"phi1": "deg"}
+            S, VS, AS = d["com_position"][rows], d["com_velocity"][rows], \
+                d["com_acceleration"][rows]
+            L = d["body_loads"][rows] if "body_loads" in d else None
+            for b, name in enumerate(bodies):
+                for key, arr, unit in ((f"S[{name}]", S, "mm"), (f"VS[{name}]", VS, "m/s"),
+                                       (f"AS[{name}]", AS, "m/s^2")):
+                    for k, ax in enumerate("xy"):
+                        cols[f"{key}_{ax}"] = arr[:, b, k]
+                        units[f"{key}_{ax}"] = unit
+                if L is not None:   # applied and inertia loads reduced to S
+                    for k, (comp, unit) in enumerate((("Fx", "N"), ("Fy", "N"), ("M", "N*m"))):
+                        cols[f"{comp}[{name}]"] = L[:, b, k]
+                        units[f"{comp}[{name}]"] = unit
+            out["bodies"] = _frame(cols, units)
         if "reactions" in d:
             from .forces import joint_peaks
             R = d["reactions"][()]
