@@ -57,7 +57,11 @@ def peak_summary(res) -> dict:
     reactions = [p for p in res.peaks or () if p.quantity == "reaction"]
     if reactions:
         p = max(reactions, key=lambda q: q.value)
-        out["peak_reaction"] = f"{p.value:.1f} N at {p.item}, phi1 = {p.phi1:.4f} deg"
+        from .forces import pin_diameter
+        (length, sigma), = res.study.output.pins([p.item])
+        out["peak_reaction"] = (f"{p.value:.1f} N at {p.item}, phi1 = {p.phi1:.4f} deg; pin "
+                                f"d_min {float(pin_diameter(p.value, length, sigma)):.2f} mm "
+                                f"({length:g} mm, {sigma:g} MPa)")
     for p in res.peaks or ():
         if p.quantity == "M_bal":
             out["peak_M_bal"] = f"{p.value:.3f} N*m at phi1 = {p.phi1:.4f} deg"

@@ -92,7 +92,7 @@ PEAK_DIMS = {"velocity": "point", "acceleration": "point", "omega": "link", "eps
              "reaction": "joint", "min_transmission_angle": "dyad"}
 
 
-def _peaks(g, peaks):
+def _peaks(g, peaks, output=None):
     """Per quantity: the peak of every point, link or joint, its crank angle
     and the largest grid sample it was refined from."""
     g.attrs["long_name"] = ("peaks over the revolution, refined between the dense positions "
@@ -110,6 +110,16 @@ def _peaks(g, peaks):
         put(g, f"{q}_phi1", phi, "deg", f"crank angle phi1 of the {what}", dims=dims)
         put(g, f"{q}_grid", grid, ps[0].unit, f"{what} among the dense positions only",
             dims=dims)
+        if q == "reaction" and output is not None:   # pin sizing from the peak reactions
+            from .forces import pin_diameter
+            pins = output.pins([p.item for p in ps])
+            put(g, "pin_length", [ln for ln, _ in pins], "mm", "pin length (in bending)",
+                dims=dims)
+            put(g, "pin_sigma", [sg for _, sg in pins], "MPa", "allowable bending stress",
+                dims=dims)
+            put(g, "pin_d_min", [float(pin_diameter(p.value, ln, sg))
+                                 for p, (ln, sg) in zip(ps, pins)], "mm",
+                "smallest pin diameter: (32 R l / (pi sigma))^(1/3)", dims=dims)
 
 
 def write_scene(res, path):
@@ -136,7 +146,7 @@ def write_scene(res, path):
             for case in res.dynamics:
                 case.write(f.require_group("dynamics"))
         if res.peaks:
-            _peaks(f.create_group("peaks"), res.peaks)
+            _peaks(f.create_group("peaks"), res.peaks, study.output)
         if res.motion:
             g = f.create_group("motion")
             g.attrs["long_name"] = "the output rocker's dwell and stroke (DOMAIN.md section 9)"

@@ -154,6 +154,14 @@ class OutputSpec:
     analysis: str = "accelerations"
     rocker: tuple | None = None  # (pivot, point): output rocker for theta, stroke, dwell
     dwell_deg: float = 150.0
+    pin_length: float = 10.0     # mm: pins in bending (DOMAIN.md section 5, the thesis's)
+    pin_sigma: float = 200.0     # MPa: allowable bending stress
+    pin_overrides: tuple = ()    # (joint, length mm, sigma MPa) per joint that differs
+
+    def pins(self, joint_names):
+        """(length mm, allowable stress MPa) of every joint's pin."""
+        over = {j: (length, sigma) for j, length, sigma in self.pin_overrides}
+        return [over.get(j, (self.pin_length, self.pin_sigma)) for j in joint_names]
 
 
 @dataclass(frozen=True)
@@ -457,6 +465,27 @@ def parse_link(s: Section, key, label, known):
     return pa, pb
 
 
+def _parse_pins(sec: Section, mech: Mechanism) -> dict:
+    """[output.pins]: length (mm) and allowable bending stress sigma (MPa) of the
+    pins, and per joint (R1 = { length = 14.0 }) where one differs."""
+    if not sec.has("pins"):
+        return {}
+    p = sec.table("pins")
+    length = p.number("length", 10.0, positive=True)
+    sigma = p.number("sigma", 200.0, positive=True)
+    joints = set(mech.compile().joint_names)
+    over = []
+    for key in [k for k in p.data if k not in ("length", "sigma")]:
+        if key not in joints:
+            raise p.error(key, f"unknown joint {key!r}; joints: {', '.join(sorted(joints))}")
+        j = p.table(key)
+        over.append((key, j.number("length", length, positive=True),
+                     j.number("sigma", sigma, positive=True)))
+        j.done()
+    p.done()
+    return {"pin_length": length, "pin_sigma": sigma, "pin_overrides": tuple(over)}
+
+
 def parse_output(sec: Section, mech: Mechanism) -> OutputSpec:
     known = set(mech.fixed) | {mech.crank.tip}
     for g in mech.groups:
@@ -482,7 +511,8 @@ def parse_output(sec: Section, mech: Mechanism) -> OutputSpec:
                      dense_positions=sec.integer("dense_positions", 360, minimum=4,
                                                  maximum=MAX_POSITIONS, why=POSITIONS_WHY),
                      analysis=analysis, rocker=rocker,
-                     dwell_deg=sec.number("dwell", 150.0, positive=True))
+                     dwell_deg=sec.number("dwell", 150.0, positive=True),
+                     **_parse_pins(sec, mech))
     if not out.dwell_deg < 360:
         raise sec.error("dwell", "must be less than 360 deg")
     sec.done()

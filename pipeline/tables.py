@@ -86,7 +86,7 @@ def _peaks_table(f) -> pd.DataFrame:
     g = f["peaks"]
     rows = []
     for q in variables(g):
-        if q.endswith(("_phi1", "_grid")):
+        if q.endswith(("_phi1", "_grid")) or q.startswith("pin_"):
             continue
         d = g[q]
         unit = str(attr_text(d.attrs.get("units", "")))
@@ -97,9 +97,12 @@ def _peaks_table(f) -> pd.DataFrame:
             scale = d.dims[0][0]
             items = [str(attr_text(x)) for x in scale[()]]
             vals, phis, grid = d[()], g[f"{q}_phi1"][()], g[f"{q}_grid"][()]
-        for it, v, ph, gv in zip(items, vals, phis, grid):
-            rows.append((q, it, float(v), unit, float(ph), float(gv),
-                         float(pin_diameter(v)) if q == "reaction" else float("nan")))
+        dmin = g["pin_d_min"][()] if (q == "reaction" and "pin_d_min" in g) else None
+        for n, (it, v, ph, gv) in enumerate(zip(items, vals, phis, grid)):
+            d = float("nan")
+            if q == "reaction":
+                d = float(dmin[n]) if dmin is not None else float(pin_diameter(v))
+            rows.append((q, it, float(v), unit, float(ph), float(gv), d))
     df = pd.DataFrame(rows, columns=["quantity", "item", "value", "unit", "phi1", "grid_value",
                                      "d_min"])
     df.attrs["units"] = {"phi1": "deg", "d_min": "mm"}

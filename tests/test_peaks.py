@@ -100,3 +100,28 @@ def test_transmission_angle_of_a_dyad_by_hand(studies):
     ab, cb, ac = np.linalg.norm(A - B), np.linalg.norm(C - B), np.linalg.norm(A - C)
     mu = np.degrees(np.arccos((ab ** 2 + cb ** 2 - ac ** 2) / (2 * ab * cb)))
     assert min(mu, 180 - mu) == pytest.approx(p.value, abs=1e-9)
+
+
+def test_pin_sizing_is_set_per_study_and_per_joint(studies, tmp_path, capsys):
+    """[output.pins]: length and allowable stress for every pin, and per joint;
+    the stored d_min follows d = (32 R l / (pi sigma))^(1/3)."""
+    import h5py
+
+    from pipeline.cli import main
+    text = (studies / "ov7_class3.toml").read_text().replace(
+        "[output]\n", "[output]\npins = { length = 12.0, sigma = 150.0, R2 = { length = 20.0 } }\n", 1)
+    study = tmp_path / "pins.toml"
+    study.write_text(text)
+    out = tmp_path / "p.h5"
+    assert main(["run", str(study), "-o", str(out), "--no-pictures"]) == 0
+    assert "(12 mm, 150 MPa)" in capsys.readouterr().out
+    with h5py.File(out, "r") as f:
+        g = f["peaks"]
+        names = [x.decode() if isinstance(x, bytes) else x for x in f["joint"][()]]
+        L, S, R, D = (g[k][()] for k in ("pin_length", "pin_sigma", "reaction", "pin_d_min"))
+    assert L[names.index("R2")] == 20.0 and L[names.index("R1")] == 12.0 and (S == 150.0).all()
+    np.testing.assert_allclose(D, np.cbrt(32 * R * L / (np.pi * S)), rtol=1e-14)
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace("R2 = { length", "R99 = { length"))
+    assert main(["run", str(bad), "-o", str(tmp_path / "b.h5"), "-q"]) == 2
+    assert "output.pins.R99: unknown joint" in capsys.readouterr().err
