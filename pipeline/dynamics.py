@@ -428,6 +428,83 @@ def run_dynamics(study, plan, method=None) -> list[CaseResult]:
     return results
 
 
+# ----------------------------------------------------------------- reduced dynamics
+@dataclass
+class Reduced:
+    """The crank's reduced dynamics over one revolution (loads at t = 0):
+    J(phi), (1/2) dJ/dphi and the generalised force Q(phi) without M1, and
+    the equilibria (Q = 0) with their stability."""
+    phi: np.ndarray             # rad, absolute crank angle, increasing over [0, 2 pi)
+    J: np.ndarray               # kg m^2
+    half_dJ: np.ndarray         # kg m^2
+    Q: np.ndarray               # N m
+    equilibria: list            # (phi deg, stable) where Q = 0
+
+    def summary(self) -> dict:
+        if not self.equilibria:
+            return {"equilibria": "none (Q does not change sign over the revolution)"}
+        return {"equilibria": ", ".join(f"{p:.4f} deg ({'stable' if st else 'unstable'})"
+                                        for p, st in self.equilibria)}
+
+    def write(self, group):
+        from .storage import put
+        group.attrs["long_name"] = ("reduced dynamics of the crank: J(phi) phi'' + (1/2) "
+                                    "J'(phi) phi'^2 = Q(phi) + M1, loads at t = 0")
+        group.attrs["equilibria_deg"] = [p for p, _ in self.equilibria] or [np.nan]
+        group.attrs["equilibria_stable"] = [bool(st) for _, st in self.equilibria] or [False]
+        put(group, "phi1", np.degrees(self.phi), "deg", "crank angle phi1", dims=("phi1",))
+        put(group, "J", self.J, "kg*m^2", "reduced moment of inertia J(phi)", dims=("phi1",))
+        put(group, "half_dJ", self.half_dJ, "kg*m^2", "(1/2) dJ/dphi", dims=("phi1",))
+        put(group, "Q", self.Q, "N*m", "generalised force without M1", dims=("phi1",))
+
+
+def reduced_dynamics(study, plan, n=None) -> Reduced:
+    """J, (1/2) J' and Q over the revolution and the equilibria: Q = 0 found
+    by Brent's method between samples where Q changes sign; stable where Q
+    falls through zero as phi grows (a restoring force)."""
+    from scipy.optimize import brentq
+    n = n or study.output.dense_positions
+    phis = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
+    J, half, Q = reduced_terms(plan, phis, 0.0, study.mechanism)
+
+    def q(phi):
+        return reduced_terms(plan, float(phi), 0.0, study.mechanism)[2]
+
+    eq = []
+    for k in range(n):
+        a, b = phis[k], phis[k + 1] if k + 1 < n else 2.0 * math.pi
+        qa, qb = Q[k], Q[(k + 1) % n]
+        if not (np.isfinite(qa) and np.isfinite(qb)) or qa * qb > 0.0 or qa == qb == 0.0:
+            continue
+        if qb == 0.0 and k + 1 < n:
+            continue                  # the root is the next sample's left end
+        root = a if qa == 0.0 else brentq(q, a, b, xtol=1e-13)
+        eq.append((math.degrees(root) % 360.0, bool(qa > qb)))
+    return Reduced(phis, J, half, Q, eq)
+
+
+def reduced_figure(red: Reduced):
+    """J(phi), (1/2) dJ/dphi and Q(phi) against the crank angle, the equilibria
+    marked.  Returns the Figure."""
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True, layout="constrained")
+    deg = np.degrees(red.phi)
+    for ax, y, label in zip(axes, (red.J, red.half_dJ, red.Q),
+                            ("J [kg m^2]", "(1/2) dJ/dphi [kg m^2]", "Q [N m] (without M1)")):
+        ax.plot(deg, y, "k-", lw=1.2)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+        for p, st in red.equilibria:
+            ax.axvline(p, color="C2" if st else "C3", lw=1, ls="--")
+    axes[2].axhline(0.0, color="0.5", lw=0.8)
+    axes[-1].set_xlabel("crank angle phi1 [deg]")
+    axes[-1].set_xlim(0, 360)
+    fig.suptitle("Reduced dynamics of the crank; equilibria: " + (", ".join(
+        f"{p:.2f} deg ({'stable' if st else 'unstable'})" for p, st in red.equilibria)
+        or "none"), fontsize=10)
+    return fig
+
+
 # ----------------------------------------------------------------- tables and pictures
 def motion_tables(group) -> dict:
     """{"motion_<case>": DataFrame(t, phi1, omega1, eps1)} from the stored

@@ -86,8 +86,9 @@ def run_scene_study(study, out, pictures=True) -> RunOutcome:
     res.peaks = scene_peaks(res)
     res.motion = scene_motion(res)
     if study.dynamics is not None:
-        from .dynamics import run_dynamics
+        from .dynamics import reduced_dynamics, run_dynamics
         res.dynamics = run_dynamics(study, res.plan)
+        res.reduced = reduced_dynamics(study, res.plan)
     write_scene(res, out)
     pics = []
     if pictures:
@@ -101,6 +102,9 @@ def run_scene_study(study, out, pictures=True) -> RunOutcome:
         for case in res.dynamics or ():
             figures.append((dynamics_figure(case), out.with_name(
                 f"{out.stem}_{safe_name(case.name, 'case')}.png")))
+        if res.reduced is not None:
+            from .dynamics import reduced_figure
+            figures.append((reduced_figure(res.reduced), out.with_name(f"{out.stem}_reduced.png")))
         for fig, path in figures:
             pics.append(save_figure(fig, path, dpi=110))
             plt.close(fig)
@@ -114,4 +118,6 @@ def run_scene_study(study, out, pictures=True) -> RunOutcome:
     for case in res.dynamics or ():
         for k, v in case.summary_lines().items():
             summary[f"{case.name} {k}"] = v
+    if res.reduced is not None:
+        summary.update(res.reduced.summary())
     return RunOutcome("scene", out, pics, summary)

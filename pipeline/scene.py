@@ -71,6 +71,7 @@ class SceneResult:
     dynamics: list | None = None     # pipeline.dynamics.CaseResult per case, if the study asks
     peaks: list | None = None        # pipeline.peaks.Peak, refined between grid positions
     motion: dict | None = None       # dwell error and stroke of the output rocker
+    reduced: object = None           # pipeline.dynamics.Reduced for a study with dynamics
 
     @property
     def status(self):

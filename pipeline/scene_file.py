@@ -147,6 +147,8 @@ def write_scene(res, path):
                 case.write(f.require_group("dynamics"))
         if res.peaks:
             _peaks(f.create_group("peaks"), res.peaks, study.output)
+        if res.reduced is not None:
+            res.reduced.write(f.create_group("reduced_dynamics"))
         if res.motion:
             g = f.create_group("motion")
             g.attrs["long_name"] = "the output rocker's dwell and stroke (DOMAIN.md section 9)"

@@ -191,4 +191,9 @@ def scene_tables(path, every=1) -> dict:
         if "dynamics" in f:
             from .dynamics import motion_tables
             out.update(motion_tables(f["dynamics"]))
+        if "reduced_dynamics" in f:
+            g = f["reduced_dynamics"]
+            cols = {c: g[c][()] for c in ("phi1", "J", "half_dJ", "Q")}
+            out["reduced"] = _frame(cols, {c: str(attr_text(g[c].attrs["units"]))
+                                           for c in cols})
     return out
