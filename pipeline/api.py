@@ -13,8 +13,6 @@ Arrays and tables are in the units of the results file (mm, deg, N, m/s, ...);
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from .study import Study, load_study as _load_study
 from .tables import candidates, scene_tables, with_units
 
@@ -31,33 +29,24 @@ def run(study, output=None, *, candidates=None, resume=False, overwrite=False, n
     """Run a study (a path or a loaded ``Study``): a scene (with its dynamics
     cases) or a sweep.  Returns the outcome: ``.results`` (the HDF5 file),
     ``.pictures``, ``.summary``."""
-    from .runner import default_output, run_scene_study
-    from .sweep import run_sweep
-    if not isinstance(study, Study):
-        study = _load_study(study)
-    out = Path(output) if output else default_output(study)
-    if study.kind == "scene":
-        return run_scene_study(study, out, pictures=pictures)
-    return run_sweep(study, out, candidates=candidates, resume=resume, overwrite=overwrite,
-                     scheduler=scheduler, n_jobs=n_jobs, progress=progress)
+    from .runner import run_study
+    return run_study(study, output, candidates=candidates, resume=resume, overwrite=overwrite,
+                     scheduler=scheduler, n_jobs=n_jobs, progress=progress, pictures=pictures)
 
 
 def solve_scene(study):
     """Solve a scene study in memory, writing nothing: its table and dense
-    curves (positions, analogs, forces) and its dynamics cases.  Draw it with
+    curves (positions, analogs, forces), refined peaks, dwell and stroke, and
+    its dynamics cases with the reduced dynamics.  Draw it with
     ``pipeline.plots.scene_figure(result)``, ``forces_figure``, and
     ``pipeline.dynamics.dynamics_figure(case)``."""
-    from .dynamics import run_dynamics
-    from .scene import run_scene
+    from .runner import solve_scene as solve
     if not isinstance(study, Study):
         study = _load_study(study)
     if study.kind != "scene":
         raise ValueError(f"{study.path}: pipeline.solve_scene solves a scene; this study is a "
                          f"{study.kind} (use pipeline.run)")
-    res = run_scene(study)
-    if study.dynamics is not None:
-        res.dynamics = run_dynamics(study, res.plan)
-    return res
+    return solve(study)
 
 
 def open(path):  # noqa: A001 - pipeline.open, as the users asked for it

@@ -30,8 +30,11 @@ def default_output(study):
 def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
               scheduler=None, n_jobs=None, chunk_size=None, progress=True,
               pictures=True) -> RunOutcome:
-    """Run a scene or a sweep study and write its results file (and pictures)."""
-    study = load_study(path)
+    """Run a scene or a sweep study (a path or a loaded Study) and write its
+    results file (and pictures)."""
+    from .study import Study
+    study = path if isinstance(path, Study) else load_study(path)
+    path = study.path
     out = Path(out) if out else default_output(study)
     if study.kind == "scene":
         if candidates is not None or resume or scheduler:
@@ -77,18 +80,25 @@ def peak_summary(res) -> dict:
     return out
 
 
-def run_scene_study(study, out, pictures=True) -> RunOutcome:
-    from .kernels import config as kc
-    from .scene import run_scene
-    from .scene_file import write_scene
-    res = run_scene(study)
+def solve_scene(study):
+    """Everything a scene study asks for, in memory: its curves (and forces),
+    refined peaks, dwell and stroke, dynamics cases and reduced dynamics."""
     from .peaks import scene_motion, scene_peaks
+    from .scene import run_scene
+    res = run_scene(study)
     res.peaks = scene_peaks(res)
     res.motion = scene_motion(res)
     if study.dynamics is not None:
         from .dynamics import reduced_dynamics, run_dynamics
         res.dynamics = run_dynamics(study, res.plan)
         res.reduced = reduced_dynamics(study, res.plan)
+    return res
+
+
+def run_scene_study(study, out, pictures=True) -> RunOutcome:
+    from .kernels import config as kc
+    from .scene_file import write_scene
+    res = solve_scene(study)
     write_scene(res, out)
     pics = []
     if pictures:

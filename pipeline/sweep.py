@@ -162,12 +162,8 @@ class Journal:
         return json.loads((self.dir / "manifest.json").read_text())
 
     def _atomic(self, path, data: bytes):
-        tmp = path.with_name(path.name + ".tmp")
-        with open(tmp, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
+        with replacing(path) as tmp:    # the one atomic writer (files.replacing)
+            tmp.write_bytes(data)
 
     def save(self, chunk, x, status, metrics, rejected):
         import io
