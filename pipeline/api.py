@@ -25,13 +25,15 @@ def load_study(path) -> Study:
 
 
 def run(study, output=None, *, candidates=None, resume=False, overwrite=False, n_jobs=None,
-        scheduler=None, progress=False, pictures=True):
+        scheduler=None, progress=False, pictures=True, seed_from=None):
     """Run a study (a path or a loaded ``Study``): a scene (with its dynamics
-    cases) or a sweep.  Returns the outcome: ``.results`` (the HDF5 file),
+    cases), a sweep, or a sweep study's [search] (``seed_from``: a results file
+    whose front starts it).  Returns the outcome: ``.results`` (the HDF5 file),
     ``.pictures``, ``.summary``."""
     from .runner import run_study
     return run_study(study, output, candidates=candidates, resume=resume, overwrite=overwrite,
-                     scheduler=scheduler, n_jobs=n_jobs, progress=progress, pictures=pictures)
+                     scheduler=scheduler, n_jobs=n_jobs, progress=progress, pictures=pictures,
+                     seed_from=seed_from)
 
 
 def solve_scene(study):

@@ -31,7 +31,8 @@ def cmd_run(a):
     from .runner import run_study
     res = run_study(a.study, a.output, candidates=a.candidates, resume=a.resume,
                     overwrite=a.overwrite, scheduler=a.scheduler, n_jobs=a.jobs,
-                    chunk_size=a.chunk_size, progress=not a.quiet, pictures=not a.no_pictures)
+                    chunk_size=a.chunk_size, progress=not a.quiet, pictures=not a.no_pictures,
+                    seed_from=a.seed_from)
     info = {"results": str(res.results), **res.summary}
     if res.pictures:
         info["pictures"] = ", ".join(str(p) for p in res.pictures)
@@ -139,6 +140,9 @@ def build_parser():
     r.add_argument("-j", "--jobs", type=int, help="sweep: threads (default: all cores)")
     r.add_argument("--chunk-size", type=int, help="sweep: candidates per chunk")
     r.add_argument("--no-pictures", action="store_true", help="scene: skip the PNG pictures")
+    r.add_argument("--from", dest="seed_from", metavar="RESULTS.h5", help=(
+        "search: start the [search] from the Pareto front of an earlier sweep's (or search's) "
+        "results file"))
     r.set_defaults(func=cmd_run)
 
     e = sub.add_parser("export", parents=[common], help=(

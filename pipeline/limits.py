@@ -19,3 +19,10 @@ CANDIDATES_WHY = "about 200 GB of results; split a larger study by seed"
 # candidates per chunk: two chunks are in memory at once, about 500 bytes each
 MAX_CHUNK = 1_000_000
 CHUNK_WHY = "two chunks are held in memory at once"
+
+# designs per generation of an adaptive search (population and offspring): pymoo
+# compares every proposed design with every design of the population (its duplicate
+# elimination): a 5,000 population takes 0.45 GB more than a 100 one, 10,000 about 2 GB
+MAX_POPULATION = 10_000
+POPULATION_WHY = ("pymoo holds the distances between the proposed designs and the "
+                  "population: about 2 GB at 10,000")

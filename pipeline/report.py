@@ -269,6 +269,29 @@ def pareto_figure(data, ana) -> str:
     return _png(fig)
 
 
+def search_figure(h) -> str:
+    """Hypervolume of the feasible front against the evaluations of an
+    adaptive search (``/search`` of the file)."""
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7.5, 3.6), layout="constrained")
+    ax.plot(h["evaluations"], h["hypervolume"], "-", color="C0", lw=1.5)
+    ax.set_xlabel("evaluations")
+    ax.set_ylabel("hypervolume of the feasible front")
+    ax.grid(alpha=0.3)
+    ax.set_title(f"{h['method']}: {len(h['evaluations'])} generations", fontsize=10)
+    return _png(fig)
+
+
+def _search_history(f):
+    """The per-generation history of a search file (None for a sweep)."""
+    if "search" not in f:
+        return None
+    g = f["search"]
+    return {"method": str(attr_text(g.attrs.get("method", "?"))),
+            "normalisation": str(attr_text(g.attrs.get("normalisation", ""))),
+            "evaluations": g["evaluations"][()], "hypervolume": g["hypervolume"][()]}
+
+
 def importance_figure(data, ana) -> str:
     import matplotlib.pyplot as plt
     objs = list(data.objectives)
@@ -444,6 +467,7 @@ def build_html(path, top=20) -> str:
         rep_values = {i: _metric_row(f, i, show_metrics) for i in reps}
         ref_values = _metric_row(f, "reference", show_metrics) if "reference" in f else None
         ga = {k: attr_text(f["analysis"].attrs[k]) for k in f["analysis"].attrs}
+        history = _search_history(f)
 
     title = a.get("study_title", a.get("study_name", "sweep"))
     parts = [f"<h1>{html.escape(str(title))}</h1>",
@@ -512,6 +536,19 @@ def build_html(path, top=20) -> str:
                  f"{html.escape(data.objectives[0])}{more}.</p>")
     parts.append(f'<div class="wide">{_table_html(ftab, knee)}</div>' if len(front)
                  else '<p class="note">empty</p>')
+
+    if history is not None and len(history["evaluations"]):
+        parts.append("<h2>Adaptive search</h2>")
+        seeded = a.get("seeded_from", "")
+        parts.append(_kv([("method", html.escape(f"{history['method']} (pymoo)")),
+                          ("generations", len(history["evaluations"])),
+                          ("evaluations", f"{int(history['evaluations'][-1]):,}"),
+                          ("seeded from", html.escape(f"{a.get('n_seeded', 0)} designs of "
+                                                      f"{seeded}") if seeded else "no"),
+                          ("hypervolume", _fmt(history["hypervolume"][-1]))]))
+        parts.append('<p class="note">Hypervolume of the feasible front of every candidate '
+                     f"evaluated so far: {html.escape(history['normalisation'])}.</p>")
+        parts.append(_img(search_figure(history), "hypervolume against evaluations"))
 
     parts.append("<h2>Candidates by status</h2>")
     parts.append(_kv([(k, f"{v['count']} ({v['percent']:.1f}%)") for k, v in counts.items()]))

@@ -29,18 +29,31 @@ def default_output(study):
 
 def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
               scheduler=None, n_jobs=None, chunk_size=None, progress=True,
-              pictures=True) -> RunOutcome:
+              pictures=True, seed_from=None) -> RunOutcome:
     """Run a scene or a sweep study (a path or a loaded Study) and write its
-    results file (and pictures)."""
+    results file (and pictures).  A sweep study with a [search] section runs
+    its adaptive search, seeded with the front of the results file
+    ``seed_from`` if given."""
     from .study import Study
     study = path if isinstance(path, Study) else load_study(path)
     path = study.path
     out = Path(out) if out else default_output(study)
     if study.kind == "scene":
-        if candidates is not None or resume or scheduler:
-            raise ValueError(f"{path}: --candidates, --resume and --scheduler apply to sweeps; "
-                             "this study is a scene")
+        if candidates is not None or resume or scheduler or seed_from:
+            raise ValueError(f"{path}: --candidates, --resume, --scheduler and --from apply to "
+                             "sweeps; this study is a scene")
         return run_scene_study(study, out, pictures=pictures)
+    if study.search is not None:
+        if candidates is not None or chunk_size is not None:
+            raise ValueError(f"{path}: --candidates and --chunk-size size a Monte-Carlo sweep; "
+                             "this study's [search] sets its own length (population, "
+                             "generations or evaluations)")
+        from .search import run_search
+        return run_search(study, out, seed_from=seed_from, resume=resume, overwrite=overwrite,
+                          scheduler=scheduler, n_jobs=n_jobs, progress=progress)
+    if seed_from is not None:
+        raise ValueError(f"{path}: --from seeds an adaptive search, and this study has no "
+                         "[search] section (studies/ov7_search.toml has one)")
     from .sweep import run_sweep
     return run_sweep(study, out, candidates=candidates, resume=resume, overwrite=overwrite,
                      scheduler=scheduler, n_jobs=n_jobs, chunk_size=chunk_size,

@@ -193,6 +193,7 @@ class Study:
     output: OutputSpec
     dynamics: DynamicsSpec | None = None
     sweep: object = None     # pipeline.sweep.SweepSpec for kind = "sweep"
+    search: object = None    # pipeline.search_spec.SearchSpec: a sweep study's [search]
     extra: dict = field(default_factory=dict)
 
 
@@ -235,9 +236,16 @@ def parse_study(text: str, path="<study>") -> Study:
         sweep = parse_sweep(root, mech, output)
     elif root.has("sweep"):
         raise root.error("sweep", "a [sweep] section needs study.kind = \"sweep\"")
+    search = None
+    if root.has("search"):
+        if kind != "sweep":
+            raise root.error("search", "a [search] section needs study.kind = \"sweep\" "
+                                       "(it searches the [sweep] section's variables)")
+        from .search_spec import parse_search
+        search = parse_search(root, sweep)
     root.done()
     return Study(path=Path(path), text=text, kind=kind, name=name, title=title,
-                 mechanism=mech, output=output, dynamics=dynamics, sweep=sweep)
+                 mechanism=mech, output=output, dynamics=dynamics, sweep=sweep, search=search)
 
 
 # ----------------------------------------------------------------- mechanism

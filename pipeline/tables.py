@@ -54,6 +54,9 @@ def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
                 "feasible": feas, "cv": f["candidates/cv"][()],
                 "front": rk.rank, "fail_phi": f["candidates/fail_phi"][()]}
         units = {"cv": "1", "front": "", "fail_phi": "deg"}
+        if "candidates/generation" in f:     # an adaptive search: who proposed the design
+            cols["generation"] = f["candidates/generation"][()]
+            units["generation"] = ""
         for j, n in enumerate(names):
             cols[n] = X[:, j]
             units[n] = vunits[j]

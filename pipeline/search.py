@@ -1,0 +1,726 @@
+"""Adaptive search: an established multi-objective optimizer from pymoo
+(NSGA-II, SMS-EMOA or AGE-MOEA, each with pymoo's own operators and settings)
+driving the sweep's evaluator, one generation per batch through the compiled
+kernels (``SweepProblem.evaluate_rows``: all cores, or split into Dask tasks).
+
+The problem is the [sweep] section's: its design variables and bounds, its
+objectives, its constraints g <= 0 and its feasibility rule.  pymoo sees
+
+* F: the objectives in their stored units; where one is NaN (a failed
+  candidate, or forces skipped for a candidate already infeasible) the finite
+  stand-in ``FAILED_OBJECTIVE``, which only infeasible candidates carry;
+* G: the stored constraints (0 where a failed candidate has none) and one more,
+  ``evaluable``: 0 for a candidate whose status is OK (and whose objectives are
+  finite if it meets its constraints), ``FAILED_VIOLATION`` otherwise.  A
+  failed status is thus a violated constraint, worse than any violation of a
+  real one, and pymoo's feasibility (CV = 0) is exactly the stored ``feasible``.
+
+Triangle inequalities of the variables (``sweep_spec.Triangle``) are met by a
+**repair**, not a constraint: they are known before solving, so a proposed
+design that breaks one is moved along the straight line towards a buildable
+centre of the bounds until it is buildable (just inside the boundary; the
+buildable part of the box is convex, so the line crosses its boundary once).
+No evaluation is spent on a design that could only be BAD_GEOMETRY.  The first
+generation is the project's own Sobol draws (impossible triangles redrawn, as
+the sweep does), after the front of an earlier results file if one is given
+(``--from``): explore with the Monte-Carlo sweep, then refine.
+
+Every evaluated design is a candidate of the sweep's file layout
+(``SweepFile``; generation g in its own block of rows), so analyze, browse,
+show, report and export read a search like a sweep.  ``candidates/generation``
+says which generation proposed each candidate; ``/search`` holds, per
+generation, the evaluations so far and the hypervolume of the feasible front
+so far (objectives divided by the study's reference design's, reference point
+1.1 in every objective).
+
+Never losing work: every generation's designs and results are saved in the
+journal ``OUT.h5.parts`` before they go into the file.  ``--resume`` re-runs
+the algorithm from its seed and answers its asks from the journal instead of
+evaluating (checking that the asked designs are the journalled ones, bit for
+bit), then goes on: the file is identical to an uninterrupted run's.  The
+algorithm runs in this process only; evaluations are per design, so the
+numbers do not depend on the thread count or the engine.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import logging
+import math
+import os
+import threading
+import time
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
+
+import h5py
+import numpy as np
+from pymoo.core.problem import Problem
+from pymoo.core.repair import Repair
+
+from .files import RunLock
+from .kernels import config as kc
+from .kernels import sweep as ks
+from .pareto import crowding_distance, nondominated_rank
+from .search_spec import METHODS, SearchSpec
+from .storage import (COMPRESSION, FORMAT, ResultsError, attach, attr_text, coordinate,
+                      open_results)
+from .sweep import (COLUMN, Journal, SweepFile, SweepInterrupted, SweepOutcome, SweepProblem,
+                    _connect, _replaced, build_problem, constraint_names, constraints, summarize)
+from .sweep_spec import SweepSpec, draw_checked, parameter_rows
+
+log = logging.getLogger("pipeline")
+
+JOURNAL_KIND = "search"
+JOURNAL_VERSION = 1
+FAILED_VIOLATION = 1e12   # the `evaluable` constraint of a failed candidate: above any real one
+FAILED_OBJECTIVE = 1e12   # pymoo's stand-in for an objective that is NaN (infeasible rows only)
+HV_REFERENCE = 1.1        # reference point of the hypervolume, in every normalised objective
+REPAIR_STEP = 1e-3        # a repaired design lies this fraction of the way on past the boundary
+NORMALISATION = ("each objective divided by the study's reference design's (1 where that is "
+                 "not a positive number); reference point 1.1 in every objective")
+
+# per generation, in /search: name, dtype, units, long name
+HISTORY = (
+    ("evaluations", "i8", "1", "designs evaluated up to and including the generation"),
+    ("hypervolume", "f8", "1", "hypervolume of the feasible front so far (normalised objectives, "
+                               "reference point 1.1)"),
+    ("front_size", "i8", "1", "designs on the feasible front so far"),
+    ("feasible", "i8", "1", "feasible designs so far"),
+    ("repaired", "i8", "1", "proposals moved inside the triangle inequalities while the "
+                            "generation was made"),
+)
+
+
+# ----------------------------------------------------------------- the problem pymoo sees
+def pymoo_view(spec: SweepSpec, status, metrics, has_margin):
+    """(F, G) of evaluated rows as pymoo sees them (see the module's text)."""
+    F = np.stack([metrics[:, COLUMN[o][0]] * COLUMN[o][1] for o in spec.objectives], axis=1)
+    G, cv = constraints(spec, metrics[:, ks.M_STROKE], metrics[:, ks.M_MARGIN], status,
+                        has_margin)
+    finite = np.isfinite(F).all(axis=1)
+    evaluable = (status == kc.OK) & ~((cv == 0) & ~finite)
+    G = np.concatenate([np.where(np.isnan(G), 0.0, G),
+                        np.where(evaluable, 0.0, FAILED_VIOLATION)[:, None]], axis=1)
+    return np.where(np.isfinite(F), F, FAILED_OBJECTIVE), G
+
+
+class SweepBlackBox(Problem):
+    """The sweep's evaluator as a vectorised pymoo problem: design-variable
+    rows X -> (F, G), one batch through the compiled kernels.  ``run_search``
+    drives an algorithm by ask and tell; this works with
+    ``pymoo.optimize.minimize`` too."""
+
+    def __init__(self, problem: SweepProblem, evaluate=None):
+        spec = problem.spec
+        self.sweep = problem
+        self.has_margin = bool((problem.plan.codes == kc.G_CLASS3).any())
+        self.constraint_labels = constraint_names(self.has_margin) + ["evaluable"]
+        self._rows = evaluate or (lambda pars: problem.evaluate_rows(pars))
+        super().__init__(n_var=len(spec.variables), n_obj=len(spec.objectives),
+                         n_ieq_constr=len(self.constraint_labels),
+                         xl=np.array([v.low for v in spec.variables]),
+                         xu=np.array([v.high for v in spec.variables]))
+
+    def results(self, X):
+        """(status, metrics) of design-variable rows X."""
+        return self._rows(parameter_rows(self.sweep.plan, self.sweep.spec, np.asarray(X, float)))
+
+    def view(self, status, metrics):
+        return pymoo_view(self.sweep.spec, status, metrics, self.has_margin)
+
+    def _evaluate(self, X, out, *args, **kwargs):
+        out["F"], out["G"] = self.view(*self.results(X))
+
+
+# ----------------------------------------------------------------- triangles: a repair
+def buildable_centre(spec: SweepSpec) -> np.ndarray:
+    """A point strictly inside the bounds and every triangle: the mean of the
+    buildable points of a fixed uniform probe of the box (the buildable part is
+    convex, so its points' mean is inside it)."""
+    lo = np.array([v.low for v in spec.variables])
+    hi = np.array([v.high for v in spec.variables])
+    if not spec.triangles:
+        return 0.5 * (lo + hi)
+    x = lo + np.random.default_rng(0).random((40000, len(lo))) * (hi - lo)
+    ok = ~_broken(spec.triangles, x)
+    return x[ok].mean(axis=0)
+
+
+def _broken(triangles, x):
+    bad = np.zeros(x.shape[0], bool)
+    for t in triangles:
+        bad |= t.broken(x)
+    return bad
+
+
+def _slack(t, x):
+    """The three inequalities of triangle ``t`` as g < 0 (linear in x)."""
+    a, b, c = t.sides(x)
+    return np.stack([a - b - c, b - a - c, c - a - b], axis=1)
+
+
+def repair_triangles(triangles, centre, X, lo, hi):
+    """(X with every design that breaks a triangle moved towards ``centre``
+    until it is buildable, number of designs moved).  Designs that are
+    buildable are returned unchanged, bit for bit."""
+    X = np.array(X, float)
+    bad = _broken(triangles, X)
+    if not bad.any():
+        return X, 0
+    x = X[bad]
+    need = np.zeros(len(x))
+    for t in triangles:
+        gx, gc = _slack(t, x), _slack(t, centre[None, :])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cross = np.where(gx >= 0, gx / (gx - gc), 0.0)
+        need = np.maximum(need, cross.max(axis=1))
+    step = need + REPAIR_STEP * (1.0 - need)
+    y = np.clip(x + step[:, None] * (centre - x), lo, hi)
+    y[_broken(triangles, y)] = centre       # rounding at the boundary: the centre itself
+    X[bad] = y
+    return X, int(bad.sum())
+
+
+class TriangleRepair(Repair):
+    """pymoo's repair hook: proposals that break a triangle inequality moved
+    inside it (``repair_triangles``); ``count`` counts them."""
+
+    def __init__(self, spec: SweepSpec):
+        super().__init__()
+        self.triangles = spec.triangles
+        self.centre = buildable_centre(spec)
+        self.lo = np.array([v.low for v in spec.variables])
+        self.hi = np.array([v.high for v in spec.variables])
+        self.count = 0
+
+    def _do(self, problem, X, **kwargs):
+        if not self.triangles:
+            return X
+        X, n = repair_triangles(self.triangles, self.centre, X, self.lo, self.hi)
+        self.count += n
+        return X
+
+
+# ----------------------------------------------------------------- the first generation
+def initial_designs(spec: SweepSpec, search: SearchSpec, seeds=None) -> np.ndarray:
+    """The first generation: ``seeds`` (an earlier front), then the project's
+    Sobol draws seeded by the search's seed (impossible triangles redrawn)
+    up to the population."""
+    d = len(spec.variables)
+    seeds = np.zeros((0, d)) if seeds is None else np.asarray(seeds, float)[:search.population]
+    fill = search.population - len(seeds)
+    if fill:
+        draws = replace(spec, candidates=fill, chunk_size=fill, seed=search.seed,
+                        sampler="sobol")
+        seeds = np.concatenate([seeds, draw_checked(draws, 0)[0]])
+    return np.ascontiguousarray(seeds)
+
+
+def front_seeds(path, spec: SweepSpec, n: int) -> np.ndarray:
+    """Up to ``n`` designs of an earlier results file (a sweep or a search of
+    the same variables): its feasible designs inside this study's bounds and
+    triangles, front 1 first, then front 2, ..., the least crowded first
+    within a front."""
+    path = Path(path)
+    with open_results(path, "sweep") as f:
+        p = f["candidates/params"]
+        names = [str(attr_text(x)) for x in p.attrs.get("names", [])]
+        params = [str(attr_text(x)) for x in p.attrs.get("params", [])]
+        want = [v.name for v in spec.variables]
+        if names != want or (params and params != [v.param for v in spec.variables]):
+            raise ResultsError(path, f"its design variables ({', '.join(names)}) are not this "
+                                     f"study's ({', '.join(want)}); cannot seed the search "
+                                     "from it")
+        missing = [o for o in spec.objectives if f"metrics/{o}" not in f]
+        if missing:
+            raise ResultsError(path, f"has no metrics/{missing[0]}, an objective of this study")
+        X = p[()]
+        feasible = f["candidates/feasible"][()].astype(bool)
+        F = np.stack([f[f"metrics/{o}"][()] for o in spec.objectives], axis=1)
+    lo = np.array([v.low for v in spec.variables])
+    hi = np.array([v.high for v in spec.variables])
+    with np.errstate(invalid="ignore"):
+        ok = feasible & np.isfinite(F).all(axis=1) & ((X >= lo) & (X <= hi)).all(axis=1)
+    ok &= ~_broken(spec.triangles, np.where(np.isfinite(X), X, lo))
+    if not ok.any():
+        raise ResultsError(path, "holds no feasible design inside this study's bounds to "
+                                 "seed the search with")
+    rank = nondominated_rank(F, ok)
+    crowd = crowding_distance(F, rank)
+    idx = np.flatnonzero(rank >= 1)
+    order = np.lexsort((idx, -crowd[idx], rank[idx]))
+    return np.ascontiguousarray(X[idx[order[:n]]])
+
+
+# ----------------------------------------------------------------- the algorithm
+def make_algorithm(search: SearchSpec, x0: np.ndarray, repair: TriangleRepair):
+    """The pymoo algorithm of ``search.method``, its first population ``x0``,
+    pymoo's default operators for that method."""
+    import importlib
+    module, name = METHODS[search.method]
+    cls = getattr(importlib.import_module(module), name)
+    return cls(pop_size=search.population, n_offsprings=search.offspring, sampling=x0,
+               repair=repair)
+
+
+def hv_scale(problem: SweepProblem) -> np.ndarray:
+    """The normalisation of the objectives: the reference design's values (1
+    where a value is not a positive number)."""
+    st, met = problem.evaluate_rows(np.ascontiguousarray(problem.plan.par[None, :]), False)
+    ref = np.array([met[0, COLUMN[o][0]] * COLUMN[o][1] for o in problem.spec.objectives])
+    return np.where((st[0] == kc.OK) & np.isfinite(ref) & (ref > 0), ref, 1.0)
+
+
+class FrontTracker:
+    """The feasible front of every candidate so far (objectives divided by
+    ``scale``) and its hypervolume against HV_REFERENCE."""
+
+    def __init__(self, scale):
+        from pymoo.indicators.hv import HV
+        self.scale = np.asarray(scale, float)
+        self.front = np.zeros((0, len(self.scale)))
+        self.feasible = 0
+        self._hv = HV(ref_point=np.full(len(self.scale), HV_REFERENCE))
+
+    def add(self, F, feasible) -> float:
+        feasible = np.asarray(feasible, bool)
+        self.feasible += int(feasible.sum())
+        Z = np.concatenate([self.front, F[feasible] / self.scale])
+        self.front = Z[nondominated_rank(Z) == 1] if len(Z) else Z
+        return self.hypervolume
+
+    @property
+    def hypervolume(self) -> float:
+        return float(self._hv(self.front)) if len(self.front) else 0.0
+
+
+def hypervolume(F, feasible, scale) -> float:
+    """Hypervolume of the feasible rows of F, normalised as the search's."""
+    t = FrontTracker(scale)
+    return t.add(np.asarray(F, float), feasible)
+
+
+# ----------------------------------------------------------------- evaluation engines
+class _Local:
+    def __init__(self, problem: SweepProblem, n_jobs):
+        if n_jobs is not None and n_jobs < 1:
+            raise ValueError(f"--jobs must be at least 1, got {n_jobs}")
+        self.problem, self.n_jobs = problem, n_jobs
+
+    def __call__(self, pars):
+        return self.problem.evaluate_rows(pars, True, self.n_jobs)
+
+
+def evaluate_rows_task(problem, pars):
+    """Dask task: rows of one generation on one worker thread."""
+    return problem.evaluate_rows(pars, parallel=False)
+
+
+class _Dask:
+    """A generation split into tasks (at least one per worker thread, at most
+    the sweep's chunk size each), gathered in order."""
+
+    def __init__(self, problem: SweepProblem, client):
+        self.client = client
+        self.remote = client.scatter(problem, broadcast=True)
+        self.max_rows = problem.spec.chunk_size
+
+    def __call__(self, pars):
+        n = len(pars)
+        threads = max(1, sum(self.client.nthreads().values()))
+        k = min(n, max(threads, math.ceil(n / self.max_rows)))
+        cuts = np.linspace(0, n, k + 1).astype(int)
+        futures = [self.client.submit(evaluate_rows_task, self.remote, pars[lo:hi], pure=False)
+                   for lo, hi in zip(cuts[:-1], cuts[1:])]
+        parts = self.client.gather(futures)
+        return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]))
+
+
+# ----------------------------------------------------------------- the results file
+@dataclass(frozen=True)
+class GenerationLayout(SweepSpec):
+    """The sweep spec as the results file sees a search: chunk c of the sweep
+    layout is generation c, rows offsets[c] .. offsets[c + 1]."""
+    offsets: tuple = (0,)
+
+    @property
+    def n_chunks(self):
+        return len(self.offsets) - 1
+
+    def chunk_bounds(self, c):
+        return self.offsets[c], self.offsets[c + 1]
+
+
+def generation_layout(spec: SweepSpec, search: SearchSpec, sizes) -> GenerationLayout:
+    offsets = tuple(int(v) for v in np.concatenate([[0], np.cumsum(sizes)]))
+    n = offsets[-1]
+    kw = {f.name: getattr(spec, f.name) for f in fields(SweepSpec)}
+    kw.update(candidates=n, chunk_size=min(n, max(max(sizes), 10000)), seed=search.seed,
+              sampler=f"{search.method} search (pymoo)")
+    return GenerationLayout(**kw, offsets=offsets)
+
+
+class SearchFile:
+    """A search's results file: the sweep layout (``SweepFile``) with
+    candidates/generation and the per-generation history in /search."""
+
+    def __init__(self, path: Path, study, problem: SweepProblem, search: SearchSpec, sizes,
+                 attrs: dict):
+        self.sf = SweepFile(path, study, problem)
+        self.sf.spec = generation_layout(problem.spec, search, sizes)
+        self.path = Path(path)
+        self.search = search
+        self.sizes = list(sizes)
+        self.attrs = attrs
+
+    def create(self, scale):
+        """The file, with every candidate unwritten (its reference design
+        evaluated: the first evaluation, which compiles a new mechanism)."""
+        self.sf.create()
+        n, ngen = sum(self.sizes), len(self.sizes)
+        with h5py.File(self.path, "r+") as f:
+            for k, v in self.attrs.items():
+                f.attrs[k] = v
+            f.attrs["kind_detail"] = "search"
+            f.attrs["n_generations"] = ngen
+            d = f["candidates"].create_dataset("generation", (n,), "i4",
+                                               chunks=(self.sf.spec.chunk_size,),
+                                               **COMPRESSION, fillvalue=-1)
+            d.attrs.update(units="1", long_name="generation of the search that proposed the "
+                                                "candidate (0: the first population)")
+            attach(d, ("candidate",))
+            g = f.create_group("search")
+            g.attrs.update(long_name="adaptive search, per generation", method=self.search.method,
+                           population=self.search.population, offspring=self.search.offspring,
+                           normalisation=NORMALISATION,
+                           hv_reference_point=np.full(len(scale), HV_REFERENCE),
+                           hv_scale=np.asarray(scale, float),
+                           objectives=list(self.sf.spec.objectives))
+            coordinate(g, "generation", np.arange(ngen), "1", "generation of the search")
+            for name, dtype, units, long in HISTORY:
+                h = g.create_dataset(name, (ngen,), dtype,
+                                     fillvalue=np.nan if dtype == "f8" else -1)
+                h.attrs.update(units=units, long_name=long)
+                attach(h, ("generation",))
+
+    def datasets(self, f):
+        d = self.sf.datasets(f)
+        d["candidates/generation"] = f["candidates/generation"]
+        for name, *_ in HISTORY:
+            d[f"search/{name}"] = f[f"search/{name}"]
+        return d
+
+    def write(self, d, gen, x, status, metrics, row):
+        """Generation ``gen``'s candidates and its history ``row``."""
+        self.sf.write_chunk(d, gen, x, status, metrics,
+                            np.zeros(len(self.sf.spec.triangles), np.int64))
+        lo, hi = self.sf.spec.chunk_bounds(gen)
+        d["candidates/generation"][lo:hi] = gen
+        for name, *_ in HISTORY:
+            d[f"search/{name}"][gen] = row[name]
+
+
+# ----------------------------------------------------------------- journal
+def manifest_for(study, search: SearchSpec, x0, seeded_from, n_seeded):
+    import pymoo
+    return {"journal_kind": JOURNAL_KIND, "journal_version": JOURNAL_VERSION,
+            "study_sha256": hashlib.sha256(study.text.encode()).hexdigest(),
+            "study_file": str(study.path), "method": search.method,
+            "population": search.population, "offspring": search.offspring,
+            "generations": search.generations, "seed": search.seed,
+            "positions": study.sweep.positions, "pymoo": pymoo.__version__,
+            "first_generation_sha256": hashlib.sha256(x0.tobytes()).hexdigest(),
+            "seeded_from": str(seeded_from) if seeded_from else "", "seeded": n_seeded}
+
+
+def _save_first(journal: Journal, x0):
+    buf = io.BytesIO()
+    np.save(buf, x0)
+    journal._atomic(journal.dir / "first_generation.npy", buf.getvalue())
+
+
+def _load_first(journal: Journal):
+    p = journal.dir / "first_generation.npy"
+    try:
+        return np.load(p)
+    except (OSError, ValueError) as e:
+        raise ResultsError(p, f"damaged journal ({e}); the search cannot be resumed: run it "
+                              "again into a new file") from None
+
+
+def _check_existing(out: Path, journal: Journal, study, want, resume, overwrite):
+    """Refuse anything that would overwrite or mix results silently."""
+    if not resume:
+        if journal.exists():
+            raise ResultsError(journal.dir, "holds an unfinished run; continue it with --resume "
+                                            "(or delete the folder to start again)")
+        if out.exists() and not overwrite:
+            raise ResultsError(out, "already exists; --overwrite replaces it, -o writes "
+                                    "another file, --resume continues an interrupted run")
+        return
+    if journal.exists():
+        man = journal.manifest()
+        if man.get("journal_kind") != JOURNAL_KIND:
+            raise ResultsError(journal.dir, "belongs to an interrupted Monte-Carlo sweep, not a "
+                                            "search; refusing to mix results")
+        # resumed without --from: the first generation is the journal's
+        skip = {"study_file", "seeded_from"} | (set() if want.get("seeded_from")
+                                                 else {"first_generation_sha256", "seeded"})
+        diff = [k for k in want if k not in skip and man.get(k) != want[k]]
+        if diff:
+            raise ResultsError(journal.dir, "belongs to another run (different "
+                               + ", ".join(diff) + "); refusing to mix results")
+        return
+    if out.exists():
+        try:
+            with h5py.File(out, "r") as f:
+                ours = f.attrs.get("format") == FORMAT
+                same = ours and f.attrs.get("study_toml") == study.text and \
+                    attr_text(f.attrs.get("kind_detail", "")) == "search"
+                complete = bool(f.attrs.get("complete", False))
+        except OSError:
+            raise ResultsError(out, "is truncated or not an HDF5 file and there is no journal "
+                                    "to rebuild it from; refusing to touch it") from None
+        if not ours:
+            raise ResultsError(out, "is not a pipeline results file; refusing to write into it")
+        if not same:
+            raise ResultsError(out, "holds another study's results (or a Monte-Carlo sweep); "
+                                    "refusing to write into it")
+        if not complete:
+            raise ResultsError(out, "is an unfinished search whose journal is gone; "
+                                    "run again into a new file")
+
+
+# ----------------------------------------------------------------- running
+def run_search(study, out, *, seed_from=None, resume=False, overwrite=False, scheduler=None,
+               client=None, n_jobs=None, progress=True, on_generation=None,
+               stop_after_generations=None) -> SweepOutcome:
+    """Run (or resume) the [search] of a sweep study into ``out``, its first
+    generation seeded with the front of the results file ``seed_from`` if
+    given.  ``on_generation(row)`` is called after every generation with its
+    history row (generation, evaluations, hypervolume, ...)."""
+    if study.search is None:
+        raise ValueError(f"{study.path}: no [search] section; it runs as a Monte-Carlo sweep")
+    out = Path(out)
+    if seed_from is not None and Path(seed_from).resolve() == out.resolve():
+        raise ValueError(f"--from {seed_from}: that is the output file; seed from another one")
+    scheduler = scheduler or study.sweep.scheduler
+    with RunLock(out):
+        return _run_locked(study, out, seed_from, resume, overwrite, scheduler, client, n_jobs,
+                           progress, on_generation, stop_after_generations)
+
+
+def _run_locked(study, out, seed_from, resume, overwrite, scheduler, client, n_jobs, progress,
+                on_generation, stop_after):
+    search, spec = study.search, study.sweep
+    journal = Journal(out)
+    seeds = front_seeds(seed_from, spec, search.population) if seed_from else None
+    x0 = initial_designs(spec, search, seeds)
+    n_seeded = 0 if seeds is None else len(seeds)
+    want = manifest_for(study, search, x0, seed_from, n_seeded)
+    _check_existing(out, journal, study, want, resume, overwrite)
+    if overwrite and out.exists() and not resume:
+        log.info("replacing %s (kept aside as %s until the new run has saved its first "
+                 "generation)", out, _replaced(out).name)
+        os.replace(out, _replaced(out))
+    if resume and not journal.exists() and out.exists():
+        log.info("%s is already complete; nothing to resume", out)
+        return SweepOutcome("sweep", out, [], search_summary(out))
+    fresh = not journal.exists()
+    if not fresh:
+        man = journal.manifest()
+        x0 = _load_first(journal)
+        seed_from, n_seeded = man.get("seeded_from") or None, int(man.get("seeded", 0))
+    problem = build_problem(study, spec)
+    own = scheduler is not None and client is None
+    if own:
+        client = _connect(scheduler)     # before anything is written
+    try:
+        if fresh:       # the first generation before the manifest that makes a journal
+            journal.dir.mkdir(parents=True, exist_ok=True)
+            _save_first(journal, x0)
+            journal.start(want)
+        return _generations(study, out, journal, problem, x0, client, n_jobs, progress,
+                            on_generation, stop_after,
+                            {"search_method": search.method, "population": search.population,
+                             "offspring": search.offspring, "generations": search.generations,
+                             "pymoo_version": want["pymoo"],
+                             "seeded_from": str(seed_from) if seed_from else "",
+                             "n_seeded": n_seeded})
+    except BaseException as e:
+        # a run that fails or is stopped before its first generation leaves nothing behind
+        if fresh and not journal.done():
+            journal.remove()
+            out.unlink(missing_ok=True)
+            if _replaced(out).exists():
+                os.replace(_replaced(out), out)
+            if isinstance(e, KeyboardInterrupt):
+                raise SweepInterrupted(f"{out}: interrupted before the first generation "
+                                       "finished; nothing was written") from None
+        raise
+    finally:
+        if own:
+            client.close()
+
+
+def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_generation,
+                 stop_after, attrs):
+    from pymoo.core.termination import NoTermination
+    from pymoo.problems.static import StaticProblem
+    search = study.search
+    planned = search.sizes()
+    box = SweepBlackBox(problem)
+    sfile = SearchFile(out, study, problem, search, planned, attrs)
+    t_prep = time.perf_counter()
+    notice = threading.Timer(1.0, log.info, ("compiling the kernels of this mechanism "
+                                             "(its first run only; about 10 s)...",))
+    notice.daemon = True
+    notice.start()
+    try:
+        scale = hv_scale(problem)
+        sfile.create(scale)
+    finally:
+        notice.cancel()
+    prep = time.perf_counter() - t_prep
+    if prep > 1.0:
+        log.info("kernels ready after %.1f s", prep)
+
+    done = set(journal.done())
+    if done:
+        log.info("resuming: %d of %d generations already done", len(done), len(planned))
+    evaluate = _Dask(problem, client) if client is not None else _Local(problem, n_jobs)
+    repair = TriangleRepair(problem.spec)
+    algorithm = make_algorithm(search, x0, repair)
+    algorithm.setup(box, termination=NoTermination(), seed=search.seed, verbose=False,
+                    progress=False)
+    tracker = FrontTracker(scale)
+    sizes, history = [], []
+    computed = evaluated = 0
+    bar = _progress(search, progress)
+    t0 = time.perf_counter()
+    try:
+        with h5py.File(out, "r+") as f:
+            d = sfile.datasets(f)
+            flushed = time.monotonic()
+            writing = True
+            for gen in range(len(planned)):
+                repair.count = 0
+                pop = algorithm.ask()
+                if pop is None or len(pop) == 0:
+                    log.info("generation %d: the algorithm proposes nothing new; the search "
+                             "ends here", gen)
+                    break
+                X = pop.get("X")
+                if gen in done:     # answered from the journal: nothing is evaluated again
+                    x, status, metrics, _ = journal.load(gen)
+                    if x.shape != X.shape or not np.array_equal(x, X):
+                        raise ResultsError(journal.dir, f"generation {gen}: the algorithm asks "
+                                           "for other designs than the journal holds (another "
+                                           "pymoo or NumPy?); run the search again into a new "
+                                           "file")
+                else:
+                    status, metrics = evaluate(parameter_rows(problem.plan, problem.spec, X))
+                    journal.save(gen, X, status, metrics, np.array([repair.count], np.int64))
+                    computed += len(X)
+                    evaluated += 1
+                F, G = box.view(status, metrics)
+                algorithm.evaluator.eval(StaticProblem(box, F=F, G=G), pop)
+                algorithm.tell(infills=pop)
+                hv = tracker.add(F, (G <= 0).all(axis=1))
+                sizes.append(len(X))
+                row = {"generation": gen, "evaluations": sum(sizes), "hypervolume": hv,
+                       "front_size": len(tracker.front), "feasible": tracker.feasible,
+                       "repaired": repair.count}
+                history.append(row)
+                writing = writing and len(X) == planned[gen]
+                if writing:
+                    sfile.write(d, gen, X, status, metrics, row)
+                    if time.monotonic() - flushed > 1.0:
+                        f.flush()
+                        flushed = time.monotonic()
+                bar.update(len(X))
+                bar.set_postfix_str(f"generation {gen}/{len(planned) - 1}, "
+                                    f"hypervolume {hv:.4f}", refresh=False)
+                if on_generation is not None:
+                    on_generation(row)
+                if stop_after is not None and evaluated >= stop_after:
+                    raise KeyboardInterrupt  # test hook: an interruption between generations
+    except KeyboardInterrupt:
+        bar.close()
+        raise SweepInterrupted(f"{out}: interrupted with {len(journal.done())} of "
+                               f"{len(planned)} generations saved; run again with --resume "
+                               "to continue") from None
+    bar.close()
+    wall = time.perf_counter() - t0
+    if sizes != planned:
+        # a generation came out smaller (pymoo found too few new designs) or the
+        # search ended early: the file is written again, to its true size, from the journal
+        sfile = SearchFile(out, study, problem, search, sizes, attrs)
+        sfile.create(scale)
+        with h5py.File(out, "r+") as f:
+            d = sfile.datasets(f)
+            for gen, row in enumerate(history):
+                sfile.write(d, gen, *journal.load(gen)[:3], row)
+    with h5py.File(out, "r+") as f:
+        f.attrs["complete"] = True
+        f.attrs["wall_time_s"] = wall
+        f.attrs["engine"] = "dask" if client is not None else "local"
+    journal.remove()
+    _replaced(out).unlink(missing_ok=True)
+    summary = search_summary(out)
+    summary["wall_time"] = f"{wall:.1f} s"
+    if prep > 1.0:
+        summary["compile_time"] = f"{prep:.1f} s (not in the wall time; cached from now on)"
+    if computed:
+        summary["throughput"] = f"{computed / wall:,.0f} evaluations/s"
+    return SweepOutcome("sweep", out, [], summary)
+
+
+def _progress(search: SearchSpec, enabled):
+    from tqdm import tqdm
+    return tqdm(total=search.evaluations, unit="eval", unit_scale=True, disable=not enabled,
+                smoothing=0.1, desc=f"search {search.method}", dynamic_ncols=True)
+
+
+# ----------------------------------------------------------------- reading it back
+@dataclass
+class SearchHistory:
+    method: str
+    evaluations: np.ndarray
+    hypervolume: np.ndarray
+    front_size: np.ndarray
+    feasible: np.ndarray
+    normalisation: str
+    scale: np.ndarray
+
+
+def read_history(f) -> SearchHistory | None:
+    """The per-generation history of an open results file (None for a sweep)."""
+    if "search" not in f:
+        return None
+    g = f["search"]
+    return SearchHistory(method=str(attr_text(g.attrs.get("method", "?"))),
+                         evaluations=g["evaluations"][()], hypervolume=g["hypervolume"][()],
+                         front_size=g["front_size"][()], feasible=g["feasible"][()],
+                         normalisation=str(attr_text(g.attrs.get("normalisation", ""))),
+                         scale=np.asarray(g.attrs.get("hv_scale", [])))
+
+
+def search_summary(out) -> dict:
+    """The sweep's summary with the search's lines."""
+    s = summarize(out)
+    with h5py.File(out, "r") as f:
+        h = read_history(f)
+        if h is not None:
+            s["search"] = (f"{h.method}, {len(h.evaluations)} generations, "
+                           f"{int(h.evaluations[-1]):,} evaluations" if len(h.evaluations)
+                           else h.method)
+            if len(h.hypervolume):
+                s["hypervolume"] = (f"{h.hypervolume[-1]:.4f} (feasible front; "
+                                    f"{NORMALISATION})")
+            seeded = attr_text(f.attrs.get("seeded_from", ""))
+            if seeded:
+                s["seeded from"] = f"{int(f.attrs.get('n_seeded', 0))} designs of {seeded}"
+    return s
