@@ -233,9 +233,10 @@ def resolve_candidate(f, cid):
     return i
 
 
-def _reason(status, fail_phi, constraints, names, feasible):
+def _reason(status, fail_phi, constraints, names, feasible, group=None):
     if status != kc.OK:
-        where = f" at phi1 = {fail_phi:g} deg" if math.isfinite(fail_phi) else ""
+        where = f" at phi1 = {fail_phi:.9g} deg" if math.isfinite(fail_phi) else ""
+        where += f" in group {group!r}" if group else ""
         return f"{kc.STATUS_NAMES.get(status, status)}{where}: {STATUS_HELP.get(status, '')}"
     if feasible:
         return "feasible"
@@ -271,7 +272,13 @@ def candidate_details(path, cid) -> dict:
             for m in f["metrics"]:
                 metrics.append((m, float(f["metrics"][m][i]), f["metrics"][m].attrs))
             rk = ranking(f)
-            reason = _reason(status, fail, G, cn, feas)
+            group = None
+            if "fail_group" in f["candidates"]:      # format 1.2
+                fg = f["candidates/fail_group"]
+                g = int(fg[i])
+                groups = [str(attr_text(x)) for x in fg.attrs.get("groups", [])]
+                group = groups[g] if 0 <= g < len(groups) else None
+            reason = _reason(status, fail, G, cn, feas, group)
             if status == kc.BAD_GEOMETRY:
                 reason = "; ".join(_geometry_problems(f, x)) or reason
             out = {"candidate": i, "status": kc.STATUS_NAMES.get(status, status),
@@ -491,7 +498,7 @@ def rerun_candidate(path, cid, *, forces=True, n_table=12, positions=None) -> Ca
     k = int(bad[0]) if bad.size else n          # solved positions before the failure
     if k:
         theta[:k] = np.unwrap(ang[:k]) - ang[0]
-    fail_phi = float(np.rad2deg(dense.phi[k])) if k < n else math.nan
+    fail_phi = float(np.rad2deg(dense.fail_phi)) if dense.overall != kc.OK else math.nan
     if k < n:   # draw no table position beyond the failure of the revolution
         past = crank.rot * (table.phi - dense.phi[k]) >= 0
         table.pos[past] = np.nan

@@ -35,6 +35,7 @@ import numpy as np
 
 from .kernels import config as kc
 from .compiler import kernels_for
+from .kernels.continuation import MARGIN_SLOTS
 from .errors import StudyError
 from .files import safe_name
 
@@ -374,7 +375,7 @@ def _dop853(plan, drive, case, tols, out, tail):
     kern = kernels_for(plan)
     work = dict(state=np.zeros((kern.N_TRIADS, kc.N_STATE)), last=np.zeros(1),
                 pos=np.zeros((n, 2)), d1=np.zeros((n, 2)), d2=np.zeros((n, 2)),
-                margins=np.zeros(plan.n_groups), loads_k=np.zeros((len(plan.load_body), 3)))
+                margins=np.zeros(plan.n_groups + MARGIN_SLOTS), loads_k=np.zeros((len(plan.load_body), 3)))
     pa, da = _plan_args(plan, tols), drive.args()
     b = float(case.damping)
 

@@ -131,9 +131,14 @@ def run_scene_study(study, out, pictures=True) -> RunOutcome:
         for fig, path in figures:
             pics.append(save_figure(fig, path, dpi=110))
             plt.close(fig)
-    summary = {"status": kc.STATUS_NAMES[res.status],
-               "table_positions": int(res.table.phi.shape[0]),
-               "dense_positions": int(res.dense.phi.shape[0])}
+    summary = {"status": kc.STATUS_NAMES[res.status]}
+    fail = res.failure
+    if fail is not None:    # where and what: the crank angle (between positions) and the group
+        summary["failure"] = (f"{fail['status']} at phi1 = {fail['phi_deg']:.9g} deg, group "
+                              f"{fail['group']!r}" + (f" ({', '.join(fail['points'])})"
+                                                      if fail["points"] else ""))
+    summary.update({"table_positions": int(res.table.phi.shape[0]),
+               "dense_positions": int(res.dense.phi.shape[0])})
     if res.status == kc.BAD_GEOMETRY:
         from .sweep_spec import geometry_problems
         summary["reason"] = "; ".join(geometry_problems(res.plan, res.plan.par))

@@ -31,6 +31,8 @@ class Curves:
     iterations: np.ndarray   # (n,)
     links: np.ndarray        # (n, n_links, 3): angle rad, analogs 1/rad, 1/rad^2
     overall: int
+    fail_phi: float = math.nan   # rad: where the walk first failed, located between positions
+    fail_group: int = -1         # the group that failed there (-1: none, or the closure)
     forces: object = None    # pipeline.forces.Reactions when computed
     extra: dict = field(default_factory=dict)
 
@@ -53,12 +55,14 @@ def solve_curves(plan: Plan, phis, order, tols=None, par=None, close_at=math.nan
     status = np.zeros(n, np.int8)
     margin = np.zeros((n, ng))
     iters = np.zeros(n)
+    fail = np.empty(2)
     overall = kernels_for(plan).revolution(
         np.ascontiguousarray(par, dtype=np.float64), np.ascontiguousarray(phis, dtype=np.float64),
-        float(close_at), int(order), tols, pos, d1, d2, status, margin, iters)
+        float(close_at), int(order), tols, pos, d1, d2, status, margin, iters, fail)
     links = np.full((n, len(plan.link_a), 3), np.nan)
     link_angles(pos, d1, d2, plan.link_a, plan.link_b, int(order), links)
-    return Curves(np.asarray(phis, float), pos, d1, d2, status, margin, iters, links, int(overall))
+    return Curves(np.asarray(phis, float), pos, d1, d2, status, margin, iters, links, int(overall),
+                  fail_phi=float(fail[0]), fail_group=int(fail[1]))
 
 
 @dataclass
@@ -77,6 +81,20 @@ class SceneResult:
     def status(self):
         """The scene's status: the dense revolution (which also checks closure)."""
         return self.dense.overall if self.dense.overall != kc.OK else self.table.overall
+
+    @property
+    def failure(self):
+        """None for an OK scene; else where it fails first: {status, phi_deg (the
+        crank angle, located between positions), group (its name, or "closure"),
+        points (the group's points)}."""
+        c = self.dense if self.dense.overall != kc.OK else self.table
+        if c.overall == kc.OK:
+            return None
+        g = c.fail_group
+        names = self.plan.point_names
+        return {"status": kc.STATUS_NAMES[c.overall], "phi_deg": math.degrees(c.fail_phi),
+                "group": self.plan.group_names[g] if g >= 0 else "closure",
+                "points": [names[int(i)] for i in self.plan.gidx[g] if i >= 0] if g >= 0 else []}
 
 
 def run_scene(study, tols=None) -> SceneResult:

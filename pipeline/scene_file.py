@@ -56,7 +56,7 @@ def _curves(g, res, curves, study):
 TOLERANCES = (("newton_tol", "1"), ("newton_maxiter", "1"), ("newton_step", "rad"),
               ("singular", "1"), ("jump", "rad"), ("substep", "rad"), ("close", "rad"),
               ("assembly_slack", "1"), ("step_change", "rad"), ("min_step", "1"),
-              ("first_step", "1"))
+              ("first_step", "1"), ("watch", "1"), ("touch", "1"), ("locate", "rad"))
 
 
 def parameter_units(name) -> str:

@@ -15,7 +15,8 @@ from .errors import ResultsError  # noqa: F401  (raised by every reader of resul
 from .kernels import config as kc
 
 FORMAT = "pipeline-results"
-FORMAT_VERSION = "1.1"     # 1.1: status enums, units per column, dimension scales
+FORMAT_VERSION = "1.2"     # 1.1: status enums, units per column, dimension scales;
+                           # 1.2: sweeps store the failing group (candidates/fail_group)
 
 
 def attr_text(v):

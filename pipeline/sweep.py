@@ -246,6 +246,11 @@ class SweepFile:
                                      fillvalue=np.nan)
                 d.attrs.update(units=units, long_name=long)
                 attach(d, ("candidate",))
+            d = c.create_dataset("fail_group", (n,), "i2", chunks=(ch,), **COMPRESSION,
+                                 fillvalue=-1)
+            d.attrs.update(units="1", long_name="index of the group that failed first (-1: none, "
+                           "or the revolution does not close)", groups=list(plan.group_names))
+            attach(d, ("candidate",))
             d = c.create_dataset("feasible", (n,), "?", chunks=(ch,), **COMPRESSION)
             d.attrs.update(units="1", long_name="status OK, constraints met, objectives finite")
             attach(d, ("candidate",))
@@ -311,6 +316,8 @@ class SweepFile:
         d["candidates/params"][lo:hi] = x
         d["candidates/status"][lo:hi] = status
         d["candidates/fail_phi"][lo:hi] = np.rad2deg(metrics[:, ks.M_FAIL_PHI])
+        group = metrics[:, ks.M_FAIL_GROUP]
+        d["candidates/fail_group"][lo:hi] = np.where(np.isfinite(group), group, -1).astype("i2")
         d["candidates/forces_evaluated"][lo:hi] = metrics[:, ks.M_FORCES_DONE] == 1.0
         cols = self._columns(metrics)
         for name, col in cols.items():
@@ -328,6 +335,7 @@ class SweepFile:
         """The open file's datasets by path, looked up once (a path lookup costs
         more than writing a chunk's column)."""
         names = ["candidates/params", "candidates/status", "candidates/fail_phi",
+                 "candidates/fail_group",
                  "candidates/forces_evaluated", "candidates/constraints", "candidates/cv",
                  "candidates/feasible", "progress/chunk_done", "progress/rejected"]
         names += [f"metrics/{m}" for m in self.spec.metrics]
@@ -343,9 +351,13 @@ class SweepOutcome:
     summary: dict
 
 
-def _check_existing(out: Path, journal: Journal, study, spec, resume: bool,
-                    overwrite: bool = False):
-    """Refuse anything that would overwrite or mix results silently."""
+def check_existing(out: Path, journal: Journal, resume: bool, overwrite: bool, *,
+                   journal_diff, same_results, what: str, other: str):
+    """Refuse anything that would overwrite or mix results silently (a sweep's
+    or a search's): ``journal_diff(manifest)`` lists what differs in an
+    interrupted run's journal (or raises), ``same_results(f)`` says whether a
+    finished file holds this run's results; ``what`` names the run ("sweep"),
+    ``other`` what else a file may hold."""
     if not resume:
         if journal.exists():
             raise ResultsError(journal.dir, "holds an unfinished run; continue it with --resume "
@@ -355,9 +367,7 @@ def _check_existing(out: Path, journal: Journal, study, spec, resume: bool,
                                     "another file, --resume continues an interrupted run")
         return
     if journal.exists():
-        man = journal.manifest()
-        want = manifest_for(study, spec)
-        diff = [k for k in want if k != "study_file" and man.get(k) != want[k]]
+        diff = journal_diff(journal.manifest())
         if diff:
             raise ResultsError(journal.dir, "belongs to another run (different "
                                + ", ".join(diff) + "); refusing to mix results")
@@ -366,8 +376,7 @@ def _check_existing(out: Path, journal: Journal, study, spec, resume: bool,
         try:
             with h5py.File(out, "r") as f:
                 ours = f.attrs.get("format") == FORMAT
-                same = ours and f.attrs.get("study_toml") == study.text and \
-                    int(f.attrs.get("n_candidates", -1)) == spec.candidates
+                same = ours and same_results(f)
                 complete = bool(f.attrs.get("complete", False))
         except OSError:
             raise ResultsError(out, "is truncated or not an HDF5 file and there is no journal "
@@ -375,11 +384,22 @@ def _check_existing(out: Path, journal: Journal, study, spec, resume: bool,
         if not ours:
             raise ResultsError(out, "is not a pipeline results file; refusing to write into it")
         if not same:
-            raise ResultsError(out, "holds another study's results (or another candidate "
-                                    "count); refusing to write into it")
+            raise ResultsError(out, f"holds another study's results ({other}); "
+                                    "refusing to write into it")
         if not complete:
-            raise ResultsError(out, "is an unfinished sweep whose journal is gone; "
+            raise ResultsError(out, f"is an unfinished {what} whose journal is gone; "
                                     "run again into a new file")
+
+
+def _check_existing(out: Path, journal: Journal, study, spec, resume: bool,
+                    overwrite: bool = False):
+    want = manifest_for(study, spec)
+    check_existing(
+        out, journal, resume, overwrite,
+        journal_diff=lambda man: [k for k in want if k != "study_file" and man.get(k) != want[k]],
+        same_results=lambda f: (f.attrs.get("study_toml") == study.text
+                                and int(f.attrs.get("n_candidates", -1)) == spec.candidates),
+        what="sweep", other="or another candidate count")
 
 
 def run_sweep(study, out, *, candidates=None, resume=False, overwrite=False, scheduler=None,

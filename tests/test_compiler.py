@@ -139,7 +139,7 @@ def test_the_lane_walk_is_vectorized(problem):
     S = np.ones((k.N_LANE_ROWS, k.LANES))
     th = np.zeros((4, k.LANES * k.THETA_COLS))
     c = np.cos(np.arange(4.0))
-    f(S.reshape(-1), k.LANES, th, c, c, 2, 1e-12, 0.1, 0.05, 1e-3)
+    f(S.reshape(-1), k.LANES, th, c, c, 2, 1, 1e-12, 0.1, 0.05, 1e-3, 1e-7, 1e-6)
     asm = next(iter(f.inspect_asm().values()))
     ops = collections.Counter(re.findall(r"\b(v?(?:mul|add|sub|div|sqrt|fmadd\d*)pd)\b", asm))
     assert sum(ops.values()) > 50, ops

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from pipeline.kernels import config as kc
-from pipeline.kernels.sweep import (M_DWELL, M_FAIL_PHI, M_FORCES_DONE, M_MARGIN,
+from pipeline.kernels.sweep import (M_DWELL, M_FAIL_GROUP, M_FAIL_PHI, M_FORCES_DONE, M_MARGIN,
                                     M_NEWTON_MEAN, M_PEAK_R, M_STROKE)
 from pipeline.scene import batch_revolutions, revolution_angles, solve_curves
 from pipeline.study import load_study
@@ -69,6 +69,15 @@ def test_near_singular_triads_no_crash_no_silent_nan(triad_run, report):
     for col in (M_STROKE, M_DWELL, M_MARGIN, M_NEWTON_MEAN):
         assert np.isfinite(m[ok, col]).all(), f"NaN under OK status in metric column {col}"
     assert (m[ok, M_MARGIN] >= pb.tols[kc.T_SINGULAR]).all()
+    # the watch between positions: a margin below sqrt(T_TOUCH) anywhere on the
+    # revolution, sampled or between samples, is a toggle (SINGULAR), never OK
+    assert (m[ok, M_MARGIN] >= math.sqrt(pb.tols[kc.T_TOUCH])).all()
+    # every failure names its group: the triad (or -1: the revolution does not close)
+    failed = ~ok & (status != kc.BAD_GEOMETRY)
+    group = m[failed, M_FAIL_GROUP]
+    triad = pb.plan.group_names.index("triad")
+    assert np.isin(group, [triad, -1.0]).all() and (group == triad).mean() > 0.9
+    assert (group[status[failed] != kc.BRANCH_JUMP] == triad).all()
     forced = m[:, M_FORCES_DONE] == 1.0
     assert forced.any() and np.isfinite(m[forced, M_PEAK_R]).all()
     failed = ~ok & (status != kc.BAD_GEOMETRY)
@@ -77,8 +86,8 @@ def test_near_singular_triads_no_crash_no_silent_nan(triad_run, report):
     exact = offset == 0.0
     assert exact.sum() > 1000 and not ok[exact].any()
     # most constructed triads sit at the edge of their workspace and fail with a
-    # status; hundreds still run the whole revolution with margins down to ~1e-9
-    assert (m[ok, M_MARGIN] < 0.05).sum() > 100 and m[ok, M_MARGIN].min() < 1e-6
+    # status; hundreds still run the whole revolution with margins down to ~1e-5
+    assert (m[ok, M_MARGIN] < 0.05).sum() > 100 and m[ok, M_MARGIN].min() < 1e-4
     _report(report, status, m, offset)
 
 

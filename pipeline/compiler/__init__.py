@@ -57,17 +57,19 @@ def library_digest() -> str:
     return _DIGEST[0]
 
 
-def source_for(plan, rocker=None) -> str:
+def source_for(plan, rocker=None, watch=True) -> str:
     """The generated source of ``plan``'s kernels (``rocker``: the output
-    rocker's (pivot, point) names, for the sweep's positions stage)."""
-    return generate(plan, rocker=rocker, digest=library_digest(), lanes_width=LANES)
+    rocker's (pivot, point) names, for the sweep's positions stage; ``watch``:
+    False only for the benchmark of the watch's cost)."""
+    return generate(plan, rocker=rocker, digest=library_digest(), lanes_width=LANES,
+                    watch=watch)
 
 
 def module_name(source: str) -> str:
     return "pipeline_mech_" + hashlib.sha256(source.encode()).hexdigest()[:20]
 
 
-def structure_key(plan, rocker=None) -> tuple:
+def structure_key(plan, rocker=None, watch=True) -> tuple:
     """What the generated source depends on: the plan's structure (not its
     parameter values) and the rocker; a cheap key for the modules in memory."""
     arrays = (plan.codes, plan.gidx, plan.goff, plan.fixed_idx, plan.fixed_off, plan.link_a,
@@ -76,19 +78,19 @@ def structure_key(plan, rocker=None) -> tuple:
               plan.load_body, plan.load_point)
     return (tuple(a.tobytes() for a in arrays), plan.point_names, plan.par_names,
             plan.group_names, plan.n_visible, plan.n_kinematic, plan.crank_body, plan.gravity,
-            tuple(rocker) if rocker is not None else None, str(cache_dir()))
+            tuple(rocker) if rocker is not None else None, bool(watch), str(cache_dir()))
 
 
 _BY_STRUCTURE: dict[tuple, object] = {}
 
 
-def kernels_for(plan, rocker=None):
+def kernels_for(plan, rocker=None, watch=True):
     """The generated kernels of ``plan``, imported (written first if new)."""
-    key = structure_key(plan, rocker)
+    key = structure_key(plan, rocker, watch)
     mod = _BY_STRUCTURE.get(key)
     if mod is not None:
         return mod
-    src = source_for(plan, rocker)
+    src = source_for(plan, rocker, watch)
     mod_name = module_name(src)
     with _LOCK:
         mod = _MODULES.get(mod_name)

@@ -25,6 +25,7 @@ from ..kernels import config as kc
 class Emitter:
     code = None
     fast = False            # has a lane form
+    watched = False         # can fail between positions: its margin is watched
 
     def __init__(self, plan, names, g, triad_row=-1):
         self.plan = plan
@@ -94,6 +95,7 @@ class CrankEmitter(Emitter):
 
 
 class RRREmitter(Emitter):
+    watched = True
     code = kc.G_RRR
     fast = True
 
@@ -135,6 +137,7 @@ class RRREmitter(Emitter):
 
 
 class RRPEmitter(Emitter):
+    watched = True
     code = kc.G_RRP
 
     def careful(self):
@@ -147,6 +150,7 @@ class RRPEmitter(Emitter):
 
 
 class RPREmitter(Emitter):
+    watched = True
     code = kc.G_RPR
 
     def careful(self):
@@ -225,6 +229,7 @@ class AttachEmitter(Emitter):
 
 
 class ClassIIIEmitter(Emitter):
+    watched = True
     code = kc.G_CLASS3
     fast = True
 

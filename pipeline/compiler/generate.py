@@ -43,8 +43,11 @@ from numba import njit
 
 from pipeline.kernels.config import (JIT, JIT_ALLOC, JIT_LANES, OK, BRANCH_JUMP, NEWTON_MAXITER,
                                      SINGULAR, NO_ASSEMBLY, BAD_GEOMETRY, S_A, S_B, S_DET_SIGN,
-                                     S_ITERS, S_MARGIN, T_SINGULAR, T_ASSEMBLY_SLACK, T_SUBSTEP,
-                                     T_MIN_STEP, T_NEWTON_TOL, T_JUMP, T_STEP_CHANGE, T_CLOSE)
+                                     S_ITERS, S_MARGIN, N_STATE, N_TOLS, T_SINGULAR,
+                                     T_ASSEMBLY_SLACK, T_NEWTON_MAXITER,
+                                     T_SUBSTEP,
+                                     T_MIN_STEP, T_NEWTON_TOL, T_JUMP, T_STEP_CHANGE, T_CLOSE,
+                                     T_WATCH, T_TOUCH, T_LOCATE)
 from pipeline.kernels.continuation import (accept, closes, copy2, predict, restore, start_triad,
                                            step_limit, work, wrap)
 from pipeline.kernels.dynamics import drive, lagrange_terms, potential
@@ -53,10 +56,15 @@ from pipeline.kernels.groups import attach, crank, rpr, rrp, rrr
 from pipeline.kernels.metrics import dwell_error, dwell_lanes, relative_angle
 from pipeline.kernels.sweep import (M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, M_PEAK_R,
                                     M_PEAK_JOINT, M_PEAK_PHI, M_PEAK_MBAL, M_FAIL_PHI,
-                                    M_NEWTON_MEAN, M_FORCES_DONE, N_METRICS, SET_STROKE_RADIUS,
+                                    M_NEWTON_MEAN, M_FORCES_DONE, M_FAIL_GROUP, N_METRICS,
+                                    SET_STROKE_RADIUS,
                                     SET_DWELL_W, SET_WANT_FORCES, SET_STROKE_LO, SET_STROKE_HI,
                                     SET_MARGIN_MIN, SET_OMEGA1, SET_EPS1, SET_MARGIN_SAFE)
 from pipeline.kernels.triad import class3, ternary_angle
+from pipeline.kernels.watch import (FOLD_BACK, LOCATE_MAXITER, LOCATE_MIN_STEP,
+                                   LOCATE_NEWTON_TOL, RESOLVED, SUB, cubic_bound, fold_distance,
+                                   third_difference, uniform_hit, window_score,
+                                   window_vertex)
 '''
 
 
@@ -67,9 +75,11 @@ def _array(name, a, dtype):
     return f"{name} = np.array({body}, dtype=np.{dtype}).reshape({shape})"
 
 
-def generate(plan, rocker=None, digest="", lanes_width=8) -> str:
+def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
     """Python source of the kernels of ``plan`` (``rocker``: the output
-    rocker's (pivot, point) names, for the sweep's dwell and stroke)."""
+    rocker's (pivot, point) names, for the sweep's dwell and stroke).  Without
+    ``watch`` no group is watched between positions (the benchmark's baseline
+    of the watch's cost; never for results)."""
     n = Names(plan)
     ems = emitters_for(plan, n)
     n_triads = sum(isinstance(e, ClassIIIEmitter) for e in ems)
@@ -105,6 +115,10 @@ def generate(plan, rocker=None, digest="", lanes_width=8) -> str:
     w(_array("SLIDE_ANGLE", plan.slide_angle, "float64"))
     w(_array("LOAD_BODY", plan.load_body, "int64"))
     w(_array("LOAD_POINT", plan.load_point, "int64"))
+    watched = [e.g for e in ems[:plan.n_kinematic] if e.watched and watch]
+    w("# groups whose margin the walks watch between positions (pipeline.kernels.watch)")
+    w(_array("WATCH_G", watched, "int64"))
+    w(f"N_WATCH = {len(watched)}")
     w(f"CRANK_BODY = {plan.crank_body}")
     w(f"N_BODIES = {len(plan.body_names)}")
     w(f"N_JOINTS = {len(plan.joint_names)}")
@@ -122,6 +136,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8) -> str:
 
     # ---------------------------------------------------------------- position
     body = [unpack, "sing = tols[T_SINGULAR]", "slack = tols[T_ASSEMBLY_SLACK]", "status = OK",
+            "margins[N_GROUPS] = -1.0   # the first group that fails (-1: none)",
             "# fixed pivots: positions from the row, zero analogs"]
     for fi in plan.fixed_idx:
         p = plan.point_names[int(fi)]
@@ -131,7 +146,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8) -> str:
                  f"d2[{I}, 1] = 0.0"]
     for e in ems:
         lines = e.careful() + [f"margins[{e.g}] = m", "if status == OK and st != OK:",
-                               "    status = st"]
+                               "    status = st", f"    margins[N_GROUPS] = {e.g}"]
         if e.g == plan.n_kinematic:
             body += ["if not with_com:", "    return status",
                      "# ---- the centres of mass (force analysis and dynamics only)"]
@@ -150,7 +165,8 @@ def generate(plan, rocker=None, digest="", lanes_width=8) -> str:
           "Writes pos/d1/d2 (n_points, 2) to ``order`` (0 positions, 1 velocity\n"
           "analogs, 2 acceleration analogs) and margins[g]; the centres of mass only\n"
           "``with_com``.  Returns the first non-OK status (later groups still run\n"
-          "and give NaN).", body, jit="SIG_POSITION, **JIT"))
+          "and give NaN); margins[N_GROUPS] is the index of the group that gave it.",
+          body, jit="SIG_POSITION, **JIT"))
 
     # ---------------------------------------------------------------- start
     triads = [e for e in ems if isinstance(e, ClassIIIEmitter)]
@@ -167,7 +183,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8) -> str:
     w(force_kernel(plan, n))
     w(textwrap.dedent(CAREFUL))
     if rocker is not None:
-        w(lane_kernel(plan, n, ems, rocker, lanes_width))
+        w(lane_kernel(plan, n, ems, rocker, lanes_width, watch))
     else:
         w(textwrap.dedent(NO_LANES))
     w(textwrap.dedent(PARALLEL))
@@ -194,7 +210,10 @@ def _fn(sig, doc, body, jit="**JIT"):
 ADVANCE_CLOSED = '''
     @njit(SIG_WALK, **JIT)
     def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, with_com):
-        """Closed form (no class III group): one solve at ``phi_to``."""
+        """Closed form (no class III group): one solve at ``phi_to`` (margins[N_GROUPS
+        + 1], margins[N_GROUPS + 2]: where the walk was and where it went)."""
+        margins[N_GROUPS + 1] = phi_from
+        margins[N_GROUPS + 2] = phi_to
         return position(K, phi_to, order, tols, state, pos, d1, d2, margins, with_com)
 
 '''
@@ -207,10 +226,15 @@ ADVANCE_NEWTON = '''
         by ``step_limit``; a step whose Newton fails or jumps branch (det J
         changes sign, or the correction exceeds tols[T_JUMP]) is retried at half
         the size, down to tols[T_MIN_STEP] of the full step, and only then
-        reported.  Returns the first non-OK status met on the way.  (One call
-        site of ``position``: numba inlines per call site, and compile time
-        grows with every copy.)"""
+        reported.  Returns the first non-OK status met on the way
+        (margins[N_GROUPS]: its group; margins[N_GROUPS + 1]: the last angle
+        reached, margins[N_GROUPS + 2]: the angle of the failing step).  (One call
+        site of ``position``: numba inlines per call site, and compile time grows
+        with every copy.)"""
         status = OK
+        group = -1.0
+        margins[N_GROUPS + 1] = phi_from
+        margins[N_GROUPS + 2] = phi_to
         direction = 1.0 if phi_to >= phi_from else -1.0
         h_min = tols[T_SUBSTEP] * tols[T_MIN_STEP]
         h_cap = tols[T_SUBSTEP]
@@ -232,6 +256,7 @@ ADVANCE_NEWTON = '''
             st = position(K, target, order if final else 0, tols, state, pos, d1, d2, margins,
                           with_com and final)
             if straight:
+                margins[N_GROUPS] = group      # the group of the failure reported
                 return status
             # retry decisions use the intended step h, never the rounded dphi
             # (phi + h - phi can exceed h_min by an ulp forever)
@@ -243,12 +268,15 @@ ADVANCE_NEWTON = '''
                 accept(state, dphi)
                 h_cap = min(2.0 * h_cap, tols[T_SUBSTEP])
                 phi = target
+                margins[N_GROUPS + 1] = phi
                 if final:
                     return status
                 continue
             # a failure at the smallest step is a fact about the candidate
             if status == OK:
                 status = st
+                group = margins[N_GROUPS]
+                margins[N_GROUPS + 2] = target
             if st == NEWTON_MAXITER:
                 restore(state)
             if final:
@@ -258,6 +286,295 @@ ADVANCE_NEWTON = '''
 '''
 
 CAREFUL = '''
+    @njit(**JIT_ALLOC)
+    def watch_work():
+        """Work arrays of the between-sample watch (pipeline.kernels.watch):
+        (hist_phi (4), hist_val (N_WATCH, 4), hist_state (4, N_TRIADS, N_STATE): the
+        last four positions of a walk; sub_phi (SUB + 1), sub_val (N_WATCH, SUB + 1),
+        sub_state (SUB + 1, N_TRIADS, N_STATE): an interval looked at closely; keep
+        (N_TRIADS, N_STATE); found (3): status, crank angle, group of a failure;
+        ltols (N_TOLS): the tolerances of ``locate``)."""
+        return (np.empty(4), np.empty((N_WATCH, 4)), np.empty((4, N_TRIADS, N_STATE)),
+                np.empty(SUB + 1), np.empty((N_WATCH, SUB + 1)),
+                np.empty((SUB + 1, N_TRIADS, N_STATE)), np.empty((N_TRIADS, N_STATE)),
+                np.empty(3), np.empty(N_TOLS))
+
+
+    @njit(**JIT)
+    def watched_values(margins, vals, col):
+        """vals[w, col] = margin^2 of every watched group (D of pipeline.kernels.watch)."""
+        for w in range(N_WATCH):
+            m = margins[WATCH_G[w]]
+            vals[w, col] = m * m
+
+
+    @njit(**JIT)
+    def watched_min(margins):
+        """The smallest margin^2 of the watched groups."""
+        v = math.inf
+        for w in range(N_WATCH):
+            v = min(v, margins[WATCH_G[w]] * margins[WATCH_G[w]])
+        return v
+
+
+    @njit(**JIT)
+    def worst_window(phis, vals, j0, j1, n):
+        """The smallest window_score of the windows centred at j0 .. j1 - 1 of the n
+        positions (phis[j], vals[:, j]), the cubic term from four positions; and
+        (its centre, its group, its third divided difference)."""
+        best = math.inf
+        best_j = -1
+        best_w = -1
+        best_f3 = math.nan
+        for j in range(j0, j1):
+            q = j - 2 if j >= 2 else j - 1          # four positions around the window
+            if q + 3 >= n:
+                q = n - 4
+            for w in range(N_WATCH):
+                f3 = third_difference(phis[q], phis[q + 1], phis[q + 2], phis[q + 3],
+                                      vals[w, q], vals[w, q + 1], vals[w, q + 2],
+                                      vals[w, q + 3])
+                sc = window_score(phis[j - 1], phis[j], phis[j + 1], vals[w, j - 1],
+                                  vals[w, j], vals[w, j + 1], f3)
+                if not (sc >= best):
+                    best = sc
+                    best_j = j
+                    best_w = w
+                    best_f3 = f3
+        return best, best_j, best_w, best_f3
+
+
+    @njit(**JIT)
+    def locate(K, good, bad, st_bad, g_bad, good_state, tols, state, pos, d1, d2, margins,
+               ww):
+        """Bisect between ``good`` (assembled: ``good_state`` is its solution) and
+        ``bad`` (the walk from good to bad failed with st_bad at group g_bad) down to
+        tols[T_LOCATE]; found = (status, crank angle of the first failing position,
+        group).  Returns the status; ``state`` is the solution at the good end.
+        Called right after the walk from good to bad failed (``state`` as it left
+        it): its last accepted angle and the angle of its failing step
+        (margins[N_GROUPS + 1], margins[N_GROUPS + 2]) narrow the bracket, the state
+        before the failing step (``restore``) the solution there.
+        Where a watched group's margin^2 on the good side has come down to
+        tols[T_WATCH] or less the group folds there: a dead position the crank
+        cannot pass, reported SINGULAR whatever the solver met beyond it."""
+        reached = margins[N_GROUPS + 1]
+        tried = margins[N_GROUPS + 2]
+        keep = ww[6]
+        found = ww[7]
+        # each trial a short walk from the good side: few halvings and a short
+        # Newton (a trial beyond the boundary fails fast; the bracket shrinks anyway)
+        ltols = ww[8]
+        for q in range(N_TOLS):
+            ltols[q] = tols[q]
+        ltols[T_NEWTON_MAXITER] = min(tols[T_NEWTON_MAXITER], LOCATE_MAXITER)
+        # closure to near rounding: Newton's tolerance blurs where a fold is
+        ltols[T_NEWTON_TOL] = min(tols[T_NEWTON_TOL], LOCATE_NEWTON_TOL)
+        ltols[T_MIN_STEP] = max(tols[T_MIN_STEP], LOCATE_MIN_STEP)
+        if (tried - good) * (bad - tried) > 0.0:
+            bad = tried
+        d_good = math.inf        # the smallest watched margin^2 at the good end
+        restore(state)
+        if (reached - good) * (bad - reached) > 0.0:
+            # the walk's last angle, solved again to the trials' closure: beyond a
+            # fold by Newton's tolerance it is the bad end instead
+            if advance(K, reached, reached, 0, ltols, state, pos, d1, d2, margins,
+                       False) == OK:
+                good = reached
+                d_good = watched_min(margins)
+            else:
+                bad = reached
+                copy2(good_state, state)
+        else:
+            copy2(good_state, state)
+        copy2(state, keep)
+        mid = 0.5 * (good + bad)
+        for it in range(200):
+            if not abs(bad - good) > tols[T_LOCATE]:
+                break
+            if d_good <= tols[T_WATCH] and not abs(bad - good) > 2.0 * FOLD_BACK:
+                break     # a fold, close enough: extrapolated below
+            st = advance(K, good, mid, 0, ltols, state, pos, d1, d2, margins, False)
+            if st == OK:
+                good = mid
+                copy2(state, keep)
+                d_good = watched_min(margins)
+            else:
+                bad = mid
+                st_bad = st
+                g_bad = margins[N_GROUPS]
+                copy2(keep, state)
+            mid = 0.5 * (good + bad)
+        at = bad
+        if d_good <= tols[T_WATCH]:
+            st_bad = SINGULAR
+            # a fold: margin^2 goes to zero with the crank angle, linearly (and a
+            # narrow lock's other edge adds a square).  Newton converges a little
+            # past the fold (within its tolerance of closure), so the bracket's
+            # edge is blurred there; the parabola through margin^2 at the good end
+            # and FOLD_BACK, 2 FOLD_BACK short of it has its zero at the fold
+            back = -FOLD_BACK if bad > good else FOLD_BACK
+            copy2(keep, state)
+            st1 = advance(K, good, good + back, 0, ltols, state, pos, d1, d2, margins, False)
+            v1 = watched_min(margins)
+            st2 = advance(K, good + back, good + 2.0 * back, 0, ltols, state, pos, d1, d2,
+                          margins, False)
+            v2 = watched_min(margins)
+            if st1 == OK and st2 == OK:
+                x = fold_distance(d_good, v1, v2, FOLD_BACK)
+                if math.isfinite(x) and x <= abs(bad - good) + 2.0 * FOLD_BACK:
+                    at = good - x * back / FOLD_BACK
+            copy2(keep, state)
+        found[0] = st_bad
+        found[1] = at
+        found[2] = g_bad
+        return st_bad
+
+
+    @njit(**JIT)
+    def refine(K, lo, hi, tols, state, pos, d1, d2, margins, ww):
+        """The walk from ``lo`` (``state``: its solution) to ``hi`` looked at closely:
+        SUB sub-positions under the same certificate, zooming in on the worst
+        window, until it is cleared (OK), a sub-position fails (its boundary
+        located: ``locate``) or the window is narrower than tols[T_LOCATE] with a
+        margin^2 at most tols[T_TOUCH] (SINGULAR there: a toggle passed between
+        positions).  found = (status, crank angle, group).  Returns the status."""
+        sub_phi, sub_val, sub_state, found = ww[3], ww[4], ww[5], ww[7]
+        for level in range(200):
+            copy2(state, sub_state[0])
+            st = advance(K, lo, lo, 0, tols, state, pos, d1, d2, margins, False)
+            if st != OK:    # cannot happen: lo was solved before
+                found[0] = st
+                found[1] = lo
+                found[2] = margins[N_GROUPS]
+                return st
+            sub_phi[0] = lo
+            watched_values(margins, sub_val, 0)
+            for i in range(1, SUB + 1):
+                t = hi if i == SUB else lo + (hi - lo) * i / SUB
+                st = advance(K, sub_phi[i - 1], t, 0, tols, state, pos, d1, d2, margins, False)
+                if st != OK:
+                    g = margins[N_GROUPS]
+                    if st == SINGULAR and i >= 3:
+                        # the group says toggle: where its margin^2 touches zero, the
+                        # quadratic through the three sub-positions before, resolved
+                        # (their margins well above rounding), has its vertex; the
+                        # positions at the toggle itself are only rounding noise
+                        for w in range(N_WATCH):
+                            if WATCH_G[w] == g:
+                                at, low = window_vertex(sub_phi[i - 3], sub_phi[i - 2],
+                                                        sub_phi[i - 1], sub_val[w, i - 3],
+                                                        sub_val[w, i - 2], sub_val[w, i - 1])
+                                if (at - sub_phi[i - 1]) * (t - at) >= 0.0 and \
+                                        low <= tols[T_TOUCH]:
+                                    found[0] = SINGULAR
+                                    found[1] = at
+                                    found[2] = g
+                                    return SINGULAR
+                    return locate(K, sub_phi[i - 1], t, st, g, sub_state[i - 1], tols, state,
+                                  pos, d1, d2, margins, ww)
+                sub_phi[i] = t
+                watched_values(margins, sub_val, i)
+                copy2(state, sub_state[i])
+            best, j, w, f3 = worst_window(sub_phi, sub_val, 1, SUB, SUB + 1)
+            wide = abs(hi - lo) > tols[T_LOCATE]
+            if best <= tols[T_TOUCH] and (not wide or cubic_bound(
+                    sub_phi[j - 1], sub_phi[j + 1], f3) <= RESOLVED * tols[T_TOUCH]):
+                # resolved: the quadratic is exact here to well within T_TOUCH; its
+                # smallest value is the margin^2 of a toggle passed between positions
+                # (its vertex: exact to rounding where D itself is only noise)
+                at, low = window_vertex(sub_phi[j - 1], sub_phi[j], sub_phi[j + 1],
+                                        sub_val[w, j - 1], sub_val[w, j], sub_val[w, j + 1])
+                if low <= tols[T_TOUCH]:
+                    # solved there: below zero the group cannot be assembled (a lock
+                    # narrower than the sub-steps), and the walk fails at its boundary
+                    jj = j - 1 if (at - sub_phi[j]) * (hi - lo) < 0.0 else j
+                    copy2(sub_state[jj], state)
+                    st = advance(K, sub_phi[jj], at, 0, tols, state, pos, d1, d2, margins,
+                                 False)
+                    if st != OK and st != SINGULAR:
+                        return locate(K, sub_phi[jj], at, st, margins[N_GROUPS],
+                                      sub_state[jj], tols, state, pos, d1, d2, margins, ww)
+                    found[0] = SINGULAR
+                    found[1] = at
+                    found[2] = WATCH_G[w]
+                    return SINGULAR
+            # a sub-position near a singular one (margin^2 at most T_WATCH): a fold
+            # closer to it than any sub-step hides from the values, so the walk zooms
+            # in on it until its first step from there is shorter than T_LOCATE
+            # (the continuation's step control then slows into any fold)
+            k_low = -1
+            v_low = tols[T_WATCH]
+            for i in range(SUB + 1):
+                for q in range(N_WATCH):
+                    if sub_val[q, i] <= v_low:
+                        v_low = sub_val[q, i]
+                        k_low = i
+            if not wide:
+                return OK
+            if k_low >= 0 and not (best <= tols[T_TOUCH] and best <= v_low):
+                j = min(max(k_low, 1), SUB - 1)
+            elif not best <= tols[T_TOUCH]:
+                return OK
+            lo = sub_phi[j - 1]
+            hi = sub_phi[j + 1]
+            copy2(sub_state[j - 1], state)
+        return OK
+
+
+    @njit(**JIT)
+    def watch(K, k, phi, tols, state, pos, d1, d2, margins, ww):
+        """Position ``k`` of a walk is solved at ``phi`` (OK): into the watch's
+        history (a ring of the last four positions), and the window it completes
+        (centred at position k - 1; at k = 3 also the first one) is certified
+        (``uniform_hit``: the walk's positions are equally spaced) or looked at
+        closely (``refine``, from the window's first position).  Returns OK or the
+        failure found (ww[7]: status, angle, group); the walk's state is position
+        k's again either way.  pos, d1, d2, margins are overwritten when a window
+        is refined."""
+        hist_phi, hist_val, hist_state = ww[0], ww[1], ww[2]
+        slot = k & 3
+        hist_phi[slot] = phi
+        watched_values(margins, hist_val, slot)
+        copy2(state, hist_state[slot])     # (also the good end of a failure: locate)
+        if N_WATCH == 0 or k < 3:
+            return OK
+        st = OK
+        for c in range(1 if k == 3 else k - 1, k):     # in order: the first failure met
+            i0 = (c - 1) & 3
+            i1 = c & 3
+            i2 = (c + 1) & 3
+            i3 = (c - 2) & 3 if c >= 2 else (c + 2) & 3    # the fourth position
+            hit = False
+            for w in range(N_WATCH):
+                hit = hit or uniform_hit(hist_val[w, i0], hist_val[w, i1], hist_val[w, i2],
+                                         hist_val[w, i3], c < 2, tols[T_WATCH])
+            if not hit:
+                continue
+            copy2(hist_state[i0], state)
+            st = refine(K, hist_phi[i0], hist_phi[i2], tols, state, pos, d1, d2, margins, ww)
+            if st != OK:
+                break
+        copy2(hist_state[slot], state)
+        return st
+
+
+    @njit(**JIT)
+    def walk_angle(phis, k, phi_close):
+        """Crank angle of step k of a watched walk: phis, then (a full revolution)
+        phi_close and two more positions past it, so that the watch's windows
+        wrap round the closing position."""
+        n = phis.shape[0]
+        return phis[k] if k < n else phi_close + (phis[k - n] - phis[0])
+
+
+    @njit(**JIT)
+    def walk_steps(phis, phi_close):
+        """Steps of a watched walk (see walk_angle)."""
+        n = phis.shape[0]
+        return n + 3 if (math.isfinite(phi_close) and n >= 3) else n
+
+
     @njit(**JIT)
     def walk_start(K, phi0, state):
         """Crank angle where a walk to ``phi0`` starts."""
@@ -267,42 +584,74 @@ CAREFUL = '''
 
     @njit(**JIT_ALLOC)
     def revolution(par, phis, phi_close, order, tols, pos_out, d1_out, d2_out, status_out,
-                   margin_out, iters_out):
+                   margin_out, iters_out, fail_out):
         """The mechanism at the crank angles ``phis`` (rad) by continuation.
 
         Outputs per position: pos_out/d1_out/d2_out (n_phi, n_points, 2),
         status_out (n_phi) int8, margin_out (n_phi, n_groups), iters_out (n_phi)
         Newton iterations summed over class III groups.  With a finite
         ``phi_close`` the continuation goes on to it and the revolution must
-        close on the state at phis[0] (BRANCH_JUMP otherwise).  Returns the
-        first non-OK position status, or BRANCH_JUMP if it does not close."""
+        close on the state at phis[0] (BRANCH_JUMP otherwise).  Between positions
+        the watch (pipeline.kernels.watch) looks for failures the positions do
+        not show.  Returns the first failure met along the walk, located between
+        positions: fail_out = (its crank angle, its group; -1: the closure); OK
+        with fail_out = (NaN, -1).  After a failure the walk goes on (a scene
+        shows what can be shown) without the watch."""
         K = constants(par)
         pos, d1, d2, margins, state, start_state = work(N_POINTS, N_GROUPS, N_TRIADS)
+        ww = watch_work()
+        found = ww[7]
+        keep = np.empty((N_TRIADS, N_STATE))
+        n = phis.shape[0]
+        fail_out[0] = math.nan
+        fail_out[1] = -1.0
         phi_prev = walk_start(K, phis[0], state)
         overall = OK
-        for k in range(phis.shape[0]):
-            st = advance(K, phi_prev, phis[k], order, tols, state, pos, d1, d2, margins, True)
-            phi_prev = phis[k]
+        for k in range(walk_steps(phis, phi_close)):
+            phi = walk_angle(phis, k, phi_close)
+            if k >= n and (overall != OK or (N_TRIADS == 0 and N_WATCH == 0)):
+                break       # the closing position and past it: only for a whole walk
+            st = advance(K, phi_prev, phi, order if k < n else 0, tols, state, pos, d1, d2,
+                         margins, k < n)
             if k == 0:
                 copy2(state, start_state)
-            status_out[k] = st
-            it = 0.0
-            for g in range(N_GROUPS):
-                margin_out[k, g] = margins[g]
-            for j in range(N_TRIADS):
-                it += state[j, S_ITERS]
-            iters_out[k] = it
-            copy2(pos, pos_out[k])
-            if order >= 1:
-                copy2(d1, d1_out[k])
-            if order >= 2:
-                copy2(d2, d2_out[k])
-            if overall == OK and st != OK:
-                overall = st
-        if N_TRIADS > 0 and math.isfinite(phi_close):
-            st = advance(K, phi_prev, phi_close, 0, tols, state, pos, d1, d2, margins, False)
-            if overall == OK and (st != OK or not closes(state, start_state, tols)):
-                overall = BRANCH_JUMP if st == OK else st
+            if k < n:
+                status_out[k] = st
+                it = 0.0
+                for g in range(N_GROUPS):
+                    margin_out[k, g] = margins[g]
+                for j in range(N_TRIADS):
+                    it += state[j, S_ITERS]
+                iters_out[k] = it
+                copy2(pos, pos_out[k])
+                if order >= 1:
+                    copy2(d1, d1_out[k])
+                if order >= 2:
+                    copy2(d2, d2_out[k])
+            if overall == OK:
+                if st != OK:
+                    overall = st
+                    found[1] = phi
+                    found[2] = margins[N_GROUPS]
+                    if k > 0:     # located between the last good position and this one
+                        copy2(state, keep)
+                        overall = locate(K, phi_prev, phi, st, margins[N_GROUPS],
+                                         ww[2][(k - 1) & 3],
+                                         tols, state, pos, d1, d2, margins, ww)
+                        copy2(keep, state)
+                    fail_out[0] = found[1]
+                    fail_out[1] = found[2]
+                elif k == n and N_TRIADS > 0 and not closes(state, start_state, tols):
+                    overall = BRANCH_JUMP
+                    fail_out[0] = phi_close
+                    fail_out[1] = -1.0
+                else:
+                    sw = watch(K, k, phi, tols, state, pos, d1, d2, margins, ww)
+                    if sw != OK:
+                        overall = sw
+                        fail_out[0] = found[1]
+                        fail_out[1] = found[2]
+            phi_prev = phi
         return overall
 
 
@@ -318,44 +667,58 @@ CAREFUL = '''
     # inline='always': one call site in the sweep; as its own function numba would
     # build and link a library of everything it calls once more (compile time)
     @njit(inline='always', **JIT)
-    def careful_positions(K, phis, phi_close, tols, theta, out, wk):
+    def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww):
         """Stage 1 of the sweep for one candidate on the careful path: assembly
-        over the revolution (triangle, Newton, branch, closure), the rocker
-        angles ``theta`` from the first position, the singularity margin and the
-        Newton iterations.  Returns (status, margin, iterations); a failure
-        writes its crank angle to out[M_FAIL_PHI].  Always from the start: a
-        walk resumed midway decides its steps near a fold from another history,
-        and may name a failure differently.  wk: the walk's work arrays (work)."""
+        over the revolution (triangle, Newton, branch, closure) and between its
+        positions (the watch), the rocker angles ``theta`` from the first
+        position, the singularity margin and the Newton iterations.  Returns
+        (status, margin, iterations); a failure writes its crank angle (located
+        between positions) and its group to out[M_FAIL_PHI], out[M_FAIL_GROUP].
+        Always from the start: a walk resumed midway decides its steps near a fold
+        from another history, and may name a failure differently.  wk, ww: the
+        walk's and the watch's work arrays (work, watch_work)."""
         n = phis.shape[0]
         pos, d1, d2, margins, state, start_state = wk
+        found = ww[7]
         phi_prev = walk_start(K, phis[0], state)
         margin = math.inf
         iters = 0.0
         x0 = 0.0
         y0 = 0.0
-        n_steps = n + 1 if (N_TRIADS > 0 and math.isfinite(phi_close)) else n
-        for k in range(n_steps):
-            phi = phis[k] if k < n else phi_close      # the last step closes the revolution
+        for k in range(walk_steps(phis, phi_close)):
+            phi = walk_angle(phis, k, phi_close)   # k >= n: the closing position and past it
             st = advance(K, phi_prev, phi, 0, tols, state, pos, d1, d2, margins, False)
-            phi_prev = phi
-            if k == n:
-                if st != OK or not closes(state, start_state, tols):
-                    out[M_FAIL_PHI] = phi_close
-                    return (st if st != OK else BRANCH_JUMP), margin, iters
-                break
             if st != OK:
-                out[M_FAIL_PHI] = phis[k]
+                if k > 0:    # located between the last good position and this one
+                    st = locate(K, phi_prev, phi, st, margins[N_GROUPS], ww[2][(k - 1) & 3],
+                                tols, state, pos, d1, d2, margins, ww)
+                else:
+                    found[1] = phi
+                    found[2] = margins[N_GROUPS]
+                out[M_FAIL_PHI] = found[1]
+                out[M_FAIL_GROUP] = found[2]
                 return st, margin, iters
-            rx = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]
-            ry = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]
-            if k == 0:
-                copy2(state, start_state)
-                x0 = rx
-                y0 = ry
-            for j in range(N_TRIADS):
-                margin = min(margin, state[j, S_MARGIN])
-                iters += state[j, S_ITERS]
-            theta[k] = relative_angle(x0, y0, rx, ry)
+            phi_prev = phi
+            if k == n and N_TRIADS > 0 and not closes(state, start_state, tols):
+                out[M_FAIL_PHI] = phi_close
+                out[M_FAIL_GROUP] = -1.0
+                return BRANCH_JUMP, margin, iters
+            if k < n:
+                rx = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]
+                ry = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]
+                if k == 0:
+                    copy2(state, start_state)
+                    x0 = rx
+                    y0 = ry
+                for j in range(N_TRIADS):
+                    margin = min(margin, state[j, S_MARGIN])
+                    iters += state[j, S_ITERS]
+                theta[k] = relative_angle(x0, y0, rx, ry)
+            st = watch(K, k, phi, tols, state, pos, d1, d2, margins, ww)
+            if st != OK:
+                out[M_FAIL_PHI] = found[1]
+                out[M_FAIL_GROUP] = found[2]
+                return st, margin, iters
         return OK, margin, iters
 
 
@@ -369,12 +732,12 @@ CAREFUL = '''
         return settle(par, np.int64(-1), phis, phi_close, tols, settings, loads, theta,
                       trail, qmax, qmin, 0.0, np.int64(-1), 0.0, 0.0,
                       work(N_POINTS, N_GROUPS, N_TRIADS),
-                      force_work(N_BODIES, N_JOINTS, N_SLIDES), out)
+                      force_work(N_BODIES, N_JOINTS, N_SLIDES), watch_work(), out)
 
 
     @njit(**JIT)
     def settle(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qmax, qmin,
-               err, start_k, full, margin, wk, fw, out):
+               err, start_k, full, margin, wk, fw, ww, out):
         """Metrics of one candidate into ``out`` (N_METRICS); returns its status.
         Where ``vouched`` (> 0) the lane path's dwell (err, start_k, full),
         margin and class III solutions ``trail`` are taken; otherwise the
@@ -389,7 +752,7 @@ CAREFUL = '''
         K = constants(par)
         iters = float(NEWTON_STEPS * N_TRIADS * n)
         if vouched <= 0:
-            st, margin, iters = careful_positions(K, phis, phi_close, tols, col, out, wk)
+            st, margin, iters = careful_positions(K, phis, phi_close, tols, col, out, wk, ww)
             if st != OK:
                 return st
             err, start_k, full = dwell_error(col, int(settings[SET_DWELL_W]), qmax, qmin)
@@ -642,17 +1005,19 @@ PARALLEL = '''
         (``pipeline.compiler.parallel``; the kernels release the GIL)."""
         npos = phis.shape[0]
         w = int(settings[SET_DWELL_W])
-        # the crank's cos/sin table, shared by every candidate (the last row is
-        # the closing angle)
-        cph = np.empty(npos + 1)
-        sph = np.empty(npos + 1)
-        for k in range(npos + 1):
-            phi = phis[k] if k < npos else (phi_close if math.isfinite(phi_close) else phis[0])
+        # the crank's cos/sin table, shared by every candidate: the positions, the
+        # closing angle and two past it (the watch's windows wrap round the close)
+        cph = np.empty(npos + 3)
+        sph = np.empty(npos + 3)
+        for k in range(npos + 3):
+            phi = phis[k] if k < npos else (phis[k - npos] - phis[0]
+                                            + (phi_close if math.isfinite(phi_close)
+                                               else phis[0]))
             cph[k] = math.cos(phi)
             sph[k] = math.sin(phi)
         # work arrays: once per call, never per candidate
         S = np.empty((N_LANE_ROWS, LANES))
-        theta = np.empty((npos + 1, LANES * THETA_COLS))
+        theta = np.empty((npos + 3, LANES * THETA_COLS))
         col = np.empty(npos)
         trail = np.empty((npos + 1, max(THETA_COLS - 1, 1)))
         W5 = np.empty((5, npos + w + 1, LANES))
@@ -664,6 +1029,7 @@ PARALLEL = '''
         idx = np.empty(LANES, np.int64)
         wk = work(N_POINTS, N_GROUPS, N_TRIADS)
         fw = force_work(N_BODIES, N_JOINTS, N_SLIDES)
+        ww = watch_work()
         pos, d1, d2, margins, state, _ = wk
         fast = lanes_apply(phis, tols)
         filled = 0
@@ -683,11 +1049,12 @@ PARALLEL = '''
                         metrics[i, c] = math.nan
                     metrics[i, M_FORCES_DONE] = 0.0
                     metrics[i, M_FAIL_PHI] = phis[0]
+                    metrics[i, M_FAIL_GROUP] = margins[N_GROUPS]
                     status[i] = code
                 else:
                     status[i] = settle(pars[i], np.int64(-1), phis, phi_close, tols, settings,
                                        loads, col, trail, qmax, qmin, 0.0, np.int64(-1), 0.0,
-                                       0.0, wk, fw, metrics[i])
+                                       0.0, wk, fw, ww, metrics[i])
             if filled == LANES or (i == hi and filled > 0):
                 for l in range(filled, LANES):     # pad a partial block with lane 0
                     for r in range(N_LANE_ROWS):
@@ -704,7 +1071,7 @@ PARALLEL = '''
                             trail[k, q] = theta[k, (1 + q) * LANES + l]
                     status[idx[l]] = settle(pars[idx[l]], vouched, phis, phi_close, tols,
                                             settings, loads, col, trail, qmax, qmin, err[l],
-                                            start_k[l], full[l], S[R_margin, l], wk, fw,
+                                            start_k[l], full[l], S[R_margin, l], wk, fw, ww,
                                             metrics[idx[l]])
                 filled = 0
 
@@ -712,13 +1079,15 @@ PARALLEL = '''
     @njit(**JIT_ALLOC)
     def batch(pars, lo, hi, phis, order, tols, point, with_forces, omega1, eps1, loads, status,
               peak_acc, peak_reaction):
-        """For each parameter row: status over the revolution, the peak
-        acceleration analog |r''| of ``point`` (mm/rad^2) and, with_forces, the
-        peak joint reaction (N).  NaN peaks with an OK status would be an
-        unflagged failure (the stress suite checks there are none).  Rows lo ..
-        hi - 1; the caller runs ranges on threads."""
+        """For each parameter row: status over the revolution (watched between
+        positions, without the closing position), the peak acceleration analog
+        |r''| of ``point`` (mm/rad^2) and, with_forces, the peak joint reaction
+        (N).  NaN peaks with an OK status would be an unflagged failure (the
+        stress suite checks there are none).  Rows lo .. hi - 1; the caller runs
+        ranges on threads."""
         pos, d1, d2, margins, state, _ = work(N_POINTS, N_GROUPS, N_TRIADS)
         work_a, work_b, loads_out, r_out, slide_out = force_work(N_BODIES, N_JOINTS, N_SLIDES)
+        ww = watch_work()
         for i in range(lo, hi):
             par = pars[i]
             K = constants(par)
@@ -743,6 +1112,10 @@ PARALLEL = '''
                         r = math.hypot(r_out[j, 0], r_out[j, 1])
                         finite = finite and math.isfinite(r)
                         peak = max(peak, r)
+                s = watch(K, k, phis[k], tols, state, pos, d1, d2, margins, ww)
+                if s != OK:     # a failure between positions
+                    st = s
+                    break
             status[i] = st
             peak_acc[i] = acc if (st == OK and finite) else math.nan
             peak_reaction[i] = peak if (st == OK and with_forces) else math.nan

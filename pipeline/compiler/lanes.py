@@ -28,6 +28,7 @@ from __future__ import annotations
 import re
 import textwrap
 
+from ..kernels.watch import ERR_FACTOR
 from .emit import ClassIIIEmitter, _wrap_line, constant_names, lane
 
 NEWTON_STEPS = 2          # Newton steps per position after the predictor
@@ -121,7 +122,7 @@ def _triad_lines(e, names):
     return out
 
 
-def lane_kernel(plan, names, ems, rocker, width):
+def lane_kernel(plan, names, ems, rocker, width, watch=True):
     """Source of the lane path of ``plan`` (``setup_lane``, ``walk``,
     ``block_walk``, ``lanes_apply``) with the output rocker ``rocker`` =
     (pivot, point) names, LANES = ``width``."""
@@ -137,6 +138,9 @@ def lane_kernel(plan, names, ems, rocker, width):
         rows += [f"{t}_{x}" for x in ("ca", "sa", "cb", "sb", "dca", "dsa", "dcb", "dsb",
                                       "sign", "a0c", "a0s", "b0c", "b0s")]
     rows += ["rock_x", "rock_y", "theta", "margin", "flag"]
+    watched = [e for e in kin if e.watched and watch]
+    for i, e in enumerate(watched):
+        rows += [f"w{i}_{x}" for x in ("k3", "k2", "k1")]    # margin^2 at k-3, k-2, k-1
     piv, pt = names.point[rocker[0]], names.point[rocker[1]]
     src = [f"ROCKER_PIVOT = {names.I(rocker[0])}",
            f"ROCKER_POINT = {names.I(rocker[1])}",
@@ -216,23 +220,31 @@ def lane_kernel(plan, names, ems, rocker, width):
     a("    S[R_rock_x, l] = 1.0")
     a("    S[R_rock_y, l] = 0.0")
     a("S[R_flag, l] = 0.0")
-    # block_walk: the walk of a full block, then the closing checks
+    for i, e in enumerate(watched):
+        a(f"# {e.title()}: the watch's history starts with margin^2 at phis[0]")
+        for x in ("k3", "k2", "k1"):
+            a(f"S[R_w{i}_{x}, l] = margins[{e.g}] * margins[{e.g}]")
+    # block_walk: the walk of a full block (its closing checks inside)
     closing = []
     a = closing.append
-    last = "npos + 1" if triads else "npos"
-    a(f"# the lock-step walk: positions 1 .. n - 1{' and the closing position' if triads else ''}")
-    a(f"walk(S.reshape(N_LANE_ROWS * LANES), S.shape[1], theta, cph_tab, sph_tab, {last}, tol,")
-    a("     jump, step_change, margin_safe)")
+    a("# the lock-step walk: positions 1 .. n - 1, the closing position and two past it")
+    a("# (the watch's windows wrap round the close)")
+    a("walk(S.reshape(N_LANE_ROWS * LANES), S.shape[1], theta, cph_tab, sph_tab, npos + 3, npos,")
+    a("     tol, jump, step_change, margin_safe, close, tols[T_WATCH])")
     walk = ["@njit(**JIT_LANES)   # FMA contraction: the one kernel with it",
-            "def walk(S, n_lanes, theta, cph_tab, sph_tab, k_end, tol, jump, step_change,",
-            "         margin_safe):",
+            "def walk(S, n_lanes, theta, cph_tab, sph_tab, k_end, k_close, tol, jump, step_change,",
+            "         margin_safe, close, watch_floor):",
             '    """The lock-step walk over crank positions 1 .. k_end - 1: every lane of the',
             "    block advances one position at a time (straight-line code, division and",
             "    square root only); a function of its own so that nothing outside the",
-            '    loops shares their variables (LLVM then vectorizes the lane loop)."""',
+            "    loops shares their variables (LLVM then vectorizes the lane loop).  At",
+            "    k_close (phi_close) the class III groups must be back on their start; every",
+            "    watched group's margin^2 passes the watch's certificate",
+            '    (pipeline.kernels.watch) on every window of three positions."""',
             "    for k in range(1, k_end):",
             "        cph = cph_tab[k]",
             "        sph = sph_tab[k]",
+            "        armed = k >= 3      # the watch: four positions known",
             "        # a trip count known only at run time: LLVM vectorizes this loop (a",
             "        # constant count is unrolled instead, and stays scalar)",
             "        for l in range(n_lanes):"]
@@ -244,6 +256,8 @@ def lane_kernel(plan, names, ems, rocker, width):
                   f"{pn}y = S[R_{names.param[p + '.y']}, l]"]
     for e in kin:
         inner += (_triad_lines(e, names) if isinstance(e, ClassIIIEmitter) else e.lanes())
+        if e in watched:
+            inner += _watch_lines(watched.index(e), e)
     inner += [
         "# the output rocker: its angle from the increments (atan series of a small tan)",
         f"ux = {pt}x - {piv}x", f"uy = {pt}y - {piv}y",
@@ -263,18 +277,19 @@ def lane_kernel(plan, names, ems, rocker, width):
     # the walk sees S flat, rows LANES apart (a constant stride: rows provably
     # apart, so no run-time overlap checks), while the lane count stays a
     # run-time value (a constant trip count is unrolled, and stays scalar)
-    walk += ["            " + re.sub(r"S\[(R_\w+), l\]", r"S[\1 * LANES + l]", line)
-             for line in inner]
+    flat = lambda line: re.sub(r"S\[(R_\w+), l\]", r"S[\1 * LANES + l]", line)  # noqa: E731
+    walk += ["            " + flat(line) for line in inner]
     if triads:
-        a("# the revolution closes on its start (the last row is phi_close)")
-        a("for l in range(LANES):")
+        shut = ["# the revolution closes on its start (row k_close is phi_close)",
+                "for l in range(n_lanes):"]
         for e in triads:
             t = f"t{e.triad_row}"
-            a(f"    ea = S[R_{t}_a0c, l] * S[R_{t}_sa, l] - S[R_{t}_a0s, l] * S[R_{t}_ca, l]")
-            a(f"    eb = S[R_{t}_b0c, l] * S[R_{t}_sb, l] - S[R_{t}_b0s, l] * S[R_{t}_cb, l]")
-            a(f"    dot = S[R_{t}_a0c, l] * S[R_{t}_ca, l] + S[R_{t}_a0s, l] * S[R_{t}_sa, l]")
-            a("    if not (abs(ea) <= close and abs(eb) <= close and dot > 0.0):")
-            a("        S[R_flag, l] = 1.0")
+            shut += [f"    ea = S[R_{t}_a0c, l] * S[R_{t}_sa, l] - S[R_{t}_a0s, l] * S[R_{t}_ca, l]",
+                     f"    eb = S[R_{t}_b0c, l] * S[R_{t}_sb, l] - S[R_{t}_b0s, l] * S[R_{t}_cb, l]",
+                     f"    dot = S[R_{t}_a0c, l] * S[R_{t}_ca, l] + S[R_{t}_a0s, l] * S[R_{t}_sa, l]",
+                     "    if not (abs(ea) <= close and abs(eb) <= close and dot > 0.0):",
+                     "        S[R_flag, l] = 1.0"]
+        walk += ["        if k == k_close:"] + ["            " + flat(x) for x in shut]
     src += [""] + walk + ["", ""]
     src += ["# inline='always': one call site in the sweep; as its own function numba would", '# build and link a library of everything it calls once more (compile time)',
             "@njit(inline='always', **JIT)",
@@ -304,6 +319,25 @@ def lane_kernel(plan, names, ems, rocker, width):
             '    no longer than the careful walk\'s largest)."""',
             "    return phis.shape[0] >= 3 and abs(phis[1] - phis[0]) <= tols[T_SUBSTEP]", ""]
     return "\n".join(src) + "\n\n"
+
+
+def _watch_lines(i, e):
+    """Lane lines of the watch (pipeline.kernels.watch) for a group whose margin is
+    ``m``: the window of margin^2 at k - 2, k - 1, k (equal steps: the quadratic
+    q(t) = D[k-1] + b t + c t^2, its cubic term from the third difference),
+    division-free; a window that may come within the watch threshold of zero
+    flags the lane (the careful path looks closely)."""
+    r = {x: f"S[R_w{i}_{x}, l]" for x in ("k3", "k2", "k1")}
+    return [
+        f"# {e.title()}: the watch's window of margin^2 at k - 2, k - 1, k",
+        f"g3 = {r['k3']}", f"g2 = {r['k2']}", f"g1 = {r['k1']}", "v = m * m",
+        f"lim = watch_floor + {ERR_FACTOR / 6.0!r} * abs(v - 3.0 * g1 + 3.0 * g2 - g3)",
+        "bq = 0.5 * (v - g2)", "cq = 0.5 * (v - 2.0 * g1 + g2)",
+        "hit = (min(g2, min(g1, v)) <= lim) | ((cq > 0.0) & (abs(bq) < 2.0 * cq)"
+        " & (4.0 * cq * g1 - bq * bq <= 4.0 * cq * lim))",
+        "big = big | (armed & hit)",
+        f"{r['k3']} = g2", f"{r['k2']} = g1", f"{r['k1']} = v",
+    ]
 
 
 def _split(line, width=90):

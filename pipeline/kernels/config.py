@@ -89,7 +89,13 @@ T_ASSEMBLY_SLACK = 7  # cosine-law argument in [1, 1+slack] is clamped to a togg
 T_STEP_CHANGE = 8     # continuation steps change a class III angle by at most this, rad
 T_MIN_STEP = 9        # a rejected step is halved down to this fraction of T_SUBSTEP
 T_FIRST_STEP = 10     # first step of a walk (no slope known yet), fraction of T_SUBSTEP
-N_TOLS = 11
+T_WATCH = 11          # between-sample watch: a margin^2 that may dip this low between two
+                      # positions (by the quadratic through three, allowing for the cubic
+                      # term) is looked at closely (pipeline.kernels.watch)
+T_TOUCH = 12          # margin^2 at or below this at a located minimum: a toggle the crank
+                      # passes between positions (the branch there is ambiguous): SINGULAR
+T_LOCATE = 13         # a failure between positions is located to this, rad
+N_TOLS = 14
 
 # state columns of a class III group (per candidate, per group)
 S_A = 0
@@ -109,7 +115,7 @@ N_STATE = 11
 def default_tolerances(newton_tol=1e-12, newton_maxiter=50, newton_step=0.5,
                        singular=1e-9, jump=0.1, substep_deg=2.0, close=1e-7,
                        assembly_slack=1e-12, step_change=0.05, min_step=1e-5,
-                       first_step=1.0 / 256.0):
+                       first_step=1.0 / 256.0, watch=1e-6, touch=1e-12, locate=1e-10):
     """The tolerance vector the kernels take, with the product's defaults."""
     t = np.empty(N_TOLS)
     t[T_NEWTON_TOL] = newton_tol
@@ -123,4 +129,7 @@ def default_tolerances(newton_tol=1e-12, newton_maxiter=50, newton_step=0.5,
     t[T_STEP_CHANGE] = step_change
     t[T_MIN_STEP] = min_step
     t[T_FIRST_STEP] = first_step
+    t[T_WATCH] = watch
+    t[T_TOUCH] = touch
+    t[T_LOCATE] = locate
     return t

@@ -19,6 +19,9 @@ from .config import (JIT, JIT_ALLOC, N_STATE, S_A, S_B, S_DET_SIGN, S_HAS_SLOPE,
                      T_STEP_CHANGE, T_SUBSTEP)
 
 
+MARGIN_SLOTS = 3     # after the groups' margins: failing group, angle reached, angle failed
+
+
 @njit(**JIT)
 def wrap(x):
     """Angle difference wrapped to (-pi, pi]."""
@@ -27,9 +30,13 @@ def wrap(x):
 
 @njit(**JIT_ALLOC)
 def work(n_points, n_groups, n_triads):
-    """Work arrays of one candidate's walk: (pos, d1, d2, margins, state, start_state)."""
+    """Work arrays of one candidate's walk: (pos, d1, d2, margins, state,
+    start_state); margins has MARGIN_SLOTS slots more than groups: the index of
+    the group that failed (``position``), the last crank angle a walk reached
+    and the angle of its failing step (``advance``)."""
     return (np.empty((n_points, 2)), np.empty((n_points, 2)), np.empty((n_points, 2)),
-            np.empty(n_groups), np.empty((n_triads, N_STATE)), np.empty((n_triads, N_STATE)))
+            np.empty(n_groups + MARGIN_SLOTS), np.empty((n_triads, N_STATE)),
+            np.empty((n_triads, N_STATE)))
 
 
 @njit(**JIT)

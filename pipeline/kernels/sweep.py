@@ -24,7 +24,8 @@ M_PEAK_MBAL = 7
 M_FAIL_PHI = 8
 M_NEWTON_MEAN = 9
 M_FORCES_DONE = 10
-N_METRICS = 11
+M_FAIL_GROUP = 11   # index of the group that failed (NaN: none)
+N_METRICS = 12
 
 # slots of the settings vector of a sweep (one float array: the kernels'
 # signatures stay short, and the numba cache is not tied to a study)
