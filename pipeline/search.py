@@ -64,10 +64,11 @@ from .kernels import config as kc
 from .kernels import sweep as ks
 from .pareto import crowding_distance, nondominated_rank
 from .search_spec import METHODS, SearchSpec
-from .storage import (COMPRESSION, FORMAT, ResultsError, attach, attr_text, coordinate,
+from .storage import (COMPRESSION, ResultsError, attach, attr_text, coordinate,
                       open_results)
 from .sweep import (COLUMN, Journal, SweepFile, SweepInterrupted, SweepOutcome, SweepProblem,
-                    _connect, _replaced, build_problem, constraint_names, constraints, summarize)
+                    _connect, _replaced, build_problem, check_existing, constraint_names,
+                    constraints, summarize)
 from .sweep_spec import SweepSpec, draw_checked, parameter_rows
 
 log = logging.getLogger("pipeline")
@@ -451,46 +452,19 @@ def _load_first(journal: Journal):
 
 
 def _check_existing(out: Path, journal: Journal, study, want, resume, overwrite):
-    """Refuse anything that would overwrite or mix results silently."""
-    if not resume:
-        if journal.exists():
-            raise ResultsError(journal.dir, "holds an unfinished run; continue it with --resume "
-                                            "(or delete the folder to start again)")
-        if out.exists() and not overwrite:
-            raise ResultsError(out, "already exists; --overwrite replaces it, -o writes "
-                                    "another file, --resume continues an interrupted run")
-        return
-    if journal.exists():
-        man = journal.manifest()
+    def journal_diff(man):
         if man.get("journal_kind") != JOURNAL_KIND:
             raise ResultsError(journal.dir, "belongs to an interrupted Monte-Carlo sweep, not a "
                                             "search; refusing to mix results")
         # resumed without --from: the first generation is the journal's
         skip = {"study_file", "seeded_from"} | (set() if want.get("seeded_from")
                                                  else {"first_generation_sha256", "seeded"})
-        diff = [k for k in want if k not in skip and man.get(k) != want[k]]
-        if diff:
-            raise ResultsError(journal.dir, "belongs to another run (different "
-                               + ", ".join(diff) + "); refusing to mix results")
-        return
-    if out.exists():
-        try:
-            with h5py.File(out, "r") as f:
-                ours = f.attrs.get("format") == FORMAT
-                same = ours and f.attrs.get("study_toml") == study.text and \
-                    attr_text(f.attrs.get("kind_detail", "")) == "search"
-                complete = bool(f.attrs.get("complete", False))
-        except OSError:
-            raise ResultsError(out, "is truncated or not an HDF5 file and there is no journal "
-                                    "to rebuild it from; refusing to touch it") from None
-        if not ours:
-            raise ResultsError(out, "is not a pipeline results file; refusing to write into it")
-        if not same:
-            raise ResultsError(out, "holds another study's results (or a Monte-Carlo sweep); "
-                                    "refusing to write into it")
-        if not complete:
-            raise ResultsError(out, "is an unfinished search whose journal is gone; "
-                                    "run again into a new file")
+        return [k for k in want if k not in skip and man.get(k) != want[k]]
+
+    check_existing(out, journal, resume, overwrite, journal_diff=journal_diff,
+                   same_results=lambda f: (f.attrs.get("study_toml") == study.text and
+                                           attr_text(f.attrs.get("kind_detail", "")) == "search"),
+                   what="search", other="or a Monte-Carlo sweep")
 
 
 # ----------------------------------------------------------------- running
