@@ -527,7 +527,8 @@ CAREFUL = '''
         """Position ``k`` of a walk is solved at ``phi`` (OK): into the watch's
         history (a ring of the last four positions), and the window it completes
         (centred at position k - 1; at k = 3 also the first one) is certified
-        (``uniform_hit``: the walk's positions are equally spaced) or looked at
+        (``uniform_hit`` where the positions are equally spaced, as a revolution's
+        are, else ``window_score``) or looked at
         closely (``refine``, from the window's first position).  Returns OK or the
         failure found (ww[7]: status, angle, group); the walk's state is position
         k's again either way.  pos, d1, d2, margins are overwritten when a window
@@ -546,9 +547,16 @@ CAREFUL = '''
             i2 = (c + 1) & 3
             i3 = (c - 2) & 3 if c >= 2 else (c + 2) & 3    # the fourth position
             hit = False
+            p0, p1, p2, p3 = hist_phi[i0], hist_phi[i1], hist_phi[i2], hist_phi[i3]
+            even = abs((p2 - p1) - (p1 - p0)) <= 1e-9 * abs(p1 - p0)
             for w in range(N_WATCH):
-                hit = hit or uniform_hit(hist_val[w, i0], hist_val[w, i1], hist_val[w, i2],
-                                         hist_val[w, i3], c < 2, tols[T_WATCH])
+                v0, v1, v2, v3 = hist_val[w, i0], hist_val[w, i1], hist_val[w, i2], hist_val[w, i3]
+                if even:
+                    hit = hit or uniform_hit(v0, v1, v2, v3, c < 2, tols[T_WATCH])
+                else:     # a walk at uneven angles (a caller's own list): the general form
+                    f3 = (third_difference(p0, p1, p2, p3, v0, v1, v2, v3) if c < 2 else
+                          third_difference(p3, p0, p1, p2, v3, v0, v1, v2))
+                    hit = hit or not (window_score(p0, p1, p2, v0, v1, v2, f3) > tols[T_WATCH])
             if not hit:
                 continue
             copy2(hist_state[i0], state)
