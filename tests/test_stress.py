@@ -121,12 +121,11 @@ RELIABLE_MARGIN = 0.05
 
 def test_no_silent_branch_jump(triad_run, report):
     """Every candidate reported OK closes its revolution (checked by the
-    kernel) and, where its singularity margin is at least RELIABLE_MARGIN,
-    gives the same positions when the continuation walks in steps 8x finer:
-    a jump to another branch would show.  Closer to a singular position the
-    walk can still cross a fold of the solution curve onto another sheet;
-    how often is measured and reported (the synthesis constraint
-    singularity_margin >= 0.3 keeps such candidates out of the feasible set)."""
+    kernel) and gives the same positions when the continuation walks in steps
+    8x finer: a jump to another branch would show.  Before the watch between
+    positions (pipeline/kernels/watch.py) the walk could cross a fold of the
+    solution curve onto another sheet within a margin of RELIABLE_MARGIN (13 of
+    410 such candidates); now none may."""
     pb, pars, offset, status, m = triad_run
     fine = pb.tols.copy()
     fine[kc.T_SUBSTEP] = np.deg2rad(0.25)
@@ -145,11 +144,10 @@ def test_no_silent_branch_jump(triad_run, report):
         if not same:
             disagree.append(i)
     margins = m[disagree, M_MARGIN]
-    assert (margins < RELIABLE_MARGIN).all(), list(zip(disagree, margins))
-    line = (f"no-silent-jump check: {len(ok)} OK candidates re-solved with 8x finer steps; "
-            f"{len(disagree)} differ, all with margin < {RELIABLE_MARGIN} "
-            f"(largest {margins.max() if len(disagree) else 0:.2e}); "
-            f"{int((m[ok, M_MARGIN] >= RELIABLE_MARGIN).sum())} with margin >= {RELIABLE_MARGIN}: all agree")
+    assert not disagree, list(zip(disagree, margins))
+    line = (f"no-silent-jump check: {len(ok)} OK candidates re-solved with 8x finer steps, "
+            f"{int((m[ok, M_MARGIN] < RELIABLE_MARGIN).sum())} of them with margin < "
+            f"{RELIABLE_MARGIN}: all agree")
     with report.open("a") as f:
         f.write(line + "\n")
     print(line)
