@@ -41,7 +41,8 @@ def cmd_run(a):
         info["next"] = (f"pipeline analyze {q}; pipeline browse {q}; "
                         f"pipeline report {q}")
     elif res.kind == "scene":
-        info["next"] = f"pipeline export {_quote(res.results)} --csv tables/"
+        info["next"] = (f"pipeline export {_quote(res.results)} --csv tables/; "
+                        f"pipeline show {_quote(res.results)} --animate")
     if not a.quiet:
         _print(info, a.format)
     return EXIT_OK
@@ -103,8 +104,20 @@ def cmd_browse(a):
 
 
 def cmd_show(a):
-    from .browse import show
-    info = show(a.results, a.candidate, a.output)
+    from .animate import animate, results_kind
+    if a.animate:
+        info = animate(a.results, a.candidate, a.output, frames=a.frames)
+    elif results_kind(a.results) == "scene":
+        from .storage import ResultsError
+        raise ResultsError(a.results, "is a scene result, this command needs a sweep result "
+                                      "(`pipeline run` wrote the scene's pictures; `pipeline "
+                                      f"show {a.results} --animate` animates it)")
+    elif a.candidate is None:
+        raise ValueError(f"{a.results} is a sweep: say which design to show with --candidate "
+                         "ID (an index, 'knee' or 'reference')")
+    else:
+        from .browse import show
+        info = show(a.results, a.candidate, a.output)
     if not a.quiet:
         _print(info, a.format)
     return EXIT_OK
@@ -195,14 +208,24 @@ def build_parser():
                    help="full-width tables and the file's datasets (default: 100 columns)")
     b.set_defaults(func=cmd_browse)
 
+    from .animate import FPS, MAX_FRAMES
     s = sub.add_parser("show", parents=[common], help=(
         "re-run one candidate of a sweep as a scene and draw it: mechanism, output motion "
-        "over the OV-7 cyclogram, joint reactions"))
-    s.add_argument("results", help="results HDF5 file of a sweep")
-    s.add_argument("--candidate", required=True, metavar="ID",
-                   help="an index, 'knee' or 'reference'")
-    s.add_argument("-o", "--output", metavar="PNG",
-                   help="picture (default: next to the results file, <name>_candidate<ID>.png)")
+        "over the OV-7 cyclogram, joint reactions; or, with --animate, animate it (or a "
+        "scene) over one revolution"))
+    s.add_argument("results", help="results HDF5 file of a sweep (or, with --animate, of a "
+                                    "scene)")
+    s.add_argument("--candidate", metavar="ID",
+                   help="a sweep's design: an index, 'knee' or 'reference'")
+    s.add_argument("--animate", action="store_true", help=(
+        f"write an animation of the mechanism over one revolution instead: a GIF ({FPS} "
+        "frames/s), or an MP4 if -o ends in .mp4 and ffmpeg is installed"))
+    s.add_argument("--frames", type=int, default=MAX_FRAMES, metavar="N",
+                   help=f"--animate: frames per revolution (2 to {MAX_FRAMES}, the default)")
+    s.add_argument("-o", "--output", metavar="FILE", help=(
+        "picture (default: next to the results file, <name>_candidate<ID>.png); with "
+        "--animate the animation (default <name>_candidate<ID>.gif, or <name>_animation.gif "
+        "for a scene)"))
     s.set_defaults(func=cmd_show)
 
     rp = sub.add_parser("report", parents=[common], help=(

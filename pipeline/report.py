@@ -45,6 +45,7 @@ td.l, th.l { text-align: left; white-space: nowrap; }
 .wide { overflow-x: auto; max-width: 100%; }
 img { max-width: 100%; height: auto; }
 .cards { display: flex; flex-wrap: wrap; gap: 14px; }
+.motion img { max-width: 48%; align-self: flex-start; }
 .card { border: 1px solid #ddd; border-radius: 6px; padding: 8px; width: 350px; }
 .card h3 { font-size: 0.95em; margin: 0.1em 0 0.3em; }
 .card table { font-size: 0.78em; width: 100%; }
@@ -324,11 +325,56 @@ def design_figure(run) -> str:
     import matplotlib.pyplot as plt
     from .plots import draw_positions
     fig, ax = plt.subplots(figsize=(3.6, 4.4), layout="constrained")
-    draw_positions(ax, run.scene, run.table, highlight=0)
+    draw_positions(ax, run.scene, run.table, highlight=0, key="horizontal", joint_key=False)
     ax.set_xlabel("x [mm]", fontsize=8)
     ax.set_ylabel("y [mm]", fontsize=8)
     ax.tick_params(labelsize=7)
     return _png(fig, dpi=90)
+
+
+ANIMATION_FRAMES = 60       # the animated design: one revolution in 3 s (about 0.5 MB)
+ANIMATION_DPI = 60
+
+
+def motion_html(path, ana) -> str:
+    """The knee design (else the first representative, else the reference
+    design) in motion: an animated GIF of one revolution, embedded like the
+    pictures, and its circular cyclogram against the cycle the study states
+    ([output.motion_law]), else the OV-7 cycle of DOMAIN.md section 9 that the
+    synthesis is for."""
+    from .animate import gif_bytes, motion_of
+    from .browse import OV7_PHASES
+    from .plots import cyclogram_figure, stated_cycle
+    if ana.knee >= 0:
+        cid, why = int(ana.knee), "the knee of front 1"
+    elif len(ana.representatives):
+        cid, why = int(ana.representatives[0]), "representative A"
+    else:
+        cid, why = "reference", "no feasible design: the study's reference design"
+    try:
+        run = rerun_candidate(path, cid, forces=False)
+        gif = gif_bytes(motion_of(run.scene, f"{run.label} ({why})"), frames=ANIMATION_FRAMES,
+                        dpi=ANIMATION_DPI)
+        cycle, turn = stated_cycle(run.study)
+        if cycle is not None:
+            against, name = "the study's motion law", "required ([output.motion_law])"
+        else:
+            against, name, cycle = "the OV-7 cycle", "OV-7 cycle", OV7_PHASES
+        cyc = _png(cyclogram_figure(run.scene, cycle, name, turn), dpi=70)
+    except Exception as e:   # a design the scene path cannot redraw: say so, go on
+        log.warning("report: no animation of candidate %s (%s)", cid, e)
+        return f'<p class="note">No animation: {html.escape(str(e))}</p>'
+    uri = "data:image/gif;base64," + base64.b64encode(gif).decode("ascii")
+    return (f'<p class="note">{html.escape(run.label)}, {html.escape(why)}, over one revolution '
+            f"({ANIMATION_FRAMES} frames, {len(gif) / 1024:.0f} KiB; the working point's path "
+            "magnified when it is small), and its cyclogram: the phases of its own output "
+            f"motion (inner ring) against {against} (outer ring), turned so that both dwells "
+            "start together, as the crank's mounting phase would (unless the law is held "
+            "fixed). <code>pipeline show FILE "
+            f"--candidate {html.escape(str(run.index))} --animate</code> writes the full "
+            'animation.</p><div class="cards motion">'
+            f'<img class="animation" src="{uri}" alt="animation of {html.escape(run.label)}">'
+            f'{_img(cyc, "cyclogram of " + run.label)}</div>')
 
 
 EXPLORER_POINTS = 3000      # feasible designs in the interactive plot (front 1 always)
@@ -529,6 +575,8 @@ def build_html(path, top=20) -> str:
         cards.append(_card("reference design", run, ref_values, data))
     parts.append('<div class="cards">' + "".join(cards) + "</div>" if cards else
                  '<p class="note">No feasible design: nothing to draw.</p>')
+
+    parts += ["<h2>A design in motion</h2>", motion_html(path, ana)]
 
     parts.append("<h2>Front 1</h2>")
     more = f" (first {len(front)} of {ana.front1.size})" if ana.front1.size > len(front) else ""

@@ -119,18 +119,32 @@ def run_scene_study(study, out, pictures=True) -> RunOutcome:
 
         from . import plots
         from .dynamics import dynamics_figure
-        figures = [(plots.scene_figure(res), out.with_suffix(".png"))]
+        # made and saved one at a time: a figure is closed before the next is drawn
+        figures = [(lambda: plots.scene_figure(res), out.with_suffix(".png")),
+                   (lambda: plots.kinematics_figure(res), out.with_name(
+                       f"{out.stem}_kinematics.png"))]
+        if plots.output_motion(res) is not None:
+            figures.append((lambda: plots.cyclogram_figure(res), out.with_name(
+                f"{out.stem}_cyclogram.png")))
         if res.dense.forces is not None:
-            figures.append((plots.forces_figure(res), out.with_name(out.stem + "_forces.png")))
+            figures.append((lambda: plots.forces_figure(res),
+                            out.with_name(out.stem + "_forces.png")))
         for case in res.dynamics or ():
-            figures.append((dynamics_figure(case), out.with_name(
-                f"{out.stem}_{safe_name(case.name, 'case')}.png")))
+            name = safe_name(case.name, "case")
+            figures.append((lambda case=case: dynamics_figure(case),
+                            out.with_name(f"{out.stem}_{name}.png")))
+            figures.append((lambda case=case: plots.eps1_figure(case),
+                            out.with_name(f"{out.stem}_{name}_eps1.png")))
         if res.reduced is not None:
             from .dynamics import reduced_figure
-            figures.append((reduced_figure(res.reduced), out.with_name(f"{out.stem}_reduced.png")))
-        for fig, path in figures:
-            pics.append(save_figure(fig, path, dpi=110))
-            plt.close(fig)
+            figures.append((lambda: reduced_figure(res.reduced),
+                            out.with_name(f"{out.stem}_reduced.png")))
+        for make, path in figures:
+            fig = make()
+            try:
+                pics.append(save_figure(fig, path, dpi=110))
+            finally:
+                plt.close(fig)
     summary = {"status": kc.STATUS_NAMES[res.status]}
     fail = res.failure
     if fail is not None:    # where and what: the crank angle (between positions) and the group
