@@ -91,6 +91,8 @@ def scene_peaks(res) -> list[Peak]:
 
     out = []
     for key, values in grid.items():
+        if not np.isfinite(values).any():
+            continue     # not computed at the study's analysis level (velocities, ...)
         kmax = int(np.nanargmax(values))
         best_phi, best = phis[kmax], float(values[kmax])
         for k in _rivals(values):

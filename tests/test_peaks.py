@@ -125,3 +125,19 @@ def test_pin_sizing_is_set_per_study_and_per_joint(studies, tmp_path, capsys):
     bad.write_text(text.replace("R2 = { length", "R99 = { length"))
     assert main(["run", str(bad), "-o", str(tmp_path / "b.h5"), "-q"]) == 2
     assert "output.pins.R99: unknown joint" in capsys.readouterr().err
+
+
+def test_a_positions_only_scene_has_the_peaks_positions_give(studies, tmp_path):
+    """analysis = "positions": no analogs, so no velocity or acceleration peaks;
+    the transmission angles (positions only) are still refined (this scene
+    once stopped with numpy's 'All-NaN slice')."""
+    text = (studies / "ov7_base.toml").read_text()
+    lines = [('analysis = "positions"' if ln.startswith("analysis =") else ln)
+             for ln in text.splitlines()]
+    assert 'analysis = "positions"' in lines
+    path = tmp_path / "positions.toml"
+    path.write_text("\n".join(lines) + "\n")
+    res = pipeline.solve_scene(pipeline.load_study(path))
+    kinds = {p.quantity for p in res.peaks}
+    assert kinds == {"min_transmission_angle"}, kinds
+    assert all(np.isfinite(p.value) for p in res.peaks)
