@@ -159,6 +159,12 @@ def _reference_feasible(data: SweepData, spec):
     if spec is not None and np.isfinite(vals.get("singularity_margin", np.nan)) and \
             vals["singularity_margin"] < spec.margin_min:
         return False, f"singularity margin {vals['singularity_margin']:.3g} < {spec.margin_min:g}"
+    for m, lo, hi in (spec.bounds if spec is not None else ()):   # [sweep.constraints] bounds
+        v = vals.get(m, np.nan)
+        if not np.isfinite(v):
+            return False, f"{m} not computed"
+        if not lo <= v <= hi:
+            return False, f"{m} {v:.4g} outside [{lo:g}, {hi:g}]"
     return True, "feasible"
 
 

@@ -43,22 +43,66 @@ def _magnitudes(study, plan, curves, forces=None):
     for j, lab in enumerate(study.output.link_labels):
         out[("omega", lab, "1/s")] = np.abs(om[:, j])
         out[("eps", lab, "1/s^2")] = np.abs(ep[:, j])
-    from .model import RRR
-    for g in study.mechanism.groups:
-        if isinstance(g, RRR):
-            # transmission angle at the middle joint B, as its deviation from 90 deg
-            ia, ib, ic = (plan.point_names.index(p) for p in (g.A, g.B, g.C))
-            ux, uy = curves.pos[:, ia, 0] - curves.pos[:, ib, 0], curves.pos[:, ia, 1] - curves.pos[:, ib, 1]
-            wx, wy = curves.pos[:, ic, 0] - curves.pos[:, ib, 0], curves.pos[:, ic, 1] - curves.pos[:, ib, 1]
-            mu = np.degrees(np.arctan2(np.abs(ux * wy - uy * wx), ux * wx + uy * wy))
-            out[("transmission_deviation", g.name or f"{g.A}-{g.B}-{g.C}", "deg")] = \
-                90.0 - np.minimum(mu, 180.0 - mu)
+    for label, kind, names in transmission_items(study.mechanism):
+        # transmission angle, as its deviation from 90 deg
+        P = [curves.pos[:, plan.point_names.index(p)] for p in names]
+        if kind == "dyad":      # at the middle joint B, between B->A and B->C
+            a, b, c = P
+            u, w = a - b, c - b
+        else:                   # class III lead J-P: the lead against J->Q (see below)
+            j, piv, a, b, c, d = P
+            u, w = piv - j, _meet(a - j, b - j, c - j, d - j)
+        mu = np.degrees(np.arctan2(np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]),
+                                   np.abs(u[:, 0] * w[:, 0] + u[:, 1] * w[:, 1])))
+        out[("transmission_deviation", label, "deg")] = 90.0 - mu
     if forces is not None:
         mag = forces.magnitude
         for j, name in enumerate(forces.joint_names):
             out[("reaction", name, "N")] = mag[:, j]
         out[("M_bal", "crank", "N*m")] = np.abs(forces.M_bal)
     return out
+
+
+def transmission_items(mech):
+    """The mechanism's transmission angles, in order: (label, kind, point names).
+
+    * an RRR dyad A-B-C ("dyad", (A, B, C)): the angle at the middle joint B
+      between B->A and B->C;
+    * each lead of a class III group that joins the ternary link at J to a
+      fixed pivot P (leads 4-6 and 5-7; "lead", (J, P, A, B, C, D)): the angle
+      at J between the lead J-P and the line from J through Q, the point where
+      the lines A-B and C-D of the other two leads meet.  With axial forces in
+      those leads, the ternary link (three forces in equilibrium meet in one
+      point) passes its force to this lead along J-Q: the four-bar's
+      transmission angle (coupler against rocker) generalised.  It is 0 when
+      the three leads' lines meet in one point, the group's singular position.
+
+    Every angle is folded into [0, 90] deg (min(mu, 180 - mu))."""
+    from .model import RRR, ClassIII
+    out = []
+    for g in mech.groups:
+        if isinstance(g, RRR):
+            out.append((g.name or f"{g.A}-{g.B}-{g.C}", "dyad", (g.A, g.B, g.C)))
+        elif isinstance(g, ClassIII):
+            p3, p4, p5 = g.joints
+            label = g.name or "class III"
+            out.append((f"{label} lead {p4}-{g.pivot_4}", "lead",
+                        (p4, g.pivot_4, g.input, p3, p5, g.pivot_5)))
+            out.append((f"{label} lead {p5}-{g.pivot_5}", "lead",
+                        (p5, g.pivot_5, g.input, p3, p4, g.pivot_4)))
+    return out
+
+
+def _meet(a, b, c, d):
+    """Direction (n, 2) from the origin to the meet of the lines a-b and c-d
+    (homogeneous coordinates: (X, Y), W's sign aside; parallel lines give
+    their common direction)."""
+    l1 = np.stack([a[:, 1] - b[:, 1], b[:, 0] - a[:, 0], a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]],
+                  axis=1)
+    l2 = np.stack([c[:, 1] - d[:, 1], d[:, 0] - c[:, 0], c[:, 0] * d[:, 1] - c[:, 1] * d[:, 0]],
+                  axis=1)
+    q = np.cross(l1, l2)
+    return q[:, :2]
 
 
 def scene_peaks(res) -> list[Peak]:
@@ -120,7 +164,8 @@ def scene_peaks(res) -> list[Peak]:
 
 def scene_motion(res) -> dict:
     """Dwell error and stroke of a scene with an output rocker (DOMAIN.md
-    section 9, as the sweep computes them): {} without one."""
+    section 9, as the sweep computes them), and with [output.motion_law] the
+    law error (``pipeline.motion_law``): {} without a rocker."""
     from .kernels.metrics import dwell_error, relative_angle
     out_spec = res.study.output
     if out_spec.rocker is None or res.dense.overall != 0:
@@ -135,9 +180,13 @@ def scene_motion(res) -> dict:
     err, start, full = dwell_error(theta, w, q, q.copy())
     iw = plan.point_names.index(out_spec.working_point)
     radius = math.hypot(pos[0, iw, 0] - pos[0, ip, 0], pos[0, iw, 1] - pos[0, ip, 1])
-    return {"dwell_error": float(err), "dwell_start": float(np.degrees(res.dense.phi[start]))
-            if start >= 0 else math.nan, "stroke": radius * float(full), "dwell_deg":
-            out_spec.dwell_deg}
+    out = {"dwell_error": float(err), "dwell_start": float(np.degrees(res.dense.phi[start]))
+           if start >= 0 else math.nan, "stroke": radius * float(full), "dwell_deg":
+           out_spec.dwell_deg}
+    law = out_spec.motion_law
+    if law is not None:
+        out.update(law.error(theta, res.study.mechanism.crank, res.dense.phi))
+    return out
 
 
 RIVALS = 4            # local maxima refined per quantity (two humps of nearly one height)

@@ -90,6 +90,11 @@ def peak_summary(res) -> dict:
         out["dwell_error"] = (f"{m['dwell_error']:.4g} (best {m['dwell_deg']:g} deg window from "
                               f"phi1 = {m['dwell_start']:g} deg)")
         out["stroke"] = f"{m['stroke']:.4g} mm"
+        if "law_error" in m:
+            shift = (f", the law shifted by {m['law_shift']:g} deg to fit best"
+                     if m["law_align"] == "best" else "")
+            out["law_error"] = (f"{m['law_error']:.4g} RMS, {m['law_error_max']:.4g} at most "
+                                f"(normalised rocker angle against the motion law{shift})")
     return out
 
 

@@ -83,9 +83,10 @@ def _coordinates(f, plan, study):
     coordinate(f, "slide_component", ["N", "C"], "1", "normal force, couple")
     coordinate(f, "parameter", list(plan.par_names), "1", "compiled mechanism parameter")
     coordinate(f, "tolerance", [n for n, _ in TOLERANCES], "1", "solver tolerance")
-    from .model import RRR
-    coordinate(f, "dyad", [g.name or f"{g.A}-{g.B}-{g.C}" for g in study.mechanism.groups
-                           if isinstance(g, RRR)], "1", "RRR dyad (A-B-C, B the middle joint)")
+    from .peaks import transmission_items
+    coordinate(f, "dyad", [label for label, _, _ in transmission_items(study.mechanism)], "1",
+               "transmission angle: RRR dyad (A-B-C, at the middle joint B) or class III lead "
+               "(J-P: the lead against the line to the meet of the other two leads)")
 
 
 PEAK_DIMS = {"velocity": "point", "acceleration": "point", "omega": "link", "eps": "link",
@@ -151,7 +152,8 @@ def write_scene(res, path):
             res.reduced.write(f.create_group("reduced_dynamics"))
         if res.motion:
             g = f.create_group("motion")
-            g.attrs["long_name"] = "the output rocker's dwell and stroke (DOMAIN.md section 9)"
+            g.attrs["long_name"] = ("the output rocker's dwell and stroke (DOMAIN.md section "
+                                    "9), and its law error with [output.motion_law]")
             g.attrs["dwell_deg"] = res.motion["dwell_deg"]
             put(g, "dwell_error", np.float64(res.motion["dwell_error"]), "1",
                 "dwell error: best window range / revolution range")
@@ -159,4 +161,9 @@ def write_scene(res, path):
                 "crank angle phi1 where the best dwell window starts")
             put(g, "stroke", np.float64(res.motion["stroke"]), "mm",
                 "stroke of the working point: radius x rocker swing")
+            if "law_error" in res.motion:      # [output.motion_law]
+                from .sweep_spec import METRICS
+                g.attrs["law_align"] = res.motion["law_align"]
+                for key in ("law_error", "law_error_max", "law_shift"):
+                    put(g, key, np.float64(res.motion[key]), METRICS[key][0], METRICS[key][1])
     return path

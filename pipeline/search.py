@@ -61,14 +61,13 @@ from pymoo.core.repair import Repair
 
 from .files import RunLock
 from .kernels import config as kc
-from .kernels import sweep as ks
 from .pareto import crowding_distance, nondominated_rank
 from .search_spec import METHODS, SearchSpec
 from .storage import (COMPRESSION, ResultsError, attach, attr_text, coordinate,
                       open_results)
-from .sweep import (COLUMN, Journal, SweepFile, SweepInterrupted, SweepOutcome, SweepProblem,
-                    _connect, _replaced, build_problem, check_existing, constraint_names,
-                    constraints, summarize)
+from .sweep import (Journal, SweepFile, SweepInterrupted, SweepOutcome, SweepProblem,
+                    _connect, _replaced, bounded_finite, build_problem, check_existing,
+                    constraint_names, constraints, metric_values, summarize)
 from .sweep_spec import SweepSpec, draw_checked, parameter_rows
 
 log = logging.getLogger("pipeline")
@@ -97,10 +96,9 @@ HISTORY = (
 # ----------------------------------------------------------------- the problem pymoo sees
 def pymoo_view(spec: SweepSpec, status, metrics, has_margin):
     """(F, G) of evaluated rows as pymoo sees them (see the module's text)."""
-    F = np.stack([metrics[:, COLUMN[o][0]] * COLUMN[o][1] for o in spec.objectives], axis=1)
-    G, cv = constraints(spec, metrics[:, ks.M_STROKE], metrics[:, ks.M_MARGIN], status,
-                        has_margin)
-    finite = np.isfinite(F).all(axis=1)
+    F = np.stack([metric_values(metrics, o) for o in spec.objectives], axis=1)
+    G, cv = constraints(spec, metrics, status, has_margin)
+    finite = np.isfinite(F).all(axis=1) & bounded_finite(spec, metrics)
     evaluable = (status == kc.OK) & ~((cv == 0) & ~finite)
     G = np.concatenate([np.where(np.isnan(G), 0.0, G),
                         np.where(evaluable, 0.0, FAILED_VIOLATION)[:, None]], axis=1)
@@ -117,7 +115,7 @@ class SweepBlackBox(Problem):
         spec = problem.spec
         self.sweep = problem
         self.has_margin = bool((problem.plan.codes == kc.G_CLASS3).any())
-        self.constraint_labels = constraint_names(self.has_margin) + ["evaluable"]
+        self.constraint_labels = constraint_names(self.has_margin, spec) + ["evaluable"]
         self._rows = evaluate or (lambda pars: problem.evaluate_rows(pars))
         super().__init__(n_var=len(spec.variables), n_obj=len(spec.objectives),
                          n_ieq_constr=len(self.constraint_labels),
@@ -270,7 +268,7 @@ def hv_scale(problem: SweepProblem) -> np.ndarray:
     """The normalisation of the objectives: the reference design's values (1
     where a value is not a positive number)."""
     st, met = problem.evaluate_rows(np.ascontiguousarray(problem.plan.par[None, :]), False)
-    ref = np.array([met[0, COLUMN[o][0]] * COLUMN[o][1] for o in problem.spec.objectives])
+    ref = np.array([metric_values(met, o)[0] for o in problem.spec.objectives])
     return np.where((st[0] == kc.OK) & np.isfinite(ref) & (ref > 0), ref, 1.0)
 
 

@@ -157,6 +157,7 @@ class OutputSpec:
     pin_length: float = 10.0     # mm: pins in bending (DOMAIN.md section 5, the thesis's)
     pin_sigma: float = 200.0     # MPa: allowable bending stress
     pin_overrides: tuple = ()    # (joint, length mm, sigma MPa) per joint that differs
+    motion_law: object = None    # pipeline.motion_law.MotionLaw: [output.motion_law]
 
     def pins(self, joint_names):
         """(length mm, allowable stress MPa) of every joint's pin."""
@@ -509,6 +510,13 @@ def parse_output(sec: Section, mech: Mechanism) -> OutputSpec:
         for p in rocker:
             if p not in known:
                 raise sec.error("rocker", f"unknown point {p!r}")
+    law = None
+    if sec.has("motion_law"):
+        from .motion_law import parse_motion_law
+        if rocker is None:
+            raise sec.error("motion_law", "a motion law is the output rocker's: give "
+                                          "output.rocker = [pivot, point]")
+        law = parse_motion_law(sec.table("motion_law"))
     default = "forces" if mech.bodies else "accelerations"
     analysis = sec.string("analysis", default, choices=ANALYSES)
     if analysis == "forces" and not mech.bodies:
@@ -518,7 +526,7 @@ def parse_output(sec: Section, mech: Mechanism) -> OutputSpec:
                                                  maximum=MAX_POSITIONS, why=POSITIONS_WHY),
                      dense_positions=sec.integer("dense_positions", 360, minimum=4,
                                                  maximum=MAX_POSITIONS, why=POSITIONS_WHY),
-                     analysis=analysis, rocker=rocker,
+                     analysis=analysis, rocker=rocker, motion_law=law,
                      dwell_deg=sec.number("dwell", 150.0, positive=True),
                      **_parse_pins(sec, mech))
     if not out.dwell_deg < 360:

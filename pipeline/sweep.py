@@ -38,7 +38,7 @@ from .sweep_spec import METRICS, SweepSpec, draw_candidates, draw_checked, param
 
 log = logging.getLogger("pipeline")
 
-JOURNAL_VERSION = 2        # 2: chunks carry the draws rejected before solving
+JOURNAL_VERSION = 3        # 2: chunks carry the draws rejected before solving; 3: 18 metric columns
 
 # kernel metric column of each stored metric, and a conversion to its units
 COLUMN = {
@@ -51,7 +51,27 @@ COLUMN = {
     "peak_joint": (ks.M_PEAK_JOINT, 1.0),
     "peak_phi": (ks.M_PEAK_PHI, 180.0 / math.pi),
     "peak_M_bal": (ks.M_PEAK_MBAL, 1.0),
+    "peak_acceleration": (ks.M_PEAK_ACC, 1.0),
+    "peak_eps": (ks.M_PEAK_EPS, 1.0),
+    "min_transmission_angle": (ks.M_MIN_TRANS, 180.0 / math.pi),
+    "law_error": (ks.M_LAW_RMS, 1.0),
+    "law_error_max": (ks.M_LAW_MAX, 1.0),
+    "law_shift": (ks.M_LAW_SHIFT, 180.0 / math.pi),
 }
+# metrics derived from a column: (column, factor, offset)
+DERIVED = {
+    "transmission_deviation": (ks.M_MIN_TRANS, -180.0 / math.pi, 90.0),
+}
+
+
+def metric_values(metrics, name):
+    """The stored values (in the metric's units) of metric ``name`` from the
+    kernels' metric rows ``metrics`` (n, N_METRICS)."""
+    if name in DERIVED:
+        col, factor, offset = DERIVED[name]
+        return metrics[:, col] * factor + offset
+    col, factor = COLUMN[name]
+    return metrics[:, col] * factor
 
 
 # ----------------------------------------------------------------- the problem
@@ -69,6 +89,9 @@ class SweepProblem:
     omega1: float
     eps1: float
     loads: np.ndarray
+    work_point: int = -1     # point index of the working point (peak_acceleration)
+    law: np.ndarray | None = None   # the motion law at the grid's positions (law_error)
+    law_best: bool = True    # the law shifted to fit best (align = "best")
 
     @property
     def kernels(self):
@@ -79,7 +102,10 @@ class SweepProblem:
     def settings(self):
         s = self.spec
         return ks.settings(s.stroke_radius, self.dwell_w, s.wants_forces, s.stroke_bounds[0],
-                           s.stroke_bounds[1], s.margin_min, self.omega1, self.eps1)
+                           s.stroke_bounds[1], s.margin_min, self.omega1, self.eps1,
+                           want_peaks=s.wants_peaks, work_point=self.work_point,
+                           want_transmission=s.wants_transmission,
+                           law=self.law if s.wants_law else None, law_best=self.law_best)
 
     def evaluate_rows(self, pars, parallel=True, n_jobs=None):
         """Status and metric rows (N_METRICS) of the parameter rows ``pars``, on
@@ -113,13 +139,17 @@ def build_problem(study, spec: SweepSpec, tols=None) -> SweepProblem:
     crank = mech.crank
     phis = revolution_angles(crank, spec.positions)
     out = study.output
+    law = out.motion_law
     return SweepProblem(
         spec=spec, plan=plan, phis=phis, phi_close=crank.phi0 + crank.rot * 2 * math.pi,
         tols=kc.default_tolerances() if tols is None else tols,
         rocker=(out.rocker[0], out.rocker[1]),
         dwell_w=int(round(out.dwell_deg * spec.positions / 360)),
         omega1=crank.omega1, eps1=crank.eps1,
-        loads=sample_loads(mech, phis) if mech.loads else np.zeros((len(phis), 0, 3)))
+        loads=sample_loads(mech, phis) if mech.loads else np.zeros((len(phis), 0, 3)),
+        work_point=plan.point(out.working_point),
+        law=None if law is None else law.on_grid(crank, phis),
+        law_best=True if law is None else law.best)
 
 
 def evaluate_chunk_task(problem, chunk):
@@ -128,20 +158,55 @@ def evaluate_chunk_task(problem, chunk):
 
 
 # ----------------------------------------------------------------- constraints, objectives
-def constraint_names(has_margin: bool):
-    """The stored constraints, in column order (the margin only for class III plans)."""
-    return ["stroke_min", "stroke_max"] + (["singularity_margin_min"] if has_margin else [])
+def _bound_columns(spec: SweepSpec):
+    """(name, metric, sign, limit) of every [sweep.constraints] bound: g = sign
+    (value - limit) <= 0."""
+    out = []
+    for m, lo, hi in spec.bounds:
+        if math.isfinite(lo):
+            out.append((f"{m}_min", m, -1.0, lo))
+        if math.isfinite(hi):
+            out.append((f"{m}_max", m, 1.0, hi))
+    return out
 
 
-def constraints(spec: SweepSpec, stroke, margin, status: np.ndarray, has_margin: bool):
+def constraint_names(has_margin: bool, spec: SweepSpec | None = None):
+    """The stored constraints, in column order (the margin only for class III
+    plans, then the study's bounds on metrics)."""
+    return (["stroke_min", "stroke_max"] + (["singularity_margin_min"] if has_margin else [])
+            + [b[0] for b in (_bound_columns(spec) if spec is not None else ())])
+
+
+def constraint_units(has_margin: bool, spec: SweepSpec):
+    """The units of each stored constraint, as ``constraint_names``."""
+    return (["mm", "mm"] + (["1"] if has_margin else [])
+            + [METRICS[m][0] for _, m, _, _ in _bound_columns(spec)])
+
+
+def constraints(spec: SweepSpec, metrics, status: np.ndarray, has_margin: bool):
     """g <= 0 per constraint (columns as ``constraint_names``) and the summed
-    violation CV (NaN where the candidate failed)."""
+    violation CV (NaN where the candidate failed), from the kernels' metric
+    rows.  A bounded metric that a candidate with status OK lacks (NaN: a
+    stage-2 metric of a candidate already outside the stroke or margin limits,
+    or a value that could not be computed) adds no violation of its own, but
+    the candidate is not feasible (``bounded_finite``)."""
+    stroke, margin = metrics[:, ks.M_STROKE], metrics[:, ks.M_MARGIN]
     g = [spec.stroke_bounds[0] - stroke, stroke - spec.stroke_bounds[1]]
     if has_margin:
         g.append(spec.margin_min - margin)
+    for _, m, sign, limit in _bound_columns(spec):
+        g.append(sign * (metric_values(metrics, m) - limit))
     G = np.stack(g, axis=1)
     cv = np.where(status == kc.OK, np.nansum(np.maximum(G, 0.0), axis=1), np.nan)
     return G, cv
+
+
+def bounded_finite(spec: SweepSpec, metrics):
+    """Rows whose bounded metrics (``spec.bounds``) are all finite."""
+    ok = np.ones(metrics.shape[0], bool)
+    for m, _, _ in spec.bounds:
+        ok &= np.isfinite(metric_values(metrics, m))
+    return ok
 
 
 # ----------------------------------------------------------------- journal
@@ -220,7 +285,7 @@ class SweepFile:
             k = f.create_dataset("candidate", data=np.arange(n), chunks=(ch,), **COMPRESSION)
             k.attrs.update(units="1", long_name="candidate index")
             k.make_scale("candidate")
-            gnames = constraint_names(self.has_margin)
+            gnames = constraint_names(self.has_margin, spec)
             coordinate(f, "variable", [v.name for v in spec.variables], "1", "design variable")
             coordinate(f, "constraint", gnames, "1", "constraint g <= 0")
             coordinate(f, "chunk", np.arange(spec.n_chunks), "1", "chunk of candidates")
@@ -252,20 +317,22 @@ class SweepFile:
                            "or the revolution does not close)", groups=list(plan.group_names))
             attach(d, ("candidate",))
             d = c.create_dataset("feasible", (n,), "?", chunks=(ch,), **COMPRESSION)
-            d.attrs.update(units="1", long_name="status OK, constraints met, objectives finite")
+            d.attrs.update(units="1", long_name="status OK, constraints met, objectives and "
+                                                "bounded metrics finite")
             attach(d, ("candidate",))
             d = c.create_dataset("forces_evaluated", (n,), "?", chunks=(ch,), **COMPRESSION)
-            d.attrs.update(units="1", long_name="force stage run (skipped for candidates "
+            d.attrs.update(units="1", long_name="force stage run: forces, peaks or transmission "
+                                                "angles, as asked (skipped for candidates "
                                                 "already infeasible)")
             attach(d, ("candidate",))
             d = c.create_dataset("constraints", (n, len(gnames)), "f8",
                                  chunks=(ch, len(gnames)), **COMPRESSION, fillvalue=np.nan)
-            d.attrs.update(units=units_attr(["mm", "mm", "1"][:len(gnames)]),
+            d.attrs.update(units=units_attr(constraint_units(self.has_margin, spec)),
                            long_name="constraints g <= 0", names=gnames)
             attach(d, ("candidate", "constraint"))
             m = f.create_group("metrics")
             for name in spec.metrics:
-                units, long, _ = METRICS[name]
+                units, long = METRICS[name][:2]
                 d = m.create_dataset(name, (n,), "f8", chunks=(ch,), **COMPRESSION,
                                      fillvalue=np.nan)
                 d.attrs.update(units=units, long_name=long)
@@ -306,7 +373,7 @@ class SweepFile:
             put(g, name, col, METRICS[name][0], METRICS[name][1], dims=("design",))
 
     def _columns(self, metrics):
-        return {name: metrics[:, COLUMN[name][0]] * COLUMN[name][1] for name in self.spec.metrics}
+        return {name: metric_values(metrics, name) for name in self.spec.metrics}
 
     def write_chunk(self, d, chunk, x, status, metrics, rejected):
         """Write one chunk's rows into the datasets ``d`` (``datasets(f)``)."""
@@ -322,13 +389,13 @@ class SweepFile:
         cols = self._columns(metrics)
         for name, col in cols.items():
             d[f"metrics/{name}"][lo:hi] = col
-        G, cv = constraints(self.spec, metrics[:, ks.M_STROKE], metrics[:, ks.M_MARGIN],
-                            status, self.has_margin)
+        G, cv = constraints(self.spec, metrics, status, self.has_margin)
         d["candidates/constraints"][lo:hi] = G
         d["candidates/cv"][lo:hi] = cv
         objectives = np.stack([cols[o] for o in self.spec.objectives], axis=1)
         d["candidates/feasible"][lo:hi] = ((status == kc.OK) & (cv == 0)
-                                           & np.isfinite(objectives).all(axis=1))
+                                           & np.isfinite(objectives).all(axis=1)
+                                           & bounded_finite(self.spec, metrics))
         d["progress/chunk_done"][chunk] = True
 
     def datasets(self, f):

@@ -28,20 +28,45 @@ SAMPLERS = ("uniform", "lhs", "sobol")
 _SOBOL: dict = {}
 _SOBOL_LOCK = threading.Lock()
 METRICS = {
-    # name: (units, long name, needs forces)
-    "dwell_error": ("1", "dwell error: best window range / revolution range", False),
-    "stroke": ("mm", "stroke of the working point: radius x rocker swing", False),
+    # name: (units, long name, stage that computes it: "positions" (stage 1), "law"
+    # (stage 1, with [output.motion_law]), "kinematics", "transmission", "forces"
+    # (stage 2, candidates that meet the stroke and margin constraints))
+    "dwell_error": ("1", "dwell error: best window range / revolution range", "positions"),
+    "stroke": ("mm", "stroke of the working point: radius x rocker swing", "positions"),
     "singularity_margin": ("1", "min |det J| / (4 L23 L46 L57 max(L34, L35)) over the revolution",
-                           False),
-    "dwell_start": ("deg", "crank angle phi1 where the best dwell window starts", False),
-    "newton_iterations": ("1", "mean Newton iterations per position", False),
-    "peak_reaction": ("N", "largest joint reaction over all joints and positions", True),
-    "peak_joint": ("1", "index of the joint with the peak reaction", True),
-    "peak_phi": ("deg", "crank angle phi1 of the peak reaction", True),
-    "peak_M_bal": ("N*m", "largest |balancing moment| over the revolution", True),
+                           "positions"),
+    "dwell_start": ("deg", "crank angle phi1 where the best dwell window starts", "positions"),
+    "newton_iterations": ("1", "mean Newton iterations per position", "positions"),
+    "peak_reaction": ("N", "largest joint reaction over all joints and positions", "forces"),
+    "peak_joint": ("1", "index of the joint with the peak reaction", "forces"),
+    "peak_phi": ("deg", "crank angle phi1 of the peak reaction", "forces"),
+    "peak_M_bal": ("N*m", "largest |balancing moment| over the revolution", "forces"),
+    "peak_acceleration": ("m/s^2", "largest |acceleration| of the working point at the "
+                          "operating speed, the largest of the grid's positions (not refined "
+                          "between them: within O(step^2) of the scene's refined peak)",
+                          "kinematics"),
+    "peak_eps": ("1/s^2", "largest |angular acceleration| of the output rocker at the operating "
+                 "speed, the largest of the grid's positions (not refined between them)",
+                 "kinematics"),
+    "min_transmission_angle": ("deg", "smallest transmission angle (RRR dyads at the middle "
+                               "joint, class III leads) over the revolution, the smallest of the "
+                               "grid's positions (not refined between them)", "transmission"),
+    "transmission_deviation": ("deg", "90 deg - min_transmission_angle: the largest deviation "
+                               "of a transmission angle from 90 deg (an objective to minimise)",
+                               "transmission"),
+    "law_error": ("1", "RMS deviation of the normalised rocker angle (0 at the dwell, 1 at the "
+                  "full swing) from the motion law over the revolution", "law"),
+    "law_error_max": ("1", "largest deviation of the normalised rocker angle from the motion "
+                      "law over the revolution", "law"),
+    "law_shift": ("deg", "cycle-angle shift of the motion law that fits best (align = best; 0 "
+                  "for align = fixed): the mounting phase phiM0 - rot x law_shift puts the "
+                  "design on the law as given", "law"),
 }
 DEFAULT_METRICS = ("dwell_error", "peak_reaction", "stroke", "singularity_margin",
                    "dwell_start", "peak_joint", "peak_phi", "peak_M_bal", "newton_iterations")
+# larger is better: not an objective (all are minimised); what to minimise instead
+NOT_OBJECTIVES = {"min_transmission_angle": "transmission_deviation"}
+NOT_BOUNDED = {"peak_joint": "an index, not a quantity"}
 
 
 @dataclass(frozen=True)
@@ -96,14 +121,31 @@ class SweepSpec:
     mass_model: tuple
     scheduler: str | None
     triangles: tuple = ()     # Triangle: known before solving; draws that break one are redrawn
+    bounds: tuple = ()        # (metric, min, max): [sweep.constraints] metric = { min, max }
 
     @property
     def n_chunks(self):
         return math.ceil(self.candidates / self.chunk_size)
 
+    def _wants(self, stage):
+        return any(METRICS[m][2] == stage for m in self.metrics + self.objectives)
+
     @property
     def wants_forces(self):
-        return any(METRICS[m][2] for m in self.metrics + self.objectives)
+        return self._wants("forces")
+
+    @property
+    def wants_peaks(self):
+        """peak_acceleration, peak_eps: second analogs at every position (stage 2)."""
+        return self._wants("kinematics")
+
+    @property
+    def wants_transmission(self):
+        return self._wants("transmission")
+
+    @property
+    def wants_law(self):
+        return self._wants("law")
 
     def chunk_bounds(self, c):
         lo = c * self.chunk_size
@@ -169,18 +211,22 @@ def parse_sweep(root, mech, output) -> SweepSpec:
         for m in names:
             if m not in METRICS:
                 raise sec.error(key, f"unknown metric {m!r}; known: {', '.join(METRICS)}")
-    metrics = tuple(dict.fromkeys(metrics + objectives))
+            _check_available(sec, key, m, mech, output)
+    for m in objectives:
+        if m in NOT_OBJECTIVES:
+            alt = NOT_OBJECTIVES[m]
+            raise sec.error("objectives", f"{m} is not an objective: objectives are "
+                                          f"minimised and a larger {m} is better; minimise "
+                                          f"{alt} instead, or bound {m} in [sweep.constraints] "
+                                          f"({m} = {{ min = ... }})")
     if len(objectives) < 1:
         raise sec.error("objectives", "at least one objective is needed")
     if output.rocker is None:
         raise StudyError(root.file, "output.rocker",
                          "a sweep needs the output rocker [pivot, point] for stroke and dwell")
-    cons = sec.table("constraints", default={})
-    stroke = cons.numbers("stroke", n=2, default=[11.0, 15.0])
-    if not stroke[0] < stroke[1]:
-        raise cons.error("stroke", "expected [min, max] with min < max")
-    margin_min = cons.number("singularity_margin_min", 0.3)
-    cons.done()
+    stroke, margin_min, bounds = _parse_constraints(sec.table("constraints", default={}), mech,
+                                                    output)
+    metrics = tuple(dict.fromkeys(metrics + objectives + tuple(b[0] for b in bounds)))
     mass_model = []
     if sec.has("mass_model"):
         bodies = {b.name for b in mech.bodies}
@@ -197,7 +243,7 @@ def parse_sweep(root, mech, output) -> SweepSpec:
                                      "whose reference value is positive")
             mass_model.append(MassScaling(body, p))
         mm.done()
-    if any(METRICS[m][2] for m in metrics) and not mech.bodies:
+    if any(METRICS[m][2] == "forces" for m in metrics) and not mech.bodies:
         raise sec.error("metrics", "force metrics need mass data: declare [[mechanism.bodies]]")
     positions = sec.integer("positions", 360, minimum=12, maximum=MAX_POSITIONS,
                             why=POSITIONS_WHY)
@@ -216,6 +262,7 @@ def parse_sweep(root, mech, output) -> SweepSpec:
         mass_model=tuple(mass_model),
         scheduler=sec.string("scheduler", "") or None,
         triangles=triangles_of(plan, variables),
+        bounds=bounds,
     )
     if spec.triangles:
         # rejection sampling needs designs that can be built: at least 1 % of the box,
@@ -239,6 +286,70 @@ def parse_sweep(root, mech, output) -> SweepSpec:
                          f"a {output.dwell_deg:g} deg window spans {w} of {positions} intervals")
     sec.done()
     return spec
+
+
+def _check_available(sec, key, m, mech, output):
+    """Refuse a metric the study cannot compute, naming the field."""
+    if METRICS[m][2] == "law" and output.motion_law is None:
+        raise sec.error(key, f"{m} needs the required motion law: declare [output.motion_law]")
+    if METRICS[m][2] == "transmission":
+        from .peaks import transmission_items
+        if not transmission_items(mech):
+            raise sec.error(key, f"{m} needs an RRR dyad or a class III group (the "
+                                 "transmission angles of pipeline.peaks); this mechanism has "
+                                 "none")
+
+
+def _parse_constraints(cons, mech, output):
+    """[sweep.constraints]: (stroke [min, max], singularity margin minimum,
+    bounds ((metric, min, max), ...)).  Besides ``stroke = [min, max]`` and
+    ``singularity_margin_min``, any metric takes ``{ min = ..., max = ... }``
+    (either or both), e.g. ``min_transmission_angle = { min = 30 }``."""
+    bounds = []
+    stroke = None
+    margin_min = None
+    for key in list(cons.data):
+        v = cons.data[key]
+        if key in ("stroke", "singularity_margin_min") and not isinstance(v, dict):
+            continue
+        if key not in METRICS:
+            raise cons.error(key, f"unknown constraint {key!r}: give stroke = [min, max], "
+                                  "singularity_margin_min = ..., or a metric = { min = ..., "
+                                  f"max = ... }}; metrics: {', '.join(METRICS)}")
+        if key in NOT_BOUNDED:
+            raise cons.error(key, f"{key} is {NOT_BOUNDED[key]}: it cannot be bounded")
+        if not isinstance(v, dict):
+            raise cons.error(key, f"expected {{ min = ..., max = ... }} (either or both), got "
+                                  f"{type(v).__name__} {v!r:.40}")
+        _check_available(cons, key, key, mech, output)
+        b = cons.table(key)
+        lo = b.number("min") if b.has("min") else -math.inf
+        hi = b.number("max") if b.has("max") else math.inf
+        b.used.update(("min", "max"))
+        b.done()
+        if not ("min" in b.data or "max" in b.data):
+            raise b.error("", "give min, max or both")
+        if not lo < hi:
+            raise b.error("max", f"the bounds are empty: min {lo:g} >= max {hi:g}")
+        if key == "stroke":
+            stroke = (lo, hi)
+        elif key == "singularity_margin":
+            if "max" in b.data:
+                raise b.error("max", "the singularity margin takes a minimum only")
+            margin_min = lo
+        else:
+            bounds.append((key, lo, hi))
+    if stroke is None:
+        stroke = cons.numbers("stroke", n=2, default=[11.0, 15.0])
+        if not stroke[0] < stroke[1]:
+            raise cons.error("stroke", "expected [min, max] with min < max")
+    if margin_min is None:
+        margin_min = cons.number("singularity_margin_min", 0.3)
+    elif cons.has("singularity_margin_min"):
+        raise cons.error("singularity_margin_min", "given twice: singularity_margin = "
+                                                   "{ min = ... } says the same")
+    cons.done()
+    return tuple(stroke), margin_min, tuple(bounds)
 
 
 def draw_unit(spec: SweepSpec, chunk: int) -> np.ndarray:

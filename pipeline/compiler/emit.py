@@ -67,6 +67,11 @@ class Emitter:
     def lanes(self):
         raise NotImplementedError
 
+    def transmission(self):
+        """Lines that lower ``tr`` to the group's transmission angles at this
+        position (rad; ``pipeline.peaks.transmission_items``); none by default."""
+        return []
+
 
 class CrankEmitter(Emitter):
     code = kc.G_CRANK
@@ -134,6 +139,11 @@ class RRREmitter(Emitter):
             f"* {inv_ab_cb}",
             "low = low | (not (m >= margin_safe))",
         ]
+
+    def transmission(self):
+        a, c, b = (self.p(j) for j in range(3))
+        return [f"# {self.title()}: the angle at {self.pname(2)} between the links",
+                f"tr = min(tr, dyad_transmission(pos, {a}, {b}, {c}))"]
 
 
 class RRPEmitter(Emitter):
@@ -249,6 +259,14 @@ class ClassIIIEmitter(Emitter):
                 f"st, m = class3(pos, d1, d2, {i2}, {i6}, {i7}, {i3}, {i4}, {i5}, {k('L23')}, "
                 f"{k('L34')}, {k('U435')}, {k('L35')}, {k('L46')}, {k('L57')}, state, "
                 f"{self.triad_row}, order, tols)"]
+
+    def transmission(self):
+        i2, i6, i7, i3, i4, i5 = (self.p(j) for j in range(6))
+        n = self.pname
+        return [f"# {self.title()}: leads {n(4)}-{n(1)} and {n(5)}-{n(2)}, each against the "
+                "line to the meet of the other two leads",
+                f"tr = min(tr, lead_transmission(pos, {i4}, {i6}, {i2}, {i3}, {i5}, {i7}))",
+                f"tr = min(tr, lead_transmission(pos, {i5}, {i7}, {i2}, {i3}, {i4}, {i6}))"]
 
 
 EMITTERS = {e.code: e for e in (CrankEmitter, RRREmitter, RRPEmitter, RPREmitter,

@@ -53,13 +53,17 @@ from pipeline.kernels.continuation import (accept, closes, copy2, predict, resto
 from pipeline.kernels.dynamics import drive, lagrange_terms, potential
 from pipeline.kernels.forces import applied_loads, force_work, gauss_solve, kinetostatics
 from pipeline.kernels.groups import attach, crank, rpr, rrp, rrr
-from pipeline.kernels.metrics import dwell_error, dwell_lanes, relative_angle
+from pipeline.kernels.metrics import (dwell_error, dwell_lanes, dyad_transmission, law_error,
+                                      lead_transmission, relative_angle)
 from pipeline.kernels.sweep import (M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, M_PEAK_R,
                                     M_PEAK_JOINT, M_PEAK_PHI, M_PEAK_MBAL, M_FAIL_PHI,
-                                    M_NEWTON_MEAN, M_FORCES_DONE, M_FAIL_GROUP, N_METRICS,
-                                    SET_STROKE_RADIUS,
+                                    M_NEWTON_MEAN, M_FORCES_DONE, M_FAIL_GROUP, M_PEAK_ACC,
+                                    M_PEAK_EPS, M_MIN_TRANS, M_LAW_RMS, M_LAW_MAX, M_LAW_SHIFT,
+                                    N_METRICS, SET_STROKE_RADIUS,
                                     SET_DWELL_W, SET_WANT_FORCES, SET_STROKE_LO, SET_STROKE_HI,
-                                    SET_MARGIN_MIN, SET_OMEGA1, SET_EPS1, SET_MARGIN_SAFE)
+                                    SET_MARGIN_MIN, SET_OMEGA1, SET_EPS1, SET_MARGIN_SAFE,
+                                    SET_WANT_PEAKS, SET_WORK_POINT, SET_WANT_TRANSMISSION,
+                                    SET_WANT_LAW, SET_LAW0, LAW_BEST)
 from pipeline.kernels.triad import class3, ternary_angle
 from pipeline.kernels.watch import (FOLD_BACK, LOCATE_MAXITER, LOCATE_MIN_STEP,
                                    LOCATE_NEWTON_TOL, RESOLVED, SUB, cubic_bound, fold_distance,
@@ -181,6 +185,15 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
 
     w(textwrap.dedent(ADVANCE_NEWTON if n_triads else ADVANCE_CLOSED))
     w(force_kernel(plan, n))
+    body = ["tr = math.inf"]
+    for e in ems[:plan.n_kinematic]:
+        body += e.transmission()
+    body.append("return tr")
+    w(_fn("transmission(pos)",
+          "The smallest transmission angle at this position (rad, in [0, pi/2]) over the\n"
+          "RRR dyads and the class III leads (``pipeline.peaks.transmission_items``);\n"
+          "inf where the mechanism has none.",
+          body))
     w(textwrap.dedent(CAREFUL))
     if rocker is not None:
         w(lane_kernel(plan, n, ems, rocker, lanes_width, watch))
@@ -740,19 +753,21 @@ CAREFUL = '''
         return settle(par, np.int64(-1), phis, phi_close, tols, settings, loads, theta,
                       trail, qmax, qmin, 0.0, np.int64(-1), 0.0, 0.0,
                       work(N_POINTS, N_GROUPS, N_TRIADS),
-                      force_work(N_BODIES, N_JOINTS, N_SLIDES), watch_work(), out)
+                      force_work(N_BODIES, N_JOINTS, N_SLIDES), watch_work(),
+                      np.empty(phis.shape[0]), out)
 
 
     @njit(**JIT)
     def settle(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qmax, qmin,
-               err, start_k, full, margin, wk, fw, ww, out):
+               err, start_k, full, margin, wk, fw, ww, corr, out):
         """Metrics of one candidate into ``out`` (N_METRICS); returns its status.
         Where ``vouched`` (> 0) the lane path's dwell (err, start_k, full),
-        margin and class III solutions ``trail`` are taken; otherwise the
+        margin and class III solutions ``trail`` are taken (and its rocker
+        angles in ``col`` where the law error is asked for); otherwise the
         careful path walks the revolution first.  Then stroke, dwell and margin
-        metrics, and the force stage where it applies.  col, trail, qmax, qmin,
-        wk (work), fw (force_work): work arrays of the caller, so nothing is
-        allocated per candidate."""
+        metrics, the law error where asked, and the force stage where it
+        applies.  col, trail, qmax, qmin, wk (work), fw (force_work), corr (n):
+        work arrays of the caller, so nothing is allocated per candidate."""
         for c in range(N_METRICS):
             out[c] = math.nan
         out[M_FORCES_DONE] = 0.0
@@ -769,7 +784,15 @@ CAREFUL = '''
         out[M_DWELL_START] = phis[start_k] if start_k >= 0 else math.nan
         out[M_MARGIN] = margin if N_TRIADS > 0 else math.nan
         out[M_NEWTON_MEAN] = iters / n
-        if settings[SET_WANT_FORCES] == 0.0:
+        if settings[SET_WANT_LAW] != 0.0:
+            # the rocker angles against the required law (settings[SET_LAW0:], two turns)
+            rms, top, sh = law_error(col, settings, SET_LAW0,
+                                     settings[SET_WANT_LAW] == LAW_BEST, corr)
+            out[M_LAW_RMS] = rms
+            out[M_LAW_MAX] = top
+            out[M_LAW_SHIFT] = sh * (2.0 * math.pi / n) if sh >= 0 else math.nan
+        if (settings[SET_WANT_FORCES] == 0.0 and settings[SET_WANT_PEAKS] == 0.0
+                and settings[SET_WANT_TRANSMISSION] == 0.0):
             return OK
         if not (out[M_STROKE] >= settings[SET_STROKE_LO]
                 and out[M_STROKE] <= settings[SET_STROKE_HI]):
@@ -791,13 +814,23 @@ CAREFUL = '''
     # build and link a library of everything it calls once more (compile time)
     @njit(inline='always', **JIT)
     def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, fw):
-        """Second analogs and kinetostatics at every position: the peaks.  With
-        ``use_trail`` every position is solved directly from the class III
-        solution the lane path found there (trail[k] = e(a), e(b) per group:
-        Newton confirms it, the branch checks still apply); otherwise by the
-        careful continuation.  wk, fw: work arrays (work, force_work)."""
+        """Stage 2 at every position of the grid, what the settings ask for:
+        kinetostatics (SET_WANT_FORCES: the peak reaction, its joint and angle,
+        the peak |balancing moment|), the working point's peak |a| and the
+        output rocker's peak |eps| (SET_WANT_PEAKS), the smallest transmission
+        angle (SET_WANT_TRANSMISSION); maxima (minima) over the grid's
+        positions.  With ``use_trail`` every position is solved directly from
+        the class III solution the lane path found there (trail[k] = e(a), e(b)
+        per group: Newton confirms it, the branch checks still apply);
+        otherwise by the careful continuation.  wk, fw: work arrays (work,
+        force_work)."""
         omega1 = settings[SET_OMEGA1]
         eps1 = settings[SET_EPS1]
+        want_f = settings[SET_WANT_FORCES] != 0.0
+        want_p = settings[SET_WANT_PEAKS] != 0.0
+        want_t = settings[SET_WANT_TRANSMISSION] != 0.0
+        order = 2 if (want_f or want_p) else 0
+        iw = int(settings[SET_WORK_POINT])
         pos, d1, d2, margins, state, _ = wk
         work_a, work_b, loads_out, r_out, slide_out = fw
         phi_prev = walk_start(K, phis[0], state)
@@ -805,6 +838,9 @@ CAREFUL = '''
         peak_j = -1
         peak_phi = math.nan
         peak_m = 0.0
+        peak_a = 0.0
+        peak_e = 0.0
+        trans = math.inf
         for k in range(phis.shape[0]):
             if use_trail:
                 # a walk of length zero: Newton at phis[k] from the lane's solution
@@ -812,25 +848,58 @@ CAREFUL = '''
                     state[j, S_A] = math.atan2(trail[k, 4 * j + 1], trail[k, 4 * j])
                     state[j, S_B] = math.atan2(trail[k, 4 * j + 3], trail[k, 4 * j + 2])
                 phi_prev = phis[k]
-            st = advance(K, phi_prev, phis[k], 2, tols, state, pos, d1, d2, margins, True)
+            st = advance(K, phi_prev, phis[k], order, tols, state, pos, d1, d2, margins,
+                         want_f)
             phi_prev = phis[k]
             if st != OK:  # cannot happen after stage 1 unless the solver is not deterministic
                 out[M_FAIL_PHI] = phis[k]
                 return st
-            mb = forces_at(par, pos, d1, d2, omega1, eps1, loads[k], work_a, work_b, loads_out,
-                           r_out, slide_out)
-            if abs(mb) > abs(peak_m) or not math.isfinite(mb):
-                peak_m = mb
-            for j in range(N_JOINTS):
-                r = math.hypot(r_out[j, 0], r_out[j, 1])
-                if r > peak or not math.isfinite(r):
-                    peak = r
-                    peak_j = j
-                    peak_phi = phis[k]
-        out[M_PEAK_R] = peak
-        out[M_PEAK_JOINT] = peak_j
-        out[M_PEAK_PHI] = peak_phi
-        out[M_PEAK_MBAL] = abs(peak_m)
+            if want_f:
+                mb = forces_at(par, pos, d1, d2, omega1, eps1, loads[k], work_a, work_b,
+                               loads_out, r_out, slide_out)
+                if abs(mb) > abs(peak_m) or not math.isfinite(mb):
+                    peak_m = mb
+                for j in range(N_JOINTS):
+                    r = math.hypot(r_out[j, 0], r_out[j, 1])
+                    if r > peak or not math.isfinite(r):
+                        peak = r
+                        peak_j = j
+                        peak_phi = phis[k]
+            if want_p:
+                # |a| = |r'' omega1^2 + r' eps1| of the working point (mm/s^2)
+                ax = d2[iw, 0] * omega1 ** 2 + d1[iw, 0] * eps1
+                ay = d2[iw, 1] * omega1 ** 2 + d1[iw, 1] * eps1
+                a = math.hypot(ax, ay)
+                if a > peak_a or not math.isfinite(a):
+                    peak_a = a
+                # the rocker's angle analogs (geometry.angle_analogs), eps = theta'' w^2 + theta' eps1
+                dx = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]
+                dy = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]
+                d1x = d1[ROCKER_POINT, 0] - d1[ROCKER_PIVOT, 0]
+                d1y = d1[ROCKER_POINT, 1] - d1[ROCKER_PIVOT, 1]
+                d2x = d2[ROCKER_POINT, 0] - d2[ROCKER_PIVOT, 0]
+                d2y = d2[ROCKER_POINT, 1] - d2[ROCKER_PIVOT, 1]
+                r2 = dx * dx + dy * dy
+                c1 = dx * d1y - dy * d1x
+                th1 = c1 / r2
+                th2 = (dx * d2y - dy * d2x) / r2 - 2.0 * (dx * d1x + dy * d1y) * c1 / (r2 * r2)
+                e = abs(th2 * omega1 ** 2 + th1 * eps1)
+                if e > peak_e or not math.isfinite(e):
+                    peak_e = e
+            if want_t:
+                t = transmission(pos)
+                if t < trans or not math.isfinite(t):
+                    trans = t
+        if want_f:
+            out[M_PEAK_R] = peak
+            out[M_PEAK_JOINT] = peak_j
+            out[M_PEAK_PHI] = peak_phi
+            out[M_PEAK_MBAL] = abs(peak_m)
+        if want_p:
+            out[M_PEAK_ACC] = peak_a / 1000.0        # m/s^2
+            out[M_PEAK_EPS] = peak_e
+        if want_t:
+            out[M_MIN_TRANS] = trans if trans <= 0.5 * math.pi else math.nan
         out[M_FORCES_DONE] = 1.0
         return OK
 
@@ -1035,6 +1104,8 @@ PARALLEL = '''
         qmax = np.empty(npos + w + 1, np.int64)
         qmin = np.empty(npos + w + 1, np.int64)
         idx = np.empty(LANES, np.int64)
+        corr = np.empty(npos)
+        want_law = settings[SET_WANT_LAW] != 0.0
         wk = work(N_POINTS, N_GROUPS, N_TRIADS)
         fw = force_work(N_BODIES, N_JOINTS, N_SLIDES)
         ww = watch_work()
@@ -1062,7 +1133,7 @@ PARALLEL = '''
                 else:
                     status[i] = settle(pars[i], np.int64(-1), phis, phi_close, tols, settings,
                                        loads, col, trail, qmax, qmin, 0.0, np.int64(-1), 0.0,
-                                       0.0, wk, fw, ww, metrics[i])
+                                       0.0, wk, fw, ww, corr, metrics[i])
             if filled == LANES or (i == hi and filled > 0):
                 for l in range(filled, LANES):     # pad a partial block with lane 0
                     for r in range(N_LANE_ROWS):
@@ -1077,10 +1148,13 @@ PARALLEL = '''
                     for k in range(npos):
                         for q in range(THETA_COLS - 1):
                             trail[k, q] = theta[k, (1 + q) * LANES + l]
+                    if want_law:     # the lane's rocker angles, for the law error
+                        for k in range(npos):
+                            col[k] = theta[k, l]
                     status[idx[l]] = settle(pars[idx[l]], vouched, phis, phi_close, tols,
                                             settings, loads, col, trail, qmax, qmin, err[l],
                                             start_k[l], full[l], S[R_margin, l], wk, fw, ww,
-                                            metrics[idx[l]])
+                                            corr, metrics[idx[l]])
                 filled = 0
 
 

@@ -151,3 +151,154 @@ def dwell_lanes(theta, n, w, lanes, W5, err, start, full):
             start[l] = -1
         else:
             err[l] = err[l] / f
+
+
+@njit(**JIT)
+def law_error(theta, law, off, best, corr):
+    """Deviation of the output rocker from a required motion law.
+
+    theta: the rocker's angles at the n positions of a revolution (any
+    origin); law[off + j], j = 0 .. 2n - 1: the law's normalised displacement
+    (0 at the dwell, 1 at the full swing) at position j mod n (two turns, so
+    a shifted law reads law[off + k + s] without a modulo).  The rocker is
+    normalised the same way, u = (theta - min) / (max - min) or 1 - that:
+    the orientation that fits the law better (which end of the swing the
+    rocker dwells at is the design's choice of sign, not a timing error).
+    With ``best`` every cyclic shift s of the law is tried and the best kept
+    (the crank's mounting phase that fits the law best; ``corr``: work array
+    of at least n), else s = 0.  Returns (RMS of u - law, largest |u - law|,
+    s); NaN (and s = -1) if theta has NaN or does not move.
+    """
+    n = theta.shape[0]
+    lo = math.inf
+    hi = -math.inf
+    for k in range(n):
+        v = theta[k]
+        if not math.isfinite(v):
+            return math.nan, math.nan, -1
+        lo = min(lo, v)
+        hi = max(hi, v)
+    full = hi - lo
+    if not (full > 0.0):
+        return math.nan, math.nan, -1
+    inv = 1.0 / full
+    shift = 0
+    flip = False
+    if best:
+        # sum_k (u_k - L_k+s)^2 = S(u^2) + S(L^2) - 2 c(s), and for 1 - u:
+        # S((1-u)^2) + S(L^2) - 2 S(L) + 2 c(s), with c(s) = sum_k u_k L_k+s:
+        # the best s has the largest c (u) or the smallest (1 - u).  c for
+        # every s at once, s innermost and element-wise (no reduction, so strict
+        # IEEE still vectorizes it), four k per pass over corr: n^2 multiply-adds
+        su2 = 0.0
+        sd2 = 0.0
+        sl = 0.0
+        for k in range(n):
+            u = (theta[k] - lo) * inv
+            su2 += u * u
+            sd2 += (1.0 - u) * (1.0 - u)
+            sl += law[off + k]
+        for s in range(n):
+            corr[s] = 0.0
+        n4 = n - n % 4
+        for k in range(0, n4, 4):
+            u0 = (theta[k] - lo) * inv
+            u1 = (theta[k + 1] - lo) * inv
+            u2 = (theta[k + 2] - lo) * inv
+            u3 = (theta[k + 3] - lo) * inv
+            # views (no copy): law from k, k + 1, k + 2, k + 3 on
+            b0 = law[off + k:off + k + n]
+            b1 = law[off + k + 1:off + k + 1 + n]
+            b2 = law[off + k + 2:off + k + 2 + n]
+            b3 = law[off + k + 3:off + k + 3 + n]
+            for s in range(n):
+                corr[s] += (u0 * b0[s] + u1 * b1[s]) + (u2 * b2[s] + u3 * b3[s])
+        for k in range(n4, n):
+            u0 = (theta[k] - lo) * inv
+            b0 = law[off + k:off + k + n]
+            for s in range(n):
+                corr[s] += u0 * b0[s]
+        cmax = -math.inf
+        cmin = math.inf
+        smax = 0
+        smin = 0
+        for s in range(n):          # the first s on ties
+            if corr[s] > cmax:
+                cmax = corr[s]
+                smax = s
+            if corr[s] < cmin:
+                cmin = corr[s]
+                smin = s
+        if su2 - 2.0 * cmax <= sd2 - 2.0 * sl + 2.0 * cmin:
+            shift = smax
+        else:
+            shift = smin
+            flip = True
+    else:
+        up = 0.0
+        dn = 0.0
+        for k in range(n):
+            u = (theta[k] - lo) * inv
+            a = u - law[off + k]
+            b = 1.0 - u - law[off + k]
+            up += a * a
+            dn += b * b
+        flip = dn < up
+    # the chosen fit again, directly (no cancellation: ~0 for a rocker on the law)
+    sq = 0.0
+    top = 0.0
+    for k in range(n):
+        u = (theta[k] - lo) * inv
+        if flip:
+            u = 1.0 - u
+        e = u - law[off + k + shift]
+        sq += e * e
+        top = max(top, abs(e))
+    return math.sqrt(sq / n), top, shift
+
+
+@njit(**JIT)
+def fold_angle(ux, uy, wx, wy):
+    """The angle between the lines of directions u and w, in [0, pi/2]."""
+    return math.atan2(abs(ux * wy - uy * wx), abs(ux * wx + uy * wy))
+
+
+@njit(**JIT)
+def dyad_transmission(pos, ia, ib, ic):
+    """Transmission angle of an RRR dyad A-B-C at its middle joint B: the
+    angle between B->A and B->C, folded into [0, pi/2] (``pipeline.peaks``)."""
+    return fold_angle(pos[ia, 0] - pos[ib, 0], pos[ia, 1] - pos[ib, 1],
+                      pos[ic, 0] - pos[ib, 0], pos[ic, 1] - pos[ib, 1])
+
+
+@njit(**JIT)
+def lead_transmission(pos, ij, ip, ia, ib, ic, idd):
+    """Transmission angle of a class III lead J-P (J on the ternary link, P
+    its pivot): the angle at J between the lead and the line from J through
+    Q, where the lines A-B and C-D of the other two leads meet (with axial
+    forces in those leads the ternary link, in equilibrium under three
+    forces, passes its force to this lead along J-Q).  Folded into
+    [0, pi/2]; 0 when the three leads' lines meet in one point (the group's
+    singular position).  Homogeneous coordinates about J: parallel leads
+    (Q at infinity) need no special case."""
+    jx = pos[ij, 0]
+    jy = pos[ij, 1]
+    ax = pos[ia, 0] - jx
+    ay = pos[ia, 1] - jy
+    bx = pos[ib, 0] - jx
+    by = pos[ib, 1] - jy
+    cx = pos[ic, 0] - jx
+    cy = pos[ic, 1] - jy
+    dx = pos[idd, 0] - jx
+    dy = pos[idd, 1] - jy
+    # the lines (a, 1) x (b, 1) and (c, 1) x (d, 1), and their meet Q = (X, Y, W)
+    l1x = ay - by
+    l1y = bx - ax
+    l1w = ax * by - ay * bx
+    l2x = cy - dy
+    l2y = dx - cx
+    l2w = cx * dy - cy * dx
+    qx = l1y * l2w - l1w * l2y
+    qy = l1w * l2x - l1x * l2w
+    # J is the origin: the direction J -> Q is (X, Y) (times W, whose sign folds away)
+    return fold_angle(pos[ip, 0] - jx, pos[ip, 1] - jy, qx, qy)

@@ -5,9 +5,16 @@ Stages, cheapest first:
   1. positions only: assembly over the revolution (triangle, Newton, branch,
      closure), singularity margin, rocker swing -> stroke, dwell error;
   2. only for candidates still feasible (status OK, stroke and margin within
-     their limits) and only if a force metric is asked for: second analogs,
+     their limits) and only if one of its metrics is asked for: second analogs,
      kinetostatics at every position -> peak reaction, its joint and angle,
-     peak balancing moment.
+     peak balancing moment; the working point's peak |a| and the output
+     rocker's peak |eps| (SET_WANT_PEAKS); the smallest transmission angle
+     (SET_WANT_TRANSMISSION).  Each is a maximum (minimum) over the grid's
+     positions, not refined between them (``pipeline.peaks`` refines a scene's).
+
+The law error (SET_WANT_LAW) is part of stage 1: the rocker angles the
+positions stage has, against the required motion law sampled at the grid
+(``settings[SET_LAW0:]``, see ``settings``).
 """
 
 import numpy as np
@@ -25,7 +32,13 @@ M_FAIL_PHI = 8
 M_NEWTON_MEAN = 9
 M_FORCES_DONE = 10
 M_FAIL_GROUP = 11   # index of the group that failed (NaN: none)
-N_METRICS = 12
+M_PEAK_ACC = 12     # m/s^2: largest |a| of the working point over the positions
+M_PEAK_EPS = 13     # 1/s^2: largest |eps| of the output rocker over the positions
+M_MIN_TRANS = 14    # rad: smallest transmission angle (RRR dyads, class III leads)
+M_LAW_RMS = 15      # RMS deviation of the normalised rocker angle from the motion law
+M_LAW_MAX = 16      # largest |deviation| (the same alignment and orientation)
+M_LAW_SHIFT = 17    # rad: cycle-angle shift of the law that fits best (0: align fixed)
+N_METRICS = 18
 
 # slots of the settings vector of a sweep (one float array: the kernels'
 # signatures stay short, and the numba cache is not tied to a study)
@@ -38,15 +51,28 @@ SET_MARGIN_MIN = 5      # singularity margin constraint
 SET_OMEGA1 = 6          # rad/s
 SET_EPS1 = 7            # rad/s^2
 SET_MARGIN_SAFE = 8     # below this margin a lane is redone on the careful path
-N_SETTINGS = 9
+SET_WANT_PEAKS = 9      # 1.0: the working point's peak |a| and the rocker's peak |eps|
+SET_WORK_POINT = 10     # point index of the working point (for SET_WANT_PEAKS)
+SET_WANT_TRANSMISSION = 11   # 1.0: the smallest transmission angle
+SET_WANT_LAW = 12       # 0: no law error; 1: law at a fixed alignment; 2: best alignment
+N_SETTINGS = 13
+SET_LAW0 = N_SETTINGS   # with SET_WANT_LAW: the law at positions 0 .. 2n - 1 (two turns)
+
+LAW_FIXED = 1.0
+LAW_BEST = 2.0
 
 MARGIN_SAFE = 1e-3
 
 
 def settings(stroke_radius, dwell_w, want_forces, stroke_lo, stroke_hi, margin_min, omega1,
-             eps1, margin_safe=MARGIN_SAFE):
-    """The settings vector of a sweep, in slot order."""
-    s = np.empty(N_SETTINGS)
+             eps1, margin_safe=MARGIN_SAFE, want_peaks=False, work_point=-1,
+             want_transmission=False, law=None, law_best=False):
+    """The settings vector of a sweep, in slot order.  ``law``: the motion
+    law's normalised displacement at the n positions of the grid (None: no
+    law error); it is stored twice over (2n values), so a shifted law reads
+    law[k + s] without a modulo."""
+    law = None if law is None else np.asarray(law, float)
+    s = np.empty(N_SETTINGS + (0 if law is None else 2 * law.shape[0]))
     s[SET_STROKE_RADIUS] = stroke_radius
     s[SET_DWELL_W] = dwell_w
     s[SET_WANT_FORCES] = 1.0 if want_forces else 0.0
@@ -56,4 +82,12 @@ def settings(stroke_radius, dwell_w, want_forces, stroke_lo, stroke_hi, margin_m
     s[SET_OMEGA1] = omega1
     s[SET_EPS1] = eps1
     s[SET_MARGIN_SAFE] = margin_safe
+    s[SET_WANT_PEAKS] = 1.0 if want_peaks else 0.0
+    s[SET_WORK_POINT] = work_point
+    s[SET_WANT_TRANSMISSION] = 1.0 if want_transmission else 0.0
+    s[SET_WANT_LAW] = 0.0 if law is None else (LAW_BEST if law_best else LAW_FIXED)
+    if law is not None:
+        n = law.shape[0]
+        s[SET_LAW0:SET_LAW0 + n] = law
+        s[SET_LAW0 + n:] = law
     return s
