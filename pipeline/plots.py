@@ -245,10 +245,12 @@ def forces_figure(res):
     """Joint reactions and balancing moment against crank angle, and the polar
     diagram of the reaction in the most loaded joint.  Returns the Figure."""
     fr = res.dense.forces
-    crank = res.study.mechanism.crank
+    mech = res.study.mechanism
+    crank = mech.crank
     phi = np.rad2deg(res.dense.phi)
-    fig = plt.figure(figsize=(13, 5.5), layout="constrained")
-    gs = fig.add_gridspec(2, 2, width_ratios=[1.6, 1])
+    rows = 3 if mech.loads else 2
+    fig = plt.figure(figsize=(13, 5.5 if rows == 2 else 8.0), layout="constrained")
+    gs = fig.add_gridspec(rows, 2, width_ratios=[1.6, 1])
     ax = fig.add_subplot(gs[0, 0])
     mag = np.hypot(fr.R[:, :, 0], fr.R[:, :, 1])
     where = dict(zip(res.plan.joint_names, joint_descriptions(res.plan)))
@@ -263,6 +265,24 @@ def forces_figure(res):
     ax2.set_ylabel("M_bal [N m]")
     ax2.set_xlabel("crank angle phi1 [deg]")
     ax2.grid(alpha=0.3)
+    if mech.loads:
+        # the loads as the study gives them (formulas of phi and t), against phi1
+        ax3 = fig.add_subplot(gs[2, 0], sharex=ax)
+        from .forces import sample_loads
+        loads = sample_loads(mech, res.dense.phi)
+        for k, ld in enumerate(mech.loads):
+            for c, (e, what, unit) in enumerate(((ld.fx, "fx", "N"), (ld.fy, "fy", "N"),
+                                                 (ld.moment, "M", "N m"))):
+                y = loads[:, k, c]
+                if np.any(y != 0.0):
+                    ax3.plot(phi, y, label=f"{what} on {ld.body}"
+                             + (f" at {ld.point}" if ld.point and c < 2 else "")
+                             + f" = {getattr(e, 'text', e)} [{unit}]")
+        ax3.set_ylabel("load [N, N m]")
+        ax3.set_xlabel("crank angle phi1 [deg]")
+        ax3.legend(fontsize=7)
+        ax3.grid(alpha=0.3)
+        ax3.set_title("External loads, as the study gives them", fontsize=9)
     if crank.rot < 0:
         ax.invert_xaxis()
     j = int(np.nanargmax(np.nanmax(mag, axis=0)))
@@ -271,6 +291,12 @@ def forces_figure(res):
     axp.plot(np.append(rx, rx[0]), np.append(ry, ry[0]), "-", color="C3")
     axp.plot([0], [0], "k+")
     _travel_arrows(axp, np.stack([rx, ry], axis=1), color="C3")
+    # crank-angle marks every 30 deg of the revolution (the first one labelled)
+    step = max(1, len(phi) // 12)
+    axp.plot(rx[::step], ry[::step], "o", ms=3, color="C3")
+    for q in range(0, len(phi), step * 3):
+        axp.annotate(f"{phi[q]:.0f}", (rx[q], ry[q]), fontsize=7, color="0.3",
+                     xytext=(3, 3), textcoords="offset points")
     k = int(np.nanargmax(mag[:, j]))
     axp.annotate(f"max {mag[k, j]:.1f} N\nat {phi[k]:.0f} deg", (rx[k], ry[k]), fontsize=8)
     axp.set_aspect("equal", adjustable="datalim")
@@ -278,7 +304,8 @@ def forces_figure(res):
     axp.set_ylabel("Ry [N]")
     axp.grid(alpha=0.3)
     axp.set_title(f"Polar diagram of {where.get(fr.joint_names[j], fr.joint_names[j])} "
-                  "(most loaded joint; arrows: direction as the crank turns)", fontsize=9)
+                  "(most loaded joint; arrows: direction as the crank turns;\n"
+                  f"dots every {360 * step / len(phi):.0f} deg of phi1, labels in deg)", fontsize=9)
     return fig
 
 

@@ -196,6 +196,24 @@ def test_forces_legend_says_what_each_joint_joins(scenes):
     assert legend[0] == "R1: ground / crank AB at P1"
 
 
+def test_forces_figure_draws_the_loads_and_marks_the_polar_diagram(scenes):
+    """The loads as the study gives them (formulas of phi and t) against phi1,
+    and crank-angle marks on the polar diagram beside its arrows."""
+    from pipeline.forces import sample_loads
+    res = scenes["warp_feed_fourbar"]
+    fig = plots.forces_figure(res)
+    ax = next(a for a in fig.axes if a.get_title().startswith("External loads"))
+    line = ax.get_lines()[0]
+    ld = res.study.mechanism.loads[0]
+    assert ld.fy.text in line.get_label()
+    np.testing.assert_array_equal(line.get_ydata(), sample_loads(res.study.mechanism,
+                                                                 res.dense.phi)[:, 0, 1])
+    polar = next(a for a in fig.axes if a.get_title().startswith("Polar diagram"))
+    labels = [t.get_text() for t in polar.texts if t.get_text().isdigit()]
+    assert labels and labels[0] == "0"
+    assert "dots every 30 deg" in polar.get_title()
+
+
 # ---------------------------------------------------------------- eps1 against phi1
 def test_eps1_against_phi1_per_dynamics_case(scenes):
     res = scenes["takeup_dynamics"]
