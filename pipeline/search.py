@@ -67,7 +67,8 @@ from .storage import (COMPRESSION, ResultsError, attach, attr_text, coordinate,
                       open_results)
 from .sweep import (Journal, SweepFile, SweepInterrupted, SweepOutcome, SweepProblem,
                     _connect, _replaced, bounded_finite, build_problem, check_existing,
-                    constraint_names, constraints, metric_values, summarize)
+                    constraint_names, constraints, metric_values, nothing_left_before_first,
+                    summarize)
 from .sweep_spec import SweepSpec, draw_checked, parameter_rows
 
 log = logging.getLogger("pipeline")
@@ -510,28 +511,18 @@ def _run_locked(study, out, seed_from, resume, overwrite, scheduler, client, n_j
     if own:
         client = _connect(scheduler)     # before anything is written
     try:
-        if fresh:       # the first generation before the manifest that makes a journal
-            journal.dir.mkdir(parents=True, exist_ok=True)
-            _save_first(journal, x0)
-            journal.start(want)
-        return _generations(study, out, journal, problem, x0, client, n_jobs, progress,
-                            on_generation, stop_after,
-                            {"search_method": search.method, "population": search.population,
-                             "offspring": search.offspring, "generations": search.generations,
-                             "pymoo_version": want["pymoo"],
-                             "seeded_from": str(seed_from) if seed_from else "",
-                             "n_seeded": n_seeded})
-    except BaseException as e:
-        # a run that fails or is stopped before its first generation leaves nothing behind
-        if fresh and not journal.done():
-            journal.remove()
-            out.unlink(missing_ok=True)
-            if _replaced(out).exists():
-                os.replace(_replaced(out), out)
-            if isinstance(e, KeyboardInterrupt):
-                raise SweepInterrupted(f"{out}: interrupted before the first generation "
-                                       "finished; nothing was written") from None
-        raise
+        with nothing_left_before_first(out, journal, fresh, "generation"):
+            if fresh:       # the first generation before the manifest that makes a journal
+                journal.dir.mkdir(parents=True, exist_ok=True)
+                _save_first(journal, x0)
+                journal.start(want)
+            return _generations(study, out, journal, problem, x0, client, n_jobs, progress,
+                                on_generation, stop_after,
+                                {"search_method": search.method, "population": search.population,
+                                 "offspring": search.offspring, "generations": search.generations,
+                                 "pymoo_version": want["pymoo"],
+                                 "seeded_from": str(seed_from) if seed_from else "",
+                                 "n_seeded": n_seeded})
     finally:
         if own:
             client.close()

@@ -13,6 +13,7 @@ resumed run gives exactly the same datasets as an uninterrupted one.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import logging
@@ -541,25 +542,33 @@ def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, 
     if own:
         client = _connect(scheduler)     # before anything is written
     try:
-        if fresh:
-            journal.start(manifest_for(study, spec))
-        return _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress,
-                           stop_after_chunks)
+        with nothing_left_before_first(out, journal, fresh, "chunk"):
+            if fresh:
+                journal.start(manifest_for(study, spec))
+            return _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs,
+                               progress, stop_after_chunks)
+    finally:
+        if own:
+            client.close()
+
+
+@contextlib.contextmanager
+def nothing_left_before_first(out: Path, journal: Journal, fresh: bool, unit: str):
+    """A fresh run (sweep or search) that fails or is stopped before its first
+    ``unit`` is saved leaves nothing behind, and a file it was to replace
+    (``--overwrite``) comes back."""
+    try:
+        yield
     except BaseException as e:
-        # a run that fails or is stopped before its first chunk leaves nothing behind
-        # (and a file it was to replace comes back)
         if fresh and not journal.done():
             journal.remove()
             out.unlink(missing_ok=True)
             if _replaced(out).exists():
                 os.replace(_replaced(out), out)
             if isinstance(e, KeyboardInterrupt):
-                raise SweepInterrupted(f"{out}: interrupted before the first chunk finished; "
+                raise SweepInterrupted(f"{out}: interrupted before the first {unit} finished; "
                                        "nothing was written") from None
         raise
-    finally:
-        if own:
-            client.close()
 
 
 def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress,
