@@ -48,7 +48,6 @@ import hashlib
 import io
 import logging
 import math
-import os
 import threading
 import time
 from dataclasses import dataclass, fields, replace
@@ -66,9 +65,9 @@ from .search_spec import METHODS, SearchSpec
 from .storage import (COMPRESSION, ResultsError, attach, attr_text, coordinate,
                       open_results)
 from .sweep import (Journal, SweepFile, SweepInterrupted, SweepOutcome, SweepProblem,
-                    _connect, _replaced, bounded_finite, build_problem, check_existing,
-                    constraint_names, constraints, metric_values, nothing_left_before_first,
-                    summarize)
+                    _connect, _replaced, aside_or_done, bounded_finite, build_problem,
+                    check_existing, constraint_names, constraints, metric_values,
+                    nothing_left_before_first, summarize)
 from .sweep_spec import SweepSpec, draw_checked, parameter_rows
 
 log = logging.getLogger("pipeline")
@@ -494,13 +493,9 @@ def _run_locked(study, out, seed_from, resume, overwrite, scheduler, client, n_j
     n_seeded = 0 if seeds is None else len(seeds)
     want = manifest_for(study, search, x0, seed_from, n_seeded)
     _check_existing(out, journal, study, want, resume, overwrite)
-    if overwrite and out.exists() and not resume:
-        log.info("replacing %s (kept aside as %s until the new run has saved its first "
-                 "generation)", out, _replaced(out).name)
-        os.replace(out, _replaced(out))
-    if resume and not journal.exists() and out.exists():
-        log.info("%s is already complete; nothing to resume", out)
-        return SweepOutcome("sweep", out, [], search_summary(out))
+    done = aside_or_done(out, journal, resume, overwrite, "generation", search_summary)
+    if done is not None:
+        return done
     fresh = not journal.exists()
     if not fresh:
         man = journal.manifest()

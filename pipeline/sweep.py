@@ -525,15 +525,9 @@ def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, 
                 stop_after_chunks):
     journal = Journal(out)
     _check_existing(out, journal, study, spec, resume, overwrite)
-    if overwrite and out.exists() and not resume:
-        # the finished file steps aside until the new run has saved work (a new
-        # run that fails or is stopped before that puts it back)
-        log.info("replacing %s (kept aside as %s until the new run has saved its first "
-                 "chunk)", out, _replaced(out).name)
-        os.replace(out, _replaced(out))
-    if resume and not journal.exists() and out.exists():
-        log.info("%s is already complete; nothing to resume", out)
-        return SweepOutcome("sweep", out, [], summarize(out))
+    done = aside_or_done(out, journal, resume, overwrite, "chunk", summarize)
+    if done is not None:
+        return done
 
     problem = build_problem(study, spec)
     sf = SweepFile(out, study, problem)
@@ -550,6 +544,22 @@ def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, 
     finally:
         if own:
             client.close()
+
+
+def aside_or_done(out: Path, journal: Journal, resume: bool, overwrite: bool, unit: str,
+                  summary):
+    """Before a run (sweep or search) writes: with --overwrite the finished file
+    steps aside until the new run has saved its first ``unit`` (a run that fails
+    or is stopped before that puts it back: nothing_left_before_first); a
+    --resume of a finished run returns its outcome (``summary(out)``), else None."""
+    if overwrite and out.exists() and not resume:
+        log.info("replacing %s (kept aside as %s until the new run has saved its first "
+                 "%s)", out, _replaced(out).name, unit)
+        os.replace(out, _replaced(out))
+    if resume and not journal.exists() and out.exists():
+        log.info("%s is already complete; nothing to resume", out)
+        return SweepOutcome("sweep", out, [], summary(out))
+    return None
 
 
 @contextlib.contextmanager

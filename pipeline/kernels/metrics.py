@@ -8,6 +8,20 @@ from .config import JIT
 
 
 @njit(**JIT)
+def finite_range(theta):
+    """(smallest, largest) of theta; (NaN, NaN) if any sample is not finite."""
+    lo = math.inf
+    hi = -math.inf
+    for k in range(theta.shape[0]):
+        v = theta[k]
+        if not math.isfinite(v):
+            return math.nan, math.nan
+        lo = min(lo, v)
+        hi = max(hi, v)
+    return lo, hi
+
+
+@njit(**JIT)
 def _sample(j, n):
     """Sample of index j (0 <= j < 2n) of a cyclic revolution of n samples."""
     return j if j < n else j - n
@@ -25,14 +39,9 @@ def dwell_error(theta, w, qmax, qmin):
     does not move.
     """
     n = theta.shape[0]
-    lo = math.inf
-    hi = -math.inf
-    for k in range(n):
-        v = theta[k]
-        if not math.isfinite(v):
-            return math.nan, -1, math.nan
-        lo = min(lo, v)
-        hi = max(hi, v)
+    lo, hi = finite_range(theta)
+    if not math.isfinite(lo):
+        return math.nan, -1, math.nan
     full = hi - lo
     if not (full > 0.0) or w < 1 or w >= n:
         return math.nan, -1, full
@@ -170,14 +179,9 @@ def law_error(theta, law, off, best, corr):
     s); NaN (and s = -1) if theta has NaN or does not move.
     """
     n = theta.shape[0]
-    lo = math.inf
-    hi = -math.inf
-    for k in range(n):
-        v = theta[k]
-        if not math.isfinite(v):
-            return math.nan, math.nan, -1
-        lo = min(lo, v)
-        hi = max(hi, v)
+    lo, hi = finite_range(theta)
+    if not math.isfinite(lo):
+        return math.nan, math.nan, -1
     full = hi - lo
     if not (full > 0.0):
         return math.nan, math.nan, -1
