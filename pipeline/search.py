@@ -48,7 +48,6 @@ import hashlib
 import io
 import logging
 import math
-import threading
 import time
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
@@ -65,7 +64,7 @@ from .search_spec import METHODS, SearchSpec
 from .storage import (COMPRESSION, ResultsError, attach, attr_text, coordinate,
                       open_results)
 from .sweep import (Journal, SweepFile, SweepInterrupted, SweepOutcome, SweepProblem,
-                    _connect, _replaced, aside_or_done, bounded_finite, build_problem,
+                    _connect, _replaced, aside_or_done, bounded_finite, build_problem, compile_notice,
                     check_existing, constraint_names, constraints, metric_values,
                     nothing_left_before_first, summarize)
 from .sweep_spec import SweepSpec, draw_checked, parameter_rows
@@ -531,19 +530,9 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
     planned = search.sizes()
     box = SweepBlackBox(problem)
     sfile = SearchFile(out, study, problem, search, planned, attrs)
-    t_prep = time.perf_counter()
-    notice = threading.Timer(1.0, log.info, ("compiling the kernels of this mechanism "
-                                             "(its first run only; about 10 s)...",))
-    notice.daemon = True
-    notice.start()
-    try:
+    with compile_notice() as prep:
         scale = hv_scale(problem)
         sfile.create(scale)
-    finally:
-        notice.cancel()
-    prep = time.perf_counter() - t_prep
-    if prep > 1.0:
-        log.info("kernels ready after %.1f s", prep)
 
     done = set(journal.done())
     if done:
@@ -629,8 +618,8 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
     _replaced(out).unlink(missing_ok=True)
     summary = search_summary(out)
     summary["wall_time"] = f"{wall:.1f} s"
-    if prep > 1.0:
-        summary["compile_time"] = f"{prep:.1f} s (not in the wall time; cached from now on)"
+    if prep[0] > 1.0:
+        summary["compile_time"] = f"{prep[0]:.1f} s (not in the wall time; cached from now on)"
     if computed:
         summary["throughput"] = f"{computed / wall:,.0f} evaluations/s"
     return SweepOutcome("sweep", out, [], summary)

@@ -546,6 +546,26 @@ def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, 
             client.close()
 
 
+@contextlib.contextmanager
+def compile_notice():
+    """Around the first evaluation of a run (the reference design), which compiles
+    a new mechanism's kernels: a notice if it takes more than a second, and how
+    long it took (the list it yields holds the seconds afterwards)."""
+    t = time.perf_counter()
+    took = [0.0]
+    notice = threading.Timer(1.0, log.info, ("compiling the kernels of this mechanism "
+                                             "(its first run only; about 15 s)...",))
+    notice.daemon = True
+    notice.start()
+    try:
+        yield took
+    finally:
+        notice.cancel()
+    took[0] = time.perf_counter() - t
+    if took[0] > 1.0:
+        log.info("kernels ready after %.1f s", took[0])
+
+
 def aside_or_done(out: Path, journal: Journal, resume: bool, overwrite: bool, unit: str,
                   summary):
     """Before a run (sweep or search) writes: with --overwrite the finished file
@@ -585,18 +605,8 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
                 stop_after_chunks):
     # the file, fresh or rebuilt from the journal below; its reference design is the
     # first evaluation, which compiles a new mechanism's kernels (once, then cached)
-    t_prep = time.perf_counter()
-    notice = threading.Timer(1.0, log.info, ("compiling the kernels of this mechanism "
-                                             "(its first run only; about 10 s)...",))
-    notice.daemon = True
-    notice.start()
-    try:
+    with compile_notice() as prep:
         sf.create()
-    finally:
-        notice.cancel()
-    prep = time.perf_counter() - t_prep
-    if prep > 1.0:
-        log.info("kernels ready after %.1f s", prep)
     finished = set(journal.done())
     t0 = time.perf_counter()
     with h5py.File(out, "r+") as f:
@@ -638,8 +648,8 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
     _replaced(out).unlink(missing_ok=True)     # the new run is complete: the old one goes
     summary = summarize(out)
     summary["wall_time"] = f"{wall:.1f} s"
-    if prep > 1.0:
-        summary["compile_time"] = f"{prep:.1f} s (not in the wall time; cached from now on)"
+    if prep[0] > 1.0:
+        summary["compile_time"] = f"{prep[0]:.1f} s (not in the wall time; cached from now on)"
     if computed:
         summary["throughput"] = f"{computed / wall:,.0f} candidates/s"
     return SweepOutcome("sweep", out, [], summary)
