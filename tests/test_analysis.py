@@ -426,13 +426,19 @@ def test_report_click_on_a_front_point_shows_that_design(cli_run, tmp_path):
 
         async def js(expr):
             r = await call("Runtime.evaluate", expression=expr, returnByValue=True)
+            assert "exceptionDetails" not in r, r["exceptionDetails"]
             return r["result"].get("value")
 
         await call("Runtime.enable")
-        for _ in range(100):
-            if await js("document.readyState") == "complete":
+        # the page (a few MB: pictures and an animation inline) is loaded and its
+        # explorer drawn; on a loaded 2-core machine this can take seconds
+        ready = ("document.readyState === 'complete' && "
+                 "!!document.querySelector('#explorer circle.f1')")
+        for _ in range(600):
+            if await js(ready):
                 break
             await asyncio.sleep(0.1)
+        assert await js(ready), "the report did not load within 60 s"
         target = _json.loads(await js("""(function () {
             var c = document.querySelector('#explorer circle.f1');
             c.scrollIntoView({block: 'center'});
