@@ -54,6 +54,13 @@ def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
                 "feasible": feas, "cv": f["candidates/cv"][()],
                 "front": rk.rank, "fail_phi": f["candidates/fail_phi"][()]}
         units = {"cv": "1", "front": "", "fail_phi": "deg"}
+        if "candidates/fail_group" in f:     # format 1.2: the group that failed, by name
+            fg = f["candidates/fail_group"]
+            groups = np.array([str(attr_text(x)) for x in fg.attrs.get("groups", [])] + [""],
+                              dtype=object)
+            idx = fg[()].astype(np.int64)
+            cols["fail_group"] = groups[np.where((idx >= 0) & (idx < len(groups) - 1), idx, -1)]
+            units["fail_group"] = ""
         if "candidates/generation" in f:     # an adaptive search: who proposed the design
             cols["generation"] = f["candidates/generation"][()]
             units["generation"] = ""

@@ -40,6 +40,14 @@ def test_open_a_sweep_gives_the_datasets_row_for_row(sweep):
         for m in f["metrics"]:
             np.testing.assert_array_equal(df[m], f[f"metrics/{m}"][()])
         np.testing.assert_array_equal(df["g_stroke_min"], f["candidates/constraints"][:, 0])
+        # the failing group by name (the mechanism's groups), empty where none failed
+        groups = [g.decode() if isinstance(g, bytes) else g
+                  for g in f["candidates/fail_group"].attrs["groups"]]
+        fg = f["candidates/fail_group"][()]
+        assert list(df["fail_group"]) == [groups[i] if i >= 0 else "" for i in fg]
+        failed = (codes != kc.OK) & (codes != kc.BAD_GEOMETRY) & (codes != kc.BRANCH_JUMP)
+        assert failed.any() and (df["fail_group"][failed] == "triad").all()
+        assert (df["fail_group"][codes == kc.OK] == "").all()
     assert df.attrs["units"]["L12"] == "mm" and df.attrs["units"]["peak_reaction"] == "N"
     front1 = df[df["front"] == 1]
     assert len(front1) >= 1 and front1["feasible"].all()
