@@ -44,8 +44,7 @@ from numba import njit
 from pipeline.kernels.config import (JIT, JIT_ALLOC, JIT_LANES, OK, BRANCH_JUMP, NEWTON_MAXITER,
                                      SINGULAR, NO_ASSEMBLY, BAD_GEOMETRY, S_A, S_B, S_DET_SIGN,
                                      S_ITERS, S_MARGIN, N_STATE, N_TOLS, T_SINGULAR,
-                                     T_ASSEMBLY_SLACK, T_NEWTON_MAXITER,
-                                     T_SUBSTEP,
+                                     T_ASSEMBLY_SLACK, T_SUBSTEP,
                                      T_MIN_STEP, T_NEWTON_TOL, T_JUMP, T_STEP_CHANGE, T_CLOSE,
                                      T_WATCH, T_TOUCH, T_LOCATE)
 from pipeline.kernels.continuation import (accept, closes, copy2, predict, restore, start_triad,
@@ -65,7 +64,7 @@ from pipeline.kernels.sweep import (M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, 
                                     SET_WANT_PEAKS, SET_WORK_POINT, SET_WANT_TRANSMISSION,
                                     SET_WANT_LAW, SET_LAW0, LAW_BEST)
 from pipeline.kernels.triad import class3, ternary_angle
-from pipeline.kernels.watch import (FOLD_BACK, LOCATE_MAXITER, LOCATE_MIN_STEP,
+from pipeline.kernels.watch import (FOLD_BACK, LOCATE_MIN_STEP,
                                    LOCATE_NEWTON_TOL, RESOLVED, SUB, cubic_bound, fold_distance,
                                    third_difference, uniform_hit, window_score,
                                    window_vertex)
@@ -375,12 +374,11 @@ CAREFUL = '''
         tried = margins[N_GROUPS + 2]
         keep = ww[6]
         found = ww[7]
-        # each trial a short walk from the good side: few halvings and a short
-        # Newton (a trial beyond the boundary fails fast; the bracket shrinks anyway)
+        # each trial a short walk from the good side with few halvings (a trial
+        # beyond the boundary fails fast; the bracket shrinks anyway)
         ltols = ww[8]
         for q in range(N_TOLS):
             ltols[q] = tols[q]
-        ltols[T_NEWTON_MAXITER] = min(tols[T_NEWTON_MAXITER], LOCATE_MAXITER)
         # closure to near rounding: Newton's tolerance blurs where a fold is
         ltols[T_NEWTON_TOL] = min(tols[T_NEWTON_TOL], LOCATE_NEWTON_TOL)
         ltols[T_MIN_STEP] = max(tols[T_MIN_STEP], LOCATE_MIN_STEP)

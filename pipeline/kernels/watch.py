@@ -33,8 +33,8 @@ from .config import JIT
 
 SUB = 8                 # sub-positions of an interval looked at closely
 FOLD_BACK = 1e-6        # rad: a fold's margin^2 is extrapolated from this far short of it
-LOCATE_MAXITER = 50     # Newton iterations of a trial while a boundary is bisected
-LOCATE_MIN_STEP = 1.0 / 64.0   # and its fewest halvings (fraction of the largest step)
+LOCATE_MIN_STEP = 1.0 / 64.0   # a trial's fewest halvings while a boundary is bisected
+                               # (fraction of the largest step)
 LOCATE_NEWTON_TOL = 1e-14      # and its closure (relative to the leads: near rounding)
 RESOLVED = 1e-2         # a window is resolved when its cubic term is below this x T_TOUCH
 ERR_FACTOR = 2.0        # the cubic term's bound: ERR_FACTOR |f[4 points]| (half-span)^3
@@ -53,37 +53,15 @@ def third_difference(p0, p1, p2, p3, v0, v1, v2, v3):
 
 
 @njit(**JIT)
-def window_score(p0, p1, p2, v0, v1, v2, f3):
-    """How far the smallest D between p0 and p2 can be from zero, by the
-    quadratic through (p0, v0), (p1, v1), (p2, v2) less the bound of its cubic
-    term (f3: a third divided difference near the window).  The window is safe
-    when the score exceeds the watch threshold; -inf when anything is not
-    finite (never safe)."""
-    err = cubic_bound(p0, p2, f3)
-    low = min(v0, min(v1, v2))
-    a01 = (v1 - v0) / (p1 - p0)
-    a12 = (v2 - v1) / (p2 - p1)
-    c = (a12 - a01) / (p2 - p0)
-    if not (math.isfinite(err) and math.isfinite(low) and math.isfinite(c)):
-        return -math.inf
-    if c > 0.0:
-        # q(s) = v1 + beta s + c s^2, s = phi - p1; its vertex between p0 and p2?
-        beta = a12 - c * (p2 - p1)
-        s = -beta / (2.0 * c)
-        if (s - (p0 - p1)) * (s - (p2 - p1)) < 0.0:
-            low = min(low, v1 - beta * beta / (4.0 * c))
-    return low - err
-
-
-@njit(**JIT)
 def window_vertex(p0, p1, p2, v0, v1, v2):
     """(crank angle, value) of the smallest D between p0 and p2 by the quadratic
     through the three positions: its vertex where that lies between them, else
-    the smallest of the three."""
+    the smallest of the three (the vertex of a convex quadratic is below them)."""
     a01 = (v1 - v0) / (p1 - p0)
     a12 = (v2 - v1) / (p2 - p1)
     c = (a12 - a01) / (p2 - p0)
     if c > 0.0:
+        # q(s) = v1 + beta s + c s^2, s = phi - p1; its vertex between p0 and p2?
         beta = a12 - c * (p2 - p1)
         s = -beta / (2.0 * c)
         if (s - (p0 - p1)) * (s - (p2 - p1)) < 0.0:
@@ -91,6 +69,21 @@ def window_vertex(p0, p1, p2, v0, v1, v2):
     if v0 <= v1 and v0 <= v2:
         return p0, v0
     return (p1, v1) if v1 <= v2 else (p2, v2)
+
+
+@njit(**JIT)
+def window_score(p0, p1, p2, v0, v1, v2, f3):
+    """How far the smallest D between p0 and p2 can be from zero, by the
+    quadratic through (p0, v0), (p1, v1), (p2, v2) less the bound of its cubic
+    term (f3: a third divided difference near the window).  The window is safe
+    when the score exceeds the watch threshold; -inf when anything is not
+    finite (never safe)."""
+    err = cubic_bound(p0, p2, f3)
+    _, low = window_vertex(p0, p1, p2, v0, v1, v2)
+    if not (math.isfinite(err) and math.isfinite(low) and math.isfinite(v0)
+            and math.isfinite(v1) and math.isfinite(v2)):
+        return -math.inf
+    return low - err
 
 
 @njit(**JIT)
