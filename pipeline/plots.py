@@ -319,6 +319,24 @@ def _angle_deg(x):
     return out
 
 
+def not_computed(ax, y, study):
+    """Say so on a panel whose quantity the study's analysis level leaves out."""
+    if not np.isfinite(y).any():
+        ax.text(0.5, 0.5, f"not computed (analysis = {study.output.analysis})",
+                ha="center", va="center", transform=ax.transAxes, fontsize=7)
+
+
+def trim_rows(axes, used):
+    """Remove the rows of a panel grid past the first ``used`` and label the
+    crank-angle axis of the last one kept."""
+    for r in range(used, axes.shape[0]):
+        for c in range(axes.shape[1]):
+            axes[r, c].remove()
+    for c in range(axes.shape[1]):
+        axes[used - 1, c].set_xlabel("crank angle phi1 [deg]", fontsize=8)
+        axes[used - 1, c].xaxis.set_tick_params(labelbottom=True)
+
+
 def moving_points(res) -> list[int]:
     """Indices of the named points that move (the fixed pivots left out)."""
     fixed = {res.plan.point(p) for p in res.study.mechanism.fixed}
@@ -378,17 +396,10 @@ def kinematics_figure(res):
             for c, (y, what, unit, pk) in enumerate(series):
                 ax = axes[j, c]
                 ax.plot(phi, y, "k-", lw=1.0)
-                if not np.isfinite(y).any():
-                    ax.text(0.5, 0.5, f"not computed (analysis = {study.output.analysis})",
-                            ha="center", va="center", transform=ax.transAxes, fontsize=7)
+                not_computed(ax, y, study)
                 panel(ax, f"link {lab} {what}", f"link {lab}: {what} {unit}", pk,
                       unit.strip("[]").replace("$^2$", "^2"))
-        for j in range(len(labels), nrows):
-            for c in range(3):
-                axes[j, c].remove()
-        for c in range(3):
-            axes[len(labels) - 1, c].set_xlabel("crank angle phi1 [deg]", fontsize=8)
-            axes[len(labels) - 1, c].xaxis.set_tick_params(labelbottom=True)
+        trim_rows(axes, len(labels))
         left.suptitle(f"Links: angle, omega, eps (omega1 = {crank.omega1:g} rad/s, "
                       f"eps1 = {crank.eps1:g} rad/s$^2$)", fontsize=10)
     if pts:
@@ -402,19 +413,12 @@ def kinematics_figure(res):
                 ax.plot(phi, arr[:, i, 1], "-", color="C1", lw=0.7, label="y")
                 mag = np.hypot(arr[:, i, 0], arr[:, i, 1])
                 ax.plot(phi, mag, "k-", lw=1.1, label="|.|")
-                if not np.isfinite(mag).any():
-                    ax.text(0.5, 0.5, f"not computed (analysis = {study.output.analysis})",
-                            ha="center", va="center", transform=ax.transAxes, fontsize=7)
+                not_computed(ax, mag, study)
                 panel(ax, f"point {name} {what}", f"{name}: {what} [{unit}]",
                       peaks.get((what, name)), unit, signed=False)
                 if r == 0 and c == 0:
                     ax.legend(fontsize=6.5, ncol=3, loc="lower left", handlelength=1.2)
-        for r in range(len(pts), nrows):
-            for c in range(2):
-                axes[r, c].remove()
-        for c in range(2):
-            axes[len(pts) - 1, c].set_xlabel("crank angle phi1 [deg]", fontsize=8)
-            axes[len(pts) - 1, c].xaxis.set_tick_params(labelbottom=True)
+        trim_rows(axes, len(pts))
         right.suptitle("Moving points: velocity and acceleration (x, y and magnitude)",
                        fontsize=10)
     fig.suptitle(f"{study.title}: kinematics against the crank angle (red: refined peaks)",
