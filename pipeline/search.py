@@ -64,8 +64,8 @@ from .search_spec import METHODS, SearchSpec
 from .storage import (COMPRESSION, ResultsError, attach, attr_text, coordinate,
                       open_results)
 from .sweep import (Journal, SweepFile, SweepInterrupted, SweepOutcome, SweepProblem,
-                    _connect, _replaced, aside_or_done, bounded_finite, build_problem, compile_notice,
-                    check_existing, constraint_names, constraints, metric_values,
+                    _connect, aside_or_done, bounded_finite, build_problem, check_existing,
+                    compile_notice, constraint_names, constraints, finish_run, metric_values,
                     nothing_left_before_first, summarize)
 from .sweep_spec import SweepSpec, draw_checked, parameter_rows
 
@@ -610,19 +610,8 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
             d = sfile.datasets(f)
             for gen, row in enumerate(history):
                 sfile.write(d, gen, *journal.load(gen)[:3], row)
-    with h5py.File(out, "r+") as f:
-        f.attrs["complete"] = True
-        f.attrs["wall_time_s"] = wall
-        f.attrs["engine"] = "dask" if client is not None else "local"
-    journal.remove()
-    _replaced(out).unlink(missing_ok=True)
-    summary = search_summary(out)
-    summary["wall_time"] = f"{wall:.1f} s"
-    if prep[0] > 1.0:
-        summary["compile_time"] = f"{prep[0]:.1f} s (not in the wall time; cached from now on)"
-    if computed:
-        summary["throughput"] = f"{computed / wall:,.0f} evaluations/s"
-    return SweepOutcome("sweep", out, [], summary)
+    return finish_run(out, journal, client, wall, prep[0], computed, search_summary,
+                      "evaluations")
 
 
 def _progress(search: SearchSpec, enabled):

@@ -639,20 +639,29 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
         raise SweepInterrupted(f"{out}: interrupted with {done} of {spec.n_chunks} chunks "
                                "saved; run again with --resume to continue") from None
     bar.close()
-    wall = time.perf_counter() - t0
+    return finish_run(out, journal, client, time.perf_counter() - t0, prep[0], computed,
+                      summarize, "candidates")
+
+
+def finish_run(out: Path, journal: Journal, client, wall: float, compile_s: float,
+               computed: int, summary, unit: str) -> SweepOutcome:
+    """A run (sweep or search) has written everything: the file is marked
+    complete, the journal and a file it replaced go, and its outcome says the
+    wall time, the compile time apart and the throughput (``summary(out)``:
+    the file's own summary; ``unit``: what was computed)."""
     with h5py.File(out, "r+") as f:
         f.attrs["complete"] = True
         f.attrs["wall_time_s"] = wall
         f.attrs["engine"] = "dask" if client is not None else "local"
     journal.remove()
     _replaced(out).unlink(missing_ok=True)     # the new run is complete: the old one goes
-    summary = summarize(out)
-    summary["wall_time"] = f"{wall:.1f} s"
-    if prep[0] > 1.0:
-        summary["compile_time"] = f"{prep[0]:.1f} s (not in the wall time; cached from now on)"
+    res = summary(out)
+    res["wall_time"] = f"{wall:.1f} s"
+    if compile_s > 1.0:
+        res["compile_time"] = f"{compile_s:.1f} s (not in the wall time; cached from now on)"
     if computed:
-        summary["throughput"] = f"{computed / wall:,.0f} candidates/s"
-    return SweepOutcome("sweep", out, [], summary)
+        res["throughput"] = f"{computed / wall:,.0f} {unit}/s"
+    return SweepOutcome("sweep", out, [], res)
 
 
 class SweepInterrupted(KeyboardInterrupt):
