@@ -101,9 +101,9 @@ def main(argv=None):
               & np.isfinite(m0[:, ks.M_FAIL_PHI]))
     moved = np.degrees(np.abs(m1[failed, ks.M_FAIL_PHI] - m0[failed, ks.M_FAIL_PHI]))
     if moved.size:
-        print(f"failures located between positions: {int((moved > 0).sum()):,} of "
-              f"{int(failed.sum()):,} moved from the position where the walk met them, "
-              f"median {np.median(moved):.4f} deg, up to {moved.max():.4f} deg")
+        print(f"failure angles: {int((moved > 0).sum()):,} of {int(failed.sum()):,} differ "
+              f"from the kernels without the watch (whose angle is the walk's failing step, "
+              f"not bisected), median {np.median(moved):.4f} deg, up to {moved.max():.4f} deg")
     return 0
 
 

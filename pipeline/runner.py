@@ -64,13 +64,19 @@ def peak_summary(res) -> dict:
     """The peaks a designer reads first: the working point's speed and
     acceleration, the largest joint reaction and balancing moment (refined
     between grid positions, with their crank angles)."""
-    out = {}
     wp = res.study.output.working_point
-    for p in res.peaks or ():
-        where = f"at phi1 = {p.phi1:.4f} deg"
+    point, moment, transmission, reactions = {}, {}, {}, []
+    for p in res.peaks or ():          # one pass, shown in this order
         if p.item == wp and p.quantity in ("velocity", "acceleration"):
-            out[f"peak {p.quantity} {wp}"] = f"{p.value:.6g} {p.unit} {where}"
-    reactions = [p for p in res.peaks or () if p.quantity == "reaction"]
+            point[f"peak {p.quantity} {wp}"] = f"{p.value:.6g} {p.unit} at phi1 = {p.phi1:.4f} deg"
+        elif p.quantity == "reaction":
+            reactions.append(p)
+        elif p.quantity == "M_bal":
+            moment["peak_M_bal"] = f"{p.value:.3f} N*m at phi1 = {p.phi1:.4f} deg"
+        elif p.quantity == "min_transmission_angle":
+            transmission[f"min transmission angle {p.item}"] = (f"{p.value:.3f} deg at phi1 = "
+                                                                f"{p.phi1:.4f} deg")
+    out = dict(point)
     if reactions:
         p = max(reactions, key=lambda q: q.value)
         from .forces import pin_diameter
@@ -78,13 +84,8 @@ def peak_summary(res) -> dict:
         out["peak_reaction"] = (f"{p.value:.1f} N at {p.item}, phi1 = {p.phi1:.4f} deg; pin "
                                 f"d_min {float(pin_diameter(p.value, length, sigma)):.2f} mm "
                                 f"({length:g} mm, {sigma:g} MPa)")
-    for p in res.peaks or ():
-        if p.quantity == "M_bal":
-            out["peak_M_bal"] = f"{p.value:.3f} N*m at phi1 = {p.phi1:.4f} deg"
-    for p in res.peaks or ():
-        if p.quantity == "min_transmission_angle":
-            out[f"min transmission angle {p.item}"] = f"{p.value:.3f} deg at phi1 = " \
-                                                      f"{p.phi1:.4f} deg"
+    out.update(moment)
+    out.update(transmission)
     m = res.motion or {}
     if m:
         out["dwell_error"] = (f"{m['dwell_error']:.4g} (best {m['dwell_deg']:g} deg window from "
@@ -156,8 +157,8 @@ def run_scene_study(study, out, pictures=True) -> RunOutcome:
         summary["failure"] = (f"{fail['status']} at phi1 = {fail['phi_deg']:.9g} deg, group "
                               f"{fail['group']!r}" + (f" ({', '.join(fail['points'])})"
                                                       if fail["points"] else ""))
-    summary.update({"table_positions": int(res.table.phi.shape[0]),
-               "dense_positions": int(res.dense.phi.shape[0])})
+    summary["table_positions"] = int(res.table.phi.shape[0])
+    summary["dense_positions"] = int(res.dense.phi.shape[0])
     if res.status == kc.BAD_GEOMETRY:
         from .sweep_spec import geometry_problems
         summary["reason"] = "; ".join(geometry_problems(res.plan, res.plan.par))

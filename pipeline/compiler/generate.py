@@ -1084,10 +1084,9 @@ PARALLEL = '''
         # closing angle and two past it (the watch's windows wrap round the close)
         cph = np.empty(npos + 3)
         sph = np.empty(npos + 3)
+        close = phi_close if math.isfinite(phi_close) else phis[0]
         for k in range(npos + 3):
-            phi = phis[k] if k < npos else (phis[k - npos] - phis[0]
-                                            + (phi_close if math.isfinite(phi_close)
-                                               else phis[0]))
+            phi = walk_angle(phis, k, close)
             cph[k] = math.cos(phi)
             sph[k] = math.sin(phi)
         # work arrays: once per call, never per candidate
