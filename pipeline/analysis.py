@@ -38,8 +38,8 @@ from .version import __version__
 from .files import RunLock, replacing
 from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank
-from .storage import (ResultsError, attr_text, coordinate, open_results, put, read_units,
-                      remove_group, variables)
+from .storage import (ResultsError, attr_text, candidate_ids, coordinate, open_results, put,
+                      read_units, remove_group, variables)
 from .study import stored_study
 
 log = logging.getLogger("pipeline")
@@ -70,6 +70,11 @@ class SweepData:
     objective_units: list
     F: np.ndarray             # (N, m) objective values
     reference: dict = field(default_factory=dict)
+    ids: np.ndarray | None = None   # (N,) the candidate index of each row (store = feasible)
+
+    def id(self, i) -> int:
+        """The sweep's candidate index of row ``i``."""
+        return int(i) if self.ids is None else int(self.ids[i])
 
     @property
     def n(self):
@@ -119,7 +124,7 @@ def read_sweep(path) -> SweepData:
             units=variable_units(d), params=d[()], status=f["candidates/status"][()],
             feasible=f["candidates/feasible"][()].astype(bool), objectives=objectives,
             objective_units=[str(f[f"metrics/{o}"].attrs.get("units", "1")) for o in objectives],
-            F=F, reference=ref)
+            F=F, reference=ref, ids=candidate_ids(f))
 
 
 def has_analysis(f) -> bool:
@@ -403,7 +408,9 @@ def _write_group(f, data: SweepData, res: dict, elapsed: float):
 def summary(data: SweepData, res: dict, elapsed: float) -> dict:
     """What `pipeline analyze` prints."""
     F, obj = data.F, data.objectives
-    out = {"results": str(data.path), "candidates": data.n,
+    drawn = int(data.attrs.get("n_candidates", data.n))
+    out = {"results": str(data.path),
+           "candidates": drawn if drawn == data.n else f"{drawn} ({data.n} feasible stored)",
            "feasible": int(data.feasible.sum()), "fronts": int(res["rank"].max(initial=0)),
            "front 1": len(res["front1"])}
     if not data.attrs.get("complete", True):
@@ -412,7 +419,7 @@ def summary(data: SweepData, res: dict, elapsed: float) -> dict:
     def fmt(i):
         return ", ".join(f"{o} {F[i, j]:.4g}" for j, o in enumerate(obj))
     if res["knee"] >= 0:
-        out["knee"] = f"#{res['knee']}: {fmt(res['knee'])}"
+        out["knee"] = f"#{data.id(res['knee'])}: {fmt(res['knee'])}"
     ref = res["reference"]
     if ref["rank"] > 0:
         out["reference design"] = (
@@ -430,7 +437,8 @@ def summary(data: SweepData, res: dict, elapsed: float) -> dict:
                                      for j in top))
         else:
             out[f"model {o}"] = f"skipped: {m['reason']}"
-    out["representatives"] = " ".join(f"#{i}" for i in res["representatives"]) or "none"
+    out["representatives"] = " ".join(f"#{data.id(i)}" for i in res["representatives"]) or \
+        "none"
     out["time"] = f"{elapsed:.1f} s"
     return out
 

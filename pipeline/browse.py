@@ -23,7 +23,7 @@ from .analysis import read_analysis, sweep_objectives, variable_units
 from .files import save_figure
 from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank
-from .storage import ResultsError, attr_text, open_results, read_units
+from .storage import ResultsError, attr_text, candidate_ids, open_results, read_units, row_of
 from .study import stored_study
 from .sweep import status_counts
 
@@ -128,7 +128,8 @@ def design_table(f, idx, selection, rk: Ranking) -> pd.DataFrame:
     names = [str(attr_text(x)) for x in p.attrs["names"]]
     units = variable_units(p)
     cols = {"selection": selection if isinstance(selection, list) else [selection] * len(idx),
-            "candidate": idx, "front": rk.rank[idx], "crowding": rk.crowding[idx]}
+            "candidate": candidate_ids(f)[idx], "front": rk.rank[idx],
+            "crowding": rk.crowding[idx]}
     order = np.argsort(idx, kind="stable")
     for m in obj + rest:
         d = f[f"metrics/{m}"]
@@ -209,9 +210,16 @@ def overview(path, top=10) -> dict:
 
 # ----------------------------------------------------------------- one candidate
 def resolve_candidate(f, cid):
-    """A candidate index from ``cid``: an integer, 'knee', or 'reference'
-    (returned as the string 'reference')."""
+    """The stored row of ``cid``, or the string 'reference': a text is what a
+    user types (a candidate number of the sweep, 'knee' or 'reference'); an
+    integer is a stored row (the package's own callers).  Rows and candidate
+    numbers are the same unless the sweep kept only its feasible candidates
+    (store = feasible: ``storage.row_of`` maps them)."""
     n = f["candidates/status"].shape[0]
+    if isinstance(cid, (int, np.integer)) and not isinstance(cid, bool):
+        if not 0 <= cid < n:
+            raise ValueError(f"row {cid} does not exist: the file holds {n} rows")
+        return int(cid)
     s = str(cid).strip().lower()
     if s in ("reference", "ref"):
         if "reference" not in f:
@@ -225,12 +233,9 @@ def resolve_candidate(f, cid):
     try:
         i = int(s)
     except ValueError:
-        raise ValueError(f"--candidate expects an index 0..{n - 1}, 'knee' or 'reference', "
+        raise ValueError(f"--candidate expects a candidate number, 'knee' or 'reference', "
                          f"got {cid!r}") from None
-    if not 0 <= i < n:
-        raise ValueError(f"candidate {i} does not exist: the file holds {n} candidates "
-                         f"(0..{n - 1})")
-    return i
+    return row_of(f, i)
 
 
 def _reason(status, fail_phi, constraints, names, feasible, group=None):
@@ -281,7 +286,8 @@ def candidate_details(path, cid) -> dict:
             reason = _reason(status, fail, G, cn, feas, group)
             if status == kc.BAD_GEOMETRY:
                 reason = "; ".join(_geometry_problems(f, x)) or reason
-            out = {"candidate": i, "status": kc.STATUS_NAMES.get(status, status),
+            out = {"candidate": int(candidate_ids(f)[i]),
+                   "status": kc.STATUS_NAMES.get(status, status),
                    "feasible": feas, "reason": reason,
                    "fail_phi_deg": fail, "cv": float(f["candidates/cv"][i]),
                    "constraints": {n: float(g) for n, g in zip(cn, G)},
@@ -477,6 +483,7 @@ def rerun_candidate(path, cid, *, forces=True, n_table=12, positions=None) -> Ca
         names = [str(attr_text(x)) for x in p.attrs["names"]]
         units = variable_units(p)
         x = f["reference/params"][()] if i == "reference" else p[i]
+        number = i if i == "reference" else int(candidate_ids(f)[i])
     if not np.isfinite(x).all():
         raise ValueError(f"candidate {i} was never evaluated (unfinished sweep)")
     spec = study.sweep
@@ -505,7 +512,7 @@ def rerun_candidate(path, cid, *, forces=True, n_table=12, positions=None) -> Ca
     w = int(round(study.output.dwell_deg * n / 360))
     q = np.empty(n + w + 1, np.int64)
     err, start, _ = dwell_error(np.ascontiguousarray(theta), w, q, q.copy())
-    label = "reference design" if i == "reference" else f"candidate #{i}"
+    label = "reference design" if i == "reference" else f"candidate #{number}"
     return CandidateRun(label, i, replace(study, mechanism=mech), plan, np.asarray(x, float),
                         names, units, table, dense, theta, float(err), int(start), w,
                         int(dense.overall), fail_phi)

@@ -32,7 +32,7 @@ def cmd_run(a):
     res = run_study(a.study, a.output, candidates=a.candidates, resume=a.resume,
                     overwrite=a.overwrite, scheduler=a.scheduler, n_jobs=a.jobs,
                     chunk_size=a.chunk_size, progress=not a.quiet, pictures=not a.no_pictures,
-                    seed_from=a.seed_from)
+                    seed_from=a.seed_from, device=a.device, store=a.store)
     info = {"results": str(res.results), **res.summary}
     if res.pictures:
         info["pictures"] = ", ".join(str(p) for p in res.pictures)
@@ -123,6 +123,17 @@ def cmd_show(a):
     return EXIT_OK
 
 
+def cmd_doctor(a):
+    try:
+        from .gpu import doctor
+    except Exception as e:   # numba.cuda itself does not import
+        print(f"numba.cuda does not import: {e}\n--device gpu: not available; "
+              "pip install -e '.[gpu]' brings numba-cuda")
+        return EXIT_OK
+    print(doctor())
+    return EXIT_OK
+
+
 def cmd_report(a):
     from .report import write_report
     info = write_report(a.results, a.output, top=a.top)
@@ -152,6 +163,12 @@ def build_parser():
     r.add_argument("--scheduler", help="sweep: Dask scheduler address tcp://HOST:PORT")
     r.add_argument("-j", "--jobs", type=int, help="sweep: threads (default: all cores)")
     r.add_argument("--chunk-size", type=int, help="sweep: candidates per chunk")
+    r.add_argument("--device", choices=("cpu", "gpu", "auto"), help=(
+        "sweep: where the kernels run (default: the study's [sweep] device, else cpu; auto "
+        "takes a GPU when numba.cuda finds one and says which); the numbers are the same"))
+    r.add_argument("--store", choices=("all", "feasible"), help=(
+        "sweep: keep every candidate's row (all, the default) or only the feasible ones, "
+        "with the counts of each status (feasible: 10^8 candidates fit on a laptop's disk)"))
     r.add_argument("--no-pictures", action="store_true", help="scene: skip the PNG pictures")
     r.add_argument("--from", dest="seed_from", metavar="RESULTS.h5", help=(
         "search: start the [search] from the Pareto front of an earlier sweep's (or search's) "
@@ -245,6 +262,11 @@ def build_parser():
                     help="folder for the tables, plots and summary.md (default: results/bench/ "
                          "of the source checkout)")
     bn.set_defaults(func=cmd_bench)
+
+    dr = sub.add_parser("doctor", parents=[common], help=(
+        "what numba.cuda sees on this machine (package, driver, toolkit, GPUs) and whether "
+        "--device gpu can run"))
+    dr.set_defaults(func=cmd_doctor)
     return p
 
 

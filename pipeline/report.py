@@ -250,7 +250,7 @@ def pareto_figure(data, ana) -> str:
                     weight="bold", color="C3", zorder=7)
     if ana.knee >= 0:
         ax.scatter([x[ana.knee]], [y[ana.knee]], s=140, marker="D", facecolor="none",
-                   ec="k", lw=1.6, zorder=6, label=f"knee (#{ana.knee})")
+                   ec="k", lw=1.6, zorder=6, label=f"knee (#{data.id(ana.knee)})")
     ro = np.asarray(ana.reference.get("objectives", [np.nan, np.nan]), float)
     if ro.size >= 2 and np.isfinite(ro[:2]).all():
         ax.scatter([ro[0]], [ro[1]], s=260, marker="*", color="gold", ec="k", lw=1.0, zorder=6,
@@ -531,7 +531,7 @@ def build_html(path, top=20) -> str:
                ("Pareto fronts", int(ana.rank.max(initial=0))),
                ("front 1", f"{ana.front1.size} designs")]
     if knee >= 0:
-        summary.append(("knee", f"#{knee}: " + ", ".join(
+        summary.append(("knee", f"#{data.id(knee)}: " + ", ".join(
             f"{o} {_fmt(data.F[knee, j])} {data.objective_units[j]}"
             for j, o in enumerate(data.objectives))))
     if int(ref["rank"]) > 0:
@@ -568,7 +568,8 @@ def build_html(path, top=20) -> str:
     cards = []
     for i in reps:
         run = rerun_candidate(path, int(i), forces=False)
-        cards.append(_card(f"{letters[i]}: candidate #{i}" + (" (knee)" if i == knee else ""),
+        cards.append(_card(f"{letters[i]}: candidate #{data.id(i)}"
+                           + (" (knee)" if i == knee else ""),
                            run, rep_values[i], data))
     if ref_values is not None:
         run = rerun_candidate(path, "reference", forces=False)

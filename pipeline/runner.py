@@ -29,7 +29,7 @@ def default_output(study):
 
 def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
               scheduler=None, n_jobs=None, chunk_size=None, progress=True,
-              pictures=True, seed_from=None) -> RunOutcome:
+              pictures=True, seed_from=None, device=None, store=None) -> RunOutcome:
     """Run a scene or a sweep study (a path or a loaded Study) and write its
     results file (and pictures).  A sweep study with a [search] section runs
     its adaptive search, seeded with the front of the results file
@@ -39,15 +39,19 @@ def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
     path = study.path
     out = Path(out) if out else default_output(study)
     if study.kind == "scene":
-        if candidates is not None or resume or scheduler or seed_from:
-            raise ValueError(f"{path}: --candidates, --resume, --scheduler and --from apply to "
-                             "sweeps; this study is a scene")
+        if candidates is not None or resume or scheduler or seed_from or device or store:
+            raise ValueError(f"{path}: --candidates, --resume, --scheduler, --from, --device "
+                             "and --store apply to sweeps; this study is a scene")
         return run_scene_study(study, out, pictures=pictures)
     if study.search is not None:
         if candidates is not None or chunk_size is not None:
             raise ValueError(f"{path}: --candidates and --chunk-size size a Monte-Carlo sweep; "
                              "this study's [search] sets its own length (population, "
                              "generations or evaluations)")
+        if (device or study.sweep.device) != "cpu" or (store or study.sweep.store) != "all":
+            raise ValueError(f"{path}: an adaptive search runs on the CPU and keeps every "
+                             "design it evaluates: [sweep] device and store (--device, "
+                             "--store) apply to Monte-Carlo sweeps")
         from .search import run_search
         return run_search(study, out, seed_from=seed_from, resume=resume, overwrite=overwrite,
                           scheduler=scheduler, n_jobs=n_jobs, progress=progress)
@@ -57,7 +61,7 @@ def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
     from .sweep import run_sweep
     return run_sweep(study, out, candidates=candidates, resume=resume, overwrite=overwrite,
                      scheduler=scheduler, n_jobs=n_jobs, chunk_size=chunk_size,
-                     progress=progress)
+                     progress=progress, device=device, store=store)
 
 
 def peak_summary(res) -> dict:

@@ -101,6 +101,28 @@ def coordinate(group, name, values, units, long_name):
     return d
 
 
+def candidate_ids(f) -> np.ndarray:
+    """The sweep's candidate index of every stored row: every candidate (the
+    default), or the feasible ones of a sweep run with store = feasible."""
+    if "candidate" in f:
+        return f["candidate"][()]
+    return np.arange(f["candidates/status"].shape[0])
+
+
+def row_of(f, cid: int) -> int:
+    """The stored row of candidate ``cid`` (ValueError if it has none)."""
+    ids = candidate_ids(f)
+    n = int(f.attrs.get("n_candidates", len(ids)))
+    if not 0 <= cid < n:
+        raise ValueError(f"candidate {cid} does not exist: the sweep drew {n} candidates "
+                         f"(0..{n - 1})")
+    j = int(np.searchsorted(ids, cid))
+    if j == len(ids) or ids[j] != cid:
+        raise ValueError(f"candidate {cid} is not in the file: the sweep kept only its "
+                         f"feasible candidates (store = feasible), {len(ids)} of {n}")
+    return j
+
+
 def attach(d, dims):
     """Name the dimensions of dataset ``d``: each entry the name of a dimension
     scale in its group or a group above it (or a dataset of its group, which

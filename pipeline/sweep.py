@@ -93,6 +93,7 @@ class SweepProblem:
     work_point: int = -1     # point index of the working point (peak_acceleration)
     law: np.ndarray | None = None   # the motion law at the grid's positions (law_error)
     law_best: bool = True    # the law shifted to fit best (align = "best")
+    device: str = "cpu"      # cpu | gpu (resolved: never auto)
 
     @property
     def kernels(self):
@@ -108,10 +109,34 @@ class SweepProblem:
                            want_transmission=s.wants_transmission,
                            law=self.law if s.wants_law else None, law_best=self.law_best)
 
+    @property
+    def device_name(self):
+        """'cpu', or the GPU the kernels run on (pipeline.gpu.describe)."""
+        if self.device == "cpu":
+            return "cpu"
+        from .gpu import describe
+        return describe()
+
+    def gpu(self):
+        """The sweep's CUDA kernels on this process's GPU (made once; not pickled)."""
+        g = self.__dict__.get("_gpu")
+        if g is None:
+            from .gpu import GpuSweep
+            g = self.__dict__["_gpu"] = GpuSweep(self)
+        return g
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state.pop("_gpu", None)
+        return state
+
     def evaluate_rows(self, pars, parallel=True, n_jobs=None):
-        """Status and metric rows (N_METRICS) of the parameter rows ``pars``, on
-        ``n_jobs`` threads (all cores by default), or on the calling thread only
-        (``parallel=False``: a Dask task)."""
+        """Status and metric rows (N_METRICS) of the parameter rows ``pars``: on
+        the GPU (device 'gpu'), else on ``n_jobs`` threads (all cores by
+        default), or on the calling thread only (``parallel=False``: a Dask
+        task)."""
+        if self.device == "gpu":
+            return self.gpu().evaluate_rows(pars)
         from .compiler.parallel import run_rows
         n = pars.shape[0]
         status = np.zeros(n, np.int8)
@@ -132,7 +157,28 @@ class SweepProblem:
         return draw_candidates(self.spec, chunk)
 
 
-def build_problem(study, spec: SweepSpec, tols=None) -> SweepProblem:
+def _device(spec: SweepSpec, distributed) -> str:
+    """The device a run takes ('cpu' or 'gpu'), before anything is written: a
+    GPU asked for and missing is an error naming what is missing."""
+    if distributed:
+        if spec.device == "gpu":
+            raise ValueError("--device gpu runs the sweep on this machine's GPU; a Dask "
+                             "cluster (--scheduler) runs it on the workers' CPUs: choose one")
+        return "cpu"
+    if spec.device == "cpu":
+        return "cpu"
+    try:
+        from .gpu import choose
+    except Exception as e:     # numba.cuda itself does not import
+        if spec.device == "auto":
+            log.info("device auto: the CPU (numba.cuda does not import: %s)", e)
+            return "cpu"
+        raise ValueError(f"--device gpu: numba.cuda does not import ({e}); "
+                         "pip install -e '.[gpu]' brings numba-cuda") from None
+    return choose(spec.device)
+
+
+def build_problem(study, spec: SweepSpec, tols=None, device="cpu") -> SweepProblem:
     from .forces import sample_loads
     from .scene import revolution_angles
     mech = study.mechanism
@@ -150,7 +196,7 @@ def build_problem(study, spec: SweepSpec, tols=None) -> SweepProblem:
         loads=sample_loads(mech, phis) if mech.loads else np.zeros((len(phis), 0, 3)),
         work_point=plan.point(out.working_point),
         law=None if law is None else law.on_grid(crank, phis),
-        law_best=True if law is None else law.best)
+        law_best=True if law is None else law.best, device=device)
 
 
 def evaluate_chunk_task(problem, chunk):
@@ -231,10 +277,13 @@ class Journal:
         with replacing(path) as tmp:    # the one atomic writer (files.replacing)
             tmp.write_bytes(data)
 
-    def save(self, chunk, x, status, metrics, rejected):
+    def save(self, chunk, x, status, metrics, rejected, index=None, counts=None):
+        """One chunk's rows; with store = feasible only the rows kept, their
+        candidate ``index`` and the chunk's ``counts`` (SweepFile.kept)."""
         import io
         buf = io.BytesIO()
-        np.savez(buf, x=x, status=status, metrics=metrics, rejected=rejected)
+        extra = {} if index is None else {"index": index, "counts": counts}
+        np.savez(buf, x=x, status=status, metrics=metrics, rejected=rejected, **extra)
         self._atomic(self.dir / f"chunk_{chunk:07d}.npz", buf.getvalue())
 
     def done(self):
@@ -247,7 +296,10 @@ class Journal:
         p = self.dir / f"chunk_{chunk:07d}.npz"
         try:
             with np.load(p) as z:
-                return z["x"], z["status"], z["metrics"], z["rejected"]
+                rows = z["x"], z["status"], z["metrics"], z["rejected"]
+                if "index" in z:
+                    rows += (z["index"], z["counts"])
+                return rows
         except (OSError, ValueError, KeyError, zipfile.BadZipFile) as e:
             raise ResultsError(p, f"damaged journal chunk ({e}); delete it and run again with "
                                   "--resume: only that chunk is computed again") from None
@@ -260,10 +312,24 @@ def manifest_for(study, spec: SweepSpec):
     return {"journal_version": JOURNAL_VERSION, "study_sha256":
             hashlib.sha256(study.text.encode()).hexdigest(), "study_file": str(study.path),
             "candidates": spec.candidates, "chunk_size": spec.chunk_size, "seed": spec.seed,
-            "sampler": spec.sampler, "positions": spec.positions}
+            "sampler": spec.sampler, "positions": spec.positions, "store": spec.store}
+
+
+# what a journal written before a manifest key existed meant by it
+MANIFEST_DEFAULTS = {"store": "all"}
 
 
 # ----------------------------------------------------------------- HDF5 file
+# the columns of progress/status_counts: every status, then the feasible candidates
+COUNTED = tuple(kc.STATUS_NAMES.values()) + ("feasible",)
+
+
+def _counts(status, feasible):
+    """Candidates per status code, then the feasible ones (COUNTED)."""
+    return np.append(np.bincount(status.astype(np.int64), minlength=len(kc.STATUS_NAMES))
+                     [:len(kc.STATUS_NAMES)], int(feasible.sum()))
+
+
 class SweepFile:
     """The results file of a sweep, written chunk by chunk."""
 
@@ -273,6 +339,12 @@ class SweepFile:
         self.problem = problem
         self.spec = problem.spec
 
+    @property
+    def feasible_only(self):
+        """store = feasible: the file keeps the feasible candidates' rows only (their
+        sweep indices in the ``candidate`` coordinate) and every chunk's counts."""
+        return self.spec.store == "feasible"
+
     def create(self):
         spec, plan = self.spec, self.problem.plan
         n, nv = spec.candidates, len(spec.variables)
@@ -281,10 +353,18 @@ class SweepFile:
             write_root_attrs(f, "sweep", self.study, seed=spec.seed, sampler=spec.sampler,
                              n_candidates=n, chunk_size=spec.chunk_size,
                              positions_per_revolution=spec.positions,
-                             objectives=list(spec.objectives), complete=False)
-            # the dimensions, named (netCDF readers: xarray, h5dump's DIMENSION_LIST)
-            k = f.create_dataset("candidate", data=np.arange(n), chunks=(ch,), **COMPRESSION)
-            k.attrs.update(units="1", long_name="candidate index")
+                             objectives=list(spec.objectives), complete=False,
+                             store=spec.store)
+            # the dimensions, named (netCDF readers: xarray, h5dump's DIMENSION_LIST);
+            # with store = feasible the rows grow chunk by chunk
+            if self.feasible_only:
+                n = 0
+                k = f.create_dataset("candidate", (0,), "i8", maxshape=(None,), chunks=(ch,),
+                                     **COMPRESSION)
+            else:
+                k = f.create_dataset("candidate", data=np.arange(n), chunks=(ch,),
+                                     **COMPRESSION)
+            k.attrs.update(units="1", long_name="candidate index (its row of the sweep's draws)")
             k.make_scale("candidate")
             gnames = constraint_names(self.has_margin, spec)
             coordinate(f, "variable", [v.name for v in spec.variables], "1", "design variable")
@@ -293,8 +373,10 @@ class SweepFile:
             coordinate(f, "triangle", [t.label for t in spec.triangles], "1",
                        "triangle inequality checked before solving")
             c = f.create_group("candidates")
+            grow = {"maxshape": (None,)} if self.feasible_only else {}
+            grow2 = {"maxshape": (None, None)} if self.feasible_only else {}
             d = c.create_dataset("params", (n, nv), "f8", chunks=(ch, nv), **COMPRESSION,
-                                 fillvalue=np.nan)
+                                 fillvalue=np.nan, **grow2)
             attach(d, ("candidate", "variable"))
             d.attrs.update(units=units_attr([v.units for v in spec.variables]),
                            long_name="design variables", names=[v.name for v in spec.variables],
@@ -302,32 +384,32 @@ class SweepFile:
                            low=[v.low for v in spec.variables],
                            high=[v.high for v in spec.variables])
             d = c.create_dataset("status", (n,), STATUS_ENUM, chunks=(ch,), **COMPRESSION,
-                                 fillvalue=kc.NOT_EVALUATED)
+                                 fillvalue=kc.NOT_EVALUATED, **grow)
             d.attrs.update(units="1", long_name="candidate status", codes=status_table())
             attach(d, ("candidate",))
             for name, units, long in (
                     ("fail_phi", "deg", "crank angle phi1 where the candidate failed"),
                     ("cv", "1", "summed constraint violation (0 = feasible, NaN = failed)")):
                 d = c.create_dataset(name, (n,), "f8", chunks=(ch,), **COMPRESSION,
-                                     fillvalue=np.nan)
+                                     fillvalue=np.nan, **grow)
                 d.attrs.update(units=units, long_name=long)
                 attach(d, ("candidate",))
             d = c.create_dataset("fail_group", (n,), "i2", chunks=(ch,), **COMPRESSION,
-                                 fillvalue=-1)
+                                 fillvalue=-1, **grow)
             d.attrs.update(units="1", long_name="index of the group that failed first (-1: none, "
                            "or the revolution does not close)", groups=list(plan.group_names))
             attach(d, ("candidate",))
-            d = c.create_dataset("feasible", (n,), "?", chunks=(ch,), **COMPRESSION)
+            d = c.create_dataset("feasible", (n,), "?", chunks=(ch,), **COMPRESSION, **grow)
             d.attrs.update(units="1", long_name="status OK, constraints met, objectives and "
                                                 "bounded metrics finite")
             attach(d, ("candidate",))
-            d = c.create_dataset("forces_evaluated", (n,), "?", chunks=(ch,), **COMPRESSION)
+            d = c.create_dataset("forces_evaluated", (n,), "?", chunks=(ch,), **COMPRESSION, **grow)
             d.attrs.update(units="1", long_name="force stage run: forces, peaks or transmission "
                                                 "angles, as asked (skipped for candidates "
                                                 "already infeasible)")
             attach(d, ("candidate",))
             d = c.create_dataset("constraints", (n, len(gnames)), "f8",
-                                 chunks=(ch, len(gnames)), **COMPRESSION, fillvalue=np.nan)
+                                 chunks=(ch, len(gnames)), **COMPRESSION, fillvalue=np.nan, **grow2)
             d.attrs.update(units=units_attr(constraint_units(self.has_margin, spec)),
                            long_name="constraints g <= 0", names=gnames)
             attach(d, ("candidate", "constraint"))
@@ -335,7 +417,7 @@ class SweepFile:
             for name in spec.metrics:
                 units, long = METRICS[name][:2]
                 d = m.create_dataset(name, (n,), "f8", chunks=(ch,), **COMPRESSION,
-                                     fillvalue=np.nan)
+                                     fillvalue=np.nan, **grow)
                 d.attrs.update(units=units, long_name=long)
                 attach(d, ("candidate",))
             joints = list(plan.joint_names)
@@ -344,6 +426,11 @@ class SweepFile:
             d = p.create_dataset("chunk_done", (spec.n_chunks,), "?")
             d.attrs.update(units="1", long_name="chunk written")
             attach(d, ("chunk",))
+            coordinate(f, "counted", list(COUNTED), "1", "a status, or the feasible candidates")
+            d = p.create_dataset("status_counts", (spec.n_chunks, len(COUNTED)), "i8")
+            d.attrs.update(units="1", long_name="candidates of each status, and the feasible "
+                                                "ones, per chunk", columns=list(COUNTED))
+            attach(d, ("chunk", "counted"))
             d = p.create_dataset("rejected", (spec.n_chunks, len(spec.triangles)), "i8")
             d.attrs.update(units="1", long_name="draws redrawn because they broke a triangle "
                                                 "inequality (known before solving), per chunk",
@@ -376,37 +463,81 @@ class SweepFile:
     def _columns(self, metrics):
         return {name: metric_values(metrics, name) for name in self.spec.metrics}
 
-    def write_chunk(self, d, chunk, x, status, metrics, rejected):
-        """Write one chunk's rows into the datasets ``d`` (``datasets(f)``)."""
-        lo, hi = self.spec.chunk_bounds(chunk)
+    def _rows(self, status, metrics):
+        """The stored columns of rows (status, metrics): the metrics in their
+        units, constraints G, violation cv and feasibility."""
+        cols = self._columns(metrics)
+        G, cv = constraints(self.spec, metrics, status, self.has_margin)
+        objectives = np.stack([cols[o] for o in self.spec.objectives], axis=1)
+        feasible = ((status == kc.OK) & (cv == 0) & np.isfinite(objectives).all(axis=1)
+                    & bounded_finite(self.spec, metrics))
+        return cols, G, cv, feasible
+
+    def kept(self, chunk, x, status, metrics):
+        """With store = feasible: (x, status, metrics, index, counts) of the chunk's
+        feasible rows, ``index`` their candidate indices and ``counts`` the
+        chunk's candidates per status and feasible (COUNTED); else None."""
+        if not self.feasible_only:
+            return None
+        feasible = self._rows(status, metrics)[3]
+        lo, _ = self.spec.chunk_bounds(chunk)
+        keep = np.flatnonzero(feasible)
+        return x[keep], status[keep], metrics[keep], lo + keep, _counts(status, feasible)
+
+    def write_chunk(self, d, chunk, x, status, metrics, rejected, index=None, counts=None):
+        """Write one chunk's rows into the datasets ``d`` (``datasets(f)``): all
+        its candidates, or (store = feasible) the rows ``index`` kept, appended,
+        with the chunk's ``counts``."""
+        cols, G, cv, feasible = self._rows(status, metrics)
+        if index is None:
+            lo, hi = self.spec.chunk_bounds(chunk)
+            counts = _counts(status, feasible)
+        else:
+            lo = d["candidate"].shape[0]
+            hi = lo + len(index)
+            for name in self.row_names():
+                d[name].resize(hi, axis=0)
+            d["candidate"][lo:hi] = index
         if len(rejected):
             d["progress/rejected"][chunk] = rejected
+        d["progress/status_counts"][chunk] = counts
         d["candidates/params"][lo:hi] = x
         d["candidates/status"][lo:hi] = status
         d["candidates/fail_phi"][lo:hi] = np.rad2deg(metrics[:, ks.M_FAIL_PHI])
         group = metrics[:, ks.M_FAIL_GROUP]
         d["candidates/fail_group"][lo:hi] = np.where(np.isfinite(group), group, -1).astype("i2")
         d["candidates/forces_evaluated"][lo:hi] = metrics[:, ks.M_FORCES_DONE] == 1.0
-        cols = self._columns(metrics)
         for name, col in cols.items():
             d[f"metrics/{name}"][lo:hi] = col
-        G, cv = constraints(self.spec, metrics, status, self.has_margin)
         d["candidates/constraints"][lo:hi] = G
         d["candidates/cv"][lo:hi] = cv
-        objectives = np.stack([cols[o] for o in self.spec.objectives], axis=1)
-        d["candidates/feasible"][lo:hi] = ((status == kc.OK) & (cv == 0)
-                                           & np.isfinite(objectives).all(axis=1)
-                                           & bounded_finite(self.spec, metrics))
+        d["candidates/feasible"][lo:hi] = feasible
         d["progress/chunk_done"][chunk] = True
+
+    def row_names(self):
+        """The datasets with a row per stored candidate."""
+        return (["candidate", "candidates/params", "candidates/status", "candidates/fail_phi",
+                 "candidates/fail_group", "candidates/forces_evaluated",
+                 "candidates/constraints", "candidates/cv", "candidates/feasible"]
+                + [f"metrics/{m}" for m in self.spec.metrics])
+
+    def sort_rows(self, f):
+        """store = feasible: rows in candidate order, whatever order the chunks
+        finished in (Dask, a resume); the kept rows are few by design."""
+        if not self.feasible_only:
+            return
+        index = f["candidate"][()]
+        if (np.diff(index) > 0).all():
+            return
+        order = np.argsort(index, kind="stable")
+        for name in self.row_names():
+            f[name][...] = f[name][()][order]
 
     def datasets(self, f):
         """The open file's datasets by path, looked up once (a path lookup costs
         more than writing a chunk's column)."""
-        names = ["candidates/params", "candidates/status", "candidates/fail_phi",
-                 "candidates/fail_group",
-                 "candidates/forces_evaluated", "candidates/constraints", "candidates/cv",
-                 "candidates/feasible", "progress/chunk_done", "progress/rejected"]
-        names += [f"metrics/{m}" for m in self.spec.metrics]
+        names = self.row_names() + ["progress/chunk_done", "progress/rejected",
+                                    "progress/status_counts"]
         return {n: f[n] for n in names}
 
 
@@ -464,7 +595,8 @@ def _check_existing(out: Path, journal: Journal, study, spec, resume: bool,
     want = manifest_for(study, spec)
     check_existing(
         out, journal, resume, overwrite,
-        journal_diff=lambda man: [k for k in want if k != "study_file" and man.get(k) != want[k]],
+        journal_diff=lambda man: [k for k in want if k != "study_file"
+                                  and man.get(k, MANIFEST_DEFAULTS.get(k)) != want[k]],
         same_results=lambda f: (f.attrs.get("study_toml") == study.text
                                 and int(f.attrs.get("n_candidates", -1)) == spec.candidates),
         what="sweep", other="or another candidate count")
@@ -472,13 +604,19 @@ def _check_existing(out: Path, journal: Journal, study, spec, resume: bool,
 
 def run_sweep(study, out, *, candidates=None, resume=False, overwrite=False, scheduler=None,
               client=None, n_jobs=None, chunk_size=None, progress=True,
-              stop_after_chunks=None) -> SweepOutcome:
+              stop_after_chunks=None, device=None, store=None) -> SweepOutcome:
     """Run (or resume) a sweep study into ``out``.  With ``resume`` the
     candidate count and chunk size come from the interrupted run's journal
     (or the finished file) unless given; ``overwrite`` replaces a finished
-    file."""
+    file.  ``device`` (cpu | gpu | auto) and ``store`` (all | feasible)
+    override the study's [sweep] device and store."""
     from dataclasses import replace
+    from .sweep_spec import DEVICES, STORES
     spec: SweepSpec = study.sweep
+    for name, value, allowed in (("device", device, DEVICES), ("store", store, STORES)):
+        if value is not None and value not in allowed:
+            raise ValueError(f"--{name} must be one of {', '.join(allowed)}, got {value!r}")
+    spec = replace(spec, device=device or spec.device, store=store or spec.store)
     if resume:
         n, ch = _run_sizes(Path(out))
         candidates = n if candidates is None else candidates
@@ -529,7 +667,7 @@ def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, 
     if done is not None:
         return done
 
-    problem = build_problem(study, spec)
+    problem = build_problem(study, spec, device=_device(spec, scheduler or client))
     sf = SweepFile(out, study, problem)
     fresh = not journal.exists()
     own = scheduler is not None and client is None
@@ -612,7 +750,7 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
     with h5py.File(out, "r+") as f:
         d = sf.datasets(f)
         for c in sorted(finished):
-            sf.write_chunk(d, c, *journal.load(c))
+            sf.write_chunk(d, c, *journal.load(c))    # kept rows and counts, if any
         f.flush()
     todo = [c for c in range(spec.n_chunks) if c not in finished]
     if finished:
@@ -624,13 +762,19 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
             d = sf.datasets(f)
             flushed = time.monotonic()
             for c, x, status, metrics, rejected in _chunks(problem, todo, client, n_jobs):
-                journal.save(c, x, status, metrics, rejected)   # the source of truth, fsynced
-                sf.write_chunk(d, c, x, status, metrics, rejected)
+                computed += len(status)
+                bar.update(len(status))
+                kept = sf.kept(c, x, status, metrics)     # store = feasible: those rows only
+                if kept is not None:
+                    x, status, metrics, index, counts = kept
+                    journal.save(c, x, status, metrics, rejected, index, counts)
+                    sf.write_chunk(d, c, x, status, metrics, rejected, index, counts)
+                else:
+                    journal.save(c, x, status, metrics, rejected)   # the source of truth
+                    sf.write_chunk(d, c, x, status, metrics, rejected)
                 if time.monotonic() - flushed > 1.0:    # the HDF5 file: once a second
                     f.flush()
                     flushed = time.monotonic()
-                computed += len(status)
-                bar.update(len(status))
                 if stop_after_chunks is not None and computed >= stop_after_chunks * spec.chunk_size:
                     raise KeyboardInterrupt  # test hook: an interruption at a chunk boundary
     except KeyboardInterrupt:
@@ -639,12 +783,14 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
         raise SweepInterrupted(f"{out}: interrupted with {done} of {spec.n_chunks} chunks "
                                "saved; run again with --resume to continue") from None
     bar.close()
+    with h5py.File(out, "r+") as f:
+        sf.sort_rows(f)
     return finish_run(out, journal, client, time.perf_counter() - t0, prep[0], computed,
-                      summarize, "candidates")
+                      summarize, "candidates", device=problem.device_name)
 
 
 def finish_run(out: Path, journal: Journal, client, wall: float, compile_s: float,
-               computed: int, summary, unit: str) -> SweepOutcome:
+               computed: int, summary, unit: str, device: str = "cpu") -> SweepOutcome:
     """A run (sweep or search) has written everything: the file is marked
     complete, the journal and a file it replaced go, and its outcome says the
     wall time, the compile time apart and the throughput (``summary(out)``:
@@ -653,6 +799,7 @@ def finish_run(out: Path, journal: Journal, client, wall: float, compile_s: floa
         f.attrs["complete"] = True
         f.attrs["wall_time_s"] = wall
         f.attrs["engine"] = "dask" if client is not None else "local"
+        f.attrs["device"] = device
     journal.remove()
     _replaced(out).unlink(missing_ok=True)     # the new run is complete: the old one goes
     res = summary(out)
@@ -661,6 +808,8 @@ def finish_run(out: Path, journal: Journal, client, wall: float, compile_s: floa
         res["compile_time"] = f"{compile_s:.1f} s (not in the wall time; cached from now on)"
     if computed:
         res["throughput"] = f"{computed / wall:,.0f} {unit}/s"
+    if device != "cpu":
+        res["device"] = device
     return SweepOutcome("sweep", out, [], res)
 
 
@@ -722,18 +871,25 @@ def _dask_chunks(problem, todo, client):
 
 def status_counts(f) -> dict:
     """Candidates per status, OK-but-infeasible and feasible: count and percent."""
-    st = f["candidates/status"][()]
-    feas = f["candidates/feasible"][()]
-    n = len(st)
+    if attr_text(f.attrs.get("store", "all")) == "feasible":
+        # only the feasible rows are stored: the counts of every chunk written
+        done = f["progress/chunk_done"][()]
+        c = f["progress/status_counts"][()][done].sum(axis=0)
+        by_status, n_feasible = c[:-1], int(c[-1])
+    else:
+        st = f["candidates/status"][()]
+        by_status = np.bincount(st.astype(np.int64), minlength=len(kc.STATUS_NAMES))
+        n_feasible = int(f["candidates/feasible"][()].sum())
+    n = int(by_status.sum())
     out = {}
     for code, name in kc.STATUS_NAMES.items():
-        k = int((st == code).sum())
+        k = int(by_status[code])
         if k:
             out[name] = {"count": k, "percent": round(100.0 * k / max(n, 1), 2)}
-    ok_infeasible = int(((st == kc.OK) & ~feas).sum())
+    ok_infeasible = int(by_status[kc.OK]) - n_feasible
     out["OK but constraints violated"] = {"count": ok_infeasible,
                                        "percent": round(100.0 * ok_infeasible / max(n, 1), 2)}
-    out["feasible"] = {"count": int(feas.sum()), "percent": round(100.0 * feas.mean(), 2)
+    out["feasible"] = {"count": n_feasible, "percent": round(100.0 * n_feasible / n, 2)
                        if n else 0.0}
     if "progress/rejected" in f and f["progress/rejected"].size:
         k = int(f["progress/rejected"][()].sum())
@@ -747,8 +903,11 @@ def summarize(out) -> dict:
     """Counts by status, feasible fraction, best objective values."""
     with h5py.File(out, "r") as f:
         feas = f["candidates/feasible"][()]
-        s = {"candidates": len(feas)}
         counts = status_counts(f)
+        s = {"candidates": sum(v["count"] for k, v in counts.items()
+                               if k in kc.STATUS_NAMES.values())}
+        if attr_text(f.attrs.get("store", "all")) == "feasible":
+            s["stored"] = f"the feasible candidates only ({len(feas)} rows; store = feasible)"
         for name in kc.STATUS_NAMES.values():
             if name in counts:
                 s[f"status {name}"] = f"{counts[name]['count']} ({counts[name]['percent']:.1f}%)"

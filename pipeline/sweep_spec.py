@@ -21,6 +21,8 @@ from .limits import (CANDIDATES_WHY, CHUNK_WHY, MAX_CANDIDATES, MAX_CHUNK, MAX_P
                      POSITIONS_WHY)
 
 SAMPLERS = ("uniform", "lhs", "sobol")
+DEVICES = ("cpu", "gpu", "auto")     # [sweep] device, --device
+STORES = ("all", "feasible")         # [sweep] store, --store
 
 # the Sobol engine of the last chunk drawn, per (seed, dimension): the next chunk
 # continues it (scrambling a new engine and fast-forwarding costs more than the
@@ -122,6 +124,8 @@ class SweepSpec:
     scheduler: str | None
     triangles: tuple = ()     # Triangle: known before solving; draws that break one are redrawn
     bounds: tuple = ()        # (metric, min, max): [sweep.constraints] metric = { min, max }
+    device: str = "cpu"       # cpu | gpu | auto: where the kernels run (the numbers are the same)
+    store: str = "all"        # all | feasible: the candidates' rows the file keeps
 
     @property
     def n_chunks(self):
@@ -263,6 +267,8 @@ def parse_sweep(root, mech, output) -> SweepSpec:
         scheduler=sec.string("scheduler", "") or None,
         triangles=triangles_of(plan, variables),
         bounds=bounds,
+        device=sec.string("device", "cpu", choices=DEVICES),
+        store=sec.string("store", "all", choices=STORES),
     )
     if spec.triangles:
         # rejection sampling needs designs that can be built: at least 1 % of the box,

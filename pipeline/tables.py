@@ -17,7 +17,8 @@ import numpy as np
 import pandas as pd
 
 from .kernels import config as kc
-from .storage import ResultsError, attr_text, open_results, read_units, variables
+from .storage import (ResultsError, attr_text, candidate_ids, open_results, read_units,
+                      variables)
 
 
 def with_units(df: pd.DataFrame) -> pd.DataFrame:
@@ -47,7 +48,7 @@ def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
         status = f["candidates/status"][()]
         feas = f["candidates/feasible"][()]
         rk = ranking(f)
-        cols = {"candidate": np.arange(len(status)),
+        cols = {"candidate": candidate_ids(f),
                 "status": pd.Categorical.from_codes(
                     np.where(status >= 0, status, kc.NOT_EVALUATED).astype(int),
                     [kc.STATUS_NAMES[k] for k in sorted(kc.STATUS_NAMES)]),

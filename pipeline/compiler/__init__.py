@@ -91,11 +91,26 @@ def kernels_for(plan, rocker=None, watch=True):
     if mod is not None:
         return mod
     src = source_for(plan, rocker, watch)
-    mod_name = module_name(src)
+    mod = _imported(src, module_name(src))
+    _BY_STRUCTURE[key] = mod
+    return mod
+
+
+def gpu_kernels_for(plan, rocker=None):
+    """The CUDA kernel module of ``plan``'s sweep (``pipeline.compiler.gpu``):
+    it imports the CPU module (``kernels_for``) and calls its functions."""
+    from .gpu import gpu_source
+    cpu = kernels_for(plan, rocker)
+    src = gpu_source(cpu.__name__)
+    return _imported(src, "pipeline_gpu_" + module_name(src)[len("pipeline_mech_"):])
+
+
+def _imported(src: str, mod_name: str):
+    """The module of source ``src``, written to the cache folder as
+    ``mod_name``.py (unless there already) and imported."""
     with _LOCK:
         mod = _MODULES.get(mod_name)
         if mod is not None:
-            _BY_STRUCTURE[key] = mod
             return mod
         folder = cache_dir()
         folder.mkdir(parents=True, exist_ok=True)
@@ -110,5 +125,4 @@ def kernels_for(plan, rocker=None, watch=True):
         mod = importlib.import_module(mod_name)
         mod.SOURCE_PATH = str(path)
         _MODULES[mod_name] = mod
-        _BY_STRUCTURE[key] = mod
         return mod

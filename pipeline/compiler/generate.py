@@ -155,21 +155,13 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
                      "# ---- the centres of mass (force analysis and dynamics only)"]
         body += lines
     body.append("return status")
-    w(f"# One compiled version of the big kernels whatever constants a caller passes (numba\n"
-      f"# would specialise on literal arguments and LLVM would inline every copy).\n"
-      f"SIG_WALK = ('int64(UniTuple(float64, {len(names_k)}), float64, float64, int64, "
-      f"float64[::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], "
-      f"float64[::1], boolean)')\n"
-      f"SIG_POSITION = ('int64(UniTuple(float64, {len(names_k)}), float64, int64, float64[::1], "
-      f"float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[::1], "
-      f"boolean)')\n")
     w(_fn("position(K, phi, order, tols, state, pos, d1, d2, margins, with_com)",
           "Every group at crank angle ``phi`` (rad), in plan order (careful path).\n"
           "Writes pos/d1/d2 (n_points, 2) to ``order`` (0 positions, 1 velocity\n"
           "analogs, 2 acceleration analogs) and margins[g]; the centres of mass only\n"
           "``with_com``.  Returns the first non-OK status (later groups still run\n"
           "and give NaN); margins[N_GROUPS] is the index of the group that gave it.",
-          body, jit="SIG_POSITION, **JIT"))
+          body))
 
     # ---------------------------------------------------------------- start
     triads = [e for e in ems if isinstance(e, ClassIIIEmitter)]
@@ -220,7 +212,7 @@ def _fn(sig, doc, body, jit="**JIT"):
 
 
 ADVANCE_CLOSED = '''
-    @njit(SIG_WALK, **JIT)
+    @njit(**JIT)
     def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, with_com):
         """Closed form (no class III group): one solve at ``phi_to`` (margins[N_GROUPS
         + 1], margins[N_GROUPS + 2]: where the walk was and where it went)."""
@@ -231,7 +223,7 @@ ADVANCE_CLOSED = '''
 '''
 
 ADVANCE_NEWTON = '''
-    @njit(SIG_WALK, **JIT)
+    @njit(**JIT)
     def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, with_com):
         """Continuation from ``phi_from`` to ``phi_to``, then the solve at
         ``phi_to`` to ``order``: secant predictor, Newton corrector, steps bounded
@@ -389,8 +381,8 @@ CAREFUL = '''
         if (reached - good) * (bad - reached) > 0.0:
             # the walk's last angle, solved again to the trials' closure: beyond a
             # fold by Newton's tolerance it is the bad end instead
-            if advance(K, reached, reached, 0, ltols, state, pos, d1, d2, margins,
-                       False) == OK:
+            if advance(K, reached, reached, np.int64(0), ltols, state, pos, d1, d2, margins,
+                       np.bool_(False)) == OK:
                 good = reached
                 d_good = watched_min(margins)
             else:
@@ -405,7 +397,8 @@ CAREFUL = '''
                 break
             if d_good <= tols[T_WATCH] and not abs(bad - good) > 2.0 * FOLD_BACK:
                 break     # a fold, close enough: extrapolated below
-            st = advance(K, good, mid, 0, ltols, state, pos, d1, d2, margins, False)
+            st = advance(K, good, mid, np.int64(0), ltols, state, pos, d1, d2, margins,
+                          np.bool_(False))
             if st == OK:
                 good = mid
                 copy2(state, keep)
@@ -426,10 +419,11 @@ CAREFUL = '''
             # and FOLD_BACK, 2 FOLD_BACK short of it has its zero at the fold
             back = -FOLD_BACK if bad > good else FOLD_BACK
             copy2(keep, state)
-            st1 = advance(K, good, good + back, 0, ltols, state, pos, d1, d2, margins, False)
+            st1 = advance(K, good, good + back, np.int64(0), ltols, state, pos, d1, d2, margins,
+                          np.bool_(False))
             v1 = watched_min(margins)
-            st2 = advance(K, good + back, good + 2.0 * back, 0, ltols, state, pos, d1, d2,
-                          margins, False)
+            st2 = advance(K, good + back, good + 2.0 * back, np.int64(0), ltols, state, pos, d1, d2,
+                          margins, np.bool_(False))
             v2 = watched_min(margins)
             if st1 == OK and st2 == OK:
                 x = fold_distance(d_good, v1, v2, FOLD_BACK)
@@ -453,7 +447,8 @@ CAREFUL = '''
         sub_phi, sub_val, sub_state, found = ww[3], ww[4], ww[5], ww[7]
         for level in range(200):
             copy2(state, sub_state[0])
-            st = advance(K, lo, lo, 0, tols, state, pos, d1, d2, margins, False)
+            st = advance(K, lo, lo, np.int64(0), tols, state, pos, d1, d2, margins,
+                         np.bool_(False))
             if st != OK:    # cannot happen: lo was solved before
                 found[0] = st
                 found[1] = lo
@@ -463,7 +458,8 @@ CAREFUL = '''
             watched_values(margins, sub_val, 0)
             for i in range(1, SUB + 1):
                 t = hi if i == SUB else lo + (hi - lo) * i / SUB
-                st = advance(K, sub_phi[i - 1], t, 0, tols, state, pos, d1, d2, margins, False)
+                st = advance(K, sub_phi[i - 1], t, np.int64(0), tols, state, pos, d1, d2,
+                             margins, np.bool_(False))
                 if st != OK:
                     g = margins[N_GROUPS]
                     if st == SINGULAR and i >= 3:
@@ -501,8 +497,8 @@ CAREFUL = '''
                     # narrower than the sub-steps), and the walk fails at its boundary
                     jj = j - 1 if (at - sub_phi[j]) * (hi - lo) < 0.0 else j
                     copy2(sub_state[jj], state)
-                    st = advance(K, sub_phi[jj], at, 0, tols, state, pos, d1, d2, margins,
-                                 False)
+                    st = advance(K, sub_phi[jj], at, np.int64(0), tols, state, pos, d1, d2, margins,
+                                 np.bool_(False))
                     if st != OK and st != SINGULAR:
                         return locate(K, sub_phi[jj], at, st, margins[N_GROUPS],
                                       sub_state[jj], tols, state, pos, d1, d2, margins, ww)
@@ -706,7 +702,8 @@ CAREFUL = '''
         y0 = 0.0
         for k in range(walk_steps(phis, phi_close)):
             phi = walk_angle(phis, k, phi_close)   # k >= n: the closing position and past it
-            st = advance(K, phi_prev, phi, 0, tols, state, pos, d1, d2, margins, False)
+            st = advance(K, phi_prev, phi, np.int64(0), tols, state, pos, d1, d2, margins,
+                         np.bool_(False))
             if st != OK:
                 if k > 0:    # located between the last good position and this one
                     st = locate(K, phi_prev, phi, st, margins[N_GROUPS], ww[2][(k - 1) & 3],
@@ -915,7 +912,8 @@ CAREFUL = '''
         """eps1 = (Q + M1 - (1/2) J' omega^2 - b omega) / J at (t, phi, omega).
         Returns (status, eps1); walks the continuation from last[0] to phi."""
         K = constants(par)
-        st = advance(K, last[0], phi, 2, tols, state, pos, d1, d2, margins, True)
+        st = advance(K, last[0], phi, np.int64(2), tols, state, pos, d1, d2, margins,
+                     np.bool_(True))
         last[0] = phi
         if st != OK:
             return st, math.nan
@@ -1021,7 +1019,8 @@ CAREFUL = '''
         if phis.shape[0] > 0:
             last[0] = walk_start(K, phis[0], state)
         for k in range(phis.shape[0]):
-            st = advance(K, last[0], phis[k], 2, tols, state, pos, d1, d2, margins, True)
+            st = advance(K, last[0], phis[k], np.int64(2), tols, state, pos, d1, d2, margins,
+                         np.bool_(True))
             last[0] = phis[k]
             out_status[k] = st
             if worst == OK and st != OK:
@@ -1176,7 +1175,8 @@ PARALLEL = '''
             peak = 0.0
             finite = True
             for k in range(phis.shape[0]):
-                s = advance(K, phi_prev, phis[k], order, tols, state, pos, d1, d2, margins, True)
+                s = advance(K, phi_prev, phis[k], order, tols, state, pos, d1, d2, margins,
+                            np.bool_(True))
                 phi_prev = phis[k]
                 if s != OK:
                     st = s

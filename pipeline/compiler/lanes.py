@@ -166,8 +166,8 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
         a(line)
     for c in consts:
         a(f"S[R_{c}, l] = {c}")
-    a("st = advance(K, walk_start(K, phis[0], state), phis[0], 1, tols, state, pos, d1, d2,")
-    a("             margins, False)")
+    a("st = advance(K, walk_start(K, phis[0], state), phis[0], np.int64(1), tols, state, pos,")
+    a("             d1, d2, margins, np.bool_(False))")
     a("ok = st == OK")
     for e in triads:
         t = f"t{e.triad_row}"

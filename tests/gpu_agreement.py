@@ -1,0 +1,98 @@
+"""The CUDA kernels against the CPU kernels, on the same candidates: run as a
+script (``python tests/gpu_agreement.py OUT.json [N]``) in a process where
+numba.cuda is the simulator (NUMBA_ENABLE_CUDASIM=1, set before numba is
+imported) or a real GPU.  For every shipped sweep study (N drawn candidates,
+constraints opened so the force stage runs for every assembled one) and for
+the near-singular class III stress candidates, it writes per case: the
+status disagreements, and per metric column the largest relative difference
+of the GPU's numbers from the CPU's default path (lanes + careful) and from
+the CPU's careful path alone (``evaluate_careful``, the function every GPU
+thread runs)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from stress_cases import near_singular_triads  # noqa: E402
+
+from pipeline.gpu import SIMULATOR, GpuSweep  # noqa: E402
+from pipeline.kernels import sweep as ks  # noqa: E402
+from pipeline.study import load_study  # noqa: E402
+from pipeline.sweep import build_problem, draw_checked, parameter_rows  # noqa: E402
+
+STUDIES = ("ov7_synthesis.toml", "ov7_synthesis_law.toml", "ov7_search.toml")
+BATCH = 24      # small launches: several batches on both streams
+
+
+def careful(pb, pars):
+    """The CPU's careful path, one candidate at a time."""
+    k = pb.kernels
+    n, w = len(pb.phis), pb.dwell_w
+    status = np.zeros(len(pars), np.int8)
+    metrics = np.full((len(pars), ks.N_METRICS), np.nan)
+    col, trail = np.empty(n), np.empty((n + 1, 4))
+    qmax, qmin = np.empty(n + w + 1, np.int64), np.empty(n + w + 1, np.int64)
+    s = pb.settings()
+    for i, row in enumerate(pars):
+        status[i] = k.evaluate_careful(row, pb.phis, pb.phi_close, pb.tols, s, pb.loads, col,
+                                       trail, qmax, qmin, metrics[i])
+    return status, metrics
+
+
+def rel(a, b):
+    """Largest |a - b| / |b| where both are finite, and the count of rows where
+    exactly one is finite."""
+    both = np.isfinite(a) & np.isfinite(b)
+    one = int((np.isfinite(a) != np.isfinite(b)).sum())
+    if not both.any():
+        return 0.0, one
+    d = np.abs(a[both] - b[both]) / np.maximum(np.abs(b[both]), 1e-300)
+    return float(d.max()), one
+
+
+def compare(pb, pars):
+    cpu_st, cpu_m = pb.evaluate_rows(pars)
+    car_st, car_m = careful(pb, pars)
+    gpu_st, gpu_m = GpuSweep(pb, batch=BATCH).evaluate_rows(pars)
+    out = {"n": len(pars), "statuses": np.bincount(cpu_st, minlength=7).tolist(),
+           "status_vs_cpu": int((gpu_st != cpu_st).sum()),
+           "status_vs_careful": int((gpu_st != car_st).sum()),
+           "forces_done": int((cpu_m[:, ks.M_FORCES_DONE] == 1).sum()),
+           "vs_cpu": {}, "vs_careful": {}}
+    ok = (cpu_st == 0) & (gpu_st == 0)
+    failed = (cpu_st != 0) & (gpu_st != 0)
+    for c in range(ks.N_METRICS):
+        rows = failed if c in (ks.M_FAIL_PHI, ks.M_FAIL_GROUP) else ok   # where it is defined
+        out["vs_cpu"][c] = rel(gpu_m[rows, c], cpu_m[rows, c])
+        out["vs_careful"][c] = rel(gpu_m[:, c], car_m[:, c])
+    return out
+
+
+def main(path, n):
+    studies = HERE.parent / "studies"
+    res = {"simulator": SIMULATOR}
+    for name in STUDIES:
+        study = load_study(studies / name)
+        spec = dataclasses.replace(study.sweep, stroke_bounds=(-np.inf, np.inf),
+                                   margin_min=-np.inf)
+        pb = build_problem(study, spec)
+        x, _ = draw_checked(spec, 0)
+        res[name] = compare(pb, np.ascontiguousarray(parameter_rows(pb.plan, spec, x)[:n]))
+    study = load_study(studies / "ov7_synthesis.toml")
+    spec = dataclasses.replace(study.sweep, stroke_bounds=(-np.inf, np.inf), margin_min=-np.inf)
+    pb = build_problem(study, spec)
+    pars, _ = near_singular_triads(pb.plan, 5 * n, seed=11)   # a fifth of them assemble
+    res["near-singular triads"] = compare(pb, pars)
+    Path(path).write_text(json.dumps(res, indent=1))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], int(sys.argv[2]) if len(sys.argv) > 2 else 60)

@@ -1,0 +1,216 @@
+"""Sweeps on a GPU (pipeline.gpu, pipeline.compiler.gpu) and store = feasible.
+
+CI has no GPU: the CUDA kernels run under numba's CUDA simulator
+(NUMBA_ENABLE_CUDASIM=1, which must be set before numba is imported, so in a
+child process) against the CPU kernels.  The simulator runs the same kernel
+function, thread by thread, calling the same generated functions; what it
+cannot show is NVVM's code generation, checked by the tests marked ``gpu``
+on a real device (skipped, with the reason, where there is none).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from pipeline.kernels import sweep as ks
+from pipeline.study import load_study
+from pipeline.sweep import run_sweep
+
+HERE = Path(__file__).resolve().parent
+STUDIES = HERE.parent / "studies"
+SIM = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
+# metrics defined differently on the two CPU paths (pipeline.gpu's docstring):
+# the lanes count a fixed number of Newton steps per position
+PATH_DEFINED = {ks.M_NEWTON_MEAN}
+REL = 1e-12
+
+
+def _run(code, env=SIM, timeout=600):
+    r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                       timeout=timeout, cwd=HERE.parent)
+    assert r.returncode == 0, r.stderr[-3000:]
+    return r.stdout
+
+
+def _check_agreement(res):
+    for case, v in res.items():
+        if case == "simulator":
+            continue
+        assert v["status_vs_cpu"] == 0, (case, "statuses differ from the CPU's")
+        assert v["status_vs_careful"] == 0, case
+        for c, (d, one) in v["vs_careful"].items():
+            assert one == 0 and d <= REL, (case, "careful", c, d, one)
+        for c, (d, one) in v["vs_cpu"].items():
+            if int(c) not in PATH_DEFINED:
+                assert one == 0 and d <= REL, (case, "cpu", c, d, one)
+    # the comparison saw what it is about: OK candidates with forces, and failures
+    syn = res["ov7_synthesis.toml"]
+    assert syn["statuses"][0] > 0 and syn["forces_done"] > 0
+    assert sum(res["near-singular triads"]["statuses"][1:]) > 0
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory):
+    out = tmp_path_factory.mktemp("gpu") / "agreement.json"
+    _run(f"import runpy, sys; sys.argv = ['x', {str(out)!r}, '60']; "
+         f"runpy.run_path({str(HERE / 'gpu_agreement.py')!r}, run_name='__main__')")
+    return json.loads(out.read_text())
+
+
+def test_simulated_gpu_kernels_agree_with_the_cpu(simulated):
+    """Every shipped sweep study and the near-singular stress candidates: the
+    same statuses (failures at the same crank angle, in the same group) and
+    metrics within 1e-12 relative, from the CPU's default path and from its
+    careful path."""
+    assert simulated["simulator"] is True
+    _check_agreement(simulated)
+
+
+def test_the_newton_count_is_the_one_path_defined_difference(simulated):
+    """The lanes report their fixed Newton steps; a GPU thread counts its own,
+    like the CPU's careful path (exactly)."""
+    v = simulated["ov7_synthesis.toml"]
+    assert v["vs_careful"][str(ks.M_NEWTON_MEAN)] == [0.0, 0]
+    assert v["vs_cpu"][str(ks.M_NEWTON_MEAN)][0] > 0.0
+
+
+def test_generated_cuda_module_is_imported_not_executed():
+    """The kernel module is a file in the cache folder that calls the CPU
+    module's own ``settle``: one source of the mechanism's numbers."""
+    out = _run(
+        "from pipeline.study import load_study\n"
+        "from pipeline.sweep import build_problem\n"
+        "from pipeline.compiler import gpu_kernels_for\n"
+        "s = load_study('studies/ov7_synthesis.toml'); pb = build_problem(s, s.sweep)\n"
+        "m = gpu_kernels_for(pb.plan, pb.rocker)\n"
+        "print(m.SOURCE_PATH); print(m.CPU_MODULE); print(pb.kernels.__name__)\n")
+    path, cpu, expected = out.split()
+    assert cpu == expected
+    text = Path(path).read_text()
+    assert f"from {cpu} import" in text and "settle(" in text
+    assert "exec(" not in text and "eval(" not in text
+
+
+def test_sweep_on_the_simulated_gpu_writes_the_cpu_file(tmp_path):
+    """`pipeline run --device gpu` end to end (chunks, journal, HDF5) gives the
+    CPU run's file: statuses and failure angles identical, metrics 1e-12."""
+    cpu, gpu = tmp_path / "cpu.h5", tmp_path / "gpu.h5"
+    args = ["run", "studies/ov7_synthesis.toml", "--candidates", "120", "--chunk-size", "50",
+            "-q"]
+    for out, extra, env in ((cpu, [], os.environ), (gpu, ["--device", "gpu"], SIM)):
+        r = subprocess.run([sys.executable, "-m", "pipeline.cli", *args, "-o", str(out),
+                            *extra], env=env, cwd=HERE.parent, capture_output=True, text=True,
+                           timeout=600)
+        assert r.returncode == 0, r.stderr[-2000:]
+    with h5py.File(cpu) as a, h5py.File(gpu) as b:
+        assert a.attrs["device"] == "cpu" and "simulator" in b.attrs["device"]
+        np.testing.assert_array_equal(a["candidates/status"][()], b["candidates/status"][()])
+        np.testing.assert_array_equal(a["candidates/fail_phi"][()], b["candidates/fail_phi"][()])
+        np.testing.assert_array_equal(a["candidates/feasible"][()], b["candidates/feasible"][()])
+        np.testing.assert_array_equal(a["progress/status_counts"][()],
+                                      b["progress/status_counts"][()])
+        for m in a["metrics"]:
+            if m == "newton_iterations":
+                continue
+            np.testing.assert_allclose(b["metrics"][m][()], a["metrics"][m][()], rtol=REL,
+                                       atol=0, err_msg=m)
+
+
+def test_gpu_asked_for_without_one_names_what_is_missing(tmp_path):
+    study = load_study(STUDIES / "ov7_synthesis.toml")
+    out = tmp_path / "x.h5"
+    code = ("from pipeline.gpu import probe; import json; print(json.dumps(probe()['missing']))")
+    missing = json.loads(_run(code, env={k: v for k, v in os.environ.items()
+                                         if k != "NUMBA_ENABLE_CUDASIM"}))
+    if missing is None:
+        pytest.skip("this machine has a usable GPU")
+    with pytest.raises(ValueError, match="--device gpu: no usable GPU; missing"):
+        run_sweep(study, out, candidates=10, device="gpu", progress=False)
+    assert not out.exists()      # refused before anything is written
+    res = run_sweep(study, out, candidates=10, device="auto", progress=False)
+    assert "device" not in res.summary      # auto took the CPU
+    with pytest.raises(ValueError, match="Dask cluster"):
+        run_sweep(study, tmp_path / "y.h5", candidates=10, device="gpu",
+                  scheduler="tcp://127.0.0.1:1", progress=False)
+    with pytest.raises(ValueError, match="--device must be one of"):
+        run_sweep(study, tmp_path / "z.h5", candidates=10, device="tpu", progress=False)
+
+
+# ----------------------------------------------------------------- store = feasible
+def test_store_feasible_keeps_the_feasible_rows_and_every_count(tmp_path):
+    study = load_study(STUDIES / "ov7_synthesis.toml")
+    full, kept = tmp_path / "all.h5", tmp_path / "feasible.h5"
+    run_sweep(study, full, candidates=900, chunk_size=300, progress=False)
+    run_sweep(study, kept, candidates=900, chunk_size=300, progress=False, store="feasible")
+    with h5py.File(full) as a, h5py.File(kept) as b:
+        feas = a["candidates/feasible"][()]
+        assert 0 < feas.sum() < len(feas)
+        assert b.attrs["store"] == "feasible" and b.attrs["n_candidates"] == 900
+        np.testing.assert_array_equal(b["candidate"][()], np.flatnonzero(feas))
+        for name in ("candidates/params", "candidates/status", "candidates/constraints",
+                     "candidates/cv", "candidates/feasible", "metrics/dwell_error",
+                     "metrics/peak_reaction"):
+            np.testing.assert_array_equal(b[name][()], a[name][()][feas], err_msg=name)
+        np.testing.assert_array_equal(a["progress/status_counts"][()],
+                                      b["progress/status_counts"][()])
+        counts = a["progress/status_counts"][()].sum(axis=0)
+        assert counts[:-1].sum() == 900 and counts[-1] == feas.sum()
+    from pipeline.browse import browse
+    from pipeline.sweep import summarize
+    sa, sb = summarize(full), summarize(kept)
+    assert sa["candidates"] == sb["candidates"] == 900
+    assert sa["feasible"] == sb["feasible"] and sa["status OK"] == sb["status OK"]
+    first = int(np.flatnonzero(feas)[0])
+    assert f"candidate {first}: OK" in browse(kept, candidate=str(first))
+    missing = int(np.flatnonzero(~feas)[0])
+    with pytest.raises(ValueError, match="kept only its feasible candidates"):
+        browse(kept, candidate=str(missing))
+
+
+def test_store_feasible_resumes_to_the_same_file(tmp_path):
+    from pipeline.sweep import SweepInterrupted
+    from sweep_helpers import assert_same_results
+    study = load_study(STUDIES / "ov7_synthesis.toml")
+    once, twice = tmp_path / "once.h5", tmp_path / "twice.h5"
+    run_sweep(study, once, candidates=600, chunk_size=200, progress=False, store="feasible")
+    with pytest.raises(SweepInterrupted):
+        run_sweep(study, twice, candidates=600, chunk_size=200, progress=False,
+                  store="feasible", stop_after_chunks=1)
+    with pytest.raises(Exception, match="different store"):
+        run_sweep(study, twice, resume=True, progress=False, store="all")
+    run_sweep(study, twice, resume=True, progress=False, store="feasible")
+    assert_same_results(once, twice)
+
+
+# ----------------------------------------------------------------- a real GPU
+def _real_gpu_missing():
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
+    r = subprocess.run([sys.executable, "-c", "from pipeline.gpu import probe; import json; "
+                        "print(json.dumps(probe()['missing']))"], env=env,
+                       capture_output=True, text=True, timeout=120)
+    if r.returncode != 0:
+        return "numba.cuda does not import"
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.gpu
+def test_real_gpu_kernels_agree_with_the_cpu(tmp_path):
+    missing = _real_gpu_missing()
+    if missing:
+        pytest.skip(f"no usable GPU here (missing {missing})")
+    out = tmp_path / "agreement.json"
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
+    _run(f"import runpy, sys; sys.argv = ['x', {str(out)!r}, '2000']; "
+         f"runpy.run_path({str(HERE / 'gpu_agreement.py')!r}, run_name='__main__')", env=env,
+         timeout=1800)
+    res = json.loads(out.read_text())
+    assert res["simulator"] is False
+    _check_agreement(res)
