@@ -1,0 +1,107 @@
+"""The default study's full-metrics sweep on the GPU against the CPU path on all
+cores of the same machine, same process, same drawn candidates.
+
+* kernel only: candidates/s of the evaluation alone (GPU: one batch already on
+  the device, results left there; CPU: ``SweepProblem.evaluate_rows`` on all
+  cores), best of ``--repeat``;
+* end to end: ``run_sweep`` into an HDF5 file (drawing, transfers, journal,
+  HDF5), with --device gpu and --device cpu, for each ``--sizes`` (default
+  10^6 and 10^7 candidates; the CPU end to end only up to --cpu-max, its
+  throughput is flat in the size).
+
+Compile time is reported apart (the first evaluation of each path).  Exits
+with a message, and status 0, where numba.cuda finds no usable GPU (see
+``pipeline doctor``); under NUMBA_ENABLE_CUDASIM=1 it runs with tiny sizes as a
+smoke test of this script (the simulator's speed means nothing).
+
+    python benchmarks/bench_gpu.py [--sizes 1000000 10000000] [--repeat 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from benchmarks.common import STUDIES, hardware  # noqa: E402
+from pipeline.study import load_study  # noqa: E402
+from pipeline.sweep import build_problem, draw_checked, parameter_rows, run_sweep  # noqa: E402
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[1_000_000, 10_000_000])
+    ap.add_argument("--cpu-max", type=int, default=1_000_000)
+    ap.add_argument("--kernel-rows", type=int, default=65536)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--chunk-size", type=int, default=1_000_000)
+    a = ap.parse_args(argv)
+    from pipeline import gpu
+    p = gpu.probe()
+    if p["missing"]:
+        print(f"no usable GPU: missing {p['missing']}")
+        return 0
+    if gpu.SIMULATOR:
+        a.sizes, a.cpu_max, a.kernel_rows, a.repeat, a.chunk_size = [200], 200, 64, 1, 100
+    print(hardware())
+    print(f"device: {gpu.describe(p)}")
+    study = load_study(STUDIES / "ov7_synthesis.toml")
+    spec = study.sweep
+    cpu = build_problem(study, spec)
+    dev = build_problem(study, spec, device="gpu")
+    x, _ = draw_checked(spec.with_candidates(a.kernel_rows), 0) if a.kernel_rows <= \
+        spec.chunk_size else _draws(spec, a.kernel_rows)
+    pars = np.ascontiguousarray(parameter_rows(cpu.plan, spec, x))
+
+    t = time.perf_counter()
+    cpu.evaluate_rows(pars[:64])
+    print(f"compile, CPU kernels: {time.perf_counter() - t:.1f} s")
+    t = time.perf_counter()
+    g = gpu.GpuSweep(dev, batch=max(a.kernel_rows, 1))
+    g.evaluate_rows(pars[:64])
+    print(f"compile, CUDA kernel: {time.perf_counter() - t:.1f} s")
+
+    best_c = min(_timed(lambda: cpu.evaluate_rows(pars)) for _ in range(a.repeat))
+    best_g = g.kernel_only(pars, repeats=a.repeat)
+    print(f"kernel only, {len(pars):,} candidates: CPU {len(pars) / best_c:,.0f}/s, "
+          f"GPU {len(pars) / best_g:,.0f}/s, ratio {best_c / best_g:.1f}x")
+
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in a.sizes:
+            row = [f"end to end, {n:,} candidates:"]
+            for device in ("gpu", "cpu"):
+                if device == "cpu" and n > a.cpu_max:
+                    continue
+                out = Path(tmp) / f"{device}{n}.h5"
+                t = time.perf_counter()
+                run_sweep(study, out, candidates=n, chunk_size=min(a.chunk_size, n),
+                          device=device, progress=False)
+                s = time.perf_counter() - t
+                row.append(f"{device.upper()} {s:.1f} s ({n / s:,.0f}/s)")
+                out.unlink()
+            print(" ".join(row))
+    return 0
+
+
+def _draws(spec, n):
+    """n drawn candidates, chunk by chunk (the sweep's own draws)."""
+    parts = []
+    for c in range(-(-n // spec.chunk_size)):
+        parts.append(draw_checked(spec, c)[0])
+    return np.concatenate(parts)[:n], None
+
+
+def _timed(f):
+    t = time.perf_counter()
+    f()
+    return time.perf_counter() - t
+
+
+if __name__ == "__main__":
+    sys.exit(main())
