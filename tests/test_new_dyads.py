@@ -379,3 +379,66 @@ def test_an_oscillating_slot_that_never_turns_parallel_stays_ok(studies):
     rocker = c.pos[:, plan.point("P3")] - c.pos[:, plan.point("P4")]
     want = np.abs(np.sin(np.arctan2(rocker[:, 1], rocker[:, 0])))
     np.testing.assert_allclose(c.margin[:, plan.group_names.index("slider")], want, rtol=1e-13)
+
+
+# ------------------------------------------------------------------ a sweep over a PRP's guide
+SWEEP_N = 160
+
+
+@pytest.fixture(scope="module")
+def prp_sweep(studies, tmp_path_factory):
+    from pipeline.cli import main
+    out = tmp_path_factory.mktemp("prp_sweep") / "prp.h5"
+    assert main(["run", str(studies / "slotted_rocker_prp_sweep.toml"), "-o", str(out),
+                 "--candidates", str(SWEEP_N), "-q"]) == 0
+    assert main(["analyze", str(out), "-q"]) == 0
+    return load_study(studies / "slotted_rocker_prp_sweep.toml"), out
+
+
+def test_sweep_over_the_prp_guide_matches_the_scene_path(prp_sweep):
+    """The guide's tilt (deg in the study and the file, rad in the plan), its
+    height and the pin's offset are design variables: each candidate's peaks
+    are those of its own scene."""
+    import h5py
+    from pipeline.sweep_spec import apply_design
+    from tolerances import SWEEP_VS_SCENE_REL
+    study, path = prp_sweep
+    with h5py.File(path, "r") as f:
+        x = f["candidates/params"][()]
+        status = f["candidates/status"][()]
+        units = [u.decode() if isinstance(u, bytes) else str(u)
+                 for u in np.atleast_1d(f["candidates/params"].attrs["units"])]
+        m = {k: f[f"metrics/{k}"][()] for k in ("peak_reaction", "peak_acceleration",
+                                                "peak_M_bal")}
+    assert (status == kc.OK).all()
+    assert np.ptp(x[:, 0]) > 20.0 and np.abs(x[:, 0]).max() <= 20.0   # degrees
+    for i in (0, 7, 101):
+        mech = apply_design(study.mechanism, study.sweep, x[i])
+        prp = next(g for g in mech.groups if isinstance(g, PRP))
+        assert (prp.guide2_angle, prp.guide2_offset, prp.guide1_offset) == \
+            (x[i, 0] * DEG, x[i, 1], x[i, 2])
+        plan = mech.compile()
+        crank = mech.crank
+        c = solve_curves(plan, revolution_angles(crank, study.sweep.positions), kc.ACCELERATIONS,
+                         close_at=crank.phi0 + crank.rot * 2 * math.pi)
+        fr = scene_forces(mech, plan, c)
+        acc = np.hypot(*c.d2[:, plan.point("P5")].T) * crank.omega1 ** 2 / 1000.0
+        for key, want in (("peak_reaction", fr.magnitude.max()),
+                          ("peak_M_bal", np.abs(fr.M_bal).max()), ("peak_acceleration", acc.max())):
+            assert m[key][i] == pytest.approx(want, rel=SWEEP_VS_SCENE_REL), (i, key)
+    assert "deg" in units[0]
+
+
+def test_pareto_analysis_of_the_prp_sweep(prp_sweep):
+    """The fronts of the stored analysis are those of a brute-force dominance
+    test over the feasible candidates."""
+    from naive_pareto import brute_force_rank
+    from pipeline.analysis import read_analysis, read_sweep
+    from pipeline.storage import open_results
+    _, path = prp_sweep
+    data = read_sweep(path)
+    with open_results(path, "sweep") as f:
+        an = read_analysis(f)
+    assert data.feasible.sum() >= 20
+    np.testing.assert_array_equal(an.rank, brute_force_rank(data.F, data.feasible))
+    assert (an.rank[an.front1] == 1).all() and an.rank[an.knee] == 1
