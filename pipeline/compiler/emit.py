@@ -193,9 +193,10 @@ class PRPEmitter(Emitter):
         a1, b1 = _guide_link(self, 1)
         a2, b2 = _guide_link(self, 4)
         k = self.k
-        return [f"# {self.title()}: {self.pname(6)} where the guide lines of two blocks meet:",
-                f"# guide 1 {_guide_words(self, 0, 1, 'guide1_angle')}, guide 2 "
-                f"{_guide_words(self, 3, 4, 'guide2_angle')} (linear: B from a 2x2 system)",
+        return [f"# {self.title()}: {self.pname(6)} where the guide lines of two blocks meet",
+                "# (linear: B from a 2x2 system);",
+                f"# guide 1 {_guide_words(self, 0, 1, 'guide1_angle')},",
+                f"# guide 2 {_guide_words(self, 3, 4, 'guide2_angle')}",
                 f"st, m = prp(pos, d1, d2, {self.p(0)}, {a1}, {b1}, {self.p(3)}, {a2}, {b2}, "
                 f"{self.p(6)}, {k('guide1_angle')}, {k('guide1_offset')}, {k('guide2_angle')}, "
                 f"{k('guide2_offset')}, order, sing)"]
@@ -208,8 +209,8 @@ class RPPEmitter(Emitter):
     def careful(self):
         ga, gb = _guide_link(self, 2)
         k = self.k
-        return [f"# {self.title()}: yoke point {self.pname(4)} on the guide "
-                f"{_guide_words(self, 1, 2, 'guide_angle')}, its slot through the block "
+        return [f"# {self.title()}: yoke point {self.pname(4)} on the guide",
+                f"# {_guide_words(self, 1, 2, 'guide_angle')}, its slot through the block "
                 f"at {self.pname(0)}",
                 f"st, m = rpp(pos, d1, d2, {self.p(0)}, {self.p(1)}, {ga}, {gb}, {self.p(4)}, "
                 f"{k('guide_angle')}, {k('guide_offset')}, {k('slot_angle')}, "
