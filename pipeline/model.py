@@ -94,6 +94,67 @@ class RPR:
 
 
 @dataclass(frozen=True)
+class PRP:
+    """Two blocks joined by the revolute B, each sliding on a known guide.
+
+    Guide i runs through the known point ``guide{i}_point`` with the absolute
+    direction ``guide{i}_angle``, or, with ``guide{i}_link`` = (a, b), with the
+    direction of the link a->b plus ``guide{i}_angle`` (a slot in that link);
+    block i carries B at the perpendicular distance ``guide{i}_offset`` from
+    its guide, on the side of the guide's direction turned +90 deg.  B is
+    where the two lines meet; the group cannot be assembled where the guides
+    are parallel."""
+    B: str
+    guide1_point: str
+    guide1_angle: float          # rad: absolute, or relative to guide1_link
+    guide2_point: str
+    guide2_angle: float
+    guide1_offset: float = 0.0   # mm
+    guide2_offset: float = 0.0
+    guide1_link: tuple[str, str] | None = None
+    guide2_link: tuple[str, str] | None = None
+    name: str = ""
+
+    def reads(self):
+        return ((self.guide1_point,) + (self.guide1_link or ()) + (self.guide2_point,)
+                + (self.guide2_link or ()))
+
+    def writes(self):
+        return (self.B,)
+
+
+@dataclass(frozen=True)
+class RPP:
+    """Scotch yoke: a block pinned at the known point A slides in a slot of a
+    yoke, and the yoke slides on a guide.
+
+    The guide runs through the known point ``guide_point`` with the absolute
+    direction ``guide_angle``, or, with ``guide_link`` = (a, b), the direction
+    of the link a->b plus ``guide_angle``; the yoke's reference point B travels
+    on the line at the perpendicular distance ``guide_offset`` from the guide
+    (on the side of its direction turned +90 deg).  The slot is fixed in the
+    yoke at ``slot_angle`` from the guide, through B; the block's pin A runs at
+    ``slot_offset`` from the slot's line (on its +90 deg side).  The yoke turns
+    with the guide; the group cannot be assembled with the slot along the
+    guide (slot_angle = 0 or 180 deg)."""
+    A: str
+    B: str
+    guide_point: str
+    guide_angle: float           # rad: absolute, or relative to guide_link
+    slot_angle: float            # rad, relative to the guide
+    guide_offset: float = 0.0    # mm
+    slot_offset: float = 0.0     # mm
+    guide_link: tuple[str, str] | None = None
+    name: str = ""
+
+    def reads(self):
+        return (self.A, self.guide_point) + (self.guide_link or ())
+
+    def writes(self):
+        return (self.B,)
+
+
+@dataclass(frozen=True)
 class ClassIII:
     """Triad of DOMAIN.md sections 3 and 5 (lead 2-3, ternary 3-4-5, leads 4-6, 5-7)."""
     input: str
@@ -137,7 +198,7 @@ class Attach:
         return (self.point,)
 
 
-Group = Crank | RRR | RRP | RPR | ClassIII | Attach
+Group = Crank | RRR | RRP | RPR | PRP | RPP | ClassIII | Attach
 
 
 # ----------------------------------------------------------------- bodies and loads
@@ -201,6 +262,8 @@ class Mechanism:
 
 
 # ----------------------------------------------------------------- compiled plan
+GIDX_WIDTH = 8                         # point indices per group row (PRP uses 7)
+
 @dataclass(frozen=True)
 class Plan:
     """Flat arrays read by the kernels; ``par`` is the base parameter row."""
@@ -289,7 +352,7 @@ def compile_mechanism(m: Mechanism) -> Plan:
 
     def emit(code, idx, label, values):
         codes.append(code)
-        row = list(idx) + [-1] * (6 - len(idx))
+        row = list(idx) + [-1] * (GIDX_WIDTH - len(idx))
         gidx.append(row)
         gnames.append(label)
         goff.append(len(par))
@@ -311,6 +374,19 @@ def compile_mechanism(m: Mechanism) -> Plan:
         elif isinstance(g, RPR):
             emit(kc.G_RPR, [pt(g.block), pt(g.pivot), pt(g.guide_end)], label,
                  [("offset", g.offset), ("guide_length", g.guide_length), ("W", g.W)])
+        elif isinstance(g, PRP):
+            links = []
+            for link in (g.guide1_link, g.guide2_link):
+                links += [pt(link[0]), pt(link[1])] if link else [-1, -1]
+            emit(kc.G_PRP, [pt(g.guide1_point), links[0], links[1], pt(g.guide2_point),
+                            links[2], links[3], pt(g.B)], label,
+                 [("guide1_angle", g.guide1_angle), ("guide1_offset", g.guide1_offset),
+                  ("guide2_angle", g.guide2_angle), ("guide2_offset", g.guide2_offset)])
+        elif isinstance(g, RPP):
+            ga, gb = (pt(g.guide_link[0]), pt(g.guide_link[1])) if g.guide_link else (-1, -1)
+            emit(kc.G_RPP, [pt(g.A), pt(g.guide_point), ga, gb, pt(g.B)], label,
+                 [("guide_angle", g.guide_angle), ("guide_offset", g.guide_offset),
+                  ("slot_angle", g.slot_angle), ("slot_offset", g.slot_offset)])
         elif isinstance(g, ClassIII):
             emit(kc.G_CLASS3, [pt(g.input), pt(g.pivot_4), pt(g.pivot_5)]
                  + [pt(j) for j in g.joints], label,
@@ -372,7 +448,7 @@ def compile_mechanism(m: Mechanism) -> Plan:
 
     i64 = lambda x, shape=None: np.asarray(x, dtype=np.int64).reshape(shape if shape else (-1,))
     return Plan(
-        codes=i64(codes), gidx=i64(gidx, (-1, 6)), goff=i64(goff),
+        codes=i64(codes), gidx=i64(gidx, (-1, GIDX_WIDTH)), goff=i64(goff),
         par=np.asarray(par, dtype=np.float64),
         fixed_idx=i64(fixed_idx), fixed_off=i64(fixed_off),
         point_names=tuple(names), par_names=tuple(par_names), group_names=tuple(gnames),

@@ -27,7 +27,7 @@ def _links_to_draw(plan, study):
     """Segments to draw: every group's links, from the mechanism declaration."""
     m = study.mechanism
     segs = [(m.crank.pivot, m.crank.tip)]
-    from .model import RRR, RRP, RPR, ClassIII, Attach
+    from .model import PRP, RPP, RRR, RRP, RPR, ClassIII, Attach
     for g in m.groups:
         if isinstance(g, RRR):
             segs += [(g.A, g.B), (g.C, g.B)]
@@ -35,6 +35,10 @@ def _links_to_draw(plan, study):
             segs += [(g.A, g.B)]
         elif isinstance(g, RPR):
             segs += [(g.pivot, g.guide_end)]
+        elif isinstance(g, PRP):
+            segs += [(p, g.B) for p in (g.guide1_point, g.guide2_point) if p != g.B]
+        elif isinstance(g, RPP):
+            segs += [(g.A, g.B)]
         elif isinstance(g, ClassIII):
             p3, p4, p5 = g.joints
             segs += [(g.input, p3), (p3, p4), (p4, p5), (p5, p3), (g.pivot_4, p4), (g.pivot_5, p5)]

@@ -16,8 +16,8 @@ from pathlib import Path
 
 from .errors import StudyError
 from .limits import MAX_POSITIONS, POSITIONS_WHY
-from .model import (RPR, RRP, RRR, Attach, Body, CentreOfMass, ClassIII, Crank, Load,
-                    Mechanism, Slide)
+from .model import (PRP, RPP, RPR, RRP, RRR, Attach, Body, CentreOfMass, ClassIII, Crank,
+                    Load, Mechanism, Slide)
 
 
 _MISSING = object()
@@ -250,7 +250,8 @@ def parse_study(text: str, path="<study>") -> Study:
 
 
 # ----------------------------------------------------------------- mechanism
-GROUP_TYPES = ("RRR", "RRP", "RPR", "class3", "attach")
+GROUP_TYPES = ("RRR", "RRP", "RPR", "PRP", "RPP", "class3", "attach")
+PARALLEL_SIN = 1e-9     # |sin| of the angle between two guides below this: parallel
 
 
 def parse_mechanism(sec: Section, name: str) -> Mechanism:
@@ -351,6 +352,35 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
             define(g, "guide_end", end)
             grp = RPR(blk, piv, end, g.number("guide_length", positive=True),
                       g.number("offset", 0.0), mode(), gname)
+        elif t == "PRP":
+            guides = []
+            for i in (1, 2):
+                gp = pnt(f"guide{i}_point")
+                link = pair(f"guide{i}_link", optional=True)
+                guides.append((gp, link, math.radians(g.number(f"guide{i}_angle", 0.0)),
+                               g.number(f"guide{i}_offset", 0.0)))
+            if guides[0][1] is None and guides[1][1] is None and \
+                    abs(math.sin(guides[1][2] - guides[0][2])) < PARALLEL_SIN:
+                raise g.error("guide2_angle", "the two guides are parallel (guide1_angle = "
+                              f"{math.degrees(guides[0][2]):g} deg, guide2_angle = "
+                              f"{math.degrees(guides[1][2]):g} deg): the blocks' lines never "
+                              "meet in one point")
+            b = g.string("B")
+            define(g, "B", b)
+            grp = PRP(b, guides[0][0], guides[0][2], guides[1][0], guides[1][2],
+                      guides[0][3], guides[1][3], guides[0][1], guides[1][1], gname)
+        elif t == "RPP":
+            a, gp = pnt("A"), pnt("guide_point")
+            link = pair("guide_link", optional=True)
+            slot = math.radians(g.number("slot_angle", 90.0))
+            if abs(math.sin(slot)) < PARALLEL_SIN:
+                raise g.error("slot_angle", f"the slot runs along the guide "
+                              f"({math.degrees(slot):g} deg from it): the block cannot move "
+                              "the yoke")
+            b = g.string("B")
+            define(g, "B", b)
+            grp = RPP(a, b, gp, math.radians(g.number("guide_angle", 0.0)), slot,
+                      g.number("guide_offset", 0.0), g.number("slot_offset", 0.0), link, gname)
         elif t == "class3":
             inp, p6, p7 = pnt("input"), pnt("pivot_4"), pnt("pivot_5")
             joints = g.strings("joints", n=3)

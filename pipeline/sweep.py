@@ -448,7 +448,7 @@ class SweepFile:
     def _reference(self, f):
         """The study's own design (the reference mechanism), evaluated the same way."""
         spec, plan = self.spec, self.problem.plan
-        x = np.array([[plan.par[plan.param(v.param)] for v in spec.variables]])
+        x = np.array([[plan.par[plan.param(v.param)] / v.factor for v in spec.variables]])
         st, met = self.problem.evaluate_rows(np.ascontiguousarray(plan.par[None, :]), False)
         g = f.create_group("reference")
         g.attrs["long_name"] = "the study's reference design, evaluated like every candidate"

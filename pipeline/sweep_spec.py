@@ -78,6 +78,8 @@ class Variable:
     low: float
     high: float
     units: str
+    factor: float = 1.0     # the parameter's (plan) units per variable unit: pi/180 for an
+                            # angle in deg (the plan holds radians)
 
 
 @dataclass(frozen=True)
@@ -191,7 +193,9 @@ def parse_sweep(root, mech, output) -> SweepSpec:
         if param not in plan.par_names:
             close = [p for p in plan.par_names if not p.startswith("S[")]
             raise v.error("param", f"no mechanism parameter {param!r}; known: {', '.join(close)}")
-        ref = float(plan.par[plan.param(param)])
+        units = v.string("units", "deg" if param.endswith(("phiM0", "angle")) else "mm")
+        factor = math.pi / 180.0 if units == "deg" else 1.0
+        ref = float(plan.par[plan.param(param)]) / factor
         low = v.number("min", ref - spread * abs(ref))
         high = v.number("max", ref + spread * abs(ref))
         if not low < high:
@@ -203,9 +207,8 @@ def parse_sweep(root, mech, output) -> SweepSpec:
             raise sec.error("spread", f"{param} is {domain[2]}, but its default bounds reach "
                                       f"{low:g} (reference {ref:g} -/+ spread {spread:g}); "
                                       f"give variables.{name}.min and max")
-        units = v.string("units", "deg" if param.endswith(("phiM0", "angle")) else "mm")
         v.done()
-        variables.append(Variable(name, param, low, high, units))
+        variables.append(Variable(name, param, low, high, units, factor))
     vs.done()
     if not variables:
         raise sec.error("variables", "a sweep needs at least one design variable")
@@ -493,7 +496,7 @@ def parameter_rows(plan, spec: SweepSpec, x: np.ndarray) -> np.ndarray:
     base = plan.par
     pars = np.repeat(base[None, :], x.shape[0], axis=0)
     for j, v in enumerate(spec.variables):
-        pars[:, plan.param(v.param)] = x[:, j]
+        pars[:, plan.param(v.param)] = x[:, j] * v.factor
     for ms in spec.mass_model:
         k = plan.param(ms.length_param)
         mass = plan.param(f"{ms.body}.mass")
@@ -509,7 +512,7 @@ def apply_design(mech, spec: SweepSpec, x) -> "Mechanism":
     the mass model applied: the scene path's twin of ``parameter_rows``."""
     from dataclasses import replace
     base_plan = mech.compile()
-    values = {v.param: float(xi) for v, xi in zip(spec.variables, x)}
+    values = {v.param: float(xi) * v.factor for v, xi in zip(spec.variables, x)}
     fixed = dict(mech.fixed)
     crank = mech.crank
     groups = list(mech.groups)

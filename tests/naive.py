@@ -37,6 +37,7 @@ from __future__ import annotations
 import inspect
 import math
 
+import mpmath
 import numpy as np
 from scipy.optimize import fsolve
 
@@ -476,17 +477,22 @@ def naive_c_lagrange_terms(phi1, M1=0.025, h=DEFAULT_H):
 # ---------------------------------------------------------------------------
 
 
-def _kinetostatics(bodies, joints, omega1, eps1):
+def _kinetostatics(bodies, joints, omega1, eps1, slides=()):
     """Generic assembly.
 
     bodies: list of dicts with keys name, S (m), aS (m/s^2), vS (m/s), m, J,
             omega, eps, ext (list of (point m, force N)), crank (bool).
     joints: list of (name, first body or None for ground, second body,
             point (m)).  R = force of first on second.
+    slides: list of (name, guide body or None for ground, slider body,
+            direction angle rad): the guide pushes the slider with N along the
+            direction turned +90 deg, at the slider's centre of mass, and turns
+            it with the couple C; the guide takes -N and -C.  out[name] = (N, C).
     """
     nb = len(bodies)
     nj = len(joints)
-    nu = 2 * nj + 1
+    ns = len(slides)
+    nu = 2 * nj + 2 * ns + 1
     idx = {b["name"]: i for i, b in enumerate(bodies)}
     Amat = np.zeros((3 * nb, nu))
     rhs = np.zeros(3 * nb)
@@ -503,7 +509,7 @@ def _kinetostatics(bodies, joints, omega1, eps1):
         rhs[3 * i: 3 * i + 2] = -F
         rhs[3 * i + 2] = -M
         if b["crank"]:
-            Amat[3 * i + 2, 2 * nj] = 1.0
+            Amat[3 * i + 2, 2 * nj + 2 * ns] = 1.0
     for j, (_name, first, second, pt) in enumerate(joints):
         for body, sgn in ((first, -1.0), (second, 1.0)):
             if body is None:
@@ -514,9 +520,23 @@ def _kinetostatics(bodies, joints, omega1, eps1):
             Amat[3 * i + 1, 2 * j + 1] += sgn
             Amat[3 * i + 2, 2 * j] += -sgn * r[1]
             Amat[3 * i + 2, 2 * j + 1] += sgn * r[0]
+    for k, (_name, guide, slider, theta) in enumerate(slides):
+        n = np.array([-math.sin(theta), math.cos(theta)])
+        at = bodies[idx[slider]]["S"]
+        for body, sgn in ((guide, -1.0), (slider, 1.0)):
+            if body is None:
+                continue
+            i = idx[body]
+            r = at - bodies[i]["S"]
+            Amat[3 * i, 2 * nj + 2 * k] += sgn * n[0]
+            Amat[3 * i + 1, 2 * nj + 2 * k] += sgn * n[1]
+            Amat[3 * i + 2, 2 * nj + 2 * k] += sgn * cross(r, n)
+            Amat[3 * i + 2, 2 * nj + 2 * k + 1] += sgn
     x = np.linalg.solve(Amat, rhs)
     out = {name: x[2 * j: 2 * j + 2].copy() for j, (name, *_r) in enumerate(joints)}
-    out["M_bal"] = float(x[2 * nj])
+    for k, (name, *_r) in enumerate(slides):
+        out[name] = x[2 * nj + 2 * k: 2 * nj + 2 * k + 2].copy()
+    out["M_bal"] = float(x[2 * nj + 2 * ns])
     out["F"] = F_all
     out["M"] = M_all
     out["v_S"] = {b["name"]: b["vS"] for b in bodies}
@@ -698,3 +718,293 @@ def naive_mech_b_peak(n=12, omega1=-94.4, eps1=0.0):
             if r > best[0]:
                 best = (r, f"R{k}", phi / DEG)
     return best
+
+
+# ---------------------------------------------------------------------------
+# Mechanisms with the slider dyads PRP and RPP: 30-digit solves
+# ---------------------------------------------------------------------------
+# The constraint equations of the whole mechanism (crank, RRR dyad, the slider
+# dyad) are solved together by a plain Newton iteration in mpmath at MP_DPS
+# digits, its Jacobian by forward differences at that precision; the analogs
+# are 4th-order central differences of those solutions with a step of 1e-15
+# rad (truncation ~1e-60, rounding ~1e-30 at MP_DPS digits).  The float start
+# comes from solve_rrr (fsolve) and a least-squares solve of the guides'
+# equations, which are linear in the slider point.  A guide line i: the points
+# X with (X - G_i) . n_i = e_i, n_i its direction turned +90 deg.
+
+MP_DPS = 60
+
+
+def _mp_vec(x):
+    return [mpmath.mpf(x[0]), mpmath.mpf(x[1])]
+
+
+def _mp_newton(residual, x0):
+    """Newton on residual(x) = 0 (lists of mpf) from x0; forward-difference
+    Jacobian at MP_DPS digits.  Raises if the residual does not fall below
+    1e-45 (relative to the unknowns' size)."""
+    x = [mpmath.mpf(float(v)) for v in x0]
+    n = len(x)
+    h = mpmath.mpf(10) ** (-(MP_DPS // 2))
+    for _ in range(30):
+        f = residual(x)
+        scale = max(mpmath.mpf(1), max(abs(v) for v in x))
+        if max(abs(v) for v in f) < mpmath.mpf(10) ** (-(MP_DPS - 15)) * scale:
+            return x
+        jac = mpmath.matrix(n, n)
+        for j in range(n):
+            xh = list(x)
+            xh[j] += h
+            fh = residual(xh)
+            for i in range(n):
+                jac[i, j] = (fh[i] - f[i]) / h
+        dx = mpmath.lu_solve(jac, mpmath.matrix(f))
+        x = [x[i] - dx[i] for i in range(n)]
+    raise ValueError("mp Newton did not converge")
+
+
+def _unit(v):
+    r = mpmath.sqrt(v[0] ** 2 + v[1] ** 2)
+    return [v[0] / r, v[1] / r]
+
+
+def _turn(u, a):
+    """u turned by the angle a (mp)."""
+    c, s = mpmath.cos(a), mpmath.sin(a)
+    return [c * u[0] - s * u[1], s * u[0] + c * u[1]]
+
+
+def _off_line(X, G, u, e):
+    """(X - G) . n - e, n = u turned +90 deg: zero on the guide line."""
+    return (X[0] - G[0]) * (-u[1]) + (X[1] - G[1]) * u[0] - e
+
+
+def _line_guess(G1, u1, e1, G2, u2, e2):
+    """Float least-squares point of two guide lines (a start for Newton)."""
+    n1 = np.array([-u1[1], u1[0]], float)
+    n2 = np.array([-u2[1], u2[0]], float)
+    rhs = np.array([e1 + n1 @ np.asarray(G1, float), e2 + n2 @ np.asarray(G2, float)])
+    return np.linalg.lstsq(np.array([n1, n2]), rhs, rcond=None)[0]
+
+
+class SliderChain:
+    """Crank P1-P2, then a four-bar dyad P2-P3-P4 (lengths L23, L43, mode W as
+    solve_rrr) when ``fourbar``, then the slider dyad at P5:
+
+    * ``kind = "PRP"``: P5 on guide 1 (through g1 along a1 from the rocker
+      P4->P3 if ``g1_rocker``, else along a1 from the crank P1->P2 if
+      ``g1_crank``, else at the absolute a1; offset e1) and on guide 2 (through
+      the fixed point G2 at the absolute a2, offset e2);
+    * ``kind = "RPP"``: the yoke point P5 on the guide (through g1 at a1, from
+      the rocker if ``g1_rocker``; offset e1) and the crank tip P2 on the slot
+      through P5 at ``slot`` from the guide, offset e_s: (P2 - P5) . n_s = e_s.
+
+    ``extra(points)`` adds points computed from the solved ones (centres of
+    mass).  d: dict of the data; angles in rad, lengths in mm."""
+
+    def __init__(self, kind, d, extra=None):
+        self.kind = kind
+        self.d = d
+        self.extra = extra
+
+    def _crank(self, phi):
+        d = self.d
+        a = phi + d["phiM0"]
+        return [d["L12"] * mpmath.cos(a), d["L12"] * mpmath.sin(a)]
+
+    def _guide1(self, P2, C):
+        d = self.d
+        if d.get("g1_rocker"):
+            G = _mp_vec(d["P4"])
+            u = _turn(_unit([C[0] - G[0], C[1] - G[1]]), d["a1"])
+        elif d.get("g1_crank"):
+            G = [mpmath.mpf(0), mpmath.mpf(0)]
+            u = _turn(_unit(P2), d["a1"])
+        else:
+            G = _mp_vec(d["G1"])
+            u = [mpmath.cos(d["a1"]), mpmath.sin(d["a1"])]
+        return G, u
+
+    def _split(self, x):
+        if self.d.get("fourbar"):
+            return [x[0], x[1]], [x[2], x[3]]
+        return None, [x[0], x[1]]
+
+    def residual(self, x, phi):
+        d = self.d
+        P2 = self._crank(phi)
+        C, B = self._split(x)
+        out = []
+        if C is not None:
+            P4 = _mp_vec(d["P4"])
+            out += [(C[0] - P2[0]) ** 2 + (C[1] - P2[1]) ** 2 - mpmath.mpf(d["L23"]) ** 2,
+                    (C[0] - P4[0]) ** 2 + (C[1] - P4[1]) ** 2 - mpmath.mpf(d["L43"]) ** 2]
+        G1, u1 = self._guide1(P2, C)
+        out.append(_off_line(B, G1, u1, mpmath.mpf(d["e1"])))
+        if self.kind == "PRP":
+            u2 = [mpmath.cos(d["a2"]), mpmath.sin(d["a2"])]
+            out.append(_off_line(B, _mp_vec(d["G2"]), u2, mpmath.mpf(d["e2"])))
+        else:
+            us = _turn(u1, d["slot"])
+            out.append(_off_line(P2, B, us, mpmath.mpf(d["e_s"])))
+        return out
+
+    def guess(self, phi):
+        """Float start: solve_rrr for P3, least squares for P5."""
+        d = self.d
+        P2 = d["L12"] * e(phi + d["phiM0"])
+        x = []
+        C = None
+        if d.get("fourbar"):
+            C = solve_rrr(P2, np.asarray(d["P4"], float), d["L23"], d["L43"], W=d["W"])
+            x += list(C)
+        with mpmath.workdps(20):
+            G1, u1 = self._guide1(_mp_vec(P2), _mp_vec(C) if C is not None else None)
+            G1, u1 = [float(v) for v in G1], [float(v) for v in u1]
+            if self.kind == "PRP":
+                a2 = float(d["a2"])
+                B = _line_guess(G1, u1, d["e1"], d["G2"], (math.cos(a2), math.sin(a2)), d["e2"])
+            else:
+                us = [float(v) for v in _turn(u1, d["slot"])]
+                # P2 on the slot through B: (B - P2) . n_s = -e_s
+                B = _line_guess(G1, u1, d["e1"], P2, us, -d["e_s"])
+        return x + list(B)
+
+    def points(self, x, phi):
+        d = self.d
+        P2 = self._crank(phi)
+        C, B = self._split(x)
+        pts = {"P1": [mpmath.mpf(0), mpmath.mpf(0)], "P2": P2, "P5": B}
+        if C is not None:
+            pts["P3"] = C
+            pts["P4"] = _mp_vec(d["P4"])
+        if self.extra is not None:
+            pts.update(self.extra(pts, d))
+        return pts
+
+
+def mp_analogs(chain, phi, links=(), h="1e-15"):
+    """Positions, first and second analogs (float arrays) of every point of
+    ``chain`` at phi (rad): {"pos": {name: (2,)}, "d1": ..., "d2": ...}, and
+    the angle of every link "a_b" (Pa -> Pb) with its analogs ("ang",
+    "ang_d1", "ang_d2"), differenced the same way."""
+    with mpmath.workdps(MP_DPS):
+        h = mpmath.mpf(h)
+        phi = mpmath.mpf(phi)
+        x0 = chain.guess(float(phi))
+        x0 = _mp_newton(lambda x: chain.residual(x, phi), x0)
+        sols = {}
+        for k in (-2, -1, 0, 1, 2):
+            p = phi + k * h
+            x = x0 if k == 0 else _mp_newton(lambda x: chain.residual(x, p), x0)
+            sols[k] = chain.points(x, p)
+        out = {"pos": {}, "d1": {}, "d2": {}}
+        for name in sols[0]:
+            f = {k: sols[k][name] for k in sols}
+            out["pos"][name] = np.array([float(v) for v in f[0]])
+            out["d1"][name] = np.array([float((f[-2][i] - 8 * f[-1][i] + 8 * f[1][i] - f[2][i])
+                                              / (12 * h)) for i in range(2)])
+            out["d2"][name] = np.array([float((-f[-2][i] + 16 * f[-1][i] - 30 * f[0][i]
+                                               + 16 * f[1][i] - f[2][i]) / (12 * h * h))
+                                        for i in range(2)])
+        out.update(ang={}, ang_d1={}, ang_d2={})
+        for link in links:
+            a, b = ("P" + q for q in link.split("_"))
+            t = {k: mpmath.atan2(sols[k][b][1] - sols[k][a][1], sols[k][b][0] - sols[k][a][0])
+                 for k in sols}
+            for k in t:                 # unwrap about the centre (across +-pi)
+                if t[k] - t[0] > mpmath.pi:
+                    t[k] -= 2 * mpmath.pi
+                elif t[k] - t[0] < -mpmath.pi:
+                    t[k] += 2 * mpmath.pi
+            out["ang"][link] = float(t[0])
+            out["ang_d1"][link] = float((t[-2] - 8 * t[-1] + 8 * t[1] - t[2]) / (12 * h))
+            out["ang_d2"][link] = float((-t[-2] + 16 * t[-1] - 30 * t[0] + 16 * t[1] - t[2])
+                                        / (12 * h * h))
+    return out
+
+
+# mechanism E: the slotted rocker and slider of studies/slotted_rocker_prp.toml
+E_DATA = dict(L12=15.0, phiM0=0.0, fourbar=True, P4=(38.0, 0.0), L23=41.0, L43=40.0, W=1,
+              g1_rocker=True, a1=0.0, e1=0.0, G2=(38.0, 50.0), a2=0.0, e2=0.0)
+E_LINKS = ["1_2", "2_3", "4_3"]
+# body: (m kg, J_S kg m^2, angle link or None, joints), centres of mass in _e_com
+E_MASS = {"crank AB": (0.4, 2e-5, "1_2"), "coupler BC": (0.6, 1e-4, "2_3"),
+          "rocker DC": (0.9, 3.5e-4, "4_3"), "block": (0.03, 2e-6, "4_3"),
+          "slider": (0.25, 0.0, None)}
+
+
+def _mp_along(base, tip, length):
+    u = _unit([tip[0] - base[0], tip[1] - base[1]])
+    return [base[0] + length * u[0], base[1] + length * u[1]]
+
+
+def _e_com(pts, d):
+    return {"S[crank AB]": _mp_along(pts["P1"], pts["P2"], 5),
+            "S[coupler BC]": _mp_along(pts["P2"], pts["P3"], mpmath.mpf("20.5")),
+            "S[rocker DC]": _mp_along(pts["P4"], pts["P3"], 30),
+            "S[block]": list(pts["P5"]),
+            "S[slider]": [pts["P5"][0], pts["P5"][1] + 8]}
+
+
+def naive_forces_e(phi1, omega1=60.0, eps1=0.0, d=E_DATA):
+    """Reactions R1..R5 (N; first-named body on second), the slides' (N, C)
+    and M_bal of mechanism E: R1 ground->crank (P1), R2 crank->coupler (P2),
+    R3 coupler->rocker (P3), R4 ground->rocker (P4), R5 block->slider (P5);
+    slide[block] the rocker's slot on the block, slide[slider] the frame's
+    guide on the slider.  Load on the slider at P5: (-40 (1 + 0.5 cos phi1), 0)."""
+    an = mp_analogs(SliderChain("PRP", d, _e_com), phi1, links=E_LINKS)
+    f5 = np.array([-40.0 * (1.0 + 0.5 * math.cos(phi1)), 0.0])
+    bodies = []
+    for name, (m, J, lk) in E_MASS.items():
+        s = f"S[{name}]"
+        bodies.append(dict(
+            name=name, m=m, J=J, crank=(name == "crank AB"),
+            ext=[(an["pos"]["P5"] / 1000.0, f5)] if name == "slider" else [],
+            S=an["pos"][s] / 1000.0, vS=an["d1"][s] / 1000.0 * omega1,
+            aS=(an["d2"][s] * omega1 ** 2 + an["d1"][s] * eps1) / 1000.0,
+            omega=an["ang_d1"][lk] * omega1 if lk else 0.0,
+            eps=an["ang_d2"][lk] * omega1 ** 2 + an["ang_d1"][lk] * eps1 if lk else 0.0))
+    P = {k: an["pos"][k] / 1000.0 for k in ("P1", "P2", "P3", "P4", "P5")}
+    joints = [("R1", None, "crank AB", P["P1"]), ("R2", "crank AB", "coupler BC", P["P2"]),
+              ("R3", "coupler BC", "rocker DC", P["P3"]), ("R4", None, "rocker DC", P["P4"]),
+              ("R5", "block", "slider", P["P5"])]
+    slides = [("slide[block]", "rocker DC", "block", an["ang"]["4_3"] + d["a1"]),
+              ("slide[slider]", None, "slider", d["a2"])]
+    return _kinetostatics(bodies, joints, omega1, eps1, slides)
+
+
+# mechanism F: the Scotch yoke of studies/scotch_yoke_rpp.toml
+F_DATA = dict(L12=12.0, phiM0=0.0, G1=(0.0, 0.0), a1=0.0, e1=0.0, slot=math.pi / 2, e_s=0.0)
+F_MASS = {"crank": (0.3, 1.5e-5, "1_2"), "block": (0.02, 1e-6, None),
+          "yoke": (0.35, 0.0, None)}
+
+
+def _f_com(pts, d):
+    return {"S[crank]": _mp_along(pts["P1"], pts["P2"], 3), "S[block]": list(pts["P2"]),
+            "S[yoke]": [pts["P5"][0] + 40, pts["P5"][1]],
+            "P4": [pts["P5"][0] + 80, pts["P5"][1]]}
+
+
+def naive_forces_f(phi1, omega1=100.0, eps1=0.0, d=F_DATA):
+    """Reactions R1 (ground->crank, P1), R2 (crank->block, P2), the slides
+    (N, C) slide[block] (the yoke's slot on the block) and slide[yoke] (the
+    frame on the yoke), M_bal of the Scotch yoke; its point P3 is this chain's
+    P5.  Load on the yoke at P4: (-25 sign(sin phi1), -5) N."""
+    an = mp_analogs(SliderChain("RPP", d, _f_com), phi1, links=["1_2"])
+    f4 = np.array([-25.0 * np.sign(math.sin(phi1)), -5.0])
+    bodies = []
+    for name, (m, J, lk) in F_MASS.items():
+        s = f"S[{name}]"
+        bodies.append(dict(
+            name=name, m=m, J=J, crank=(name == "crank"),
+            ext=[(an["pos"]["P4"] / 1000.0, f4)] if name == "yoke" else [],
+            S=an["pos"][s] / 1000.0, vS=an["d1"][s] / 1000.0 * omega1,
+            aS=(an["d2"][s] * omega1 ** 2 + an["d1"][s] * eps1) / 1000.0,
+            omega=an["ang_d1"][lk] * omega1 if lk else 0.0,
+            eps=an["ang_d2"][lk] * omega1 ** 2 + an["ang_d1"][lk] * eps1 if lk else 0.0))
+    joints = [("R1", None, "crank", an["pos"]["P1"] / 1000.0),
+              ("R2", "crank", "block", an["pos"]["P2"] / 1000.0)]
+    slides = [("slide[block]", "yoke", "block", d["a1"] + d["slot"]),
+              ("slide[yoke]", None, "yoke", d["a1"])]
+    return _kinetostatics(bodies, joints, omega1, eps1, slides)

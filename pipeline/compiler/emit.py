@@ -170,6 +170,53 @@ class RPREmitter(Emitter):
                 f"{self.k('offset')}, {self.k('guide_length')}, {self.k('W')}, order, sing, slack)"]
 
 
+def _guide_link(e, j):
+    """Point index constants of a guide link's ends at gidx columns j, j + 1
+    ("-1, -1" for a guide of fixed direction)."""
+    if e.ix[j] < 0:
+        return "-1", "-1"
+    return e.p(j), e.p(j + 1)
+
+
+def _guide_words(e, j, link_j, angle_key):
+    if e.ix[link_j] < 0:
+        return f"through {e.pname(j)} at the absolute {angle_key}"
+    return (f"through {e.pname(j)} along {e.pname(link_j)}->{e.pname(link_j + 1)} "
+            f"+ {angle_key}")
+
+
+class PRPEmitter(Emitter):
+    watched = True
+    code = kc.G_PRP
+
+    def careful(self):
+        a1, b1 = _guide_link(self, 1)
+        a2, b2 = _guide_link(self, 4)
+        k = self.k
+        return [f"# {self.title()}: {self.pname(6)} where the guide lines of two blocks meet",
+                "# (linear: B from a 2x2 system);",
+                f"# guide 1 {_guide_words(self, 0, 1, 'guide1_angle')},",
+                f"# guide 2 {_guide_words(self, 3, 4, 'guide2_angle')}",
+                f"st, m = prp(pos, d1, d2, {self.p(0)}, {a1}, {b1}, {self.p(3)}, {a2}, {b2}, "
+                f"{self.p(6)}, {k('guide1_angle')}, {k('guide1_offset')}, {k('guide2_angle')}, "
+                f"{k('guide2_offset')}, order, sing)"]
+
+
+class RPPEmitter(Emitter):
+    watched = True
+    code = kc.G_RPP
+
+    def careful(self):
+        ga, gb = _guide_link(self, 2)
+        k = self.k
+        return [f"# {self.title()}: yoke point {self.pname(4)} on the guide",
+                f"# {_guide_words(self, 1, 2, 'guide_angle')}, its slot through the block "
+                f"at {self.pname(0)}",
+                f"st, m = rpp(pos, d1, d2, {self.p(0)}, {self.p(1)}, {ga}, {gb}, {self.p(4)}, "
+                f"{k('guide_angle')}, {k('guide_offset')}, {k('slot_angle')}, "
+                f"{k('slot_offset')}, order, sing)"]
+
+
 class AttachEmitter(Emitter):
     code = kc.G_ATTACH
 
@@ -270,7 +317,7 @@ class ClassIIIEmitter(Emitter):
 
 
 EMITTERS = {e.code: e for e in (CrankEmitter, RRREmitter, RRPEmitter, RPREmitter,
-                                AttachEmitter, ClassIIIEmitter)}
+                                PRPEmitter, RPPEmitter, AttachEmitter, ClassIIIEmitter)}
 
 
 def emitters_for(plan, names):

@@ -51,7 +51,7 @@ from pipeline.kernels.continuation import (accept, closes, copy2, predict, resto
                                            step_limit, work, wrap)
 from pipeline.kernels.dynamics import drive, lagrange_terms, potential
 from pipeline.kernels.forces import applied_loads, force_work, gauss_solve, kinetostatics
-from pipeline.kernels.groups import attach, crank, rpr, rrp, rrr
+from pipeline.kernels.groups import attach, crank, prp, rpp, rpr, rrp, rrr
 from pipeline.kernels.metrics import (dwell_error, dwell_lanes, dyad_transmission, law_error,
                                       lead_transmission, relative_angle)
 from pipeline.kernels.sweep import (M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, M_PEAK_R,

@@ -68,9 +68,11 @@ G_RRP = 2
 G_RPR = 3
 G_CLASS3 = 4
 G_ATTACH = 5
+G_PRP = 6
+G_RPP = 7
 
 GROUP_NAMES = {G_CRANK: "crank", G_RRR: "RRR", G_RRP: "RRP", G_RPR: "RPR",
-               G_CLASS3: "class3", G_ATTACH: "attach"}
+               G_CLASS3: "class3", G_ATTACH: "attach", G_PRP: "PRP", G_RPP: "RPP"}
 
 # ---- what to compute --------------------------------------------------------
 POSITIONS = 0

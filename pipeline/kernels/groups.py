@@ -1,4 +1,4 @@
-"""Structural groups: the crank, class II dyads (RRR, RRP, RPR), attached points.
+"""Structural groups: the crank, class II dyads (RRR, RRP, RPR, PRP, RPP), attached points.
 
 Every group reads already-solved points from ``pos``/``d1``/``d2`` (shape
 (n_points, 2): position, first and second analogs with respect to phi1) and
@@ -234,6 +234,104 @@ def rpr(pos, d1, d2, ia, ic, ib, offset, guide_length, w, order, sing_tol, slack
             d2[ib, 0] = d2[ic, 0] + guide_length * (th2 * nx - th1 * th1 * ux)
             d2[ib, 1] = d2[ic, 1] + guide_length * (th2 * ny - th1 * th1 * uy)
     return status, margin
+
+
+@njit(**JIT)
+def _line_meet(pos, d1, d2, ib, g1, th1, t11, t12, e1, g2, th2, t21, t22, e2, order, sing_tol):
+    """B where two guide lines meet: line i runs through the known point g_i
+    (its analogs in d1/d2) with direction u_i = e(th_i) (analogs t_i1, t_i2) at
+    the perpendicular offset e_i along n_i = e(th_i + 90 deg), i.e.
+    (B - G_i) . n_i = e_i.  The two conditions are linear in B:
+
+        B = G1 + e1 n1 + s1 u1,  s1 = (e2 - e1 n1.n2 - (G1 - G2).n2) / (u1.n2);
+
+    differentiated, n_i . B' = n_i . G_i' + t_i1 s_i and
+    n_i . B'' = n_i . G_i'' + 2 t_i1 (B' - G_i') . u_i + t_i2 s_i + t_i1^2 e_i,
+    s_i = (B - G_i) . u_i: two 2x2 systems with the matrix rows n1, n2.
+    Returns (status, margin), margin = |sin| of the angle between the lines
+    (|u1 x u2|, 0 where they are parallel: no meet, or no unique one)."""
+    u1x = math.cos(th1)
+    u1y = math.sin(th1)
+    u2x = math.cos(th2)
+    u2y = math.sin(th2)
+    n1x = -u1y
+    n1y = u1x
+    n2x = -u2y
+    n2y = u2x
+    den = u1x * n2x + u1y * n2y            # u1 . n2 = -(u1 x u2)
+    margin = abs(den)
+    if not (margin >= sing_tol):           # parallel guides (NaN-safe)
+        _nan_point(pos, d1, d2, ib)
+        return SINGULAR, margin
+    gx = pos[g1, 0] - pos[g2, 0]
+    gy = pos[g1, 1] - pos[g2, 1]
+    s1 = (e2 - e1 * (n1x * n2x + n1y * n2y) - (gx * n2x + gy * n2y)) / den
+    bx = pos[g1, 0] + e1 * n1x + s1 * u1x
+    by = pos[g1, 1] + e1 * n1y + s1 * u1y
+    pos[ib, 0] = bx
+    pos[ib, 1] = by
+    if order >= 1:
+        s2 = (bx - pos[g2, 0]) * u2x + (by - pos[g2, 1]) * u2y
+        r1 = n1x * d1[g1, 0] + n1y * d1[g1, 1] + t11 * s1
+        r2 = n2x * d1[g2, 0] + n2y * d1[g2, 1] + t21 * s2
+        vx, vy = solve2(n1x, n1y, n2x, n2y, r1, r2)
+        d1[ib, 0] = vx
+        d1[ib, 1] = vy
+        if order >= 2:
+            r1 = (n1x * d2[g1, 0] + n1y * d2[g1, 1]
+                  + 2.0 * t11 * ((vx - d1[g1, 0]) * u1x + (vy - d1[g1, 1]) * u1y)
+                  + t12 * s1 + t11 * t11 * e1)
+            r2 = (n2x * d2[g2, 0] + n2y * d2[g2, 1]
+                  + 2.0 * t21 * ((vx - d1[g2, 0]) * u2x + (vy - d1[g2, 1]) * u2y)
+                  + t22 * s2 + t21 * t21 * e2)
+            ax, ay = solve2(n1x, n1y, n2x, n2y, r1, r2)
+            d2[ib, 0] = ax
+            d2[ib, 1] = ay
+    return OK, margin
+
+
+@njit(**JIT)
+def prp(pos, d1, d2, ig1, ga1, gb1, ig2, ga2, gb2, ib, angle1, offset1, angle2, offset2,
+        order, sing_tol):
+    """PRP dyad: two blocks joined by the revolute B, each sliding on a known
+    guide.  Guide i runs through the known point G_i with a fixed direction
+    (ga_i < 0: the absolute ``angle_i``) or one that turns with the link
+    ga_i->gb_i (``angle_i`` relative to it); block i carries B at the
+    perpendicular distance ``offset_i`` from its guide (on the +90 deg side).
+    B is where the two lines of B meet (``_line_meet``); the margin |sin| of
+    the angle between the guides is 0 where they are parallel (SINGULAR)."""
+    th1, t11, t12 = _direction(pos, d1, d2, ga1, gb1, angle1, order)
+    th2, t21, t22 = _direction(pos, d1, d2, ga2, gb2, angle2, order)
+    if not (math.isfinite(th1) and math.isfinite(th2)):   # a guide link of no length
+        _nan_point(pos, d1, d2, ib)
+        return SINGULAR, 0.0
+    return _line_meet(pos, d1, d2, ib, ig1, th1, t11, t12, offset1, ig2, th2, t21, t22,
+                      offset2, order, sing_tol)
+
+
+@njit(**JIT)
+def rpp(pos, d1, d2, ia, ig, ga, gb, ib, guide_angle, guide_offset, slot_angle, slot_offset,
+        order, sing_tol):
+    """RPP dyad (Scotch yoke): a block pinned at the known point A slides in a
+    slot of the yoke, and the yoke slides on a guide.  The guide runs through
+    the known point G with a fixed direction (ga < 0: absolute
+    ``guide_angle``) or one that turns with the link ga->gb (``guide_angle``
+    relative to it); the yoke's reference point B travels on the line at the
+    perpendicular distance ``guide_offset`` from it.  The slot is fixed in the
+    yoke at ``slot_angle`` from the guide, and A runs on it at the distance
+    ``slot_offset`` from the slot's line through B.  So B is where the yoke's
+    line and the slot's line through A (shifted back by the offset) meet:
+
+        (B - G) . n_g = guide_offset,  (B - A) . n_s = -slot_offset,
+
+    n = the direction turned +90 deg.  The margin |sin slot_angle| does not
+    change with the crank (0: the slot runs along the guide, SINGULAR)."""
+    th, t1, t2 = _direction(pos, d1, d2, ga, gb, guide_angle, order)
+    if not math.isfinite(th):
+        _nan_point(pos, d1, d2, ib)
+        return SINGULAR, 0.0
+    return _line_meet(pos, d1, d2, ib, ig, th, t1, t2, guide_offset, ia, th + slot_angle,
+                      t1, t2, -slot_offset, order, sing_tol)
 
 
 @njit(**JIT)
