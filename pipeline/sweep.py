@@ -121,8 +121,9 @@ class SweepProblem:
         """The sweep's CUDA kernels on this process's GPU (made once; not pickled)."""
         g = self.__dict__.get("_gpu")
         if g is None:
-            from .gpu import GpuSweep
-            g = self.__dict__["_gpu"] = GpuSweep(self)
+            from .gpu import BATCH, GpuSweep
+            # a launch no larger than a chunk: device memory follows --chunk-size
+            g = self.__dict__["_gpu"] = GpuSweep(self, batch=min(BATCH, self.spec.chunk_size))
         return g
 
     def __getstate__(self):
