@@ -197,12 +197,20 @@ class GpuSweep:
         self.stage = [self._staging() for _ in range(STREAMS)]
 
     def _work_arrays(self):
-        """One set of per-thread work arrays (rows: threads of a batch)."""
-        out = []
-        for name, dims, dtype in self.mod.work_shapes(len(self.problem.phis),
-                                                      self.problem.dwell_w):
-            out.append(cuda.device_array((self.batch,) + dims, np.dtype(dtype)))
-        return out
+        """One set of per-thread work arrays (rows: threads of a batch), each
+        shaped like the one the CPU path allocates: ``evaluate``'s own four,
+        then continuation.work, forces.force_work and the module's watch_work."""
+        from .kernels.continuation import work
+        from .kernels.forces import force_work
+        m, n, w = self.cpu, len(self.problem.phis), self.problem.dwell_w
+        like = [np.empty(n), np.empty(n + w + 1, np.int64), np.empty(n + w + 1, np.int64),
+                np.empty(n), *work(m.N_POINTS, m.N_GROUPS, m.N_TRIADS),
+                *force_work(m.N_BODIES, m.N_JOINTS, m.N_SLIDES), *m.watch_work()]
+        if len(like) != len(self.mod.WORK_NAMES):
+            raise RuntimeError(f"{self.mod.SOURCE_PATH}: the kernel takes "
+                               f"{len(self.mod.WORK_NAMES)} work arrays, the CPU path "
+                               f"allocates {len(like)}")
+        return [cuda.device_array((self.batch,) + a.shape, a.dtype) for a in like]
 
     def _staging(self):
         """Page-locked host buffers of one batch (asynchronous copies) and the

@@ -404,13 +404,15 @@ class SweepFile:
             d.attrs.update(units="1", long_name="status OK, constraints met, objectives and "
                                                 "bounded metrics finite")
             attach(d, ("candidate",))
-            d = c.create_dataset("forces_evaluated", (n,), "?", chunks=(ch,), **COMPRESSION, **grow)
+            d = c.create_dataset("forces_evaluated", (n,), "?", chunks=(ch,), **COMPRESSION,
+                                 **grow)
             d.attrs.update(units="1", long_name="force stage run: forces, peaks or transmission "
                                                 "angles, as asked (skipped for candidates "
                                                 "already infeasible)")
             attach(d, ("candidate",))
             d = c.create_dataset("constraints", (n, len(gnames)), "f8",
-                                 chunks=(ch, len(gnames)), **COMPRESSION, fillvalue=np.nan, **grow2)
+                                 chunks=(ch, len(gnames)), **COMPRESSION, fillvalue=np.nan,
+                                 **grow2)
             d.attrs.update(units=units_attr(constraint_units(self.has_margin, spec)),
                            long_name="constraints g <= 0", names=gnames)
             attach(d, ("candidate", "constraint"))
