@@ -8,6 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .kernels.inputs import ROTARY
+
 
 PIN_LENGTH_MM = 10.0       # DOMAIN.md section 5: pin of length 10 mm in bending
 PIN_SIGMA_MPA = 200.0      # allowed bending stress
@@ -51,11 +53,17 @@ class Reactions:
     phi: np.ndarray          # rad
     R: np.ndarray            # (n, n_joints, 2) N: force of the first body on the second
     slide: np.ndarray        # (n, n_slides, 2): normal force N, couple N*m
-    M_bal: np.ndarray        # (n,) N*m, on the crank
+    M_bal: np.ndarray        # (n,) N*m, delivered by the main shaft (the crank's moment
+                             # plus every input's share)
     body_loads: np.ndarray   # (n, n_bodies, 3): applied + inertia loads at S (N, N*m)
     joint_names: tuple
     slide_names: tuple
     body_names: tuple
+    # inputs besides the crank: (n, n_inputs, 2) = drive on the input (N*m for a
+    # rotary input, N along the guide for a slider input), its share of M_bal
+    drive: np.ndarray = None
+    input_names: tuple = ()
+    drive_units: tuple = ()  # per input: "N*m" (rotary) or "N" (slider)
 
     @property
     def magnitude(self):
@@ -85,6 +93,14 @@ class Reactions:
                 "prismatic pair: normal force and couple", dims=("phi1", "slide",
                                                                   "slide_component"),
                 slides=list(self.slide_names))
+        if self.input_names:
+            put(g, "input_drive", self.drive[:, :, 0], list(self.drive_units),
+                "drive of each input besides the crank: a moment on a rotary input, a force "
+                "along the guide of a slider input", dims=("phi1", "input"),
+                inputs=list(self.input_names))
+            put(g, "input_share", self.drive[:, :, 1], "N*m",
+                "each input's share of M_bal: its drive times dq/dphi1", dims=("phi1", "input"),
+                inputs=list(self.input_names))
         put(g, "body_loads", self.body_loads, ["N", "N", "N*m"],
             "applied and inertia loads reduced to the centre of mass",
             dims=("phi1", "body", "load_component"), bodies=list(self.body_names))
@@ -98,10 +114,12 @@ def scene_forces(mechanism, plan, curves) -> Reactions:
     nb, nj, ns = len(plan.body_names), len(plan.joint_names), len(plan.slide_names)
     body_loads = np.zeros((n, nb, 3))
     R = np.zeros((n, nj, 2))
-    S = np.zeros((n, ns, 2))
+    S = np.zeros((n, ns + plan.n_inputs, 2))
     M = np.zeros(n)
     from .compiler import kernels_for
     kernels_for(plan).forces_curve(plan.par, curves.pos, curves.d1, curves.d2, crank.omega1,
                                    crank.eps1, loads, body_loads, R, S, M)
-    return Reactions(curves.phi, R, S, M, body_loads, plan.joint_names, plan.slide_names,
-                     plan.body_names)
+    return Reactions(curves.phi, R, S[:, :ns], M, body_loads, plan.joint_names,
+                     plan.slide_names, plan.body_names, drive=S[:, ns:],
+                     input_names=plan.input_names,
+                     drive_units=tuple("N*m" if k == ROTARY else "N" for k in plan.input_kind))

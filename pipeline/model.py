@@ -7,12 +7,14 @@ parser converts from degrees), masses kg, moments of inertia kg*m^2.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .kernels import config as kc
+from .kernels import inputs as ik
 
 
 # ----------------------------------------------------------------- groups
@@ -155,6 +157,89 @@ class RPP:
 
 
 @dataclass(frozen=True)
+class Law:
+    """Motion law of an input against the cycle angle phi1
+    (``pipeline.kernels.inputs``): ``linear`` (q = phase + ratio phi1, a
+    geared second crank), ``harmonic`` or ``cycloidal`` (a rise by ``travel``
+    from ``start`` over ``rise`` rad of the cycle from ``phase``, and the
+    return), or ``table`` (a periodic cubic spline through ``table``:
+    (cycle angle, value) pairs, shifted by ``phase``).  Values are rad for a
+    rotary input, mm for a slider input; cycle angles rad."""
+    kind: str
+    ratio: float = 1.0
+    phase: float = 0.0
+    start: float = 0.0
+    travel: float = 0.0
+    rise: float = math.pi
+    table: tuple = ()
+
+    @property
+    def code(self):
+        from .kernels import inputs
+        return {v: k for k, v in inputs.LAW_NAMES.items()}[self.kind]
+
+    def parameters(self, rotary):
+        """(key, value) of the law's entries in the parameter row; angle keys
+        end in "angle" (a sweep reads them in degrees)."""
+        if self.kind == "linear":
+            return [("ratio", self.ratio), ("phase_angle", self.phase)]
+        if self.kind == "table":
+            return [("phase_angle", self.phase)]
+        start, travel = ("start_angle", "travel_angle") if rotary else ("start", "stroke")
+        return [(start, self.start), (travel, self.travel), ("phase_angle", self.phase),
+                ("rise_angle", self.rise)]
+
+    def spline(self):
+        """(knots (n + 1), coefficients (4, n)) of the periodic cubic spline
+        through the table, closed after one cycle (2 pi)."""
+        from scipy.interpolate import CubicSpline
+        t = np.array([p[0] for p in self.table], dtype=np.float64)
+        v = np.array([p[1] for p in self.table], dtype=np.float64)
+        t = np.append(t, t[0] + 2.0 * math.pi)
+        v = np.append(v, v[0])
+        s = CubicSpline(t, v, bc_type="periodic")
+        return s.x.copy(), np.ascontiguousarray(s.c)
+
+
+@dataclass(frozen=True)
+class RotaryInput:
+    """A link turned about the fixed ``pivot`` to the absolute angle given by
+    ``law`` of the cycle angle: ``tip`` = pivot + length e(q(phi1)).  An
+    oscillating rocker driven by a cam, or a second crank geared to the
+    first (linear law)."""
+    pivot: str
+    tip: str
+    length: float
+    law: Law
+    name: str = ""
+
+    def reads(self):
+        return (self.pivot,)
+
+    def writes(self):
+        return (self.tip,)
+
+
+@dataclass(frozen=True)
+class SliderInput:
+    """A block moved along a fixed guide by ``law`` of the cycle angle: the
+    guide runs through the fixed ``guide_point`` at the absolute direction
+    ``guide_angle``; ``block`` = guide_point + q(phi1) e(guide_angle).  A
+    linear actuator with a stroke law."""
+    guide_point: str
+    block: str
+    guide_angle: float
+    law: Law
+    name: str = ""
+
+    def reads(self):
+        return (self.guide_point,)
+
+    def writes(self):
+        return (self.block,)
+
+
+@dataclass(frozen=True)
 class ClassIII:
     """Triad of DOMAIN.md sections 3 and 5 (lead 2-3, ternary 3-4-5, leads 4-6, 5-7)."""
     input: str
@@ -198,7 +283,7 @@ class Attach:
         return (self.point,)
 
 
-Group = Crank | RRR | RRP | RPR | PRP | RPP | ClassIII | Attach
+Group = Crank | RRR | RRP | RPR | PRP | RPP | ClassIII | Attach | RotaryInput | SliderInput
 
 
 # ----------------------------------------------------------------- bodies and loads
@@ -296,6 +381,17 @@ class Plan:
     load_body: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     load_point: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     gravity: float = 9.81
+    # inputs besides the crank (pipeline.kernels.inputs), in solve order: their
+    # group, kind (ROTARY/SLIDER), law code, points (pivot, tip) or (guide
+    # point, block), the body the drive acts on (-1: none) and, for a table
+    # law, its spline (knots, coefficients), else None
+    input_group: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    input_kind: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    input_law: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    input_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+    input_body: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    input_tables: tuple = ()
+    input_names: tuple = ()
 
     @property
     def n_points(self):
@@ -304,6 +400,10 @@ class Plan:
     @property
     def n_groups(self):
         return len(self.codes)
+
+    @property
+    def n_inputs(self):
+        return len(self.input_group)
 
     def point(self, name):
         return self.point_names.index(name)
@@ -349,6 +449,7 @@ def compile_mechanism(m: Mechanism) -> Plan:
         add(f"{n}.y", y)
 
     codes, gidx, goff, gnames = [], [], [], []
+    inputs = []
 
     def emit(code, idx, label, values):
         codes.append(code)
@@ -397,6 +498,14 @@ def compile_mechanism(m: Mechanism) -> Plan:
             ia, ib = (pt(g.along[0]), pt(g.along[1])) if g.along else (-1, -1)
             emit(kc.G_ATTACH, [pt(g.base), ia, ib, pt(g.point)], label,
                  [("angle", g.angle), ("length", g.length)])
+        elif isinstance(g, (RotaryInput, SliderInput)):
+            rotary = isinstance(g, RotaryInput)
+            ends = (g.pivot, g.tip) if rotary else (g.guide_point, g.block)
+            first = [("length", g.length)] if rotary else [("guide_angle", g.guide_angle)]
+            inputs.append((len(codes), ik.ROTARY if rotary else ik.SLIDER, g.law.code,
+                           [pt(ends[0]), pt(ends[1])], g, label))
+            emit(kc.G_INPUT, [pt(ends[0]), pt(ends[1])], label,
+                 first + g.law.parameters(rotary))
         else:  # pragma: no cover - the parser only builds the types above
             raise TypeError(f"unknown group {g!r}")
     n_visible = len(names)
@@ -443,6 +552,7 @@ def compile_mechanism(m: Mechanism) -> Plan:
     for i, b in enumerate(m.bodies):
         if c.pivot in b.joints and c.tip in b.joints:
             crank_body = i
+    input_body = [_driven_body(m, g) for (*_, g, _l) in inputs]
     lb = [body_index[ld.body] for ld in m.loads]
     lp = [index[ld.point] if ld.point else -1 for ld in m.loads]
 
@@ -461,7 +571,27 @@ def compile_mechanism(m: Mechanism) -> Plan:
         slide_bodies=i64(sb, (-1, 2)), slide_dir=i64(sd, (-1, 2)),
         slide_angle=np.asarray(sa, dtype=np.float64), slide_names=tuple(sn),
         crank_body=crank_body, load_body=i64(lb), load_point=i64(lp), gravity=m.gravity,
+        input_group=i64([i[0] for i in inputs]), input_kind=i64([i[1] for i in inputs]),
+        input_law=i64([i[2] for i in inputs]), input_points=i64([i[3] for i in inputs], (-1, 2)),
+        input_body=i64(input_body),
+        input_tables=tuple(i[4].law.spline() if i[4].law.kind == "table" else None
+                           for i in inputs),
+        input_names=tuple(i[5] for i in inputs),
     )
+
+
+def _driven_body(m: Mechanism, g) -> int:
+    """The body an input's drive acts on: the one jointed at the pivot and the
+    tip of a rotary input, the one sliding on the ground at a slider input's
+    block; -1 if no body is declared for it."""
+    for i, b in enumerate(m.bodies):
+        if isinstance(g, RotaryInput):
+            if g.pivot in b.joints and g.tip in b.joints:
+                return i
+        elif g.block in b.joints and any(s.slider == b.name and s.guide is None
+                                         for s in m.slides):
+            return i
+    return -1
 
 
 def natural_key(name):

@@ -65,8 +65,10 @@ def parameter_units(name) -> str:
     if key in ("x", "y", "length", "offset", "guide_length") or (
             key.startswith("L") and key[1:2] in "0123456789_"):
         return "mm"
-    if key in ("angle", "phiM0", "a0", "b0", "phi_start", "guide_angle"):
+    if key in ("angle", "phiM0", "a0", "b0", "phi_start") or key.endswith("angle"):
         return "rad"
+    if key in ("start", "stroke"):            # a slider input's law
+        return "mm"
     return {"mass": "kg", "J_S": "kg*m^2"}.get(key, "1")
 
 
@@ -78,6 +80,7 @@ def _coordinates(f, plan, study):
     coordinate(f, "group", list(plan.group_names), "1", "structural group")
     coordinate(f, "joint", list(plan.joint_names), "1", "joint")
     coordinate(f, "slide", list(plan.slide_names), "1", "prismatic pair")
+    coordinate(f, "input", list(plan.input_names), "1", "input besides the crank")
     coordinate(f, "body", list(plan.body_names), "1", "body")
     coordinate(f, "load_component", ["Fx", "Fy", "M"], "1", "force x, force y, moment")
     coordinate(f, "slide_component", ["N", "C"], "1", "normal force, couple")

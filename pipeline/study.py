@@ -16,8 +16,8 @@ from pathlib import Path
 
 from .errors import StudyError
 from .limits import MAX_POSITIONS, POSITIONS_WHY
-from .model import (PRP, RPP, RPR, RRP, RRR, Attach, Body, CentreOfMass, ClassIII, Crank,
-                    Load, Mechanism, Slide)
+from .model import (PRP, RPP, RPR, RRP, RRR, Attach, Body, CentreOfMass, ClassIII, Crank, Law,
+                    Load, Mechanism, RotaryInput, Slide, SliderInput)
 
 
 _MISSING = object()
@@ -250,7 +250,9 @@ def parse_study(text: str, path="<study>") -> Study:
 
 
 # ----------------------------------------------------------------- mechanism
-GROUP_TYPES = ("RRR", "RRP", "RPR", "PRP", "RPP", "class3", "attach")
+GROUP_TYPES = ("RRR", "RRP", "RPR", "PRP", "RPP", "class3", "attach", "rotary_input",
+               "slider_input")
+LAW_TYPES = ("harmonic", "cycloidal", "table", "linear")
 PARALLEL_SIN = 1e-9     # |sin| of the angle between two guides below this: parallel
 
 
@@ -267,7 +269,7 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
     later = {}
     for i, g in enumerate(sec.data.get("groups", []) if isinstance(sec.data.get("groups"), list) else []):
         if isinstance(g, dict):
-            for key in ("B", "guide_end", "point"):
+            for key in ("B", "guide_end", "point", "tip", "block"):
                 if isinstance(g.get(key), str):
                     later.setdefault(g[key], f"{sec.path('groups')}[{i}].{key}")
             if isinstance(g.get("joints"), list):
@@ -397,6 +399,21 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
                            phi_start=math.radians(g.number("phi_start", 0.0)),
                            orientation=g.integer("orientation", 1, choices=(-1, 1)),
                            name=gname or "triad")
+        elif t in ("rotary_input", "slider_input"):
+            rotary = t == "rotary_input"
+            first, moved = ("pivot", "tip") if rotary else ("guide_point", "block")
+            p0 = pnt(first)
+            if p0 not in fixed:
+                raise g.error(first, f"the {t.replace('_', ' ')}'s {first.replace('_', ' ')} "
+                              f"{p0!r} must be a fixed point (mechanism.fixed): the input is "
+                              "driven from the frame")
+            p1 = g.string(moved)
+            define(g, moved, p1)
+            law = parse_law(g.table("law"), rotary)
+            if rotary:
+                grp = RotaryInput(p0, p1, g.number("length", positive=True), law, gname)
+            else:
+                grp = SliderInput(p0, p1, math.radians(g.number("guide_angle", 0.0)), law, gname)
         else:  # attach
             base = pnt("base")
             along = pair("along", optional=True)
@@ -474,6 +491,58 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
     return Mechanism(name=name, fixed=fixed, crank=crank, groups=tuple(groups),
                      bodies=tuple(bodies), slides=tuple(slides), loads=tuple(loads),
                      gravity=gravity)
+
+
+def parse_law(s: Section, rotary: bool) -> Law:
+    """An input's motion law against the cycle angle phi1 (angles in deg, a
+    slider's travel in mm); see ``pipeline.kernels.inputs``."""
+    kind = s.string("type", choices=LAW_TYPES)
+    unit = "deg" if rotary else "mm"
+    to_q = math.radians if rotary else float
+    phase = math.radians(s.number("phase", 0.0))
+    if kind == "linear":
+        if not rotary:
+            raise s.error("type", "a slider input cannot follow a linear law: its stroke would "
+                                  "grow without end; use harmonic, cycloidal or table")
+        ratio = s.number("ratio", nonzero=True)
+        if ratio != round(ratio):
+            raise s.error("ratio", f"must be a whole number, got {ratio:g}: the geared crank "
+                          "must be back at its start when the main crank has made its one "
+                          "revolution of the cycle (for a ratio of 1/n, make the slower crank "
+                          "the main crank and give the other the ratio n)")
+        law = Law("linear", ratio=ratio, phase=phase)
+    elif kind in ("harmonic", "cycloidal"):
+        rise = s.number("rise", 180.0)
+        if not 0.0 < rise < 360.0:
+            raise s.error("rise", f"the rise takes a part of the cycle: more than 0 and less "
+                                  f"than 360 deg, got {rise:g}")
+        law = Law(kind, phase=phase, start=to_q(s.number("start", 0.0)),
+                  travel=to_q(s.number("travel", nonzero=True)), rise=math.radians(rise))
+    else:
+        cycle = s.numbers("cycle")
+        values = s.numbers("values")
+        if len(cycle) < 4:
+            raise s.error("cycle", f"a table needs at least 4 points for its periodic spline, "
+                                   f"got {len(cycle)}")
+        if len(values) != len(cycle):
+            raise s.error("values", f"one value ({unit}) per cycle angle: {len(cycle)} cycle "
+                                    f"angles, {len(values)} values")
+        for k in range(1, len(cycle)):
+            if not cycle[k] > cycle[k - 1]:
+                raise s.error("cycle", f"cycle angles must increase: {cycle[k]:g} deg follows "
+                                       f"{cycle[k - 1]:g} deg")
+        if cycle[-1] == cycle[0] + 360.0:
+            if values[-1] != values[0]:
+                raise s.error("values", f"the cycle closes at {cycle[-1]:g} deg with "
+                              f"{values[-1]:g} {unit}, but starts with {values[0]:g} {unit}")
+            cycle, values = cycle[:-1], values[:-1]
+        elif not cycle[-1] < cycle[0] + 360.0:
+            raise s.error("cycle", f"the table spans one cycle: the last angle "
+                                   f"({cycle[-1]:g} deg) must be less than the first + 360 deg")
+        law = Law("table", phase=phase,
+                  table=tuple((math.radians(c), to_q(v)) for c, v in zip(cycle, values)))
+    s.done()
+    return law
 
 
 def _check_joints(sec, bodies, fixed):

@@ -193,6 +193,10 @@ def parse_sweep(root, mech, output) -> SweepSpec:
         if param not in plan.par_names:
             close = [p for p in plan.par_names if not p.startswith("S[")]
             raise v.error("param", f"no mechanism parameter {param!r}; known: {', '.join(close)}")
+        if param.endswith(".ratio"):
+            raise v.error("param", f"{param} is a gear ratio, a whole number (the cycle is one "
+                                   "revolution of the main crank): it cannot be drawn from a "
+                                   "range; run one study per ratio")
         units = v.string("units", "deg" if param.endswith(("phiM0", "angle")) else "mm")
         factor = math.pi / 180.0 if units == "deg" else 1.0
         ref = float(plan.par[plan.param(param)]) / factor
@@ -200,6 +204,11 @@ def parse_sweep(root, mech, output) -> SweepSpec:
         high = v.number("max", ref + spread * abs(ref))
         if not low < high:
             raise v.error("max", f"the bounds are empty: min {low:g} >= max {high:g}")
+        if param.endswith(".rise_angle") and not (0.0 < low * factor and high * factor
+                                                  < 2.0 * math.pi):
+            raise v.error("min" if not low * factor > 0.0 else "max",
+                          f"{param} is the part of the cycle the rise takes: its bounds must "
+                          f"lie within (0, 360) deg, got [{low:g}, {high:g}] {units}")
         domain = parameter_domain(param)
         if domain is not None and not (low >= domain[0] if domain[1] else low > domain[0]):
             if "min" in v.data:

@@ -477,7 +477,7 @@ def naive_c_lagrange_terms(phi1, M1=0.025, h=DEFAULT_H):
 # ---------------------------------------------------------------------------
 
 
-def _kinetostatics(bodies, joints, omega1, eps1, slides=()):
+def _kinetostatics(bodies, joints, omega1, eps1, slides=(), drives=()):
     """Generic assembly.
 
     bodies: list of dicts with keys name, S (m), aS (m/s^2), vS (m/s), m, J,
@@ -488,11 +488,15 @@ def _kinetostatics(bodies, joints, omega1, eps1, slides=()):
             direction angle rad): the guide pushes the slider with N along the
             direction turned +90 deg, at the slider's centre of mass, and turns
             it with the couple C; the guide takes -N and -C.  out[name] = (N, C).
+    drives: list of (name, body, direction angle rad or None, point (m)): an
+            input's drive from the ground on ``body``, a moment (None) or a
+            force along the direction acting at ``point``.  out[name] = its value.
     """
     nb = len(bodies)
     nj = len(joints)
     ns = len(slides)
-    nu = 2 * nj + 2 * ns + 1
+    nd = len(drives)
+    nu = 2 * nj + 2 * ns + 1 + nd
     idx = {b["name"]: i for i, b in enumerate(bodies)}
     Amat = np.zeros((3 * nb, nu))
     rhs = np.zeros(3 * nb)
@@ -532,8 +536,20 @@ def _kinetostatics(bodies, joints, omega1, eps1, slides=()):
             Amat[3 * i + 1, 2 * nj + 2 * k] += sgn * n[1]
             Amat[3 * i + 2, 2 * nj + 2 * k] += sgn * cross(r, n)
             Amat[3 * i + 2, 2 * nj + 2 * k + 1] += sgn
+    for k, (_name, body, theta, pt) in enumerate(drives):
+        i = idx[body]
+        col = 2 * nj + 2 * ns + 1 + k
+        if theta is None:
+            Amat[3 * i + 2, col] += 1.0
+        else:
+            u = np.array([math.cos(theta), math.sin(theta)])
+            Amat[3 * i, col] += u[0]
+            Amat[3 * i + 1, col] += u[1]
+            Amat[3 * i + 2, col] += cross(pt - bodies[i]["S"], u)
     x = np.linalg.solve(Amat, rhs)
     out = {name: x[2 * j: 2 * j + 2].copy() for j, (name, *_r) in enumerate(joints)}
+    for k, (name, *_r) in enumerate(drives):
+        out[name] = float(x[2 * nj + 2 * ns + 1 + k])
     for k, (name, *_r) in enumerate(slides):
         out[name] = x[2 * nj + 2 * k: 2 * nj + 2 * k + 2].copy()
     out["M_bal"] = float(x[2 * nj + 2 * ns])
@@ -1008,3 +1024,228 @@ def naive_forces_f(phi1, omega1=100.0, eps1=0.0, d=F_DATA):
     slides = [("slide[block]", "yoke", "block", d["a1"] + d["slot"]),
               ("slide[yoke]", None, "yoke", d["a1"])]
     return _kinetostatics(bodies, joints, omega1, eps1, slides)
+
+
+# ---------------------------------------------------------------------------
+# Mechanisms with inputs besides the crank: 60-digit solves
+# ---------------------------------------------------------------------------
+# The laws are written here again in mpmath from their definitions (the rise
+# and return of a harmonic or cycloidal cam; the periodic cubic spline of a
+# table from its own cyclic system for the knots' second derivatives, not from
+# scipy), the mechanisms' closures are solved by _mp_newton and the analogs
+# are the central differences of mp_analogs.
+
+def mp_rise_return(phi, start, travel, phase, rise, cycloidal):
+    """q(phi) of a rise by ``travel`` from ``start`` over ``rise`` rad of the
+    cycle from ``phase``, returning over the rest of the cycle (mp)."""
+    two_pi = 2 * mpmath.pi
+    u = mpmath.fmod(phi - phase, two_pi)
+    if u < 0:
+        u += two_pi
+    x = u / rise if u < rise else (two_pi - u) / (two_pi - rise)
+    if cycloidal:
+        f = x - mpmath.sin(two_pi * x) / two_pi
+    else:
+        f = (1 - mpmath.cos(mpmath.pi * x)) / 2
+    return start + travel * f
+
+
+class MpPeriodicSpline:
+    """The periodic cubic spline through (t_i, y_i), i < n, closed by
+    (t_0 + 2 pi, y_0): second derivatives M_i from the cyclic system
+    h_{i-1} M_{i-1} + 2 (h_{i-1} + h_i) M_i + h_i M_{i+1}
+        = 6 ((y_{i+1} - y_i) / h_i - (y_i - y_{i-1}) / h_{i-1})."""
+
+    def __init__(self, t, y):
+        with mpmath.workdps(MP_DPS):
+            t = [mpmath.mpf(v) for v in t] + [mpmath.mpf(t[0]) + 2 * mpmath.pi]
+            y = [mpmath.mpf(v) for v in y] + [mpmath.mpf(y[0])]
+            n = len(t) - 1
+            h = [t[i + 1] - t[i] for i in range(n)]
+            A = mpmath.matrix(n, n)
+            b = mpmath.matrix(n, 1)
+            for i in range(n):
+                hp, hi = h[i - 1], h[i]
+                A[i, (i - 1) % n] += hp
+                A[i, i] += 2 * (hp + hi)
+                A[i, (i + 1) % n] += hi
+                yp = y[i - 1] if i > 0 else y[n - 1]
+                b[i] = 6 * ((y[i + 1] - y[i]) / hi - (y[i] - yp) / hp)
+            m = mpmath.lu_solve(A, b)
+            self.t, self.y, self.h = t, y, h
+            self.M = [m[i] for i in range(n)] + [m[0]]
+
+    def __call__(self, u):
+        t, y, h, M = self.t, self.y, self.h, self.M
+        two_pi = 2 * mpmath.pi
+        u = t[0] + mpmath.fmod(u - t[0], two_pi)
+        if u < t[0]:
+            u += two_pi
+        i = max(k for k in range(len(h)) if t[k] <= u)
+        a, b_ = t[i + 1] - u, u - t[i]
+        return (M[i] * a ** 3 / (6 * h[i]) + M[i + 1] * b_ ** 3 / (6 * h[i])
+                + (y[i] / h[i] - M[i] * h[i] / 6) * a + (y[i + 1] / h[i] - M[i + 1] * h[i] / 6) * b_)
+
+
+class InputChain:
+    """The mechanisms of studies/feed_fivebar.toml (kind "fivebar"),
+    studies/cam_rocker_input.toml ("cam_rocker") and
+    studies/actuator_slider_input.toml ("actuator"), read from their
+    definitions in ``d`` (angles rad, lengths mm):
+
+    * fivebar: crank P1-P2 (L12), second crank P4-P5 (L45) at phase + ratio
+      phi1, couplers P2-P3 (L23) and P5-P3 (L53) meeting above (mode W), the
+      tooth P6 = P3 + L36 along P2->P3;
+    * cam_rocker: rocker P4-P5 (L45) at the cycloidal law ``law`` (start,
+      travel, phase, rise), P6 on the vertical line x = P7x joined to P5 by
+      L56, above;
+    * actuator: block P5 = P4 + s(phi1) (1, 0), s the spline through ``table``
+      ((deg, mm) pairs); P3 joined to P5 by L53 and to P6 by L63 (mode W); the
+      eye P7 = P3 + L37 along P6->P3."""
+
+    def __init__(self, kind, d, extra=None):
+        self.kind = kind
+        self.d = d
+        self.extra = extra
+        if kind == "actuator":
+            self.spline = MpPeriodicSpline([c * mpmath.pi / 180 for c, _ in d["table"]],
+                                           [v for _, v in d["table"]])
+
+    def driven(self, phi):
+        """The points the crank and the input fix at phi, and the input's q."""
+        d = self.d
+        P2 = [d["L12"] * mpmath.cos(phi), d["L12"] * mpmath.sin(phi)]
+        if self.kind == "fivebar":
+            q = d["phase"] + d["ratio"] * phi
+            P5 = [d["P4"][0] + d["L45"] * mpmath.cos(q), d["P4"][1] + d["L45"] * mpmath.sin(q)]
+        elif self.kind == "cam_rocker":
+            q = mp_rise_return(phi, *d["law"], cycloidal=True)
+            P5 = [d["P4"][0] + d["L45"] * mpmath.cos(q), d["P4"][1] + d["L45"] * mpmath.sin(q)]
+        else:
+            q = self.spline(phi)
+            P5 = [d["P4"][0] + q, mpmath.mpf(d["P4"][1])]
+        return P2, P5, q
+
+    def residual(self, x, phi):
+        d = self.d
+        P2, P5, _ = self.driven(phi)
+        X = [x[0], x[1]]
+        if self.kind == "fivebar":
+            return [(X[0] - P2[0]) ** 2 + (X[1] - P2[1]) ** 2 - mpmath.mpf(d["L23"]) ** 2,
+                    (X[0] - P5[0]) ** 2 + (X[1] - P5[1]) ** 2 - mpmath.mpf(d["L53"]) ** 2]
+        if self.kind == "cam_rocker":
+            return [X[0] - d["P7"][0],
+                    (X[0] - P5[0]) ** 2 + (X[1] - P5[1]) ** 2 - mpmath.mpf(d["L56"]) ** 2]
+        return [(X[0] - P5[0]) ** 2 + (X[1] - P5[1]) ** 2 - mpmath.mpf(d["L53"]) ** 2,
+                (X[0] - d["P6"][0]) ** 2 + (X[1] - d["P6"][1]) ** 2 - mpmath.mpf(d["L63"]) ** 2]
+
+    def guess(self, phi):
+        d = self.d
+        with mpmath.workdps(20):
+            P2, P5, _ = self.driven(mpmath.mpf(phi))
+            P2, P5 = np.array([float(v) for v in P2]), np.array([float(v) for v in P5])
+        if self.kind == "fivebar":
+            return list(solve_rrr(P2, P5, d["L23"], d["L53"], W=d["W"]))
+        if self.kind == "cam_rocker":
+            dx = d["P7"][0] - P5[0]
+            return [d["P7"][0], P5[1] + math.sqrt(d["L56"] ** 2 - dx * dx)]
+        return list(solve_rrr(P5, np.asarray(d["P6"], float), d["L53"], d["L63"], W=d["W"]))
+
+    def points(self, x, phi):
+        d = self.d
+        P2, P5, q = self.driven(phi)
+        X = [x[0], x[1]]
+        pts = {"P1": [mpmath.mpf(0), mpmath.mpf(0)], "P2": P2, "P4": _mp_vec(d["P4"]),
+               "P5": P5, "Q": [q, mpmath.mpf(0)]}
+        if self.kind == "fivebar":
+            pts["P3"] = X
+            pts["P6"] = _mp_along(P2, X, mpmath.mpf(d["L23"]) + d["L36"])
+        elif self.kind == "cam_rocker":
+            pts["P6"] = X
+        else:
+            pts["P3"] = X
+            pts["P6"] = _mp_vec(d["P6"])
+            pts["P7"] = _mp_along(pts["P6"], X, mpmath.mpf(d["L63"]) + d["L37"])
+        if self.extra is not None:
+            pts.update(self.extra(pts, d))
+        return pts
+
+
+FIVEBAR_DATA = dict(L12=8.0, P4=(42.0, 0.0), L45=9.0, ratio=1, phase=math.pi / 2, L23=36.0,
+                    L53=32.0, W=1, L36=15.0)
+CAM_ROCKER_DATA = dict(L12=10.0, P4=(30.0, 0.0), L45=35.0, P7=(80.0, 0.0), L56=45.0,
+                       law=(30 * DEG, 40 * DEG, 0.0, 150 * DEG))
+ACTUATOR_DATA = dict(L12=10.0, P4=(0.0, -40.0), P6=(45.0, 0.0), L53=40.0, L63=30.0, W=-1,
+                     L37=25.0, table=list(zip(range(0, 360, 30),
+                                              (0.0, 0.0, 3.0, 12.0, 21.0, 24.0, 24.0, 24.0,
+                                               19.0, 9.0, 2.0, 0.0))))
+
+
+def _fivebar_com(pts, d):
+    return {"S[main crank]": _mp_along(pts["P1"], pts["P2"], 2),
+            "S[second crank]": _mp_along(pts["P4"], pts["P5"], 2),
+            "S[feed bar]": _mp_along(pts["P2"], pts["P3"], 30),
+            "S[link]": _mp_along(pts["P5"], pts["P3"], 16)}
+
+
+def naive_forces_fivebar(phi1, omega1=100.0, eps1=0.0, d=FIVEBAR_DATA):
+    """Reactions R1..R5 (R1 ground->main crank at P1, R2 main crank->feed bar
+    at P2, R3 feed bar->link at P3, R4 ground->second crank at P4, R5 second
+    crank->link at P5), the second crank's drive moment and M_bal of the main
+    crank alone, with the second crank's q' for its share.  Load at P6 on the
+    feed bar: (-20 (1 + cos phi1), 0) N."""
+    an = mp_analogs(InputChain("fivebar", d, _fivebar_com), phi1,
+                    links=["1_2", "4_5", "2_3", "5_3"])
+    mass = {"main crank": (0.15, 1.5e-5, "1_2"), "second crank": (0.15, 1.5e-5, "4_5"),
+            "feed bar": (0.12, 4e-5, "2_3"), "link": (0.05, 5e-6, "5_3")}
+    f6 = np.array([-20.0 * (1.0 + math.cos(phi1)), 0.0])
+    bodies = _bodies(an, mass, "main crank", omega1, eps1,
+                     {"feed bar": [(an["pos"]["P6"] / 1000.0, f6)]})
+    P = {k: an["pos"][k] / 1000.0 for k in ("P1", "P2", "P3", "P4", "P5")}
+    joints = [("R1", None, "main crank", P["P1"]), ("R2", "main crank", "feed bar", P["P2"]),
+              ("R3", "feed bar", "link", P["P3"]), ("R4", None, "second crank", P["P4"]),
+              ("R5", "second crank", "link", P["P5"])]
+    out = _kinetostatics(bodies, joints, omega1, eps1,
+                         drives=[("second crank", "second crank", None, P["P4"])])
+    out["q1"] = {"second crank": float(an["d1"]["Q"][0])}
+    return out
+
+
+def _bodies(an, mass, crank, omega1, eps1, ext):
+    out = []
+    for name, (m, J, lk) in mass.items():
+        s = f"S[{name}]"
+        out.append(dict(
+            name=name, m=m, J=J, crank=(name == crank), ext=ext.get(name, []),
+            S=an["pos"][s] / 1000.0, vS=an["d1"][s] / 1000.0 * omega1,
+            aS=(an["d2"][s] * omega1 ** 2 + an["d1"][s] * eps1) / 1000.0,
+            omega=an["ang_d1"][lk] * omega1 if lk else 0.0,
+            eps=an["ang_d2"][lk] * omega1 ** 2 + an["ang_d1"][lk] * eps1 if lk else 0.0))
+    return out
+
+
+def _actuator_com(pts, d):
+    return {"S[main shaft]": list(pts["P1"]), "S[block]": list(pts["P5"]),
+            "S[link]": _mp_along(pts["P5"], pts["P3"], 20),
+            "S[lever]": _mp_along(pts["P6"], pts["P3"], 25)}
+
+
+def naive_forces_actuator(phi1, omega1=40.0, eps1=0.0, d=ACTUATOR_DATA):
+    """Reactions R1 (ground->main shaft, P1), R3 (link->lever, P3), R5
+    (block->link, P5), R6 (ground->lever, P6), the block's slide (N, C), the
+    actuator's drive force (N, along +x) with its q' (m/rad) and the main
+    shaft's own M_bal.  Load at P7 on the lever: (0, -8) N."""
+    an = mp_analogs(InputChain("actuator", d, _actuator_com), phi1,
+                    links=["1_2", "5_3", "6_3"])
+    mass = {"main shaft": (0.5, 2e-4, "1_2"), "block": (0.15, 0.0, None),
+            "link": (0.06, 1e-5, "5_3"), "lever": (0.1, 2.5e-5, "6_3")}
+    bodies = _bodies(an, mass, "main shaft", omega1, eps1,
+                     {"lever": [(an["pos"]["P7"] / 1000.0, np.array([0.0, -8.0]))]})
+    P = {k: an["pos"][k] / 1000.0 for k in ("P1", "P3", "P5", "P6")}
+    joints = [("R1", None, "main shaft", P["P1"]), ("R3", "link", "lever", P["P3"]),
+              ("R5", "block", "link", P["P5"]), ("R6", None, "lever", P["P6"])]
+    out = _kinetostatics(bodies, joints, omega1, eps1,
+                         slides=[("slide[block]", None, "block", 0.0)],
+                         drives=[("actuator", "block", 0.0, P["P5"])])
+    out["q1"] = {"actuator": float(an["d1"]["Q"][0]) / 1000.0}
+    return out

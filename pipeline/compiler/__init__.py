@@ -75,8 +75,11 @@ def structure_key(plan, rocker=None, watch=True) -> tuple:
     arrays = (plan.codes, plan.gidx, plan.goff, plan.fixed_idx, plan.fixed_off, plan.link_a,
               plan.link_b, plan.body_com, plan.body_turn, plan.body_mass_off, plan.joint_point,
               plan.joint_bodies, plan.slide_bodies, plan.slide_dir, plan.slide_angle,
-              plan.load_body, plan.load_point)
-    return (tuple(a.tobytes() for a in arrays), plan.point_names, plan.par_names,
+              plan.load_body, plan.load_point, plan.input_group, plan.input_kind,
+              plan.input_law, plan.input_points, plan.input_body)
+    tables = tuple(None if t is None else (t[0].tobytes(), t[1].tobytes())
+                   for t in plan.input_tables)
+    return (tuple(a.tobytes() for a in arrays), tables, plan.point_names, plan.par_names,
             plan.group_names, plan.n_visible, plan.n_kinematic, plan.crank_body, plan.gravity,
             tuple(rocker) if rocker is not None else None, bool(watch), str(cache_dir()))
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 
 from ..kernels import config as kc
+from ..kernels import inputs as ik
 
 
 class Emitter:
@@ -66,6 +67,10 @@ class Emitter:
 
     def lanes(self):
         raise NotImplementedError
+
+    def module_constants(self):
+        """Lines of module-level constants the group's kernels read (none by default)."""
+        return []
 
     def transmission(self):
         """Lines that lower ``tr`` to the group's transmission angles at this
@@ -285,6 +290,61 @@ class AttachEmitter(Emitter):
                 f"{out}y = {base}y + f * ({s} * vx + {c} * vy)"]
 
 
+class InputEmitter(Emitter):
+    """A rotary or slider input moved by its law of the crank angle phi
+    (``pipeline.kernels.inputs``); a table law's spline is a constant of the
+    module."""
+    code = kc.G_INPUT
+
+    def __init__(self, plan, names, g, triad_row=-1):
+        super().__init__(plan, names, g, triad_row)
+        self.i = [int(x) for x in plan.input_group].index(g)
+        self.kind = int(plan.input_kind[self.i])
+        self.law = int(plan.input_law[self.i])
+        self.table = f"LAW_{names.K(self.label, 'spline')}"
+
+    def module_constants(self):
+        if self.law != ik.LAW_TABLE:
+            return []
+        knots, coef = self.plan.input_tables[self.i]
+        return [f"# the periodic spline of {self.label!r}'s table: knots (rad) and coefficients",
+                _wrap_line(f"{self.table}_KNOTS = np.array({[float(x) for x in knots]!r})"),
+                _wrap_line(f"{self.table}_COEF = np.array({coef.tolist()!r})")]
+
+    def derived(self):
+        if self.kind != ik.SLIDER:
+            return []
+        a = self.k("guide_angle")
+        return [(f"{a}_cos", f"math.cos({a})"), (f"{a}_sin", f"math.sin({a})")]
+
+    def careful(self):
+        k = self.k
+        rotary = self.kind == ik.ROTARY
+        if self.law == ik.LAW_LINEAR:
+            words = "q = phase + ratio phi (a geared crank)"
+            law = f"linear_law(phi, {k('ratio')}, {k('phase_angle')})"
+        elif self.law == ik.LAW_TABLE:
+            words = "q from the periodic spline of its table"
+            law = f"table_law(phi, {k('phase_angle')}, {self.table}_KNOTS, {self.table}_COEF)"
+        else:
+            cyc = self.law == ik.LAW_CYCLOIDAL
+            words = f"{'cycloidal' if cyc else 'harmonic'} rise and return"
+            start, travel = ("start_angle", "travel_angle") if rotary else ("start", "stroke")
+            law = (f"rise_return(phi, {k(start)}, {k(travel)}, {k('phase_angle')}, "
+                   f"{k('rise_angle')}, {cyc})")
+        lines = [f"# {self.title()}: {words}", f"q, q1, q2 = {law}"]
+        if rotary:
+            lines += [f"# {self.pname(1)} = {self.pname(0)} + length e(q)",
+                      f"st, m = rotary_input(pos, d1, d2, {self.p(0)}, {self.p(1)}, "
+                      f"{k('length')}, q, q1, q2, order)"]
+        else:
+            a = k("guide_angle")
+            lines += [f"# {self.pname(1)} = {self.pname(0)} + q e(guide_angle)",
+                      f"st, m = slider_input(pos, d1, d2, {self.p(0)}, {self.p(1)}, {a}_cos, "
+                      f"{a}_sin, q, q1, q2, order)"]
+        return lines
+
+
 class ClassIIIEmitter(Emitter):
     watched = True
     code = kc.G_CLASS3
@@ -317,7 +377,8 @@ class ClassIIIEmitter(Emitter):
 
 
 EMITTERS = {e.code: e for e in (CrankEmitter, RRREmitter, RRPEmitter, RPREmitter,
-                                PRPEmitter, RPPEmitter, AttachEmitter, ClassIIIEmitter)}
+                                PRPEmitter, RPPEmitter, AttachEmitter, ClassIIIEmitter,
+                                InputEmitter)}
 
 
 def emitters_for(plan, names):

@@ -16,6 +16,7 @@ reports NaN, as before).
 
 from __future__ import annotations
 
+from ..kernels.inputs import ROTARY
 from .emit import literal
 
 MM = 1e-3
@@ -71,10 +72,21 @@ def _s(x):
 
 def force_kernel(plan, names) -> str:
     """Source of ``forces_at`` for ``plan`` (same signature and outputs as the
-    general kinetostatics kernel)."""
+    general kinetostatics kernel).
+
+    Inputs besides the crank (``pipeline.kernels.inputs``) add one unknown
+    each: the drive on the input's body (a moment for a rotary input, a force
+    along the guide for a slider input).  Their rows of ``slide_out``, after
+    the slides', are (drive [N*m or N], its share of M_bal [N*m]); the
+    returned M_bal is the moment the main shaft delivers, the crank's own
+    plus every input's drive times dq/dphi1 (the inputs are driven from the
+    main shaft: by virtual power, sum of drive * q' = M_bal on phi1)."""
     nb, nj, ns = len(plan.body_names), len(plan.joint_names), len(plan.slide_names)
+    ni = plan.n_inputs
     n = 3 * nb
     col_m = 2 * nj + 2 * ns
+    has_crank = plan.crank_body >= 0
+    col_in = col_m + int(has_crank)            # first input's drive
     sig = ("def forces_at(par, pos, d1, d2, omega1, eps1, loads_k, work_a, work_b, loads_out, "
            "r_out, slide_out):")
     general = ["@njit(**JIT)", sig,
@@ -86,7 +98,19 @@ def force_kernel(plan, names) -> str:
                "SLIDE_DIR,",
                "                         SLIDE_ANGLE, CRANK_BODY, LOAD_BODY, LOAD_POINT, loads_k, "
                "work_a,", "                         work_b, loads_out, r_out, slide_out)", ""]
-    if nb == 0 or col_m + 1 != n or plan.crank_body < 0:
+    square = nb > 0 and col_in + ni == n and (has_crank or ni > 0)
+    if not square and ni > 0:
+        # the general solver knows no inputs: nothing to solve (NaN, as it gives)
+        return "\n".join(
+            ["@njit(**JIT)", sig,
+             '    """Kinetostatics at one position: NaN everywhere (this plan\'s force',
+             '    system is not square: a body is missing or over-constrained)."""',
+             "    for j in range(r_out.shape[0]):",
+             "        r_out[j, 0] = r_out[j, 1] = math.nan",
+             "    for k in range(slide_out.shape[0]):",
+             "        slide_out[k, 0] = slide_out[k, 1] = math.nan",
+             "    return math.nan", ""]) + "\n"
+    if not square:
         return "\n".join(general) + "\n"
 
     sym = _Sym()
@@ -157,7 +181,35 @@ def force_kernel(plan, names) -> str:
             add(3 * body + 1, col, fy)
             add(3 * body + 2, col, sym.var(f"{lx} * {fy} - {ly} * {fx}"))
             add(3 * body + 2, col + 1, sgn)
-    add(3 * plan.crank_body + 2, col_m, 1.0)
+    if has_crank:
+        add(3 * plan.crank_body + 2, col_m, 1.0)
+    shares = []                                   # q' of every input
+    for k in range(ni):
+        body = int(plan.input_body[k])
+        col = col_in + k
+        a_, b_ = (P[int(v)] for v in plan.input_points[k])
+        label = plan.input_names[k]
+        if int(plan.input_kind[k]) == ROTARY:
+            L.append(f"# input {label!r}: a drive moment on its link; q' = (r x r') / |r|^2")
+            add(3 * body + 2, col, 1.0)
+            shares.append(sym.var(
+                f"((pos[{b_}, 0] - pos[{a_}, 0]) * (d1[{b_}, 1] - d1[{a_}, 1]) - "
+                f"(pos[{b_}, 1] - pos[{a_}, 1]) * (d1[{b_}, 0] - d1[{a_}, 0])) / "
+                f"((pos[{b_}, 0] - pos[{a_}, 0]) ** 2 + (pos[{b_}, 1] - pos[{a_}, 1]) ** 2)"))
+        else:
+            L.append(f"# input {label!r}: a drive force along its guide at the block; "
+                     "q' = u . (block' - guide point') in m")
+            g = names.param[f"{label}.guide_angle"]
+            ux = sym.var(f"math.cos(par[PAR_{g}])")
+            uy = sym.var(f"math.sin(par[PAR_{g}])")
+            s_ = int(plan.body_com[body])
+            lx = sym.var(f"(pos[{b_}, 0] - pos[{P[s_]}, 0]) * {MM}")
+            ly = sym.var(f"(pos[{b_}, 1] - pos[{P[s_]}, 1]) * {MM}")
+            add(3 * body, col, ux)
+            add(3 * body + 1, col, uy)
+            add(3 * body + 2, col, sym.var(f"{lx} * {uy} - {ly} * {ux}"))
+            shares.append(sym.var(f"({ux} * (d1[{b_}, 0] - d1[{a_}, 0]) + "
+                                  f"{uy} * (d1[{b_}, 1] - d1[{a_}, 1])) * {MM}"))
 
     # ---- symbolic elimination with exact +-1 pivots, least fill first
     L.append("# elimination with the exact pivots +-1 of the force-balance rows")
@@ -220,7 +272,16 @@ def force_kernel(plan, names) -> str:
     for k in range(ns):
         body += [f"slide_out[{k}, 0] = x{2 * nj + 2 * k}",
                  f"slide_out[{k}, 1] = x{2 * nj + 2 * k + 1}"]
-    body.append(f"return x{col_m}")
+    if ni:
+        body.append("# every input's drive, and its share of the main shaft's moment")
+        for k in range(ni):
+            body += [f"slide_out[{ns + k}, 0] = x{col_in + k}",
+                     f"slide_out[{ns + k}, 1] = x{col_in + k} * {shares[k]}"]
+        total = " + ".join(([f"x{col_m}"] if has_crank else [])
+                           + [f"slide_out[{ns + k}, 1]" for k in range(ni)])
+        body.append(f"return {total}")
+    else:
+        body.append(f"return x{col_m}")
     src = ["# inline='always': one call site in the sweep; as its own function numba would", '# build and link a library of everything it calls once more (compile time)',
            "@njit(inline='always', **JIT)", sig,
            '    """Kinetostatics at one position: reactions r_out (n_joints, 2) [N], slides',

@@ -52,6 +52,8 @@ from pipeline.kernels.continuation import (accept, closes, copy2, predict, resto
 from pipeline.kernels.dynamics import drive, lagrange_terms, potential
 from pipeline.kernels.forces import applied_loads, force_work, gauss_solve, kinetostatics
 from pipeline.kernels.groups import attach, crank, prp, rpp, rpr, rrp, rrr
+from pipeline.kernels.inputs import (linear_law, rise_return, rotary_input, slider_input,
+                                     table_law)
 from pipeline.kernels.metrics import (dwell_error, dwell_lanes, dyad_transmission, law_error,
                                       lead_transmission, relative_angle)
 from pipeline.kernels.sweep import (M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, M_PEAK_R,
@@ -126,7 +128,12 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
     w(f"N_BODIES = {len(plan.body_names)}")
     w(f"N_JOINTS = {len(plan.joint_names)}")
     w(f"N_SLIDES = {len(plan.slide_names)}")
+    w(f"N_INPUTS = {plan.n_inputs}   # inputs besides the crank: their drives follow the "
+      "slides' rows of slide_out")
     w("")
+    for e in ems:
+        for line in e.module_constants():
+            w(line)
 
     # ---------------------------------------------------------------- constants(par)
     consts = constants_of(plan, n, ems)
@@ -673,7 +680,7 @@ CAREFUL = '''
     @njit(**JIT_ALLOC)
     def forces_curve(par, pos, d1, d2, omega1, eps1, loads, loads_out, r_out, slide_out, m_out):
         """forces_at every position k of pos/d1/d2 (n, n_points, 2); loads (n, n_loads, 3)."""
-        work_a, work_b, _l, _r, _s = force_work(N_BODIES, N_JOINTS, N_SLIDES)
+        work_a, work_b, _l, _r, _s = force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS)
         for k in range(pos.shape[0]):
             m_out[k] = forces_at(par, pos[k], d1[k], d2[k], omega1, eps1, loads[k], work_a,
                                  work_b, loads_out[k], r_out[k], slide_out[k])
@@ -748,7 +755,7 @@ CAREFUL = '''
         return settle(par, np.int64(-1), phis, phi_close, tols, settings, loads, theta,
                       trail, qmax, qmin, 0.0, np.int64(-1), 0.0, 0.0,
                       work(N_POINTS, N_GROUPS, N_TRIADS),
-                      force_work(N_BODIES, N_JOINTS, N_SLIDES), watch_work(),
+                      force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS), watch_work(),
                       np.empty(phis.shape[0]), out)
 
 
@@ -1103,7 +1110,7 @@ PARALLEL = '''
         corr = np.empty(npos)
         want_law = settings[SET_WANT_LAW] != 0.0
         wk = work(N_POINTS, N_GROUPS, N_TRIADS)
-        fw = force_work(N_BODIES, N_JOINTS, N_SLIDES)
+        fw = force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS)
         ww = watch_work()
         pos, d1, d2, margins, state, _ = wk
         fast = lanes_apply(phis, tols)
@@ -1164,7 +1171,7 @@ PARALLEL = '''
         stress suite checks there are none).  Rows lo .. hi - 1; the caller runs
         ranges on threads."""
         pos, d1, d2, margins, state, _ = work(N_POINTS, N_GROUPS, N_TRIADS)
-        work_a, work_b, loads_out, r_out, slide_out = force_work(N_BODIES, N_JOINTS, N_SLIDES)
+        work_a, work_b, loads_out, r_out, slide_out = force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS)
         ww = watch_work()
         for i in range(lo, hi):
             par = pars[i]

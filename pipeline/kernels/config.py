@@ -70,9 +70,10 @@ G_CLASS3 = 4
 G_ATTACH = 5
 G_PRP = 6
 G_RPP = 7
+G_INPUT = 8        # a rotary or slider input moved by a law of the crank angle
 
 GROUP_NAMES = {G_CRANK: "crank", G_RRR: "RRR", G_RRP: "RRP", G_RPR: "RPR",
-               G_CLASS3: "class3", G_ATTACH: "attach", G_PRP: "PRP", G_RPP: "RPP"}
+               G_CLASS3: "class3", G_ATTACH: "attach", G_PRP: "PRP", G_RPP: "RPP", G_INPUT: "input"}
 
 # ---- what to compute --------------------------------------------------------
 POSITIONS = 0

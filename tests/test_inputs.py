@@ -1,0 +1,288 @@
+"""Inputs besides the crank: an oscillating rocker driven through a swing by a
+cam law, a slider driven along its guide by a stroke table, and a second crank
+geared to the first.  Study format, the laws against their definitions, the
+kinematics against the 60-digit reference of tests/naive.py over a full
+cycle, kinetostatics against the naive dense solve (with the inputs' drives as
+unknowns) and virtual power with eps1 != 0, and a sweep over an input's
+dimensions with its Pareto analysis."""
+
+import dataclasses
+import math
+
+import mpmath
+import numpy as np
+import pytest
+
+import naive
+from pipeline.kernels import config as kc
+from pipeline.kernels.inputs import linear_law, rise_return, table_law
+from pipeline.model import Law, RotaryInput, SliderInput
+from pipeline.scene import revolution_angles, run_scene, solve_curves
+from pipeline.study import StudyError, load_study
+from test_forces import virtual_power
+from tolerances import MP_REFERENCE_REL, REACTION_REL, VIRTUAL_POWER_REL
+
+DEG = math.pi / 180.0
+N_CYCLE = 36
+STUDIES = ("feed_fivebar", "cam_rocker_input", "actuator_slider_input")
+
+
+# ------------------------------------------------------------------ the laws
+def _mp_derivatives(f, phi):
+    """f, f', f'' at phi by mpmath's own differentiation at 40 digits."""
+    with mpmath.workdps(40):
+        x = mpmath.mpf(phi)
+        return [float(mpmath.diff(f, x, k)) for k in range(3)]
+
+
+@pytest.mark.parametrize("cycloidal", [False, True])
+@pytest.mark.parametrize("rise_deg", [180.0, 120.0, 250.0])
+def test_rise_return_laws_match_their_definition(cycloidal, rise_deg):
+    start, travel, phase, rise = 0.3, -0.7, 40 * DEG, rise_deg * DEG
+    rng = np.random.default_rng(3)
+    for phi in rng.uniform(-2 * math.pi, 4 * math.pi, 40):
+        u = (phi - phase) % (2 * math.pi)
+        if min(abs(u), abs(u - rise), abs(u - 2 * math.pi)) < 1e-3:
+            continue                      # mpmath.diff must not straddle a turning point
+        ref = _mp_derivatives(lambda x: naive.mp_rise_return(x, start, travel, phase, rise,
+                                                             cycloidal), phi)
+        got = rise_return(phi, start, travel, phase, rise, cycloidal)
+        for k in range(3):
+            assert abs(got[k] - ref[k]) <= 1e-13 * (1 + abs(ref[k])), (phi, k, got, ref)
+
+
+def test_rise_return_turns_at_the_rise_and_closes_the_cycle():
+    for cyc in (False, True):
+        q0 = rise_return(0.2, 1.0, 2.0, 0.2, 2.0, cyc)
+        top = rise_return(2.2, 1.0, 2.0, 0.2, 2.0, cyc)
+        again = rise_return(0.2 + 2 * math.pi, 1.0, 2.0, 0.2, 2.0, cyc)
+        assert q0[0] == 1.0 and abs(top[0] - 3.0) < 1e-15 and again[0] == q0[0]
+        assert q0[1] == 0.0 and abs(top[1]) < 1e-15
+        if cyc:                           # cycloidal: no jump of acceleration at the ends
+            assert abs(q0[2]) < 1e-15 and abs(top[2]) < 1e-14
+
+
+def test_linear_law():
+    assert linear_law(0.7, -2.0, 0.25) == (0.25 - 1.4, -2.0, 0.0)
+
+
+def test_table_law_is_the_periodic_spline_through_the_table():
+    rng = np.random.default_rng(5)
+    cycle = np.sort(rng.choice(np.arange(0, 360, 7), 9, replace=False)) + 11.0
+    values = rng.uniform(-5, 5, 9)
+    law = Law("table", phase=0.4, table=tuple(zip(np.radians(cycle), values)))
+    knots, coef = law.spline()
+    ref = naive.MpPeriodicSpline(np.radians(cycle), values)
+    for c, v in zip(cycle, values):          # through every point, also a cycle later
+        for shift in (0.0, 2 * math.pi, -4 * math.pi):
+            q = table_law(math.radians(c) + 0.4 + shift, 0.4, knots, coef)[0]
+            assert abs(q - v) <= 1e-13 * 5, (c, q, v)
+    for phi in rng.uniform(-7, 7, 40):
+        u = (phi - 0.4 - knots[0]) % (2 * math.pi) + knots[0]
+        if np.min(np.abs(knots - u)) < 1e-3:
+            continue
+        want = _mp_derivatives(lambda x: ref(x - mpmath.mpf(0.4)), phi)
+        got = table_law(phi, 0.4, knots, coef)
+        for k in range(3):
+            assert abs(got[k] - want[k]) <= 1e-12 * (1 + abs(want[k])), (phi, k, got, want)
+
+
+# ------------------------------------------------------------------ study format
+def _broken(studies, name, old, new):
+    text = (studies / f"{name}.toml").read_text()
+    assert old in text, old
+    return text.replace(old, new, 1)
+
+
+LINEAR = 'law = { type = "linear", ratio = 1, phase = 90.0 }'
+CYCLOIDAL = 'law = { type = "cycloidal", start = 30.0, travel = 40.0, phase = 0.0, rise = 150.0 }'
+TABLE_CYCLE = "cycle = [0, 30, 60,"
+ERRORS = [
+    ("feed_fivebar", (LINEAR, LINEAR.replace("ratio = 1", "ratio = 1.5")),
+     "mechanism.groups[0].law.ratio", "must be a whole number"),
+    ("feed_fivebar", (LINEAR, LINEAR.replace("ratio = 1", "ratio = 0")),
+     "mechanism.groups[0].law.ratio", "must not be zero"),
+    ("feed_fivebar", (LINEAR, LINEAR.replace('"linear"', '"sine"')),
+     "mechanism.groups[0].law.type", "must be one of harmonic, cycloidal, table, linear"),
+    ("feed_fivebar", (LINEAR, LINEAR.replace("phase", "phaze")),
+     "mechanism.groups[0].law.phaze", "unknown key"),
+    ("feed_fivebar", ('pivot = "P4"', 'pivot = "P2"'),
+     "mechanism.groups[0].pivot", "must be a fixed point"),
+    ("feed_fivebar", ('tip = "P5"', 'tip = "P2"'),
+     "mechanism.groups[0].tip", "defined twice"),
+    ("feed_fivebar", ("length = 9.0", "length = -9.0"),
+     "mechanism.groups[0].length", "must be positive"),
+    ("feed_fivebar", (LINEAR, ""),
+     "mechanism.groups[0].law", "required field is missing"),
+    ("cam_rocker_input", (CYCLOIDAL, CYCLOIDAL.replace("rise = 150.0", "rise = 360.0")),
+     "mechanism.groups[0].law.rise", "less than 360 deg"),
+    ("cam_rocker_input", (CYCLOIDAL, CYCLOIDAL.replace("travel = 40.0", "travel = 0.0")),
+     "mechanism.groups[0].law.travel", "must not be zero"),
+    ("actuator_slider_input", ('type = "table"', 'type = "linear", ratio = 1'),
+     "mechanism.groups[0].law.type", "a slider input cannot follow a linear law"),
+    ("actuator_slider_input", (TABLE_CYCLE, "cycle = [0, 30, 20,"),
+     "mechanism.groups[0].law.cycle", "cycle angles must increase"),
+    ("actuator_slider_input", (TABLE_CYCLE, "cycle = [0, 30, 60, 65,"),
+     "mechanism.groups[0].law.values", "13 cycle angles, 12 values"),
+    ("actuator_slider_input", (TABLE_CYCLE, "cycle = [-40, 30, 60,"),
+     "mechanism.groups[0].law.cycle", "must be less than the first + 360 deg"),
+    ("actuator_slider_input", ('guide_point = "P4"', 'guide_point = "P3"'),
+     "mechanism.groups[0].guide_point", "solved later"),
+]
+
+
+@pytest.mark.parametrize("name,change,field,reason", ERRORS,
+                         ids=[f"{e[0]}-{e[2]}-{i}" for i, e in enumerate(ERRORS)])
+def test_declaration_error_names_file_field_reason(studies, tmp_path, name, change, field, reason):
+    path = tmp_path / "bad_study.toml"
+    path.write_text(_broken(studies, name, *change))
+    with pytest.raises(StudyError) as e:
+        load_study(path)
+    msg = str(e.value)
+    assert str(path) in msg and field in msg and reason in msg, msg
+
+
+def test_a_table_may_close_the_cycle_itself(studies, tmp_path):
+    text = (studies / "actuator_slider_input.toml").read_text()
+    closed = text.replace("300, 330]", "300, 330, 360]").replace("2.0, 0.0] }", "2.0, 0.0, 0.0] }")
+    path = tmp_path / "closed.toml"
+    path.write_text(closed)
+    a = load_study(path).mechanism.groups[0].law
+    assert a == load_study(studies / "actuator_slider_input.toml").mechanism.groups[0].law
+    path.write_text(closed.replace("2.0, 0.0, 0.0] }", "2.0, 0.0, 1.0] }"))
+    with pytest.raises(StudyError, match=r"law\.values.*closes at 360 deg with 1 mm"):
+        load_study(path)
+
+
+def test_the_inputs_are_declared_as_written(studies):
+    g = load_study(studies / "feed_fivebar.toml").mechanism.groups[0]
+    assert g == RotaryInput("P4", "P5", 9.0, Law("linear", ratio=1.0, phase=math.pi / 2),
+                            "second crank")
+    g = load_study(studies / "cam_rocker_input.toml").mechanism.groups[0]
+    assert g.law == Law("cycloidal", phase=0.0, start=30 * DEG, travel=40 * DEG,
+                        rise=150 * DEG)
+    g = load_study(studies / "actuator_slider_input.toml").mechanism.groups[0]
+    assert isinstance(g, SliderInput) and (g.guide_point, g.block, g.guide_angle) == \
+        ("P4", "P5", 0.0)
+    assert g.law.table[3] == (90 * DEG, 12.0)
+    plan = load_study(studies / "cam_rocker_input.toml").mechanism.compile()
+    assert list(plan.par_names[plan.goff[1]:plan.goff[1] + 5]) == \
+        ["rocker.length", "rocker.start_angle", "rocker.travel_angle", "rocker.phase_angle",
+         "rocker.rise_angle"]
+    assert list(plan.codes[:2]) == [kc.G_CRANK, kc.G_INPUT]
+    assert plan.input_names == ("rocker",) and list(plan.input_body) == [1]
+
+
+# ------------------------------------------------------------------ kinematics
+CHAINS = {"feed_fivebar": ("fivebar", naive.FIVEBAR_DATA),
+          "cam_rocker_input": ("cam_rocker", naive.CAM_ROCKER_DATA),
+          "actuator_slider_input": ("actuator", naive.ACTUATOR_DATA)}
+
+
+def _cycle(study, n=N_CYCLE):
+    crank = study.mechanism.crank
+    plan = study.mechanism.compile()
+    c = solve_curves(plan, revolution_angles(crank, n), kc.ACCELERATIONS,
+                     close_at=crank.phi0 + crank.rot * 2 * math.pi)
+    return plan, c
+
+
+@pytest.mark.parametrize("name", STUDIES)
+def test_inputs_match_the_60_digit_reference_over_a_cycle(studies, name):
+    """Positions, first and second analogs of every point, within
+    MP_REFERENCE_REL of each one's largest value over the cycle."""
+    plan, c = _cycle(load_study(studies / f"{name}.toml"))
+    assert (c.status == kc.OK).all()
+    kind, data = CHAINS[name]
+    chain = naive.InputChain(kind, data)
+    refs = [naive.mp_analogs(chain, phi) for phi in c.phi]
+    names = [p for p in refs[0]["pos"] if p in plan.point_names]
+    assert len(names) >= 5
+    for p in names:
+        i = plan.point(p)
+        for key, mine in (("pos", c.pos), ("d1", c.d1), ("d2", c.d2)):
+            ref = np.array([r[key][p] for r in refs])
+            scale = np.abs(ref).max()
+            err = np.abs(mine[:, i] - ref).max()
+            assert err <= MP_REFERENCE_REL * max(scale, 1e-300), \
+                f"{name} {p} {key}: {err / scale:.2e} relative"
+
+
+def test_the_geared_crank_keeps_its_phase_and_ratio(studies):
+    """The second crank's angle is phase + ratio * phi1 at every position, with
+    a ratio of -2 too (counter-rotating at twice the speed)."""
+    study = load_study(studies / "feed_fivebar.toml")
+    m = study.mechanism
+    for ratio in (1.0, -2.0):
+        g = dataclasses.replace(m.groups[0], law=Law("linear", ratio=ratio, phase=math.pi / 2))
+        st = dataclasses.replace(study, mechanism=dataclasses.replace(
+            m, groups=(g,) + m.groups[1:]))
+        plan, c = _cycle(st, 72)
+        i4, i5 = plan.point("P4"), plan.point("P5")
+        ang = np.arctan2(c.pos[:, i5, 1] - c.pos[:, i4, 1], c.pos[:, i5, 0] - c.pos[:, i4, 0])
+        want = math.pi / 2 + ratio * c.phi
+        assert np.abs(np.angle(np.exp(1j * (ang - want)))).max() < 1e-14
+        v = c.d1[:, i5] - c.d1[:, i4]
+        assert np.allclose(np.hypot(*v.T), 9.0 * abs(ratio), rtol=1e-14)
+
+
+# ------------------------------------------------------------------ kinetostatics
+def _with_eps(study, eps1):
+    m = study.mechanism
+    return dataclasses.replace(study, mechanism=dataclasses.replace(
+        m, crank=dataclasses.replace(m.crank, eps1=eps1)))
+
+
+@pytest.mark.parametrize("name", STUDIES)
+def test_virtual_power_with_the_inputs_driven(studies, name):
+    """M_bal (the main shaft's moment, every input's share included) * omega1
+    + the power of every load, gravity and inertia = 0, with eps1 != 0."""
+    study = _with_eps(load_study(studies / f"{name}.toml"), -250.0)
+    res = run_scene(study)
+    assert res.dense.forces.drive.shape[1] == 1
+    for curves in (res.table, res.dense):
+        total, scale = virtual_power(study, res.plan, curves, curves.forces)
+        assert np.isfinite(total).all()
+        rel = np.abs(total) / scale
+        assert rel.max() <= VIRTUAL_POWER_REL, f"{name}: {rel.max():.2e}"
+
+
+@pytest.mark.parametrize("name,naive_fn,input_name", [
+    ("feed_fivebar", naive.naive_forces_fivebar, "second crank"),
+    ("actuator_slider_input", naive.naive_forces_actuator, "actuator")])
+def test_reactions_and_drives_match_the_naive_dense_solve(studies, name, naive_fn, input_name):
+    study = _with_eps(load_study(studies / f"{name}.toml"), 120.0)
+    crank = study.mechanism.crank
+    res = run_scene(study)
+    fr = res.table.forces
+    plan = res.plan
+    for k, phi in enumerate(res.table.phi[:-1]):
+        ref = naive_fn(float(phi), omega1=crank.omega1, eps1=crank.eps1)
+        scale = max(np.abs(ref[j]).max() for j in plan.joint_names)
+        for j, jn in enumerate(plan.joint_names):
+            assert np.abs(fr.R[k, j] - ref[jn]).max() <= REACTION_REL * scale, (phi, jn)
+        for s, sn in enumerate(plan.slide_names):
+            assert np.abs(fr.slide[k, s] - ref[sn]).max() <= REACTION_REL * scale, (phi, sn)
+        drive, share = fr.drive[k, 0]
+        assert abs(drive - ref[input_name]) <= REACTION_REL * (abs(ref[input_name]) + 1e-3)
+        want_share = ref[input_name] * ref["q1"][input_name]
+        assert abs(share - want_share) <= REACTION_REL * (abs(ref["M_bal"]) + abs(want_share))
+        assert abs(fr.M_bal[k] - (ref["M_bal"] + want_share)) <= \
+            REACTION_REL * (abs(ref["M_bal"]) + abs(want_share))
+
+
+def test_the_drives_are_in_the_scene_file(studies, tmp_path):
+    import h5py
+    from pipeline.runner import run_study
+    out = tmp_path / "cam.h5"
+    run_study(studies / "cam_rocker_input.toml", out)
+    with h5py.File(out, "r") as f:
+        g = f["forces/dense"] if "forces/dense" in f else None
+        found = []
+        f.visititems(lambda n, o: found.append(n) if n.endswith("input_drive") else None)
+        assert found, "no input_drive dataset"
+        d = f[found[0]]
+        assert d.attrs["units"] == "N*m" and list(d.attrs["inputs"]) == ["rocker"]
+        assert np.isfinite(d[...]).all()
+        share = f[found[0].replace("input_drive", "input_share")][...]
+        assert np.isfinite(share).all() and np.abs(share).max() > 0
