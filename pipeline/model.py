@@ -173,6 +173,10 @@ class Law:
     rise: float = math.pi
     table: tuple = ()
 
+    # the law's keys in the parameter row -> its fields
+    FIELDS = {"ratio": "ratio", "phase_angle": "phase", "start_angle": "start", "start": "start",
+              "travel_angle": "travel", "stroke": "travel", "rise_angle": "rise"}
+
     @property
     def code(self):
         from .kernels import inputs

@@ -536,7 +536,11 @@ def apply_design(mech, spec: SweepSpec, x) -> "Mechanism":
             crank = replace(crank, **{key: val})
         else:
             k = labels.index(owner) - 1          # group_names[0] is the crank
-            groups[k] = replace(groups[k], **{key: val})
+            law = getattr(groups[k], "law", None)
+            if law is not None and key in law.FIELDS:     # an input's law
+                groups[k] = replace(groups[k], law=replace(law, **{law.FIELDS[key]: val}))
+            else:
+                groups[k] = replace(groups[k], **{key: val})
     out = replace(mech, fixed=fixed, crank=crank, groups=tuple(groups))
     scale = {}
     new_plan = out.compile()

@@ -24,7 +24,7 @@ def files(tmp_path_factory, studies):
     from pipeline.analysis import analyze
     analyze(sweep)
     scenes = [pipeline.run(studies / f"{s}.toml", d / f"{s}.h5", pictures=False).results
-              for s in ("ov7_class3", "takeup_dynamics")]
+              for s in ("ov7_class3", "takeup_dynamics", "cam_rocker_input")]
     return [sweep] + scenes
 
 

@@ -286,3 +286,103 @@ def test_the_drives_are_in_the_scene_file(studies, tmp_path):
         assert np.isfinite(d[...]).all()
         share = f[found[0].replace("input_drive", "input_share")][...]
         assert np.isfinite(share).all() and np.abs(share).max() > 0
+
+
+@pytest.mark.parametrize("name", STUDIES)
+def test_m_bal_is_the_lagrange_moment_of_the_whole_machine(studies, name):
+    """The main shaft's moment from kinetostatics equals the Lagrange equation
+    on phi1, J eps1 + (1/2) J' omega1^2 - Q: the inputs' inertia enters the
+    reduced moment of inertia through their analogs, and their drives reach
+    the shaft through q' (two independent routes to the same number)."""
+    from pipeline import dynamics as dy
+    study = _with_eps(load_study(studies / f"{name}.toml"), 75.0)
+    crank = study.mechanism.crank
+    res = run_scene(study)
+    fr = res.table.forces
+    phi = res.table.phi
+    J, half, Q = dy.reduced_terms(res.plan, phi, mechanism=study.mechanism)
+    want = J * crank.eps1 + half * crank.omega1 ** 2 - Q
+    scale = np.abs(want).max()
+    assert np.abs(fr.M_bal - want).max() <= 1e-9 * scale, np.abs(fr.M_bal - want).max() / scale
+
+
+# ------------------------------------------------------------------ a sweep over an input
+SWEEP_N = 160
+
+
+@pytest.fixture(scope="module")
+def cam_sweep(studies, tmp_path_factory):
+    from pipeline.cli import main
+    out = tmp_path_factory.mktemp("cam_sweep") / "cam.h5"
+    assert main(["run", str(studies / "cam_rocker_input_sweep.toml"), "-o", str(out),
+                 "--candidates", str(SWEEP_N), "-q"]) == 0
+    assert main(["analyze", str(out), "-q"]) == 0
+    return load_study(studies / "cam_rocker_input_sweep.toml"), out
+
+
+def test_sweep_over_the_cam_law_matches_the_scene_path(cam_sweep):
+    """The law's swing and rise (deg in the study and the file, rad in the
+    plan) and the arms' lengths are design variables: each candidate's peaks
+    are those of its own scene."""
+    import h5py
+    from pipeline.forces import scene_forces
+    from pipeline.sweep_spec import apply_design
+    from tolerances import SWEEP_VS_SCENE_REL
+    study, path = cam_sweep
+    with h5py.File(path, "r") as f:
+        x = f["candidates/params"][()]
+        status = f["candidates/status"][()]
+        m = {k: f[f"metrics/{k}"][()] for k in ("peak_reaction", "peak_acceleration",
+                                                "peak_M_bal", "stroke")}
+    assert (status == kc.OK).mean() > 0.9
+    assert x[:, 1].min() >= 120.0 and x[:, 1].max() <= 220.0 and np.ptp(x[:, 1]) > 80.0
+    # the force stage runs for the candidates that meet the stroke constraint
+    feasible = [k for k in range(SWEEP_N) if status[k] == kc.OK and m["stroke"][k] >= 20.0]
+    assert np.isfinite(m["peak_reaction"][feasible]).all()
+    for i in feasible[:3]:
+        mech = apply_design(study.mechanism, study.sweep, x[i])
+        rocker = next(g for g in mech.groups if isinstance(g, RotaryInput))
+        assert (rocker.law.travel, rocker.law.rise, rocker.length) == \
+            (x[i, 0] * DEG, x[i, 1] * DEG, x[i, 2])
+        plan = mech.compile()
+        crank = mech.crank
+        c = solve_curves(plan, revolution_angles(crank, study.sweep.positions), kc.ACCELERATIONS,
+                         close_at=crank.phi0 + crank.rot * 2 * math.pi)
+        fr = scene_forces(mech, plan, c)
+        acc = np.hypot(*c.d2[:, plan.point("P6")].T) * crank.omega1 ** 2 / 1000.0
+        arm = c.pos[:, plan.point("P5")] - c.pos[:, plan.point("P4")]
+        swing = np.ptp(np.arctan2(arm[:, 1], arm[:, 0]))       # on the sweep's grid
+        assert swing == pytest.approx(x[i, 0] * DEG, rel=1e-5)
+        for key, want in (("peak_reaction", fr.magnitude.max()),
+                          ("peak_M_bal", np.abs(fr.M_bal).max()), ("peak_acceleration", acc.max()),
+                          ("stroke", study.sweep.stroke_radius * swing)):
+            assert m[key][i] == pytest.approx(want, rel=SWEEP_VS_SCENE_REL), (i, key)
+
+
+def test_pareto_analysis_of_the_cam_sweep(cam_sweep):
+    from naive_pareto import brute_force_rank
+    from pipeline.analysis import read_analysis, read_sweep
+    from pipeline.storage import open_results
+    _, path = cam_sweep
+    data = read_sweep(path)
+    with open_results(path, "sweep") as f:
+        an = read_analysis(f)
+    assert data.feasible.sum() >= 20
+    np.testing.assert_array_equal(an.rank, brute_force_rank(data.F, data.feasible))
+    assert (an.rank[an.front1] == 1).all() and an.rank[an.knee] == 1
+
+
+def test_a_gear_ratio_cannot_be_swept(studies, tmp_path):
+    text = (studies / "cam_rocker_input_sweep.toml").read_text()
+    path = tmp_path / "bad.toml"
+    path.write_text(text.replace('rise = { param = "rocker.rise_angle", min = 120.0, max = 220.0 }',
+                                 'rise = { param = "rocker.rise_angle", min = 120.0, max = 360.0 }'))
+    with pytest.raises(StudyError, match=r"sweep\.variables\.rise\.max.*within \(0, 360\) deg"):
+        load_study(path)
+    five = (studies / "feed_fivebar.toml").read_text().replace('kind = "scene"', 'kind = "sweep"')
+    five += ('\n[sweep]\ncandidates = 10\n[sweep.variables]\n'
+             'r = { param = "second crank.ratio", min = 1.0, max = 3.0 }\n')
+    five = five.replace('analysis = "forces"', 'analysis = "forces"\nrocker = ["P5", "P3"]')
+    path.write_text(five)
+    with pytest.raises(StudyError, match=r"sweep\.variables\.r\.param.*gear ratio"):
+        load_study(path)
