@@ -386,3 +386,44 @@ def test_a_gear_ratio_cannot_be_swept(studies, tmp_path):
     path.write_text(five)
     with pytest.raises(StudyError, match=r"sweep\.variables\.r\.param.*gear ratio"):
         load_study(path)
+
+
+# ------------------------------------------------------------------ between the samples
+@pytest.mark.parametrize("law", ["cycloidal", "harmonic"])
+@pytest.mark.parametrize("link", [37.9, 38.02, 38.029])
+def test_a_lock_between_two_positions_is_found_where_it_begins(studies, law, link):
+    """The link P5-P6 is too short at the top of the rocker's swing: the
+    sinker bar cannot be reached in a window (34 deg wide down to under 2)
+    that 36 positions may straddle.  The link folds at the window's first
+    angle, a dead position the crank cannot pass: SINGULAR there (from the law's own formula by brentq), within
+    1e-6 deg, for the smooth cycloidal law and for a harmonic one whose
+    acceleration jumps at the top (rise 130 deg); the top of the swing lies
+    5 deg from the nearest position."""
+    from scipy.optimize import brentq
+    study = load_study(studies / "cam_rocker_input.toml")
+    m = study.mechanism
+    rocker = m.groups[0]
+    rocker = dataclasses.replace(rocker, law=dataclasses.replace(
+        rocker.law, kind=law, phase=5 * DEG,
+        rise=130 * DEG if law == "harmonic" else rocker.law.rise))
+    mech = dataclasses.replace(m, groups=(rocker, dataclasses.replace(m.groups[1], L_AB=link)))
+    plan = mech.compile()
+    c = solve_curves(plan, revolution_angles(mech.crank, 36), kc.ACCELERATIONS,
+                     close_at=2 * math.pi)
+    lw = rocker.law
+
+    def gap(p):      # > 0 where the link cannot reach the guide x = 80 mm
+        q = rise_return(p, lw.start, lw.travel, lw.phase, lw.rise, law == "cycloidal")[0]
+        return 80.0 - (30.0 + 35.0 * math.cos(q)) - link
+
+    grid = np.radians(np.linspace(0.0, 360.0, 360001))
+    v = np.array([gap(p) for p in grid])
+    k = int(np.argmax(v > 0))
+    assert k > 0 and (v > 0).sum() < len(v) * 0.1
+    begin = brentq(gap, grid[k - 1], grid[k], xtol=1e-15)
+    inside = [gap(p) > 0 for p in revolution_angles(mech.crank, 36)]
+    if link == 38.029:                       # the window lies between two positions
+        assert not any(inside)
+    assert c.overall == kc.SINGULAR          # the dyad folds there: a dead position
+    assert plan.group_names[int(c.fail_group)] == "lift"
+    assert abs(math.degrees(c.fail_phi - begin)) <= 1e-6, math.degrees(c.fail_phi - begin)
