@@ -265,7 +265,11 @@ def forces_figure(res):
     ax.grid(alpha=0.3)
     ax.set_title(f"Joint reactions at omega1 = {crank.omega1:g} rad/s", fontsize=10)
     ax2 = fig.add_subplot(gs[1, 0], sharex=ax)
-    ax2.plot(phi, fr.M_bal, "k")
+    ax2.plot(phi, fr.M_bal, "k", label="M_bal: the main shaft's moment")
+    for k, name in enumerate(fr.input_names):      # inputs driven from the main shaft
+        ax2.plot(phi, fr.drive[:, k, 1], "--", label=f"share of input {name!r} (drive x dq/dphi1)")
+    if fr.input_names:
+        ax2.legend(fontsize=7)
     ax2.set_ylabel("M_bal [N m]")
     ax2.set_xlabel("crank angle phi1 [deg]")
     ax2.grid(alpha=0.3)
