@@ -31,6 +31,29 @@ def joint_peaks(phi_deg, magnitude, joint_names):
     return rows
 
 
+def slide_action(slide):
+    """Where the normal force of each prismatic pair acts: e = 1000 C / N [mm],
+    its distance from the slider's centre of mass along the slide's direction
+    (the guide's N n at S plus the couple C is the one force N n at S + e u,
+    u the slide's direction, n = u turned +90 deg).  ``slide`` (..., 2) holds
+    (N [N], C [N*m]); NaN where N = 0 (a pure couple has no line of action).
+
+    A slider that bears on its guide at two ends l [mm] apart, centred on S,
+    takes N/2 - 1000 C/l and N/2 + 1000 C/l [N] there: both press on the same
+    side of the guide while |e| < l/2; beyond that the slider is wedged
+    between the guide's two faces (edge loads larger than N, and jamming
+    with friction).  The larger end load sizes the slide."""
+    slide = np.asarray(slide, float)
+    n, c = slide[..., 0], slide[..., 1]
+    e = 1000.0 * c / np.where(n != 0.0, n, 1.0) + 0.0     # (+ 0.0: no -0 in tables)
+    return np.where(n != 0.0, e, np.nan)
+
+
+def slide_label(name):
+    """The slider's name in a slide's name: slide[block] -> block."""
+    return name[6:-1] if name.startswith("slide[") and name.endswith("]") else name
+
+
 def load_time(phi, crank):
     """Time at crank angle phi on a uniform run from phi0 (the kinetostatic crank)."""
     return (np.asarray(phi, float) - crank.phi0) / crank.omega1
@@ -87,12 +110,17 @@ class Reactions:
         from .storage import put
         put(g, "reactions", self.R, "N", "joint reaction (force of the first body on the second)",
             dims=("phi1", "joint", "axis"), joints=list(self.joint_names))
-        put(g, "M_bal", self.M_bal, "N*m", "balancing moment on the crank", dims=("phi1",))
+        put(g, "M_bal", self.M_bal, "N*m", "balancing moment the main shaft delivers (on the crank; "
+            "with inputs besides the crank, plus their shares)", dims=("phi1",))
         if self.slide.shape[1]:
             put(g, "slide_reactions", self.slide, ["N", "N*m"],
-                "prismatic pair: normal force and couple", dims=("phi1", "slide",
-                                                                  "slide_component"),
-                slides=list(self.slide_names))
+                "prismatic pair: normal force N of the guide on the slider (along the slide's "
+                "direction turned +90 deg) and couple C, at the slider's centre of mass",
+                dims=("phi1", "slide", "slide_component"), slides=list(self.slide_names))
+            put(g, "slide_action", slide_action(self.slide), "mm",
+                "where the normal force acts: e = C/N, its distance from the slider's centre "
+                "of mass along the slide's direction (NaN where N = 0)",
+                dims=("phi1", "slide"), slides=list(self.slide_names))
         if self.input_names:
             put(g, "input_drive", self.drive[:, :, 0], list(self.drive_units),
                 "drive of each input besides the crank: a moment on a rotary input, a force "

@@ -1,8 +1,10 @@
 """Peaks a designer asks for, exact, with the crank angle where they happen.
 
 For a scene: the peak speed |v| and acceleration |a| of every named point, the
-peak |omega| and |eps| of every link, and, with forces, the peak reaction of
-every joint and the peak |balancing moment|.  Each peak is bracketed by the
+peak |omega| and |eps| of every link, the smallest transmission angle of every
+dyad and class III lead, and, with forces, the peak reaction of every joint,
+the peak normal force |N| and couple |C| of every slide and the peak
+|balancing moment|.  Each peak is bracketed by the
 largest sample of the dense revolution and its two neighbours, then found by
 a bounded 1-D maximiser (SciPy's Brent) on the exact kinematics: the
 continuation is walked from the first position to the trial angle, so the
@@ -23,8 +25,9 @@ XATOL = 1e-9          # rad: where a peak is, to about 6e-8 deg
 
 @dataclass
 class Peak:
-    quantity: str       # velocity, acceleration, omega, eps, reaction, M_bal
-    item: str           # the point, link or joint
+    quantity: str       # velocity, acceleration, omega, eps, reaction, slide_normal,
+                        # slide_couple, M_bal, min_transmission_angle
+    item: str           # the point, link, joint, slide or dyad
     value: float        # the peak magnitude
     unit: str
     phi1: float         # crank angle of the peak, deg
@@ -45,13 +48,16 @@ def _magnitudes(study, plan, curves, forces=None):
         out[("eps", lab, "1/s^2")] = np.abs(ep[:, j])
     for label, kind, names in transmission_items(study.mechanism):
         # transmission angle, as its deviation from 90 deg
-        P = [curves.pos[:, plan.point_names.index(p)] for p in names]
-        if kind == "dyad":      # at the middle joint B, between B->A and B->C
-            a, b, c = P
-            u, w = a - b, c - b
-        else:                   # class III lead J-P: the lead against J->Q (see below)
-            j, piv, a, b, c, d = P
-            u, w = piv - j, _meet(a - j, b - j, c - j, d - j)
+        if kind == "lines":     # a group with a sliding pair: two lines (see below)
+            u, w = (_line(curves.pos, plan, *line) for line in names)
+        else:
+            P = [curves.pos[:, plan.point_names.index(p)] for p in names]
+            if kind == "dyad":  # at the middle joint B, between B->A and B->C
+                a, b, c = P
+                u, w = a - b, c - b
+            else:               # class III lead J-P: the lead against J->Q (see below)
+                j, piv, a, b, c, d = P
+                u, w = piv - j, _meet(a - j, b - j, c - j, d - j)
         mu = np.degrees(np.arctan2(np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]),
                                    np.abs(u[:, 0] * w[:, 0] + u[:, 1] * w[:, 1])))
         out[("transmission_deviation", label, "deg")] = 90.0 - mu
@@ -59,15 +65,24 @@ def _magnitudes(study, plan, curves, forces=None):
         mag = forces.magnitude
         for j, name in enumerate(forces.joint_names):
             out[("reaction", name, "N")] = mag[:, j]
+        for k, name in enumerate(forces.slide_names):   # each prismatic pair's |N|, |C|
+            out[("slide_normal", name, "N")] = np.abs(forces.slide[:, k, 0])
+            out[("slide_couple", name, "N*m")] = np.abs(forces.slide[:, k, 1])
         out[("M_bal", "crank", "N*m")] = np.abs(forces.M_bal)
     return out
 
 
 def transmission_items(mech):
-    """The mechanism's transmission angles, in order: (label, kind, point names).
+    """The mechanism's transmission angles, in order: (label, kind, what).
+
+    A transmission angle is 90 deg minus the pressure angle, the angle between
+    the line of the force a group passes to the member it drives (frictionless
+    joints, links without their own loads) and that member's velocity; 90 deg
+    is best, 0 a dead position.  Every angle is folded into [0, 90] deg
+    (min(mu, 180 - mu)).
 
     * an RRR dyad A-B-C ("dyad", (A, B, C)): the angle at the middle joint B
-      between B->A and B->C;
+      between B->A and B->C (the force along A-B, B moving across C-B);
     * each lead of a class III group that joins the ternary link at J to a
       fixed pivot P (leads 4-6 and 5-7; "lead", (J, P, A, B, C, D)): the angle
       at J between the lead J-P and the line from J through Q, the point where
@@ -77,9 +92,32 @@ def transmission_items(mech):
       transmission angle (coupler against rocker) generalised.  It is 0 when
       the three leads' lines meet in one point, the group's singular position.
 
-    Every angle is folded into [0, 90] deg (min(mu, 180 - mu))."""
-    from .model import RRR, ClassIII
+    The groups with a sliding pair give two lines, ("lines", ((a, b, alpha),
+    (c, d, beta))): the link a->b turned by alpha (the absolute direction
+    alpha where a is None) against c->d turned by beta
+    (``kernels.metrics.lines_transmission``):
+
+    * RRP (slider B on its guide, link A-B): the force along A-B drives the
+      slider along the guide, so mu = 90 deg - angle(A-B, guide) = the angle
+      between A-B and the guide's normal (the slider-crank's: coupler against
+      the normal to the slider's path); 0 where A-B lies across the guide,
+      the group's toggle (its margin is sin mu);
+    * RPR (coulisse: block at A on a guide turning about C, guide end E): the
+      block pushes the guide along its normal n, and the guide's point under
+      the block moves across C->A, so mu = angle(C->A, n) = 90 deg -
+      angle(C->A, C->E); 90 deg with no offset, 0 where the block passes the
+      foot of the perpendicular from C (the group's toggle);
+    * PRP (two blocks joined at B, on guides 1 and 2): block 1 passes the
+      force to the pin along the normal of guide 1, and block 2 moves along
+      guide 2 (either way round), so mu = the angle between the two guides
+      (0 where they are parallel; sin mu is the group's margin);
+    * RPP (Scotch yoke): the block pushes the yoke along the slot's normal,
+      and the yoke moves along its guide, so mu = the angle between the slot
+      and the guide, |slot_angle| folded: constant over the revolution, a
+      design quantity (90 deg for the classic yoke)."""
+    from .model import PRP, RPP, RPR, RRP, RRR, ClassIII
     out = []
+    half = 0.5 * math.pi
     for g in mech.groups:
         if isinstance(g, RRR):
             out.append((g.name or f"{g.A}-{g.B}-{g.C}", "dyad", (g.A, g.B, g.C)))
@@ -90,7 +128,33 @@ def transmission_items(mech):
                         (p4, g.pivot_4, g.input, p3, p5, g.pivot_5)))
             out.append((f"{label} lead {p5}-{g.pivot_5}", "lead",
                         (p5, g.pivot_5, g.input, p3, p4, g.pivot_4)))
+        elif isinstance(g, RRP):
+            ga, gb = g.guide_link or (None, None)
+            out.append((g.name or f"RRP {g.A}-{g.B}", "lines",
+                        ((g.A, g.B, 0.0), (ga, gb, g.guide_angle + half))))
+        elif isinstance(g, RPR):
+            out.append((g.name or f"RPR {g.pivot}-{g.block}", "lines",
+                        ((g.pivot, g.block, 0.0), (g.pivot, g.guide_end, half))))
+        elif isinstance(g, PRP):
+            a1, b1 = g.guide1_link or (None, None)
+            a2, b2 = g.guide2_link or (None, None)
+            out.append((g.name or f"PRP {g.B}", "lines",
+                        ((a1, b1, g.guide1_angle), (a2, b2, g.guide2_angle))))
+        elif isinstance(g, RPP):
+            ga, gb = g.guide_link or (None, None)
+            out.append((g.name or f"RPP {g.A}-{g.B}", "lines",
+                        ((ga, gb, g.guide_angle), (ga, gb, g.guide_angle + g.slot_angle))))
     return out
+
+
+def _line(pos, plan, a, b, alpha):
+    """Direction (n, 2) of the link a->b turned by alpha, or of the absolute
+    alpha where a is None (``kernels.metrics._line``)."""
+    c, s = math.cos(alpha), math.sin(alpha)
+    if a is None:
+        return np.broadcast_to(np.array([c, s]), (pos.shape[0], 2))
+    d = pos[:, plan.point_names.index(b)] - pos[:, plan.point_names.index(a)]
+    return np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]], axis=1)
 
 
 def _meet(a, b, c, d):

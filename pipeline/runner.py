@@ -66,15 +66,17 @@ def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
 
 def peak_summary(res) -> dict:
     """The peaks a designer reads first: the working point's speed and
-    acceleration, the largest joint reaction and balancing moment (refined
-    between grid positions, with their crank angles)."""
+    acceleration, the largest joint reaction, slide normal force and balancing
+    moment (refined between grid positions, with their crank angles)."""
     wp = res.study.output.working_point
-    point, moment, transmission, reactions = {}, {}, {}, []
+    point, moment, transmission, reactions, slides = {}, {}, {}, [], []
     for p in res.peaks or ():          # one pass, shown in this order
         if p.item == wp and p.quantity in ("velocity", "acceleration"):
             point[f"peak {p.quantity} {wp}"] = f"{p.value:.6g} {p.unit} at phi1 = {p.phi1:.4f} deg"
         elif p.quantity == "reaction":
             reactions.append(p)
+        elif p.quantity == "slide_normal":
+            slides.append(p)
         elif p.quantity == "M_bal":
             moment["peak_M_bal"] = f"{p.value:.3f} N*m at phi1 = {p.phi1:.4f} deg"
         elif p.quantity == "min_transmission_angle":
@@ -88,6 +90,9 @@ def peak_summary(res) -> dict:
         out["peak_reaction"] = (f"{p.value:.1f} N at {p.item}, phi1 = {p.phi1:.4f} deg; pin "
                                 f"d_min {float(pin_diameter(p.value, length, sigma)):.2f} mm "
                                 f"({length:g} mm, {sigma:g} MPa)")
+    if slides:
+        p = max(slides, key=lambda q: q.value)
+        out["peak_slide_force"] = f"{p.value:.1f} N at {p.item}, phi1 = {p.phi1:.4f} deg"
     out.update(moment)
     out.update(transmission)
     m = res.motion or {}

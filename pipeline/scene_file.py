@@ -88,12 +88,18 @@ def _coordinates(f, plan, study):
     coordinate(f, "tolerance", [n for n, _ in TOLERANCES], "1", "solver tolerance")
     from .peaks import transmission_items
     coordinate(f, "dyad", [label for label, _, _ in transmission_items(study.mechanism)], "1",
-               "transmission angle: RRR dyad (A-B-C, at the middle joint B) or class III lead "
-               "(J-P: the lead against the line to the meet of the other two leads)")
+               "transmission angle: RRR dyad (A-B-C, at the middle joint B), class III lead "
+               "(J-P: the lead against the line to the meet of the other two leads), or a dyad "
+               "with a sliding pair (RRP, RPR, PRP, RPP: pipeline.peaks.transmission_items)")
 
 
 PEAK_DIMS = {"velocity": "point", "acceleration": "point", "omega": "link", "eps": "link",
-             "reaction": "joint", "min_transmission_angle": "dyad"}
+             "reaction": "joint", "slide_normal": "slide", "slide_couple": "slide",
+             "min_transmission_angle": "dyad"}
+
+
+PEAK_WHAT = {"slide_normal": "peak |N| (a slide's normal force)",
+             "slide_couple": "peak |C| (a slide's couple)"}
 
 
 def _peaks(g, peaks, output=None):
@@ -109,7 +115,7 @@ def _peaks(g, peaks, output=None):
         val = np.array([p.value for p in ps]) if dims else np.float64(ps[0].value)
         phi = np.array([p.phi1 for p in ps]) if dims else np.float64(ps[0].phi1)
         grid = np.array([p.grid_value for p in ps]) if dims else np.float64(ps[0].grid_value)
-        what = q.replace("_", " ") if q.startswith("min_") else f"peak |{q}|"
+        what = q.replace("_", " ") if q.startswith("min_") else PEAK_WHAT.get(q, f"peak |{q}|")
         put(g, q, val, ps[0].unit, what, dims=dims)
         put(g, f"{q}_phi1", phi, "deg", f"crank angle phi1 of the {what}", dims=dims)
         put(g, f"{q}_grid", grid, ps[0].unit, f"{what} among the dense positions only",

@@ -51,7 +51,8 @@ METRICS = {
                  "speed, the largest of the grid's positions (not refined between them)",
                  "kinematics"),
     "min_transmission_angle": ("deg", "smallest transmission angle (RRR dyads at the middle "
-                               "joint, class III leads) over the revolution, the smallest of the "
+                               "joint, class III leads, the slider dyads' force against the "
+                               "driven member's motion) over the revolution, the smallest of the "
                                "grid's positions (not refined between them)", "transmission"),
     "transmission_deviation": ("deg", "90 deg - min_transmission_angle: the largest deviation "
                                "of a transmission angle from 90 deg (an objective to minimise)",
@@ -313,7 +314,7 @@ def _check_available(sec, key, m, mech, output):
     if METRICS[m][2] == "transmission":
         from .peaks import transmission_items
         if not transmission_items(mech):
-            raise sec.error(key, f"{m} needs an RRR dyad or a class III group (the "
+            raise sec.error(key, f"{m} needs a dyad or a class III group (the "
                                  "transmission angles of pipeline.peaks); this mechanism has "
                                  "none")
 

@@ -3,8 +3,10 @@
 
 * a sweep: one row per candidate (design variables, status name, feasibility,
   constraint violation, Pareto front, metrics, constraints);
-* a scene: its points, links, reactions, peaks and dynamics motion tables, at
-  every computed position.
+* a scene: its points, links, reactions (the joints' Rx, Ry, |R|; each
+  slide's normal force N, couple C and the point of action e = C/N of
+  ``forces.slide_action``; M_bal), peaks and dynamics motion tables, at every
+  computed position.
 
 Column names are plain (``L12``, ``P8_x``); the units of every column are in
 ``df.attrs["units"]``, and ``with_units(df)`` gives headers such as
@@ -189,6 +191,15 @@ def scene_tables(path, every=1) -> dict:
                 cols[f"{name}_y"] = R[rows, j, 1]
                 cols[name] = mag[rows, j]
                 units.update({f"{name}_x": "N", f"{name}_y": "N", name: "N"})
+            if "slide_reactions" in d:     # prismatic pairs: N, C and where N acts
+                from .forces import slide_action, slide_label
+                S = d["slide_reactions"][rows]
+                E = slide_action(S)
+                for k, name in enumerate(d["slide_reactions"].attrs["slides"]):
+                    lab = slide_label(str(attr_text(name)))
+                    cols[f"N[{lab}]"], cols[f"C[{lab}]"] = S[:, k, 0], S[:, k, 1]
+                    cols[f"e[{lab}]"] = E[:, k]
+                    units.update({f"N[{lab}]": "N", f"C[{lab}]": "N*m", f"e[{lab}]": "mm"})
             cols["M_bal"] = d["M_bal"][rows]
             units["M_bal"] = "N*m"
             out["reactions"] = _frame(cols, units)

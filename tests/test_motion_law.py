@@ -313,21 +313,37 @@ def test_sweep_metric_errors_name_file_field_reason(studies, change, field, reas
     assert "bad_sweep.toml" in msg and field in msg and reason in msg, msg
 
 
-def test_transmission_needs_a_dyad_or_a_class_iii_group(studies):
-    """The take-up (RRP, RPR only) has no transmission angle to bound."""
-    text = (studies / "takeup_dynamics.toml").read_text().replace('kind = "scene"',
-                                                                  'kind = "sweep"')
-    text = text.split("[dynamics]")[0] if "[dynamics]" in text else text
-    text = text.replace("[output]\n", '[output]\nrocker = ["P5", "P7"]\n', 1) + """
+def test_transmission_needs_a_dyad_or_a_class_iii_group():
+    """A crank with an attached point only has no transmission angle to bound
+    (every dyad has one: RRR, RRP, RPR, PRP, RPP; see pipeline.peaks)."""
+    text = """
+[study]
+kind = "sweep"
+name = "crank_only"
+[mechanism.fixed]
+P1 = [0.0, 0.0]
+[mechanism.crank]
+pivot = "P1"
+tip = "P2"
+length = 10.0
+omega1 = 10.0
+[[mechanism.groups]]
+type = "attach"
+point = "P3"
+base = "P2"
+along = ["P1", "P2"]
+length = 5.0
+[output]
+rocker = ["P1", "P3"]
 [sweep]
-stroke_radius = 55.0
+stroke_radius = 15.0
 objectives = ["dwell_error"]
 metrics = ["min_transmission_angle"]
 [sweep.variables]
 L12 = { param = "crank.length" }
 """
-    with pytest.raises(StudyError, match=r"sweep.metrics: min_transmission_angle needs an RRR "
-                                         r"dyad or a class III group"):
+    with pytest.raises(StudyError, match=r"sweep.metrics: min_transmission_angle needs a dyad "
+                                         r"or a class III group"):
         parse_study(text, "t.toml")
 
 

@@ -72,3 +72,86 @@ def test_load_expression_error_names_field(studies):
     with pytest.raises(ValueError) as e:
         parse_study(text, "d.toml")
     assert "d.toml" in str(e.value) and "loads[0].fy" in str(e.value) and "'x'" in str(e.value)
+
+
+# ------------------------------------------------------------------ slides against the guides
+SLIDE_CASES = [
+    # (study, change, field expected in the message, reason fragment)
+    ("slotted_rocker_prp", ('along = ["P4", "P3"]\nangle = 0.0',
+                            'along = ["P4", "P3"]\nangle = 30.0'),
+     "mechanism.slides[0].angle", "the PRP group 'slider' guides P5 on guide 1 along P4->P3 + 0 "
+     "deg; this slide says along P4->P3 + 30 deg"),
+    ("slotted_rocker_prp", ('guide = "ground"\nangle = 0.0', 'guide = "ground"\nangle = 30.0'),
+     "mechanism.slides[1].angle", "guides P5 on guide 2 at 0 deg (absolute); this slide says "
+     "30 deg"),
+    ("slotted_rocker_prp", ('along = ["P4", "P3"]\nangle = 0.0',
+                            'along = ["P2", "P3"]\nangle = 0.0'),
+     "mechanism.slides[0].along", "follows P2->P3, a link of neither the slider 'block' nor its "
+     "guide 'rocker DC'"),
+    ("slotted_rocker_prp", ('along = ["P4", "P3"]\nangle = 0.0', 'angle = 0.0'),
+     "mechanism.slides[0].along", "turning with its body 'rocker DC'; this slide gives the fixed "
+     "direction 0 deg"),
+    ("scotch_yoke_rpp", ('guide = "yoke"\nangle = 90.0', 'guide = "yoke"\nangle = 0.0'),
+     "mechanism.slides[0].angle", "the RPP group 'yoke' guides P2 along its slot, 90 deg from its "
+     "guide at 0 deg (absolute); this slide says 0 deg"),
+    ("scotch_yoke_rpp", ('guide = "ground"\nangle = 0.0', 'guide = "ground"\nangle = 10.0'),
+     "mechanism.slides[1].angle", "guides P3 at 0 deg (absolute); this slide says 10 deg"),
+    ("takeup_dynamics", ('guide = "ground"\nangle = 90.0', 'guide = "ground"\nangle = 0.0'),
+     "mechanism.slides[0].angle", "the RRP group 'needle bar' guides P3 at 90 deg (absolute)"),
+    ("takeup_dynamics", ('along = ["P5", "P4"]\nangle = 0.0', 'along = ["P5", "P4"]\nangle = 5.0'),
+     "mechanism.slides[1].angle", "the RPR group 'coulisse' guides P4 along P5->P6"),
+    # the take-up eye P7 is attached along P5->P6: P7->P5 is the guide turned 180 deg
+    ("takeup_dynamics", ('along = ["P5", "P4"]\nangle = 0.0', 'along = ["P7", "P5"]\nangle = 1.0'),
+     "mechanism.slides[1].angle", "lines 1 deg apart"),
+]
+
+
+@pytest.mark.parametrize("name,change,field,reason", SLIDE_CASES,
+                         ids=[f"{c[0]}-{c[2]}-{c[1][1][-12:]}" for c in SLIDE_CASES])
+def test_a_slide_against_its_groups_guide_is_an_error(studies, tmp_path, name, change, field,
+                                                      reason):
+    text = (studies / f"{name}.toml").read_text()
+    assert change[0] in text
+    path = tmp_path / "bad_slide.toml"
+    path.write_text(text.replace(*change, 1))
+    with pytest.raises(StudyError) as e:
+        load_study(path)
+    msg = str(e.value)
+    assert str(path) in msg and field in msg and reason in msg, msg
+
+
+SLIDE_AGREES = [
+    # the same line modulo 180 deg, written another way
+    ("slotted_rocker_prp", [('along = ["P4", "P3"]\nangle = 0.0',
+                             'along = ["P3", "P4"]\nangle = 0.0')]),
+    ("slotted_rocker_prp", [('along = ["P4", "P3"]\nangle = 0.0',
+                             'along = ["P4", "P3"]\nangle = 180.0')]),
+    ("slotted_rocker_prp", [('guide = "ground"\nangle = 0.0', 'guide = "ground"\nangle = -180.0')]),
+    # a link of two fixed points is a fixed direction
+    ("slotted_rocker_prp", [('guide = "ground"\nangle = 0.0',
+                             'guide = "ground"\nalong = ["P1", "P4"]')]),
+    # the coulisse's guide end, or the eye attached along it, instead of the block
+    ("takeup_dynamics", [('along = ["P5", "P4"]\nangle = 0.0',
+                          'along = ["P5", "P6"]\nangle = 0.0')]),
+    ("takeup_dynamics", [('along = ["P5", "P4"]\nangle = 0.0',
+                          'along = ["P7", "P5"]\nangle = 0.0')]),
+    # both PRP guides fixed (60 and 0 deg): the slider on the ground carries the
+    # sliding point of both, so which one it is cannot be told: not judged
+    ("slotted_rocker_prp", [('guide1_link = ["P4", "P3"]\nguide1_angle = 0.0',
+                             'guide1_angle = 60.0'),
+                            ('guide = "ground"\nangle = 0.0', 'guide = "ground"\nangle = 30.0')]),
+]
+
+
+@pytest.mark.parametrize("name,changes", SLIDE_AGREES)
+def test_slides_that_agree_or_cannot_be_judged_load(studies, name, changes):
+    text = (studies / f"{name}.toml").read_text()
+    for old, new in changes:
+        assert old in text
+        text = text.replace(old, new, 1)
+    parse_study(text, "ok.toml")
+
+
+def test_every_shipped_study_loads(studies):
+    for path in sorted(studies.glob("*.toml")):
+        load_study(path)

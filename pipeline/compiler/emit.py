@@ -163,6 +163,13 @@ class RRPEmitter(Emitter):
                 f"st, m = rrp(pos, d1, d2, {self.p(0)}, {self.p(1)}, {self.p(2)}, {ga}, {gb}, "
                 f"{self.k('L_AB')}, {self.k('guide_angle')}, {self.k('W')}, order, sing, slack)"]
 
+    def transmission(self):
+        ga, gb = _guide_link(self, 3)
+        return [f"# {self.title()}: link {self.pname(0)}-{self.pname(2)} against the guide's "
+                "normal",
+                _wrap_line(f"tr = min(tr, lines_transmission(pos, {self.p(0)}, {self.p(2)}, 0.0, "
+                           f"{ga}, {gb}, {self.k('guide_angle')} + 0.5 * math.pi))")]
+
 
 class RPREmitter(Emitter):
     watched = True
@@ -173,6 +180,12 @@ class RPREmitter(Emitter):
                 f"{self.pname(0)}; guide end {self.pname(2)}",
                 f"st, m = rpr(pos, d1, d2, {self.p(0)}, {self.p(1)}, {self.p(2)}, "
                 f"{self.k('offset')}, {self.k('guide_length')}, {self.k('W')}, order, sing, slack)"]
+
+    def transmission(self):
+        c, a, e = self.p(1), self.p(0), self.p(2)
+        return [f"# {self.title()}: {self.pname(1)}->{self.pname(0)} against the guide's normal",
+                _wrap_line(f"tr = min(tr, lines_transmission(pos, {c}, {a}, 0.0, {c}, {e}, "
+                           "0.5 * math.pi))")]
 
 
 def _guide_link(e, j):
@@ -206,6 +219,13 @@ class PRPEmitter(Emitter):
                 f"{self.p(6)}, {k('guide1_angle')}, {k('guide1_offset')}, {k('guide2_angle')}, "
                 f"{k('guide2_offset')}, order, sing)"]
 
+    def transmission(self):
+        a1, b1 = _guide_link(self, 1)
+        a2, b2 = _guide_link(self, 4)
+        return [f"# {self.title()}: the angle between the two guides",
+                _wrap_line(f"tr = min(tr, lines_transmission(pos, {a1}, {b1}, "
+                           f"{self.k('guide1_angle')}, {a2}, {b2}, {self.k('guide2_angle')}))")]
+
 
 class RPPEmitter(Emitter):
     watched = True
@@ -220,6 +240,13 @@ class RPPEmitter(Emitter):
                 f"st, m = rpp(pos, d1, d2, {self.p(0)}, {self.p(1)}, {ga}, {gb}, {self.p(4)}, "
                 f"{k('guide_angle')}, {k('guide_offset')}, {k('slot_angle')}, "
                 f"{k('slot_offset')}, order, sing)"]
+
+    def transmission(self):
+        ga, gb = _guide_link(self, 2)
+        g = self.k("guide_angle")
+        return [f"# {self.title()}: the angle between the slot and the guide",
+                _wrap_line(f"tr = min(tr, lines_transmission(pos, {ga}, {gb}, {g}, {ga}, {gb}, "
+                           f"{g} + {self.k('slot_angle')}))")]
 
 
 class AttachEmitter(Emitter):

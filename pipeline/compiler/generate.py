@@ -55,7 +55,7 @@ from pipeline.kernels.groups import attach, crank, prp, rpp, rpr, rrp, rrr
 from pipeline.kernels.inputs import (linear_law, rise_return, rotary_input, slider_input,
                                      table_law)
 from pipeline.kernels.metrics import (dwell_error, dwell_lanes, dyad_transmission, law_error,
-                                      lead_transmission, relative_angle)
+                                      lead_transmission, lines_transmission, relative_angle)
 from pipeline.kernels.sweep import (M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, M_PEAK_R,
                                     M_PEAK_JOINT, M_PEAK_PHI, M_PEAK_MBAL, M_FAIL_PHI,
                                     M_NEWTON_MEAN, M_FORCES_DONE, M_FAIL_GROUP, M_PEAK_ACC,
@@ -183,14 +183,14 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
 
     w(textwrap.dedent(ADVANCE_NEWTON if n_triads else ADVANCE_CLOSED))
     w(force_kernel(plan, n))
-    body = ["tr = math.inf"]
+    body = [unpack, "tr = math.inf"]
     for e in ems[:plan.n_kinematic]:
         body += e.transmission()
     body.append("return tr")
-    w(_fn("transmission(pos)",
+    w(_fn("transmission(K, pos)",
           "The smallest transmission angle at this position (rad, in [0, pi/2]) over the\n"
-          "RRR dyads and the class III leads (``pipeline.peaks.transmission_items``);\n"
-          "inf where the mechanism has none.",
+          "dyads and the class III leads (``pipeline.peaks.transmission_items``); inf\n"
+          "where the mechanism has none.",
           body))
     w(textwrap.dedent(CAREFUL))
     if rocker is not None:
@@ -889,7 +889,7 @@ CAREFUL = '''
                 if e > peak_e or not math.isfinite(e):
                     peak_e = e
             if want_t:
-                t = transmission(pos)
+                t = transmission(K, pos)
                 if t < trans or not math.isfinite(t):
                     trans = t
         if want_f:

@@ -306,3 +306,29 @@ def lead_transmission(pos, ij, ip, ia, ib, ic, idd):
     qy = l1w * l2x - l1x * l2w
     # J is the origin: the direction J -> Q is (X, Y) (times W, whose sign folds away)
     return fold_angle(pos[ip, 0] - jx, pos[ip, 1] - jy, qx, qy)
+
+
+@njit(**JIT)
+def _line(pos, ia, ib, alpha):
+    """Direction of the link a->b turned by ``alpha`` (the absolute direction
+    ``alpha`` where ia < 0); not normalised."""
+    c = math.cos(alpha)
+    s = math.sin(alpha)
+    if ia < 0:
+        return c, s
+    dx = pos[ib, 0] - pos[ia, 0]
+    dy = pos[ib, 1] - pos[ia, 1]
+    return c * dx - s * dy, s * dx + c * dy
+
+
+@njit(**JIT)
+def lines_transmission(pos, ia, ib, alpha, ic, idd, beta):
+    """Transmission angle of a group with a sliding pair: the angle between
+    line 1 (the link a->b turned by ``alpha``, or the absolute ``alpha`` where
+    ia < 0) and line 2 (c->d turned by ``beta``), folded into [0, pi/2].  Each
+    group's emitter picks the two lines so that this is 90 deg minus the
+    angle between the line of the force the group transmits and the velocity
+    of the member it drives (``pipeline.peaks.transmission_items``)."""
+    ux, uy = _line(pos, ia, ib, alpha)
+    wx, wy = _line(pos, ic, idd, beta)
+    return fold_angle(ux, uy, wx, wy)
