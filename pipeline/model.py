@@ -320,6 +320,11 @@ class Slide:
     guide: str | None
     angle: float
     along: tuple[str, str] | None = None
+    # the parameters (plan names) of the group's guide this slide runs along:
+    # the direction is angle - (their declared sum) + their values in the
+    # candidate's row, so a sweep that turns the guide turns the slide with it
+    follows: tuple = ()
+    follows_declared: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -380,6 +385,10 @@ class Plan:
     slide_bodies: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
     slide_dir: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
     slide_angle: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    # per slide: up to two parameters (indices into par, -1: none) added to
+    # slide_angle - slide_declared (the guide parameters a slide follows)
+    slide_follow: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+    slide_declared: np.ndarray = field(default_factory=lambda: np.zeros(0))
     slide_names: tuple = ()
     crank_body: int = -1
     load_body: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
@@ -546,8 +555,10 @@ def compile_mechanism(m: Mechanism) -> Plan:
     order = sorted(range(len(joints)), key=lambda k: natural_key(jnames[k]))
     joints, jb, jnames = [joints[k] for k in order], [jb[k] for k in order], [jnames[k] for k in order]
     body_index = {b.name: i for i, b in enumerate(m.bodies)}
-    sb, sd, sa, sn = [], [], [], []
+    sb, sd, sa, sn, sf, sdecl = [], [], [], [], [], []
     for s in m.slides:
+        sf.append([par_names.index(f) for f in s.follows] + [-1] * (2 - len(s.follows)))
+        sdecl.append(s.follows_declared)
         sb.append([body_index[s.guide] if s.guide else -1, body_index[s.slider]])
         sd.append([index[s.along[0]], index[s.along[1]]] if s.along else [-1, -1])
         sa.append(s.angle)
@@ -574,6 +585,7 @@ def compile_mechanism(m: Mechanism) -> Plan:
         joint_point=i64(joints), joint_bodies=i64(jb, (-1, 2)), joint_names=tuple(jnames),
         slide_bodies=i64(sb, (-1, 2)), slide_dir=i64(sd, (-1, 2)),
         slide_angle=np.asarray(sa, dtype=np.float64), slide_names=tuple(sn),
+        slide_follow=i64(sf, (-1, 2)), slide_declared=np.asarray(sdecl, dtype=np.float64),
         crank_body=crank_body, load_body=i64(lb), load_point=i64(lp), gravity=m.gravity,
         input_group=i64([i[0] for i in inputs]), input_kind=i64([i[1] for i in inputs]),
         input_law=i64([i[2] for i in inputs]), input_points=i64([i[3] for i in inputs], (-1, 2)),

@@ -17,7 +17,7 @@ from pathlib import Path
 from .errors import StudyError
 from .limits import MAX_POSITIONS, POSITIONS_WHY
 from .model import (PRP, RPP, RPR, RRP, RRR, Attach, Body, CentreOfMass, ClassIII, Crank, Law,
-                    Load, Mechanism, RotaryInput, Slide, SliderInput)
+                    Load, Mechanism, RotaryInput, Slide, SliderInput, group_label)
 
 
 _MISSING = object()
@@ -467,7 +467,7 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
             slides.append(Slide(slider, None if guide == "ground" else guide,
                                 math.radians(s.number("angle", 0.0)), along))
             s.done()
-            _check_slide(s, slides[-1], groups, bodies, fixed)
+            slides[-1] = _check_slide(s, slides[-1], groups, bodies, fixed)
     if sec.has("loads"):
         from .expressions import parse_expression
         for ld in sec.tables("loads"):
@@ -574,15 +574,18 @@ def _along_words(link, angle):
 
 
 def _guides(groups, fixed):
-    """The sliding pairs the groups define: (who, point, (link, angle), host, words).
-    The slider carries ``point``; the guide's direction is the link a->b
-    turned by angle, or the absolute angle (link None); host: the points the
-    guide's body carries (None: the ground)."""
+    """The sliding pairs the groups define: (who, point, (link, angle), host,
+    words, params).  The slider carries ``point``; the guide's direction is
+    the link a->b turned by angle, or the absolute angle (link None); host:
+    the points the guide's body carries (None: the ground); params: the
+    group's parameters (plan names) whose sum is that angle."""
     out = []
     for k, g in enumerate(groups):
         kind = type(g).__name__
         who = (f"the {kind} group {g.name!r}" if g.name
                else f"the {kind} group mechanism.groups[{k}]")
+        label = group_label(g, k + 1)
+        n = len(out)
 
         def host(point, link):
             return link if link else (None if point in fixed else (point,))
@@ -608,6 +611,13 @@ def _guides(groups, fixed):
             out.append((who, g.A, (g.guide_link, g.guide_angle + g.slot_angle), (g.B,),
                         f"along its slot, {_deg(g.slot_angle)} from its guide "
                         f"{words(g.guide_link, g.guide_angle)}"))
+        elif isinstance(g, SliderInput):
+            out.append((who, g.block, (None, g.guide_angle), None,
+                        words(None, g.guide_angle)))
+        keys = {RRP: [("guide_angle",)], PRP: [("guide1_angle",), ("guide2_angle",)],
+                RPP: [("guide_angle",), ("guide_angle", "slot_angle")],
+                SliderInput: [("guide_angle",)]}.get(type(g), [()] * (len(out) - n))
+        out[n:] = [o + (tuple(f"{label}.{key}" for key in ks),) for o, ks in zip(out[n:], keys)]
     return out
 
 
@@ -638,6 +648,8 @@ def _same_directions(groups):
                 same.setdefault((g.guide_point, g.B), (g.guide_link, g.guide_angle))
             if g.slot_offset == 0.0:
                 same.setdefault((g.B, g.A), (g.guide_link, g.guide_angle + g.slot_angle))
+        elif isinstance(g, SliderInput):
+            same.setdefault((g.guide_point, g.block), (None, g.guide_angle))
     return same
 
 
@@ -700,27 +712,29 @@ def _check_slide(s: Section, slide: Slide, groups, bodies, fixed):
       angle (``.along``).
 
     Anything else (e.g. another link of the guide's own body) is not flagged:
-    its angle to the guide's link is not known before the kinematics.  This
-    judges the declared design: a slide's angle is no design variable, so a
-    sweep that turns a guide leaves its slide's direction behind."""
+    its angle to the guide's link is not known before the kinematics.
+
+    Returns the slide, following the guide's angle parameters (``follows``)
+    where it is written along the guide's own link (or both are absolute):
+    a sweep that turns the guide turns the slide with it."""
     by_name = {b.name: b for b in bodies}
     slider = by_name[slide.slider]
     guide = by_name[slide.guide] if slide.guide else None
     guide_pts = _carries(guide, groups) if guide else None
     same = _same_directions(groups)
     matches = []
-    for who, point, direction, host, words in _guides(groups, fixed):
+    for who, point, direction, host, words, params in _guides(groups, fixed):
         if point not in slider.joints and point != slider.com.base:
             continue
         if (host is None) != (guide is None) or (host and not set(host) <= guide_pts):
             continue
-        matches.append((who, point, _reduce(direction, same, fixed), words))
+        matches.append((who, point, _reduce(direction, same, fixed), words, direction, params))
     if not matches:
-        return
-    (who, point, (glink, gangle), words) = matches[0]
+        return slide
+    (who, point, (glink, gangle), words, direction, params) = matches[0]
     for m in matches[1:]:
         if m[2][0] != glink or abs(math.sin(m[2][1] - gangle)) > math.sin(SLIDE_ANGLE_TOL):
-            return     # ambiguous: the slider carries the sliding point of two pairs
+            return slide    # ambiguous: the slider carries the sliding point of two pairs
     slink, sangle = _reduce((slide.along, slide.angle), same, fixed)
     says = _along_words(slide.along, slide.angle) if slide.along else _deg(slide.angle)
     guide_words = f"{who} guides {point} {words}"
@@ -729,7 +743,11 @@ def _check_slide(s: Section, slide: Slide, groups, bodies, fixed):
             raise s.error("angle", f"{guide_words}; this slide says {says} (lines "
                                    f"{_fold_deg(sangle - gangle):.4g} deg apart: the slide's "
                                    "normal force would be taken across the wrong line)")
-        return
+        if params and slide.along == direction[0]:
+            # written along the guide's own link (or both absolute): the slide turns with
+            # the guide's parameters when a sweep varies them
+            return replace(slide, follows=params, follows_declared=direction[1])
+        return slide
     if slide.along and not (set(slide.along) <= fixed.keys()):
         pts = _carries(slider, groups) | (guide_pts or set(fixed))
         if not set(slide.along) <= pts:
@@ -743,6 +761,7 @@ def _check_slide(s: Section, slide: Slide, groups, bodies, fixed):
                                f"slide gives the fixed direction {_deg(slide.angle)} (give "
                                "along = [a, b], a link of the guide's body, and the angle "
                                "from it)")
+    return slide
 
 
 def _fold_deg(angle):

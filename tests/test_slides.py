@@ -227,3 +227,36 @@ def test_the_generated_transmission_is_the_scenes(studies, name):
     want = np.min([90.0 - v for (q, _, _), v in grid.items() if q == "transmission_deviation"],
                   axis=0)
     np.testing.assert_allclose(got, want, atol=1e-12)
+
+
+def test_a_slide_turns_with_its_guide_when_a_sweep_turns_the_guide(studies):
+    """The PRP sweep turns the frame's guide (slider.guide2_angle); the slide
+    written along it (absolute 0 deg) follows the guide's parameter, so a
+    tilted candidate's forces are those of a study that declares the tilt in
+    both places."""
+    import dataclasses
+    from pipeline.forces import scene_forces
+    from pipeline.scene import revolution_angles, solve_curves
+    from pipeline.study import load_study, parse_study
+    study = load_study(studies / "slotted_rocker_prp.toml")
+    m = study.mechanism
+    assert m.slides[1].follows == ("slider.guide2_angle",)
+    tilt = -20.0
+    prp = dataclasses.replace(m.groups[1], guide2_angle=math.radians(tilt))
+    swept = dataclasses.replace(m, groups=(m.groups[0], prp))          # as a sweep row does
+    text = study.text.replace("guide2_angle = 0.0", f"guide2_angle = {tilt}")
+    text = text.replace('guide = "ground"\nangle = 0.0', f'guide = "ground"\nangle = {tilt}')
+    declared = parse_study(text, "tilted.toml").mechanism
+    out = []
+    for mech in (swept, declared):
+        plan = mech.compile()
+        c = solve_curves(plan, revolution_angles(mech.crank, 24), 2, close_at=2 * math.pi)
+        out.append(scene_forces(mech, plan, c))
+    for a, b in ((out[0].R, out[1].R), (out[0].slide, out[1].slide), (out[0].M_bal, out[1].M_bal)):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())
+    # and the slide held at 0 deg gives other forces: the test can fail
+    held = dataclasses.replace(swept, slides=(swept.slides[0], dataclasses.replace(
+        swept.slides[1], follows=())))
+    plan = held.compile()
+    c = solve_curves(plan, revolution_angles(held.crank, 24), 2, close_at=2 * math.pi)
+    assert np.abs(scene_forces(held, plan, c).M_bal - out[1].M_bal).max() > 0.1

@@ -75,6 +75,7 @@ def structure_key(plan, rocker=None, watch=True) -> tuple:
     arrays = (plan.codes, plan.gidx, plan.goff, plan.fixed_idx, plan.fixed_off, plan.link_a,
               plan.link_b, plan.body_com, plan.body_turn, plan.body_mass_off, plan.joint_point,
               plan.joint_bodies, plan.slide_bodies, plan.slide_dir, plan.slide_angle,
+              plan.slide_follow, plan.slide_declared,
               plan.load_body, plan.load_point, plan.input_group, plan.input_kind,
               plan.input_law, plan.input_points, plan.input_body)
     tables = tuple(None if t is None else (t[0].tobytes(), t[1].tobytes())

@@ -158,12 +158,19 @@ def force_kernel(plan, names) -> str:
     for k in range(ns):
         q = int(plan.slide_bodies[k, 1])
         sq = int(plan.body_com[q])
+        # the slide's direction: its angle, turned with the guide parameters it
+        # follows (a design variable turns the slide with its guide)
+        follow = [int(i) for i in plan.slide_follow[k] if i >= 0]
+        angle = literal(float(plan.slide_angle[k]))
+        if follow:
+            angle = " + ".join([literal(float(plan.slide_angle[k] - plan.slide_declared[k]))]
+                               + [f"par[PAR_{names.param[plan.par_names[i]]}]" for i in follow])
         if plan.slide_dir[k, 0] >= 0:
             a_, b_ = (int(v) for v in plan.slide_dir[k])
             th = sym.var(f"math.atan2(pos[{P[b_]}, 1] - pos[{P[a_]}, 1], pos[{P[b_]}, 0] - "
-                         f"pos[{P[a_]}, 0]) + {literal(float(plan.slide_angle[k]))}")
+                         f"pos[{P[a_]}, 0]) + {angle}")
         else:
-            th = sym.var(literal(float(plan.slide_angle[k])))
+            th = sym.var(angle)
         nx = sym.var(f"-math.sin({th})")
         ny = sym.var(f"math.cos({th})")
         col = 2 * nj + 2 * k
