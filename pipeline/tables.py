@@ -200,6 +200,15 @@ def scene_tables(path, every=1) -> dict:
                     cols[f"N[{lab}]"], cols[f"C[{lab}]"] = S[:, k, 0], S[:, k, 1]
                     cols[f"e[{lab}]"] = E[:, k]
                     units.update({f"N[{lab}]": "N", f"C[{lab}]": "N*m", f"e[{lab}]": "mm"})
+            if "input_drive" in d:        # inputs besides the crank: drive and share
+                from .storage import read_units
+                D = d["input_drive"][rows]
+                H = d["input_share"][rows]
+                names = [str(attr_text(x)) for x in d["input_drive"].attrs["inputs"]]
+                du = read_units(d["input_drive"], len(names))
+                for k, name in enumerate(names):
+                    cols[f"drive[{name}]"], cols[f"share[{name}]"] = D[:, k], H[:, k]
+                    units.update({f"drive[{name}]": du[k], f"share[{name}]": "N*m"})
             cols["M_bal"] = d["M_bal"][rows]
             units["M_bal"] = "N*m"
             out["reactions"] = _frame(cols, units)

@@ -427,3 +427,22 @@ def test_a_lock_between_two_positions_is_found_where_it_begins(studies, law, lin
     assert c.overall == kc.SINGULAR          # the dyad folds there: a dead position
     assert plan.group_names[int(c.fail_group)] == "lift"
     assert abs(math.degrees(c.fail_phi - begin)) <= 1e-6, math.degrees(c.fail_phi - begin)
+
+
+def test_the_drives_are_in_reactions_csv(studies, tmp_path):
+    import pandas as pd
+    from pipeline.cli import main
+    out = tmp_path / "act.h5"
+    assert main(["run", str(studies / "actuator_slider_input.toml"), "-o", str(out), "-q",
+                 "--no-pictures"]) == 0
+    assert main(["export", str(out), "--csv", str(tmp_path / "csv")]) == 0
+    df = pd.read_csv(tmp_path / "csv" / "reactions.csv")
+    res = run_scene(load_study(studies / "actuator_slider_input.toml"))
+    fr = res.dense.forces                   # the CSV holds the dense positions, 12 digits
+    n = len(df)
+    assert n >= 360
+    np.testing.assert_allclose(df["drive[actuator] [N]"], fr.drive[:n, 0, 0], rtol=1e-10,
+                               atol=1e-12)
+    np.testing.assert_allclose(df["share[actuator] [N*m]"], fr.drive[:n, 0, 1], rtol=1e-10,
+                               atol=1e-15)
+    np.testing.assert_allclose(df["M_bal [N*m]"], fr.M_bal[:n], rtol=1e-10, atol=1e-15)
