@@ -1019,7 +1019,9 @@ def naive_forces_f(phi1, omega1=100.0, eps1=0.0, d=F_DATA):
 # plain squared distances of lead 2-3, the ternary triangle's three sides and
 # lead 4-6, and P5 on the block's line, (P5 - G) . n = e (n: the guide's
 # direction turned +90 deg).  The branch is the one continued from the study's
-# start (a0, b0) in float steps of 1 deg (fsolve), then polished at MP_DPS digits.
+# start (a0, b0) in float steps of at most 1 deg (fsolve), each refused if the
+# Jacobian's determinant changes sign or a point moves more than 10 mm (another
+# branch), then polished at MP_DPS digits.
 
 SLIDER_DATA = dict(
     P1=(0.0, 0.0), P6=(195.0, 226.0), G=(46.0, 533.0), L12=50.0, phiM0=173.0 * DEG,
@@ -1047,9 +1049,12 @@ class Class3SliderChain:
     at crank angles in the order of a walk).  ``extra(points, d)`` adds points
     (centres of mass)."""
 
-    def __init__(self, d, extra=None):
+    MAX_MOVE = 10.0           # mm: the most a point moves in one step of the walk
+
+    def __init__(self, d, extra=None, max_step=DEG):
         self.d = d
         self.extra = extra
+        self.max_step = max_step
         self._at = None       # (phi, x) of the last float solution
 
     def _equations(self, x, phi, num, cos, sin, sqrt):
@@ -1100,13 +1105,23 @@ class Class3SliderChain:
             x += list(solve_rrr(P2, np.asarray(P10, float), L29, L109, W=W))
         return phi, _solve(lambda z: self._float(z, phi), np.array(x))
 
+    def _det(self, x, phi):
+        return np.linalg.det(_complex_step_jacobian(lambda z: self._float(z, phi), x))
+
     def guess(self, phi):
+        """The float solution at ``phi``, walked from the last one in steps of
+        at most ``max_step``; ValueError where a step finds no solution or
+        another branch (the walk stays at its last solution)."""
         at, x = self._at if self._at is not None else self._start()
-        n = max(1, int(math.ceil(abs(phi - at) / DEG - 1e-12)))
+        n = max(1, int(math.ceil(abs(phi - at) / self.max_step - 1e-12)))
+        sign = np.sign(self._det(x, at))
         for k in range(1, n + 1):
             p = at + (phi - at) * k / n
-            x = _solve(lambda z: self._float(z, p), x)
-        self._at = (phi, x)
+            y = _solve(lambda z: self._float(z, p), x)
+            if np.sign(self._det(y, p)) != sign or np.abs(y - x).max() > self.MAX_MOVE:
+                raise ValueError(f"another branch at {p!r} rad")
+            x = y
+            self._at = (p, x)
         return list(x)
 
     def points(self, x, phi):

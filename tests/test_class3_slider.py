@@ -6,6 +6,7 @@ slide), the between-sample watch, and a sweep over its dimensions with its
 Pareto analysis."""
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -266,21 +267,24 @@ LOCK_OFFSET, NEAR_OFFSET = 138.783, 138.80
 BRANCHES = {"upper": (72.649, 14.712), "lower": (52.673, 83.588)}    # (a0, b0) deg at 0
 
 
+@functools.lru_cache(maxsize=None)
 def _exact_fold(offset, start_deg, rot):
     """The crank angle (rad) where the group first folds walking from phi1 = 0
-    in the direction ``rot``: the reference chain continued in float steps to
-    the last angle it reaches (bisected to 1e-9 rad), then the fold itself (the
-    closure and a singular Jacobian of the point equations) solved at 60 digits."""
+    in the direction ``rot``: the reference chain continued in float steps of
+    0.1 deg (the lock is 0.7 deg wide) to the last angle it reaches on its
+    branch (bisected to 1e-9 rad), then the fold itself (the closure and a
+    singular Jacobian of the point equations) solved at 60 digits from there."""
     chain = naive.Class3SliderChain(dict(naive.SLIDER_DATA, e=offset,
-                                         start=tuple(s * DEG for s in start_deg)))
+                                         start=tuple(s * DEG for s in start_deg)),
+                                    max_step=0.1 * DEG)
     phi, x = 0.0, chain.guess(0.0)
-    while True:
+    while abs(phi) < 2 * math.pi:
         try:
-            x = chain.guess(phi + rot * DEG)
+            x = chain.guess(phi + rot * 0.1 * DEG)
         except ValueError:
             break
-        phi += rot * DEG
-    lo, hi = phi, phi + rot * DEG
+        phi += rot * 0.1 * DEG
+    lo, hi = phi, phi + rot * 0.1 * DEG
     while abs(hi - lo) > 1e-9:
         mid = 0.5 * (lo + hi)
         try:
@@ -289,6 +293,7 @@ def _exact_fold(offset, start_deg, rot):
         except ValueError:
             hi = mid
     phi_f, _ = chain.fold(lo, x)
+    assert abs(float(phi_f) - lo) < 1e-6, (float(phi_f), lo)   # the fold where the walk ends
     return float(phi_f)
 
 
