@@ -270,6 +270,43 @@ class ClassIII:
 
 
 @dataclass(frozen=True)
+class ClassIIISlider:
+    """The class III group with a slider in place of lead 5-7: lead 2-3 from
+    ``input``, the ternary link 3-4-5, lead 4-6 to ``pivot_4``, and a block
+    pinned at vertex 5 that slides on a guide line.
+
+    The guide runs through the known point ``guide_point`` with the absolute
+    direction ``guide_angle``, or, with ``guide_link`` = (a, b), the direction
+    of the link a->b plus ``guide_angle``; the block carries vertex 5 at the
+    perpendicular distance ``guide_offset`` from the guide, on the side of its
+    direction turned +90 deg (the convention of RRP, PRP and RPP).  Unknowns,
+    start guess and branch as ``ClassIII``."""
+    input: str
+    pivot_4: str
+    guide_point: str
+    joints: tuple[str, str, str]   # names of vertices 3, 4, 5
+    L23: float
+    L34: float
+    L45: float
+    L35: float
+    L46: float
+    guide_angle: float             # rad: absolute, or relative to guide_link
+    guide_offset: float            # mm
+    a0: float                      # start guess at phi_start, rad
+    b0: float
+    phi_start: float = 0.0
+    orientation: int = 1           # sign of U435
+    guide_link: tuple[str, str] | None = None
+    name: str = "triad"
+
+    def reads(self):
+        return (self.input, self.pivot_4, self.guide_point) + (self.guide_link or ())
+
+    def writes(self):
+        return self.joints
+
+
+@dataclass(frozen=True)
 class Attach:
     """Point rigidly attached to a link: base + rot(along vector, angle, length);
     with along=None the direction is the absolute ``angle`` (translating body)."""
@@ -287,7 +324,8 @@ class Attach:
         return (self.point,)
 
 
-Group = Crank | RRR | RRP | RPR | PRP | RPP | ClassIII | Attach | RotaryInput | SliderInput
+Group = (Crank | RRR | RRP | RPR | PRP | RPP | ClassIII | ClassIIISlider | Attach | RotaryInput
+         | SliderInput)
 
 
 # ----------------------------------------------------------------- bodies and loads
@@ -356,7 +394,7 @@ class Mechanism:
 
 
 # ----------------------------------------------------------------- compiled plan
-GIDX_WIDTH = 8                         # point indices per group row (PRP uses 7)
+GIDX_WIDTH = 8                         # point indices per group row (class3_slider uses 8)
 
 @dataclass(frozen=True)
 class Plan:
@@ -506,6 +544,14 @@ def compile_mechanism(m: Mechanism) -> Plan:
                  + [pt(j) for j in g.joints], label,
                  [("L23", g.L23), ("L34", g.L34), ("L45", g.L45), ("L35", g.L35),
                   ("L46", g.L46), ("L57", g.L57), ("orientation", g.orientation),
+                  ("a0", g.a0), ("b0", g.b0), ("phi_start", g.phi_start)])
+        elif isinstance(g, ClassIIISlider):
+            ga, gb = (pt(g.guide_link[0]), pt(g.guide_link[1])) if g.guide_link else (-1, -1)
+            emit(kc.G_CLASS3_SLIDER, [pt(g.input), pt(g.pivot_4), pt(g.guide_point)]
+                 + [pt(j) for j in g.joints] + [ga, gb], label,
+                 [("L23", g.L23), ("L34", g.L34), ("L45", g.L45), ("L35", g.L35),
+                  ("L46", g.L46), ("guide_angle", g.guide_angle),
+                  ("guide_offset", g.guide_offset), ("orientation", g.orientation),
                   ("a0", g.a0), ("b0", g.b0), ("phi_start", g.phi_start)])
         elif isinstance(g, Attach):
             ia, ib = (pt(g.along[0]), pt(g.along[1])) if g.along else (-1, -1)

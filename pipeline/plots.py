@@ -27,7 +27,7 @@ def _links_to_draw(plan, study):
     """Segments to draw: every group's links, from the mechanism declaration."""
     m = study.mechanism
     segs = [(m.crank.pivot, m.crank.tip)]
-    from .model import PRP, RPP, RRR, RRP, RPR, ClassIII, Attach
+    from .model import PRP, RPP, RRR, RRP, RPR, ClassIII, ClassIIISlider, Attach
     for g in m.groups:
         if isinstance(g, RRR):
             segs += [(g.A, g.B), (g.C, g.B)]
@@ -42,6 +42,10 @@ def _links_to_draw(plan, study):
         elif isinstance(g, ClassIII):
             p3, p4, p5 = g.joints
             segs += [(g.input, p3), (p3, p4), (p4, p5), (p5, p3), (g.pivot_4, p4), (g.pivot_5, p5)]
+        elif isinstance(g, ClassIIISlider):
+            p3, p4, p5 = g.joints
+            # (no segment for the block: a line from the guide point would read as a lead)
+            segs += [(g.input, p3), (p3, p4), (p4, p5), (p5, p3), (g.pivot_4, p4)]
         elif isinstance(g, Attach):
             if g.along:
                 segs += [(g.base, g.point)]

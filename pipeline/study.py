@@ -16,8 +16,9 @@ from pathlib import Path
 
 from .errors import StudyError
 from .limits import MAX_POSITIONS, POSITIONS_WHY
-from .model import (PRP, RPP, RPR, RRP, RRR, Attach, Body, CentreOfMass, ClassIII, Crank, Law,
-                    Load, Mechanism, RotaryInput, Slide, SliderInput, group_label)
+from .model import (PRP, RPP, RPR, RRP, RRR, Attach, Body, CentreOfMass, ClassIII,
+                    ClassIIISlider, Crank, Law, Load, Mechanism, RotaryInput, Slide, SliderInput,
+                    group_label)
 
 
 _MISSING = object()
@@ -384,21 +385,32 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
             grp = RPP(a, b, gp, math.radians(g.number("guide_angle", 0.0)), slot,
                       g.number("guide_offset", 0.0), g.number("slot_offset", 0.0), link, gname)
         elif t == "class3":
-            inp, p6, p7 = pnt("input"), pnt("pivot_4"), pnt("pivot_5")
+            inp, p6 = pnt("input"), pnt("pivot_4")
+            slider = _class3_slider(g, need) if g.has("slider") else None
+            if slider is None and not g.has("pivot_5"):
+                raise g.error("pivot_5", "required field is missing (or, for a block on a "
+                                         "guide in place of lead 5-7, a slider table)")
+            p7 = pnt("pivot_5") if slider is None else None
             joints = g.strings("joints", n=3)
             for p in joints:
                 define(g, "joints", p)
             start = g.numbers("start", n=2)
-            L = {k: g.number(k, positive=True) for k in ("L23", "L34", "L45", "L35", "L46", "L57")}
+            leads = ("L23", "L34", "L45", "L35", "L46") + (("L57",) if slider is None else ())
+            L = {k: g.number(k, positive=True) for k in leads}
             if not (L["L45"] < L["L34"] + L["L35"] and L["L34"] < L["L45"] + L["L35"]
                     and L["L35"] < L["L34"] + L["L45"]):
                 raise g.error("L45", "the ternary link 3-4-5 is not a triangle "
                                      f"(L34={L['L34']:g}, L45={L['L45']:g}, L35={L['L35']:g})")
-            grp = ClassIII(inp, p6, p7, joints, **L, a0=math.radians(start[0]),
-                           b0=math.radians(start[1]),
-                           phi_start=math.radians(g.number("phi_start", 0.0)),
-                           orientation=g.integer("orientation", 1, choices=(-1, 1)),
-                           name=gname or "triad")
+            common = dict(a0=math.radians(start[0]), b0=math.radians(start[1]),
+                          phi_start=math.radians(g.number("phi_start", 0.0)),
+                          orientation=g.integer("orientation", 1, choices=(-1, 1)),
+                          name=gname or "triad")
+            if slider is None:
+                grp = ClassIII(inp, p6, p7, joints, **L, **common)
+            else:
+                point, angle, offset, link = slider
+                grp = ClassIIISlider(inp, p6, point, joints, **L, guide_angle=angle,
+                                     guide_offset=offset, guide_link=link, **common)
         elif t in ("rotary_input", "slider_input"):
             rotary = t == "rotary_input"
             first, moved = ("pivot", "tip") if rotary else ("guide_point", "block")
@@ -544,6 +556,29 @@ def parse_law(s: Section, rotary: bool) -> Law:
                   table=tuple((math.radians(c), to_q(v)) for c, v in zip(cycle, values)))
     s.done()
     return law
+
+
+def _class3_slider(g: Section, need):
+    """The ``slider`` table of a class III group whose lead 5-7 is a block on a
+    guide: (guide point, angle rad, offset mm, guide link or None).  The table
+    replaces ``pivot_5`` and ``L57``."""
+    for key in ("pivot_5", "L57"):
+        if g.has(key):
+            raise g.error(key, "a class III group with a slider has no lead 5-7: the slider "
+                               "table (point, angle, offset) takes the place of pivot_5 and L57")
+    s = g.table("slider")
+    point = s.string("point")
+    need(s, "point", point)
+    link = s.strings("link", n=2, default=None)
+    if link is not None:
+        for p in link:
+            need(s, "link", p)
+        if link[0] == link[1]:
+            raise s.error("link", "a link needs two different points")
+    angle = math.radians(s.number("angle"))
+    offset = s.number("offset", 0.0)
+    s.done()
+    return point, angle, offset, link
 
 
 def _check_joints(sec, bodies, fixed):

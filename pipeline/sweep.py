@@ -446,7 +446,7 @@ class SweepFile:
 
     @property
     def has_margin(self):
-        return bool((self.problem.plan.codes == kc.G_CLASS3).any())
+        return bool(np.isin(self.problem.plan.codes, kc.CLASS3_GROUPS).any())
 
     def _reference(self, f):
         """The study's own design (the reference mechanism), evaluated the same way."""

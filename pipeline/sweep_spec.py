@@ -35,7 +35,8 @@ METRICS = {
     # (stage 2, candidates that meet the stroke and margin constraints))
     "dwell_error": ("1", "dwell error: best window range / revolution range", "positions"),
     "stroke": ("mm", "stroke of the working point: radius x rocker swing", "positions"),
-    "singularity_margin": ("1", "min |det J| / (4 L23 L46 L57 max(L34, L35)) over the revolution",
+    "singularity_margin": ("1", "min |det J| / (4 L23 L46 L57 max(L34, L35)) over the revolution "
+                           "(a class III group with a slider: / (L23 L46 max(L34, L35)))",
                            "positions"),
     "dwell_start": ("deg", "crank angle phi1 where the best dwell window starts", "positions"),
     "newton_iterations": ("1", "mean Newton iterations per position", "positions"),

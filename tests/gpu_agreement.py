@@ -29,7 +29,8 @@ from pipeline.study import load_study  # noqa: E402
 from pipeline.sweep import build_problem, draw_checked, parameter_rows  # noqa: E402
 
 STUDIES = ("ov7_synthesis.toml", "ov7_synthesis_law.toml", "ov7_search.toml",
-           "slotted_rocker_prp_sweep.toml", "cam_rocker_input_sweep.toml")
+           "slotted_rocker_prp_sweep.toml", "cam_rocker_input_sweep.toml",
+           "ov7_class3_slider_sweep.toml")
 BATCH = 24      # small launches: several batches on both streams
 
 

@@ -1249,3 +1249,201 @@ def naive_forces_actuator(phi1, omega1=40.0, eps1=0.0, d=ACTUATOR_DATA):
                          drives=[("actuator", "block", 0.0, P["P5"])])
     out["q1"] = {"actuator": float(an["d1"]["Q"][0]) / 1000.0}
     return out
+
+
+# ---------------------------------------------------------------------------
+# the class III group with a slider in place of lead 5-7
+# (studies/ov7_class3_slider.toml)
+# ---------------------------------------------------------------------------
+# Unknowns: the points P3, P4, P5 themselves (and the guide rocker's tip P9
+# where the guide turns), never the angles a, b of the kernel; equations: the
+# plain squared distances of lead 2-3, the ternary triangle's three sides and
+# lead 4-6, and P5 on the block's line, (P5 - G) . n = e (n: the guide's
+# direction turned +90 deg).  The branch is the one continued from the study's
+# start (a0, b0) in float steps of at most 1 deg (fsolve), each refused if the
+# Jacobian's determinant changes sign or a point moves more than 10 mm (another
+# branch), then polished at MP_DPS digits.
+
+SLIDER_DATA = dict(
+    P1=(0.0, 0.0), P6=(195.0, 226.0), G=(46.0, 533.0), L12=50.0, phiM0=173.0 * DEG,
+    L23=272.5, L34=81.0, L45=104.5, L35=174.0, L46=104.5, ga=171.0 * DEG, e=261.0,
+    start=(44.0 * DEG, 128.8 * DEG), phi_start=0.0, orientation=1,
+    # a guide that turns: None, or (P10, L29, L109, W): the rocker P10-P9 of the RRR
+    # dyad P2-P9-P10 (solve_rrr's mode W), the guide's direction that of P10->P9 + ga
+    rocker=None)
+SLIDER_LINKS = ["1_2", "2_3", "3_4", "6_4"]
+# body: (base, tip, lS mm, US rad, m kg, J_S kg m^2, angle link or None)
+SLIDER_MASS = {
+    "crank 1-2": ("P1", "P2", 26.21, 0.0, 0.91, 0.001189631, "1_2"),
+    "lead 2-3": ("P2", "P3", 122.54, 0.0, 0.73, 0.008434849, "2_3"),
+    "ternary 3-4-5": ("P3", "P4", 85.01, 15.13 * DEG, 0.91, 0.004456758, "3_4"),
+    "lead 4-6": ("P6", "P4", 40.99, 0.0, 1.64, 0.005376871, "6_4"),
+    "block": ("P5", None, 20.0, 261.0 * DEG, 0.6, 0.0, None),
+}
+SLIDER_LOAD = (19.754, -3.129)        # N on the block at P5 (a return spring)
+
+
+class Class3SliderChain:
+    """Crank P1-P2, optionally the guide's rocker P9 (RRR from P2 about P10),
+    then the class III group with a slider: the residuals of ``mp_analogs``'s
+    chain protocol, and a float continuation for its start (``guess``: call it
+    at crank angles in the order of a walk).  ``extra(points, d)`` adds points
+    (centres of mass)."""
+
+    MAX_MOVE = 10.0           # mm: the most a point moves in one step of the walk
+
+    def __init__(self, d, extra=None, max_step=DEG):
+        self.d = d
+        self.extra = extra
+        self.max_step = max_step
+        self._at = None       # (phi, x) of the last float solution
+
+    def _equations(self, x, phi, num, cos, sin, sqrt):
+        d = self.d
+        P2 = [num(d["L12"]) * cos(phi + num(d["phiM0"])), num(d["L12"]) * sin(phi + num(d["phiM0"]))]
+        P3, P4, P5 = x[0:2], x[2:4], x[4:6]
+        P6 = [num(d["P6"][0]), num(d["P6"][1])]
+        G = [num(d["G"][0]), num(d["G"][1])]
+
+        def sq(p, q):
+            return (p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2
+
+        L = {k: num(d[k]) for k in ("L23", "L34", "L45", "L35", "L46")}
+        out = [sq(P3, P2) - L["L23"] ** 2, sq(P4, P3) - L["L34"] ** 2,
+               sq(P5, P3) - L["L35"] ** 2, sq(P5, P4) - L["L45"] ** 2,
+               sq(P4, P6) - L["L46"] ** 2]
+        ga = num(d["ga"])
+        if d["rocker"] is None:
+            u = [cos(ga), sin(ga)]
+        else:
+            P10, L29, L109, _W = d["rocker"]
+            P9, P10 = x[6:8], [num(P10[0]), num(P10[1])]
+            out += [sq(P9, P2) - num(L29) ** 2, sq(P9, P10) - num(L109) ** 2]
+            r = sqrt(sq(P9, P10))
+            v = [(P9[0] - P10[0]) / r, (P9[1] - P10[1]) / r]
+            u = [cos(ga) * v[0] - sin(ga) * v[1], sin(ga) * v[0] + cos(ga) * v[1]]
+        out.append((P5[0] - G[0]) * (-u[1]) + (P5[1] - G[1]) * u[0] - num(d["e"]))
+        return out
+
+    def residual(self, x, phi):
+        return self._equations(x, phi, mpmath.mpf, mpmath.cos, mpmath.sin, mpmath.sqrt)
+
+    def _float(self, x, phi):
+        return np.array(self._equations(list(x), phi, float, np.cos, np.sin, np.sqrt))
+
+    def _start(self):
+        """The float solution at phi_start from the declared (a0, b0)."""
+        d = self.d
+        phi = d["phi_start"]
+        P2 = d["L12"] * e(phi + d["phiM0"])
+        a0, b0 = d["start"]
+        u = d["orientation"] * math.acos((d["L34"] ** 2 + d["L35"] ** 2 - d["L45"] ** 2)
+                                         / (2.0 * d["L34"] * d["L35"]))
+        P3 = P2 + d["L23"] * e(a0)
+        x = list(P3) + list(P3 + d["L34"] * e(b0)) + list(P3 + d["L35"] * e(b0 + u))
+        if d["rocker"] is not None:
+            P10, L29, L109, W = d["rocker"]
+            x += list(solve_rrr(P2, np.asarray(P10, float), L29, L109, W=W))
+        return phi, _solve(lambda z: self._float(z, phi), np.array(x))
+
+    def _det(self, x, phi):
+        return np.linalg.det(_complex_step_jacobian(lambda z: self._float(z, phi), x))
+
+    def guess(self, phi):
+        """The float solution at ``phi``, walked from the last one in steps of
+        at most ``max_step``; ValueError where a step finds no solution or
+        another branch (the walk stays at its last solution)."""
+        at, x = self._at if self._at is not None else self._start()
+        n = max(1, int(math.ceil(abs(phi - at) / self.max_step - 1e-12)))
+        sign = np.sign(self._det(x, at))
+        for k in range(1, n + 1):
+            p = at + (phi - at) * k / n
+            y = _solve(lambda z: self._float(z, p), x)
+            if np.sign(self._det(y, p)) != sign or np.abs(y - x).max() > self.MAX_MOVE:
+                raise ValueError(f"another branch at {p!r} rad")
+            x = y
+            self._at = (p, x)
+        return list(x)
+
+    def points(self, x, phi):
+        d = self.d
+        P2 = [d["L12"] * mpmath.cos(phi + d["phiM0"]), d["L12"] * mpmath.sin(phi + d["phiM0"])]
+        pts = {"P1": _mp_vec(d["P1"]), "P2": P2, "P3": x[0:2], "P4": x[2:4], "P5": x[4:6],
+               "P6": _mp_vec(d["P6"])}
+        if d["rocker"] is not None:
+            pts["P9"] = x[6:8]
+        if self.extra is not None:
+            pts.update(self.extra(pts, d))
+        return pts
+
+    def fold(self, phi_guess, x_guess):
+        """A crank angle where the group folds (the 6x6 Jacobian of its point
+        equations, analytic, is singular) and its points, by Newton at MP_DPS
+        digits on the closure and det = 0 from the float guesses.  Fixed guide
+        only."""
+        d = self.d
+        assert d["rocker"] is None
+
+        def jac(x, phi):
+            P2 = [d["L12"] * mpmath.cos(phi + d["phiM0"]), d["L12"] * mpmath.sin(phi + d["phiM0"])]
+            P3, P4, P5 = x[0:2], x[2:4], x[4:6]
+            P6 = _mp_vec(d["P6"])
+            n = [-mpmath.sin(d["ga"]), mpmath.cos(d["ga"])]
+            J = mpmath.matrix(6, 6)
+            rows = [(0, P3, P2, None), (2, P4, P3, 0), (4, P5, P3, 0), (4, P5, P4, 2),
+                    (2, P4, P6, None)]
+            for i, (c, p, q, cq) in enumerate(rows):
+                for k in range(2):
+                    J[i, c + k] = 2 * (p[k] - q[k])
+                    if cq is not None:
+                        J[i, cq + k] = -2 * (p[k] - q[k])
+            J[5, 4], J[5, 5] = n[0], n[1]
+            return J
+
+        def residual(z):
+            x, phi = z[:6], z[6]
+            return self.residual(x, phi) + [mpmath.det(jac(x, phi)) * mpmath.mpf(10) ** -12]
+
+        with mpmath.workdps(MP_DPS):
+            z = _mp_newton(residual, list(x_guess) + [phi_guess])
+            return z[6], z[:6]
+
+
+def _mp_com(pts, base, tip, lS, US):
+    """base + rot(base->tip, US, lS); a translating body (tip None): base + lS e(US)."""
+    P = pts[base]
+    u = [mpmath.cos(US), mpmath.sin(US)] if tip is None else \
+        _turn(_unit([pts[tip][0] - P[0], pts[tip][1] - P[1]]), US)
+    return [P[0] + lS * u[0], P[1] + lS * u[1]]
+
+
+def _slider_com(pts, d):
+    return {f"S[{name}]": _mp_com(pts, base, tip, mpmath.mpf(lS), mpmath.mpf(US))
+            for name, (base, tip, lS, US, *_r) in SLIDER_MASS.items()}
+
+
+def naive_forces_slider(chain, phi1, omega1, eps1):
+    """Reactions R1..R6 (N; first-named body on second), the block's slide
+    (N, C) and M_bal of studies/ov7_class3_slider.toml at phi1, on ``chain``'s
+    60-digit kinematics (a Class3SliderChain with extra=_slider_com; call it
+    in the order of a walk): R1 ground->crank (P1), R2 crank->lead 2-3 (P2), R3
+    lead->ternary (P3), R4 ternary->lead 4-6 (P4), R5 ternary->block (P5), R6
+    ground->lead 4-6 (P6); slide[block] the frame's guide on the block."""
+    an = mp_analogs(chain, phi1, links=SLIDER_LINKS)
+    bodies = []
+    for name, (_b, _t, _l, _u, m, J, lk) in SLIDER_MASS.items():
+        s = f"S[{name}]"
+        bodies.append(dict(
+            name=name, m=m, J=J, crank=(name == "crank 1-2"),
+            ext=[(an["pos"]["P5"] / 1000.0, np.array(SLIDER_LOAD))] if name == "block" else [],
+            S=an["pos"][s] / 1000.0, vS=an["d1"][s] / 1000.0 * omega1,
+            aS=(an["d2"][s] * omega1 ** 2 + an["d1"][s] * eps1) / 1000.0,
+            omega=an["ang_d1"][lk] * omega1 if lk else 0.0,
+            eps=an["ang_d2"][lk] * omega1 ** 2 + an["ang_d1"][lk] * eps1 if lk else 0.0))
+    P = {k: an["pos"][k] / 1000.0 for k in ("P1", "P2", "P3", "P4", "P5", "P6")}
+    joints = [("R1", None, "crank 1-2", P["P1"]), ("R2", "crank 1-2", "lead 2-3", P["P2"]),
+              ("R3", "lead 2-3", "ternary 3-4-5", P["P3"]),
+              ("R4", "ternary 3-4-5", "lead 4-6", P["P4"]),
+              ("R5", "ternary 3-4-5", "block", P["P5"]), ("R6", None, "lead 4-6", P["P6"])]
+    slides = [("slide[block]", None, "block", chain.d["ga"])]
+    return _kinetostatics(bodies, joints, omega1, eps1, slides)

@@ -27,6 +27,8 @@ class Emitter:
     code = None
     fast = False            # has a lane form
     watched = False         # can fail between positions: its margin is watched
+    continued = False       # solved by Newton: keeps a row of the continuation state
+                            # (``triad_row``: start, predictor, step control, closing)
 
     def __init__(self, plan, names, g, triad_row=-1):
         self.plan = plan
@@ -374,6 +376,7 @@ class InputEmitter(Emitter):
 
 class ClassIIIEmitter(Emitter):
     watched = True
+    continued = True
     code = kc.G_CLASS3
     fast = True
 
@@ -403,17 +406,47 @@ class ClassIIIEmitter(Emitter):
                 f"tr = min(tr, lead_transmission(pos, {i5}, {i7}, {i2}, {i3}, {i4}, {i6}))"]
 
 
+class ClassIIISliderEmitter(Emitter):
+    """The class III group with a block on a guide in place of lead 5-7: the
+    careful path only (a plan with it takes the careful path for every
+    candidate), the continuation state and the watch like ``ClassIIIEmitter``."""
+    watched = True
+    continued = True
+    code = kc.G_CLASS3_SLIDER
+
+    def derived(self):
+        u = self.k("U435")
+        return [(u, f"ternary_angle({self.k('L34')}, {self.k('L45')}, {self.k('L35')}, "
+                    f"{self.k('orientation')})")]
+
+    def careful(self):
+        i2, i6, i7, i3, i4, i5 = (self.p(j) for j in range(6))
+        ga, gb = _guide_link(self, 6)
+        k = self.k
+        return [f"# {self.title()}: ternary link {self.pname(3)}-{self.pname(4)}-"
+                f"{self.pname(5)}",
+                f"# on leads from {self.pname(0)}, {self.pname(1)} and a block at {self.pname(5)} "
+                f"on the guide {_guide_words(self, 2, 6, 'guide_angle')}",
+                "# (P5 at guide_offset from it); Newton on |P4 - P6| = L46, n.(P5 - G) = offset",
+                f"# from the continuation state row {self.triad_row}",
+                _wrap_line(f"st, m = class3_slider(pos, d1, d2, {i2}, {i6}, {i7}, {i3}, {i4}, "
+                           f"{i5}, {ga}, {gb}, {k('L23')}, {k('L34')}, {k('U435')}, "
+                           f"{k('L35')}, {k('L46')}, {k('guide_angle')}, {k('guide_offset')}, "
+                           f"state, {self.triad_row}, order, tols)")]
+
+
 EMITTERS = {e.code: e for e in (CrankEmitter, RRREmitter, RRPEmitter, RPREmitter,
                                 PRPEmitter, RPPEmitter, AttachEmitter, ClassIIIEmitter,
-                                InputEmitter)}
+                                InputEmitter, ClassIIISliderEmitter)}
 
 
 def emitters_for(plan, names):
-    """The emitters of a plan's groups, in solve order."""
+    """The emitters of a plan's groups, in solve order; each group solved by
+    continuation gets the next row of the continuation state."""
     out, row = [], 0
     for g, code in enumerate(plan.codes):
         cls = EMITTERS[int(code)]
-        if cls is ClassIIIEmitter:
+        if cls.continued:
             out.append(cls(plan, names, g, row))
             row += 1
         else:

@@ -22,7 +22,7 @@ import textwrap
 
 import numpy as np
 
-from .emit import ClassIIIEmitter, _wrap_line, constants_of, emitters_for, literal
+from .emit import _wrap_line, constants_of, emitters_for, literal
 from .forces import force_kernel
 from .lanes import lane_kernel
 from .names import Names
@@ -65,7 +65,7 @@ from pipeline.kernels.sweep import (M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, 
                                     SET_MARGIN_MIN, SET_OMEGA1, SET_EPS1, SET_MARGIN_SAFE,
                                     SET_WANT_PEAKS, SET_WORK_POINT, SET_WANT_TRANSMISSION,
                                     SET_WANT_LAW, SET_LAW0, LAW_BEST)
-from pipeline.kernels.triad import class3, ternary_angle
+from pipeline.kernels.triad import class3, class3_slider, ternary_angle
 from pipeline.kernels.watch import (FOLD_BACK, LOCATE_MIN_STEP,
                                    LOCATE_NEWTON_TOL, RESOLVED, SUB, cubic_bound, fold_distance,
                                    third_difference, uniform_hit, window_score,
@@ -87,7 +87,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
     of the watch's cost; never for results)."""
     n = Names(plan)
     ems = emitters_for(plan, n)
-    n_triads = sum(isinstance(e, ClassIIIEmitter) for e in ems)
+    n_triads = sum(e.continued for e in ems)
     groups = ", ".join(f"{type(e).__name__[:-7]} {e.label!r}" for e in ems[:plan.n_kinematic])
     out = [HEADER.format(groups=groups, digest=digest)]
     w = out.append
@@ -97,7 +97,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
     w(f"N_POINTS = {plan.n_points}")
     w(f"N_GROUPS = {plan.n_groups}")
     w(f"N_KINEMATIC = {plan.n_kinematic}   # groups before the hidden centres of mass")
-    w(f"N_TRIADS = {n_triads}   # class III groups (rows of the continuation state)")
+    w(f"N_TRIADS = {n_triads}   # class III groups, either kind (rows of the continuation state)")
     w(f"N_PARAMS = {len(plan.par_names)}")
     w(f"GRAVITY = {literal(plan.gravity)}")
     w("")
@@ -171,7 +171,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
           body))
 
     # ---------------------------------------------------------------- start
-    triads = [e for e in ems if isinstance(e, ClassIIIEmitter)]
+    triads = [e for e in ems if e.continued]
     body = [unpack]
     for e in triads:
         body.append(f"start_triad(state, {e.triad_row}, {e.k('a0')}, {e.k('b0')})")

@@ -128,7 +128,7 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
     (pivot, point) names, LANES = ``width``."""
     kin = ems[:plan.n_kinematic]
     fast = all(e.fast for e in kin)
-    triads = [e for e in kin if isinstance(e, ClassIIIEmitter)]
+    triads = [e for e in kin if e.continued]    # (with a lane form: class3 only)
     rows = []
     # per-candidate constants: every entry of constants(par)
     consts = constant_names(plan, names, ems)

@@ -71,9 +71,14 @@ G_ATTACH = 5
 G_PRP = 6
 G_RPP = 7
 G_INPUT = 8        # a rotary or slider input moved by a law of the crank angle
+G_CLASS3_SLIDER = 9   # class III group with a slider in place of lead 5-7
 
 GROUP_NAMES = {G_CRANK: "crank", G_RRR: "RRR", G_RRP: "RRP", G_RPR: "RPR",
-               G_CLASS3: "class3", G_ATTACH: "attach", G_PRP: "PRP", G_RPP: "RPP", G_INPUT: "input"}
+               G_CLASS3: "class3", G_ATTACH: "attach", G_PRP: "PRP", G_RPP: "RPP",
+               G_INPUT: "input", G_CLASS3_SLIDER: "class3_slider"}
+# class III groups, either kind: solved by continuation, with the singularity margin
+# |det J| normalised that the sweep's margin constraint bounds
+CLASS3_GROUPS = (G_CLASS3, G_CLASS3_SLIDER)
 
 # ---- what to compute --------------------------------------------------------
 POSITIONS = 0
@@ -100,7 +105,7 @@ T_TOUCH = 12          # margin^2 at or below this at a located minimum: a toggle
 T_LOCATE = 13         # a failure between positions is located to this, rad
 N_TOLS = 14
 
-# state columns of a class III group (per candidate, per group)
+# state columns of a class III group, either kind (per candidate, per group)
 S_A = 0
 S_B = 1
 S_DET_SIGN = 2

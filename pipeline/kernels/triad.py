@@ -10,6 +10,15 @@ lead 2-3 and the angle b of side 3-4.
 solved by Newton with the analytic 2x2 Jacobian (damped: the step is limited),
 warm-started from the previous crank position.  The first and second analogs
 come from the same Jacobian applied to the differentiated closure equations.
+
+The sliding variant (``class3_slider``) has a block at vertex 5 in place of
+lead 5-7: the block slides on a guide line through the known point G = P7
+with the direction th (fixed, or turning with a link), and carries P5 at the
+perpendicular distance ``offset`` from it, on the side of n = e(th + 90 deg):
+
+    F1 = (|P4 - P6|^2 - L46^2) / 2 = 0,   F2 = n . (P5 - G) - offset = 0
+
+with the same unknowns, continuation state and checks as ``class3``.
 """
 
 import math
@@ -20,6 +29,7 @@ from .config import (JIT, OK, NEWTON_MAXITER, SINGULAR, BRANCH_JUMP,
                      BAD_GEOMETRY, S_A, S_B, S_DET_SIGN, S_MARGIN, S_ITERS,
                      T_NEWTON_TOL, T_NEWTON_MAXITER, T_NEWTON_STEP, T_SINGULAR, T_JUMP)
 from .geometry import solve2
+from .groups import _direction as guide_direction
 
 # Newton outcomes
 CONVERGED = 0
@@ -221,6 +231,202 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
     k5y = k3y - l35 * b1 * b1 * sc - d2[i7, 1]
     rhs1 = -(q4x * q4x + q4y * q4y) - (r4x * k4x + r4y * k4y)
     rhs2 = -(q5x * q5x + q5y * q5y) - (r5x * k5x + r5y * k5y)
+    a2, b2 = solve2(j11, j12, j21, j22, rhs1, rhs2)
+    d2[i3, 0] = k3x - l23 * a2 * sa
+    d2[i3, 1] = k3y + l23 * a2 * ca
+    d2[i4, 0] = d2[i3, 0] - l34 * (b2 * sb + b1 * b1 * cb)
+    d2[i4, 1] = d2[i3, 1] + l34 * (b2 * cb - b1 * b1 * sb)
+    d2[i5, 0] = d2[i3, 0] - l35 * (b2 * sc + b1 * b1 * cc)
+    d2[i5, 1] = d2[i3, 1] + l35 * (b2 * cc - b1 * b1 * sc)
+    return status, margin
+
+
+# ---------------------------------------------------------------- the sliding variant
+@njit(**JIT)
+def slider_closure(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, u435, offset, a, b):
+    """Residuals (F1, F2) of the sliding variant at (a, b) and their Jacobian
+    d(F1, F2)/d(a, b): F1 = (|P4 - P6|^2 - L46^2) / 2 (mm^2), F2 = n.(P5 - G) -
+    offset (mm), n the guide's unit normal."""
+    ca = math.cos(a)
+    sa = math.sin(a)
+    cb = math.cos(b)
+    sb = math.sin(b)
+    cc = math.cos(b + u435)
+    sc = math.sin(b + u435)
+    p3x = p2x + l23 * ca
+    p3y = p2y + l23 * sa
+    r4x = p3x + l34 * cb - p6x
+    r4y = p3y + l34 * sb - p6y
+    f1 = 0.5 * (r4x * r4x + r4y * r4y - l46 * l46)
+    f2 = nx * (p3x + l35 * cc - gx) + ny * (p3y + l35 * sc - gy) - offset
+    # d/da of P3, P4, P5 is L23 n(a); d/db of P4 is L34 n(b), of P5 L35 n(b + U435)
+    j11 = l23 * (-r4x * sa + r4y * ca)
+    j12 = l34 * (-r4x * sb + r4y * cb)
+    j21 = l23 * (-nx * sa + ny * ca)
+    j22 = l35 * (-nx * sc + ny * cc)
+    return f1, f2, j11, j12, j21, j22
+
+
+@njit(**JIT)
+def slider_newton(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, u435, offset, a, b,
+                  tol, maxiter, max_step):
+    """Damped Newton on the sliding variant's closure from (a, b), as ``newton``.
+
+    Converged means both residuals, as distances (|F1| / L46: how far P4 is
+    off its circle; |F2|: how far P5 is off its line, mm), are at most ``tol``
+    times the longer lead (L23 or L46)."""
+    det = math.nan
+    tol_mm = tol * max(l23, l46)
+    for it in range(maxiter + 1):
+        f1, f2, j11, j12, j21, j22 = slider_closure(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23,
+                                                    l34, l35, l46, u435, offset, a, b)
+        det = j11 * j22 - j12 * j21
+        res = max(abs(f1) / l46, abs(f2))
+        if res <= tol_mm:
+            return CONVERGED, a, b, it, det
+        if it == maxiter:
+            break
+        if not (det != 0.0 and math.isfinite(det)):
+            return SINGULAR_JACOBIAN, a, b, it, det
+        da, db = solve2(j11, j12, j21, j22, f1, f2)
+        step = max(abs(da), abs(db))
+        if not math.isfinite(step):
+            return SINGULAR_JACOBIAN, a, b, it, det
+        if step > max_step:
+            da *= max_step / step
+            db *= max_step / step
+        a -= da
+        b -= db
+    return MAXITER, a, b, maxiter, det
+
+
+@njit(**JIT)
+def _nan_joints(pos, d1, d2, i3, i4, i5, order_from):
+    """NaN the three vertices from ``order_from`` on (0: positions and analogs,
+    1: the analogs only)."""
+    for i in (i3, i4, i5):
+        for k in range(2):
+            if order_from == 0:
+                pos[i, k] = math.nan
+            d1[i, k] = math.nan
+            d2[i, k] = math.nan
+
+
+@njit(**JIT)
+def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l35, l46,
+                  guide_angle, offset, state, g, order, tols):
+    """Solve the sliding class III group whose continuation state is row ``g``
+    of ``state``, at the current crank position (see ``class3``).
+
+    The guide runs through the known point i7 with the absolute direction
+    ``guide_angle`` (ga < 0) or that of the link ga->gb plus ``guide_angle``
+    (``groups._direction``).  The margin is |det J| / (L23 L46 max(L34, L35)),
+    J the Jacobian of (F1, F2) above: scale-free, 0 at a singular position.
+    Returns (status, margin).
+    """
+    if not (math.isfinite(u435) and l23 > 0.0 and l46 > 0.0):
+        _nan_joints(pos, d1, d2, i3, i4, i5, 0)
+        state[g, S_MARGIN] = 0.0
+        return BAD_GEOMETRY, 0.0
+    th, th1, th2 = guide_direction(pos, d1, d2, ga, gb, guide_angle, order)
+    if not math.isfinite(th):   # the guide link has no length: no direction
+        _nan_joints(pos, d1, d2, i3, i4, i5, 0)
+        state[g, S_MARGIN] = 0.0
+        return SINGULAR, 0.0
+    ux = math.cos(th)
+    uy = math.sin(th)
+    nx = -uy
+    ny = ux
+    p2x = pos[i2, 0]
+    p2y = pos[i2, 1]
+    p6x = pos[i6, 0]
+    p6y = pos[i6, 1]
+    gx = pos[i7, 0]
+    gy = pos[i7, 1]
+    a0 = state[g, S_A]
+    b0 = state[g, S_B]
+    outcome, a, b, iters, det = slider_newton(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34,
+                                              l35, l46, u435, offset, a0, b0,
+                                              tols[T_NEWTON_TOL], int(tols[T_NEWTON_MAXITER]),
+                                              tols[T_NEWTON_STEP])
+    state[g, S_ITERS] = iters
+    if outcome != CONVERGED:
+        _nan_joints(pos, d1, d2, i3, i4, i5, 0)
+        state[g, S_MARGIN] = 0.0
+        if outcome == SINGULAR_JACOBIAN:
+            return SINGULAR, 0.0
+        return NEWTON_MAXITER, 0.0
+    margin = abs(det) / (l23 * l46 * max(l34, l35))
+    state[g, S_MARGIN] = margin
+    status = OK
+    sign = 1.0 if det > 0.0 else -1.0
+    if state[g, S_DET_SIGN] != 0.0:
+        if sign != state[g, S_DET_SIGN]:
+            status = BRANCH_JUMP
+        elif (abs(_wrap(a - a0)) > tols[T_JUMP] or abs(_wrap(b - b0)) > tols[T_JUMP]):
+            status = BRANCH_JUMP
+    state[g, S_A] = a
+    state[g, S_B] = b
+    state[g, S_DET_SIGN] = sign
+    if status == OK and margin < tols[T_SINGULAR]:
+        status = SINGULAR
+
+    ca = math.cos(a)
+    sa = math.sin(a)
+    cb = math.cos(b)
+    sb = math.sin(b)
+    cc = math.cos(b + u435)
+    sc = math.sin(b + u435)
+    pos[i3, 0] = p2x + l23 * ca
+    pos[i3, 1] = p2y + l23 * sa
+    pos[i4, 0] = pos[i3, 0] + l34 * cb
+    pos[i4, 1] = pos[i3, 1] + l34 * sb
+    pos[i5, 0] = pos[i3, 0] + l35 * cc
+    pos[i5, 1] = pos[i3, 1] + l35 * sc
+    if order < 1:
+        return status, margin
+    if status == SINGULAR:
+        _nan_joints(pos, d1, d2, i3, i4, i5, 1)
+        return status, margin
+
+    r4x = pos[i4, 0] - p6x
+    r4y = pos[i4, 1] - p6y
+    w5x = pos[i5, 0] - gx
+    w5y = pos[i5, 1] - gy
+    j11 = l23 * (-r4x * sa + r4y * ca)
+    j12 = l34 * (-r4x * sb + r4y * cb)
+    j21 = l23 * (-nx * sa + ny * ca)
+    j22 = l35 * (-nx * sc + ny * cc)
+    # first analogs: r4.(P4' - P6') = 0 and, with n' = -th' u,
+    # n.(P5' - G') - th' u.(P5 - G) = 0
+    rhs1 = -(r4x * (d1[i2, 0] - d1[i6, 0]) + r4y * (d1[i2, 1] - d1[i6, 1]))
+    rhs2 = (-(nx * (d1[i2, 0] - d1[i7, 0]) + ny * (d1[i2, 1] - d1[i7, 1]))
+            + th1 * (ux * w5x + uy * w5y))
+    a1, b1 = solve2(j11, j12, j21, j22, rhs1, rhs2)
+    d1[i3, 0] = d1[i2, 0] - l23 * a1 * sa
+    d1[i3, 1] = d1[i2, 1] + l23 * a1 * ca
+    d1[i4, 0] = d1[i3, 0] - l34 * b1 * sb
+    d1[i4, 1] = d1[i3, 1] + l34 * b1 * cb
+    d1[i5, 0] = d1[i3, 0] - l35 * b1 * sc
+    d1[i5, 1] = d1[i3, 1] + l35 * b1 * cc
+    if order < 2:
+        return status, margin
+    # second analogs: r4.(P4'' - P6'') + |P4' - P6'|^2 = 0 (as class3) and
+    # n.(P5'' - G'') - 2 th' u.(P5' - G') - th'' u.(P5 - G) - th'^2 offset = 0, with
+    # P5'' = P2'' + L23 (a'' n(a) - a'^2 e(a)) + L35 (b'' n(c) - b'^2 e(c)), c = b + U435
+    q4x = d1[i4, 0] - d1[i6, 0]
+    q4y = d1[i4, 1] - d1[i6, 1]
+    v5x = d1[i5, 0] - d1[i7, 0]
+    v5y = d1[i5, 1] - d1[i7, 1]
+    k3x = d2[i2, 0] - l23 * a1 * a1 * ca
+    k3y = d2[i2, 1] - l23 * a1 * a1 * sa
+    k4x = k3x - l34 * b1 * b1 * cb - d2[i6, 0]
+    k4y = k3y - l34 * b1 * b1 * sb - d2[i6, 1]
+    k5x = k3x - l35 * b1 * b1 * cc - d2[i7, 0]
+    k5y = k3y - l35 * b1 * b1 * sc - d2[i7, 1]
+    rhs1 = -(q4x * q4x + q4y * q4y) - (r4x * k4x + r4y * k4y)
+    rhs2 = (-(nx * k5x + ny * k5y) + 2.0 * th1 * (ux * v5x + uy * v5y)
+            + th2 * (ux * w5x + uy * w5y) + th1 * th1 * offset)
     a2, b2 = solve2(j11, j12, j21, j22, rhs1, rhs2)
     d2[i3, 0] = k3x - l23 * a2 * sa
     d2[i3, 1] = k3y + l23 * a2 * ca
