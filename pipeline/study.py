@@ -649,9 +649,13 @@ def _guides(groups, fixed):
         elif isinstance(g, SliderInput):
             out.append((who, g.block, (None, g.guide_angle), None,
                         words(None, g.guide_angle)))
+        elif isinstance(g, ClassIIISlider):
+            out.append((who, g.joints[2], (g.guide_link, g.guide_angle),
+                        host(g.guide_point, g.guide_link), words(g.guide_link, g.guide_angle)))
         keys = {RRP: [("guide_angle",)], PRP: [("guide1_angle",), ("guide2_angle",)],
                 RPP: [("guide_angle",), ("guide_angle", "slot_angle")],
-                SliderInput: [("guide_angle",)]}.get(type(g), [()] * (len(out) - n))
+                SliderInput: [("guide_angle",)],
+                ClassIIISlider: [("guide_angle",)]}.get(type(g), [()] * (len(out) - n))
         out[n:] = [o + (tuple(f"{label}.{key}" for key in ks),) for o, ks in zip(out[n:], keys)]
     return out
 
@@ -685,6 +689,8 @@ def _same_directions(groups):
                 same.setdefault((g.B, g.A), (g.guide_link, g.guide_angle + g.slot_angle))
         elif isinstance(g, SliderInput):
             same.setdefault((g.guide_point, g.block), (None, g.guide_angle))
+        elif isinstance(g, ClassIIISlider) and g.guide_offset == 0.0:
+            same.setdefault((g.guide_point, g.joints[2]), (g.guide_link, g.guide_angle))
     return same
 
 
