@@ -116,6 +116,45 @@ def _wrap(x):
 
 
 @njit(**JIT)
+def _accept(state, g, a, b, a0, b0, det, margin, tols):
+    """Status of a converged solve (a, b) from (a0, b0): BRANCH_JUMP where det J
+    changed sign or an angle moved more than tols[T_JUMP], SINGULAR below
+    tols[T_SINGULAR]; the continuation state row g takes the new solution."""
+    status = OK
+    sign = 1.0 if det > 0.0 else -1.0
+    if state[g, S_DET_SIGN] != 0.0:
+        if sign != state[g, S_DET_SIGN]:
+            status = BRANCH_JUMP
+        elif (abs(_wrap(a - a0)) > tols[T_JUMP] or abs(_wrap(b - b0)) > tols[T_JUMP]):
+            status = BRANCH_JUMP
+    state[g, S_A] = a
+    state[g, S_B] = b
+    state[g, S_DET_SIGN] = sign
+    if status == OK and margin < tols[T_SINGULAR]:
+        status = SINGULAR
+    return status
+
+
+@njit(**JIT)
+def _place(pos, i2, i3, i4, i5, l23, l34, l35, u435, a, b):
+    """Vertices 3, 4, 5 at the angles (a, b); returns the cos/sin of a, b and
+    b + U435 for the analogs."""
+    ca = math.cos(a)
+    sa = math.sin(a)
+    cb = math.cos(b)
+    sb = math.sin(b)
+    cc = math.cos(b + u435)
+    sc = math.sin(b + u435)
+    pos[i3, 0] = pos[i2, 0] + l23 * ca
+    pos[i3, 1] = pos[i2, 1] + l23 * sa
+    pos[i4, 0] = pos[i3, 0] + l34 * cb
+    pos[i4, 1] = pos[i3, 1] + l34 * sb
+    pos[i5, 0] = pos[i3, 0] + l35 * cc
+    pos[i5, 1] = pos[i3, 1] + l35 * sc
+    return ca, sa, cb, sb, cc, sc
+
+
+@njit(**JIT)
 def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
            state, g, order, tols):
     """Solve the class III group whose continuation state is row ``g`` of
@@ -128,11 +167,7 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
     margin and the Newton iterations.  Returns (status, margin).
     """
     if not (math.isfinite(u435) and l23 > 0.0 and l46 > 0.0 and l57 > 0.0):
-        for i in (i3, i4, i5):
-            for k in range(2):
-                pos[i, k] = math.nan
-                d1[i, k] = math.nan
-                d2[i, k] = math.nan
+        _nan_joints(pos, d1, d2, i3, i4, i5, 0)
         state[g, S_MARGIN] = 0.0
         return BAD_GEOMETRY, 0.0
     p2x = pos[i2, 0]
@@ -149,11 +184,7 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
     state[g, S_ITERS] = iters
     scale = 4.0 * l23 * l46 * l57 * max(l34, l35)
     if outcome != CONVERGED:
-        for i in (i3, i4, i5):
-            for k in range(2):
-                pos[i, k] = math.nan
-                d1[i, k] = math.nan
-                d2[i, k] = math.nan
+        _nan_joints(pos, d1, d2, i3, i4, i5, 0)
         state[g, S_MARGIN] = 0.0
         if outcome == SINGULAR_JACOBIAN:
             return SINGULAR, 0.0
@@ -162,38 +193,12 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
         return NEWTON_MAXITER, 0.0
     margin = abs(det) / scale
     state[g, S_MARGIN] = margin
-    status = OK
-    sign = 1.0 if det > 0.0 else -1.0
-    if state[g, S_DET_SIGN] != 0.0:
-        if sign != state[g, S_DET_SIGN]:
-            status = BRANCH_JUMP
-        elif (abs(_wrap(a - a0)) > tols[T_JUMP] or abs(_wrap(b - b0)) > tols[T_JUMP]):
-            status = BRANCH_JUMP
-    state[g, S_A] = a
-    state[g, S_B] = b
-    state[g, S_DET_SIGN] = sign
-    if status == OK and margin < tols[T_SINGULAR]:
-        status = SINGULAR
-
-    ca = math.cos(a)
-    sa = math.sin(a)
-    cb = math.cos(b)
-    sb = math.sin(b)
-    cc = math.cos(b + u435)
-    sc = math.sin(b + u435)
-    pos[i3, 0] = p2x + l23 * ca
-    pos[i3, 1] = p2y + l23 * sa
-    pos[i4, 0] = pos[i3, 0] + l34 * cb
-    pos[i4, 1] = pos[i3, 1] + l34 * sb
-    pos[i5, 0] = pos[i3, 0] + l35 * cc
-    pos[i5, 1] = pos[i3, 1] + l35 * sc
+    status = _accept(state, g, a, b, a0, b0, det, margin, tols)
+    ca, sa, cb, sb, cc, sc = _place(pos, i2, i3, i4, i5, l23, l34, l35, u435, a, b)
     if order < 1:
         return status, margin
     if status == SINGULAR:
-        for i in (i3, i4, i5):
-            for k in range(2):
-                d1[i, k] = math.nan
-                d2[i, k] = math.nan
+        _nan_joints(pos, d1, d2, i3, i4, i5, 1)
         return status, margin
 
     r4x = pos[i4, 0] - p6x
@@ -358,31 +363,8 @@ def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l
         return NEWTON_MAXITER, 0.0
     margin = abs(det) / (l23 * l46 * max(l34, l35))
     state[g, S_MARGIN] = margin
-    status = OK
-    sign = 1.0 if det > 0.0 else -1.0
-    if state[g, S_DET_SIGN] != 0.0:
-        if sign != state[g, S_DET_SIGN]:
-            status = BRANCH_JUMP
-        elif (abs(_wrap(a - a0)) > tols[T_JUMP] or abs(_wrap(b - b0)) > tols[T_JUMP]):
-            status = BRANCH_JUMP
-    state[g, S_A] = a
-    state[g, S_B] = b
-    state[g, S_DET_SIGN] = sign
-    if status == OK and margin < tols[T_SINGULAR]:
-        status = SINGULAR
-
-    ca = math.cos(a)
-    sa = math.sin(a)
-    cb = math.cos(b)
-    sb = math.sin(b)
-    cc = math.cos(b + u435)
-    sc = math.sin(b + u435)
-    pos[i3, 0] = p2x + l23 * ca
-    pos[i3, 1] = p2y + l23 * sa
-    pos[i4, 0] = pos[i3, 0] + l34 * cb
-    pos[i4, 1] = pos[i3, 1] + l34 * sb
-    pos[i5, 0] = pos[i3, 0] + l35 * cc
-    pos[i5, 1] = pos[i3, 1] + l35 * sc
+    status = _accept(state, g, a, b, a0, b0, det, margin, tols)
+    ca, sa, cb, sb, cc, sc = _place(pos, i2, i3, i4, i5, l23, l34, l35, u435, a, b)
     if order < 1:
         return status, margin
     if status == SINGULAR:
