@@ -1171,7 +1171,8 @@ PARALLEL = '''
         stress suite checks there are none).  Rows lo .. hi - 1; the caller runs
         ranges on threads."""
         pos, d1, d2, margins, state, _ = work(N_POINTS, N_GROUPS, N_TRIADS)
-        work_a, work_b, loads_out, r_out, slide_out = force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS)
+        work_a, work_b, loads_out, r_out, slide_out = force_work(N_BODIES, N_JOINTS,
+                                                                 N_SLIDES + N_INPUTS)
         ww = watch_work()
         for i in range(lo, hi):
             par = pars[i]
