@@ -31,6 +31,7 @@ import math
 from numba import njit
 
 from .config import BAD_GEOMETRY, JIT, OK
+from .groups import _nan_point
 
 TWO_PI = 2.0 * math.pi
 
@@ -110,10 +111,7 @@ def rotary_input(pos, d1, d2, ip, io, length, q, q1, q2, order):
     """Input link turned about the fixed pivot ``ip`` to the absolute angle q:
     tip ``io`` = pivot + length e(q), analogs from q' and q''."""
     if not length > 0.0:
-        for k in range(2):
-            pos[io, k] = math.nan
-            d1[io, k] = math.nan
-            d2[io, k] = math.nan
+        _nan_point(pos, d1, d2, io)
         return BAD_GEOMETRY, 0.0
     c = math.cos(q)
     s = math.sin(q)

@@ -155,6 +155,20 @@ def _place(pos, i2, i3, i4, i5, l23, l34, l35, u435, a, b):
 
 
 @njit(**JIT)
+def _place_analogs(d, i2, i3, i4, i5, l23, l34, l35, a_k, b_k, a1, b1, ca, sa, cb, sb, cc, sc):
+    """First (a1 = b1 = 0) or second analogs ``d`` of vertices 3, 4, 5 from the
+    analogs (a_k, b_k) of the angles a, b and the first ones (a1, b1):
+    P3^(k) = P2^(k) + L23 (a_k n(a) - a1^2 e(a)), P4^(k) = P3^(k) + L34 (b_k n(b)
+    - b1^2 e(b)), P5^(k) = P3^(k) + L35 (b_k n(c) - b1^2 e(c)), c = b + U435."""
+    d[i3, 0] = d[i2, 0] - l23 * a1 * a1 * ca - l23 * a_k * sa
+    d[i3, 1] = d[i2, 1] - l23 * a1 * a1 * sa + l23 * a_k * ca
+    d[i4, 0] = d[i3, 0] - l34 * (b_k * sb + b1 * b1 * cb)
+    d[i4, 1] = d[i3, 1] + l34 * (b_k * cb - b1 * b1 * sb)
+    d[i5, 0] = d[i3, 0] - l35 * (b_k * sc + b1 * b1 * cc)
+    d[i5, 1] = d[i3, 1] + l35 * (b_k * cc - b1 * b1 * sc)
+
+
+@njit(**JIT)
 def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
            state, g, order, tols):
     """Solve the class III group whose continuation state is row ``g`` of
@@ -214,12 +228,7 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
     rhs1 = -(r4x * (d1[i2, 0] - d1[i6, 0]) + r4y * (d1[i2, 1] - d1[i6, 1]))
     rhs2 = -(r5x * (d1[i2, 0] - d1[i7, 0]) + r5y * (d1[i2, 1] - d1[i7, 1]))
     a1, b1 = solve2(j11, j12, j21, j22, rhs1, rhs2)
-    d1[i3, 0] = d1[i2, 0] - l23 * a1 * sa
-    d1[i3, 1] = d1[i2, 1] + l23 * a1 * ca
-    d1[i4, 0] = d1[i3, 0] - l34 * b1 * sb
-    d1[i4, 1] = d1[i3, 1] + l34 * b1 * cb
-    d1[i5, 0] = d1[i3, 0] - l35 * b1 * sc
-    d1[i5, 1] = d1[i3, 1] + l35 * b1 * cc
+    _place_analogs(d1, i2, i3, i4, i5, l23, l34, l35, a1, b1, 0.0, 0.0, ca, sa, cb, sb, cc, sc)
     if order < 2:
         return status, margin
     # second analogs: r4.(P4'' - P6'') + |P4' - P6'|^2 = 0 (and for 5, 7), with
@@ -237,12 +246,7 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
     rhs1 = -(q4x * q4x + q4y * q4y) - (r4x * k4x + r4y * k4y)
     rhs2 = -(q5x * q5x + q5y * q5y) - (r5x * k5x + r5y * k5y)
     a2, b2 = solve2(j11, j12, j21, j22, rhs1, rhs2)
-    d2[i3, 0] = k3x - l23 * a2 * sa
-    d2[i3, 1] = k3y + l23 * a2 * ca
-    d2[i4, 0] = d2[i3, 0] - l34 * (b2 * sb + b1 * b1 * cb)
-    d2[i4, 1] = d2[i3, 1] + l34 * (b2 * cb - b1 * b1 * sb)
-    d2[i5, 0] = d2[i3, 0] - l35 * (b2 * sc + b1 * b1 * cc)
-    d2[i5, 1] = d2[i3, 1] + l35 * (b2 * cc - b1 * b1 * sc)
+    _place_analogs(d2, i2, i3, i4, i5, l23, l34, l35, a2, b2, a1, b1, ca, sa, cb, sb, cc, sc)
     return status, margin
 
 
@@ -385,12 +389,7 @@ def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l
     rhs2 = (-(nx * (d1[i2, 0] - d1[i7, 0]) + ny * (d1[i2, 1] - d1[i7, 1]))
             + th1 * (ux * w5x + uy * w5y))
     a1, b1 = solve2(j11, j12, j21, j22, rhs1, rhs2)
-    d1[i3, 0] = d1[i2, 0] - l23 * a1 * sa
-    d1[i3, 1] = d1[i2, 1] + l23 * a1 * ca
-    d1[i4, 0] = d1[i3, 0] - l34 * b1 * sb
-    d1[i4, 1] = d1[i3, 1] + l34 * b1 * cb
-    d1[i5, 0] = d1[i3, 0] - l35 * b1 * sc
-    d1[i5, 1] = d1[i3, 1] + l35 * b1 * cc
+    _place_analogs(d1, i2, i3, i4, i5, l23, l34, l35, a1, b1, 0.0, 0.0, ca, sa, cb, sb, cc, sc)
     if order < 2:
         return status, margin
     # second analogs: r4.(P4'' - P6'') + |P4' - P6'|^2 = 0 (as class3) and
@@ -410,10 +409,5 @@ def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l
     rhs2 = (-(nx * k5x + ny * k5y) + 2.0 * th1 * (ux * v5x + uy * v5y)
             + th2 * (ux * w5x + uy * w5y) + th1 * th1 * offset)
     a2, b2 = solve2(j11, j12, j21, j22, rhs1, rhs2)
-    d2[i3, 0] = k3x - l23 * a2 * sa
-    d2[i3, 1] = k3y + l23 * a2 * ca
-    d2[i4, 0] = d2[i3, 0] - l34 * (b2 * sb + b1 * b1 * cb)
-    d2[i4, 1] = d2[i3, 1] + l34 * (b2 * cb - b1 * b1 * sb)
-    d2[i5, 0] = d2[i3, 0] - l35 * (b2 * sc + b1 * b1 * cc)
-    d2[i5, 1] = d2[i3, 1] + l35 * (b2 * cc - b1 * b1 * sc)
+    _place_analogs(d2, i2, i3, i4, i5, l23, l34, l35, a2, b2, a1, b1, ca, sa, cb, sb, cc, sc)
     return status, margin
