@@ -389,12 +389,9 @@ SWEEP_N = 160
 
 @pytest.fixture(scope="module")
 def prp_sweep(studies, tmp_path_factory):
-    from pipeline.cli import main
-    out = tmp_path_factory.mktemp("prp_sweep") / "prp.h5"
-    assert main(["run", str(studies / "slotted_rocker_prp_sweep.toml"), "-o", str(out),
-                 "--candidates", str(SWEEP_N), "-q"]) == 0
-    assert main(["analyze", str(out), "-q"]) == 0
-    return load_study(studies / "slotted_rocker_prp_sweep.toml"), out
+    from sweep_helpers import run_and_analyze
+    return run_and_analyze(studies / "slotted_rocker_prp_sweep.toml",
+                           tmp_path_factory.mktemp("prp_sweep") / "prp.h5", SWEEP_N)
 
 
 def test_sweep_over_the_prp_guide_matches_the_scene_path(prp_sweep):
@@ -434,13 +431,5 @@ def test_sweep_over_the_prp_guide_matches_the_scene_path(prp_sweep):
 def test_pareto_analysis_of_the_prp_sweep(prp_sweep):
     """The fronts of the stored analysis are those of a brute-force dominance
     test over the feasible candidates."""
-    from naive_pareto import brute_force_rank
-    from pipeline.analysis import read_analysis, read_sweep
-    from pipeline.storage import open_results
-    _, path = prp_sweep
-    data = read_sweep(path)
-    with open_results(path, "sweep") as f:
-        an = read_analysis(f)
-    assert data.feasible.sum() >= 20
-    np.testing.assert_array_equal(an.rank, brute_force_rank(data.F, data.feasible))
-    assert (an.rank[an.front1] == 1).all() and an.rank[an.knee] == 1
+    from sweep_helpers import assert_fronts_are_the_brute_force_rank
+    assert_fronts_are_the_brute_force_rank(prp_sweep[1])
