@@ -27,6 +27,23 @@ def _nan_point(pos, d1, d2, i):
 
 
 @njit(**JIT)
+def polar_point(pos, d1, d2, ibase, io, length, th, th1, th2, order):
+    """Point ``io`` = base + length e(th), its analogs from th' and th'' (an
+    attached point, an input's tip)."""
+    c = math.cos(th)
+    s = math.sin(th)
+    pos[io, 0] = pos[ibase, 0] + length * c
+    pos[io, 1] = pos[ibase, 1] + length * s
+    if order >= 1:
+        d1[io, 0] = d1[ibase, 0] - length * th1 * s
+        d1[io, 1] = d1[ibase, 1] + length * th1 * c
+    if order >= 2:
+        d2[io, 0] = d2[ibase, 0] - length * (th2 * s + th1 * th1 * c)
+        d2[io, 1] = d2[ibase, 1] + length * (th2 * c - th1 * th1 * s)
+    return OK, 1.0
+
+
+@njit(**JIT)
 def crank(pos, d1, d2, ip, io, length, phi_m0, phi1, order):
     """Crank tip: P = pivot + L (cos(phi1 + phiM0), sin(phi1 + phiM0))."""
     ang = phi1 + phi_m0
@@ -348,14 +365,4 @@ def attach(pos, d1, d2, ibase, ia, ib, io, angle, length, order):
         if not (dx * dx + dy * dy > 0.0):
             _nan_point(pos, d1, d2, io)
             return SINGULAR, 0.0
-    c = math.cos(th)
-    s = math.sin(th)
-    pos[io, 0] = pos[ibase, 0] + length * c
-    pos[io, 1] = pos[ibase, 1] + length * s
-    if order >= 1:
-        d1[io, 0] = d1[ibase, 0] - length * th1 * s
-        d1[io, 1] = d1[ibase, 1] + length * th1 * c
-    if order >= 2:
-        d2[io, 0] = d2[ibase, 0] - length * (th2 * s + th1 * th1 * c)
-        d2[io, 1] = d2[ibase, 1] + length * (th2 * c - th1 * th1 * s)
-    return OK, 1.0
+    return polar_point(pos, d1, d2, ibase, io, length, th, th1, th2, order)

@@ -31,7 +31,7 @@ import math
 from numba import njit
 
 from .config import BAD_GEOMETRY, JIT, OK
-from .groups import _nan_point
+from .groups import _nan_point, polar_point
 
 TWO_PI = 2.0 * math.pi
 
@@ -113,17 +113,7 @@ def rotary_input(pos, d1, d2, ip, io, length, q, q1, q2, order):
     if not length > 0.0:
         _nan_point(pos, d1, d2, io)
         return BAD_GEOMETRY, 0.0
-    c = math.cos(q)
-    s = math.sin(q)
-    pos[io, 0] = pos[ip, 0] + length * c
-    pos[io, 1] = pos[ip, 1] + length * s
-    if order >= 1:
-        d1[io, 0] = d1[ip, 0] - length * q1 * s
-        d1[io, 1] = d1[ip, 1] + length * q1 * c
-    if order >= 2:
-        d2[io, 0] = d2[ip, 0] - length * (q2 * s + q1 * q1 * c)
-        d2[io, 1] = d2[ip, 1] + length * (q2 * c - q1 * q1 * s)
-    return OK, 1.0
+    return polar_point(pos, d1, d2, ip, io, length, q, q1, q2, order)
 
 
 @njit(**JIT)
