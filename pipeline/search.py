@@ -573,6 +573,8 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
                     computed += len(X)
                     evaluated += 1
                 F, G = box.view(status, metrics)
+                # pymoo's Evaluator.eval method (not Python's eval): hands the computed
+                # F, G to the population and counts the evaluations the termination reads
                 algorithm.evaluator.eval(StaticProblem(box, F=F, G=G), pop)
                 algorithm.tell(infills=pop)
                 hv = tracker.add(F, (G <= 0).all(axis=1))
