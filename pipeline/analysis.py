@@ -31,14 +31,13 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import h5py
 import numpy as np
 
 from .version import __version__
 from .files import RunLock, replacing
 from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank
-from .storage import (ResultsError, attr_text, candidate_ids, coordinate, open_results, put,
+from .storage import (ResultsError, attr_text, candidate_ids, coordinate, hdf5_image, open_results, put,
                       read_units, remove_group, variables)
 from .study import stored_study
 
@@ -307,7 +306,7 @@ def write(path, data: SweepData, res: dict, elapsed: float):
     sweep as it was."""
     path = Path(path)
     with RunLock(path, "a sweep or another analysis is writing this file"), \
-            replacing(path, copy_of=path) as tmp, h5py.File(tmp, "r+") as f:
+            replacing(path) as tmp, hdf5_image(tmp, start=path) as f:
         _write_group(f, data, res, elapsed)
 
 

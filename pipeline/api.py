@@ -54,7 +54,12 @@ def solve_scene(study):
 def open(path):  # noqa: A001 - pipeline.open, as the users asked for it
     """A results file as tables: a sweep's candidates as one DataFrame
     (``candidates``), a scene's tables as {name: DataFrame} (``scene_tables``)."""
-    from .storage import attr_text, open_results
+    from .storage import ResultsError, attr_text, open_results
     with open_results(path) as f:
         kind = attr_text(f.attrs["kind"])
-    return candidates(path) if kind == "sweep" else scene_tables(path)
+    try:
+        return candidates(path) if kind == "sweep" else scene_tables(path)
+    except (OSError, RuntimeError, KeyError, IndexError) as e:
+        # bytes damaged past the header: HDF5 fails inside a read
+        raise ResultsError(path, "damaged or incomplete results file ("
+                           + " ".join(str(e).split()) + ")") from None

@@ -281,26 +281,45 @@ def main(argv=None) -> int:
     try:
         return args.func(args)
     except _user_errors() as e:
-        print(f"pipeline {args.command}: error: {e}", file=sys.stderr)
+        print(f"pipeline {args.command}: error: {_one_line(e)}", file=sys.stderr)
         return EXIT_USER_ERROR
-    except (KeyError, IndexError) as e:
+    except (KeyError, IndexError, RuntimeError) as e:
         path = getattr(args, "results", None)
         if path is None:
             raise
-        # a results file that opens but lacks what its kind must hold
+        # a results file that opens but lacks what its kind must hold, or whose bytes
+        # are damaged (HDF5 then fails inside a read: h5py's RuntimeError)
         print(f"pipeline {args.command}: error: {path}: damaged or incomplete results file "
-              f"({type(e).__name__}: {e})", file=sys.stderr)
+              f"({type(e).__name__}: {_one_line(e)})", file=sys.stderr)
         return EXIT_USER_ERROR
     except OSError as e:
         # the operating system's word (no space left, read-only, locked): one line
         # naming the file; every write is atomic, so earlier results are intact
         from .files import os_error_text
-        print(f"pipeline {args.command}: error: {os_error_text(e)}", file=sys.stderr)
+        text = os_error_text(e)
+        named = _file_of(args)
+        if named and not e.filename and str(named) not in text:
+            text = f"{named}: {text}"
+        print(f"pipeline {args.command}: error: {_one_line(text)}", file=sys.stderr)
         return EXIT_USER_ERROR
     except KeyboardInterrupt as e:
         # a sweep says how much is saved and how to resume
         print(f"pipeline {args.command}: {str(e) or 'interrupted'}", file=sys.stderr)
         return 130
+
+
+def _file_of(args):
+    """The file a command works on, to name where an error does not."""
+    for key in ("results", "output", "study"):
+        v = getattr(args, key, None)
+        if v:
+            return v
+    return None
+
+
+def _one_line(e) -> str:
+    """An error's text on one line (HDF5 and NumPy texts can span several)."""
+    return " ".join(str(e).split())
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -11,10 +11,12 @@ folder.
 
 from __future__ import annotations
 
+import errno
 import glob
 import os
 import re
 import shutil
+import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -49,18 +51,49 @@ def _fsync_dir(folder: Path):
         os.close(fd)
 
 
+# The fault-injection hook of the tests (tests/test_faults.py): the environment
+# variable names a point of the write path where the process kills itself with
+# SIGKILL, as a power cut or `kill -9` would, so that a test knows the point was
+# reached.  Unset (always, outside the tests) it costs one dictionary lookup.
+FAULT_VARIABLE = "PIPELINE_FAULT"
+
+
+def fault_point(name: str, target=None):
+    """Die here (SIGKILL) if ``PIPELINE_FAULT`` names this point; with
+    ``PIPELINE_FAULT=point:text`` only where ``text`` is in the target's name."""
+    want = os.environ.get(FAULT_VARIABLE)
+    if not want:
+        return
+    point, _, match = want.partition(":")
+    if point == name and (not match or match in str(target or "")):
+        import signal
+        os.kill(os.getpid(), signal.SIGKILL)
+
+
 def temporary_beside(target) -> Path:
-    """A temporary name in ``target``'s folder that keeps its suffix (so
-    writers that go by the suffix, such as matplotlib, still work)."""
+    """A new, empty temporary file in ``target``'s folder, created exclusively
+    (O_EXCL: a name planted there, a symbolic link included, is never followed)
+    under an unpredictable name that keeps the target's suffix (writers that go
+    by the suffix, such as matplotlib, still work) and carries this process's
+    id (``_remove_stale`` clears a killed writer's file)."""
     target = Path(target)
-    return target.with_name(f".{target.stem}.{os.getpid()}.partial{target.suffix}")
+    fd, name = tempfile.mkstemp(prefix=f".{target.stem}.{os.getpid()}.tmp-",
+                                suffix=f".partial{target.suffix}", dir=target.parent)
+    try:
+        mask = os.umask(0)
+        os.umask(mask)
+        os.fchmod(fd, 0o666 & ~mask)    # the mode any new file gets, not mkstemp's 0600
+    finally:
+        os.close(fd)
+    return Path(name)
 
 
 def _remove_stale(target: Path):
     """Temporary files of ``target`` left by a process that was killed (their
     process id is gone); the whole name must match, so another file's
     temporary file is never touched."""
-    pattern = re.compile(rf"\.{re.escape(target.stem)}\.(\d+)\.partial{re.escape(target.suffix)}")
+    pattern = re.compile(rf"\.{re.escape(target.stem)}\.(\d+)(?:\.tmp-[A-Za-z0-9_]+)?"
+                         rf"\.partial{re.escape(target.suffix)}")
     for p in target.parent.glob(f".{glob.escape(target.stem)}.*.partial{glob.escape(target.suffix)}"):
         m = pattern.fullmatch(p.name)
         if not m:
@@ -73,58 +106,120 @@ def _remove_stale(target: Path):
             continue
 
 
+def refuse_link(path, what="a results file"):
+    """A symbolic link where a run writes its own files (a journal folder, a
+    lock) is refused: it would send the run's writes elsewhere."""
+    path = Path(path)
+    if path.is_symlink():
+        raise ResultsError(path, f"is a symbolic link where {what} belongs; refusing to write "
+                                 "through it (delete the link)")
+
+
 class RunLock:
     """One writer per results file: a second run on the same file, or an
     analysis while a sweep writes it, is refused at once (an advisory lock on
     a hidden file beside it, released when the process ends, however it
-    ends)."""
+    ends, and removed when the run ends)."""
 
     def __init__(self, out, what="another run is writing this file"):
         self.out = Path(out)
-        self.path = self.out.with_name(f".{self.out.name}.lock")
+        real = Path(os.path.realpath(out))     # two links to one file: one lock
+        self.path = real.with_name(f".{real.name}.lock")
         self.what = what
 
     def __enter__(self):
         import fcntl
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
+        refuse_link(self.path, "a run's lock file")
+        while True:
+            try:
+                self.fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW
+                                  | os.O_CLOEXEC, 0o644)
+            except OSError as e:
+                if e.errno == errno.ELOOP:
+                    refuse_link(self.path, "a run's lock file")
+                raise
+            try:
+                fcntl.flock(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                os.close(self.fd)
+                raise ResultsError(self.out, f"{self.what}; wait for it to finish, or write to "
+                                             "another file with -o") from None
+            # the lock holds only if the name still leads to the file locked: a run
+            # that just ended removed it (and a new one may have been made)
+            held = os.fstat(self.fd)
+            try:
+                now = os.stat(self.path, follow_symlinks=False)
+            except FileNotFoundError:
+                now = None
+            if now is not None and (now.st_ino, now.st_dev) == (held.st_ino, held.st_dev):
+                return self
             os.close(self.fd)
-            raise ResultsError(self.out, f"{self.what}; wait for it to finish, or write to "
-                                         "another file with -o") from None
-        return self
 
     def __exit__(self, *exc):
         import fcntl
+        try:
+            os.unlink(self.path)        # while locked: no other run holds this name
+        except FileNotFoundError:
+            pass
         fcntl.flock(self.fd, fcntl.LOCK_UN)
         os.close(self.fd)
+
+
+def errno_of(e: Exception):
+    """The operating system's error number behind ``e``: its own, or the one
+    HDF5 folds into its text (h5py raises RuntimeError for a failed flush)."""
+    if getattr(e, "errno", None):
+        return e.errno
+    m = re.search(r"errno = (\d+)", str(e))
+    return int(m.group(1)) if m else None
+
+
+def naming(e: Exception, target) -> OSError:
+    """``e`` as an OSError that names ``target`` (the file the user asked
+    for), not the temporary file or nothing at all."""
+    code = errno_of(e)
+    reason = os.strerror(code) if code else " ".join(str(e).split()) or type(e).__name__
+    return OSError(code, reason, str(target))
 
 
 @contextmanager
 def replacing(target, copy_of=None):
     """Yield a temporary path to write ``target`` to; on success it is flushed
-    and renamed over ``target``, on any error (or interruption) removed.
+    and renamed over ``target``, on any error (or interruption) removed.  A
+    target that is a symbolic link is written through: the file it leads to is
+    replaced, the link stays.  An operating-system error names ``target``.
 
     ``copy_of``: start from a copy of that file (an in-place update, such as
     the analysis of a sweep, is made on the copy and swapped in)."""
     target = Path(target)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    _remove_stale(target)
-    tmp = temporary_beside(target)
+    if target.is_symlink():
+        target = Path(os.path.realpath(target))
+    if target.is_dir():
+        raise ResultsError(target, "is a folder; give a file name")
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        _remove_stale(target)
+        tmp = temporary_beside(target)
+    except OSError as e:
+        raise naming(e, target) from None
     try:
         if copy_of is not None:
             shutil.copyfile(copy_of, tmp)
         yield tmp
+        fault_point("before-fsync", target)
         _fsync(tmp)
+        fault_point("before-rename", target)
         os.replace(tmp, target)
         _fsync_dir(target.parent)
-    except BaseException:
+    except BaseException as e:
         try:
             tmp.unlink()
         except FileNotFoundError:
             pass
+        if (isinstance(e, OSError) and not isinstance(e, FileNotFoundError)
+                or isinstance(e, RuntimeError) and errno_of(e)):
+            raise naming(e, target) from None
         raise
 
 
@@ -161,6 +256,7 @@ def os_error_text(e: OSError) -> str:
         reason = e.strerror
     else:
         reason = msg.splitlines()[0] if msg else type(e).__name__
-    name = re.sub(r"(^|/)\.([^/]+)\.\d+\.partial(\.[^/]*)?$", r"\1\2\3", name)
+    name = re.sub(r"(^|/)\.([^/]+)\.\d+(?:\.tmp-[A-Za-z0-9_]+)?\.partial(\.[^/]*)?$",
+                  r"\1\2\3", name)
     name = re.sub(r"\.tmp$", "", name)
     return f"{name}: {reason}" if name else reason

@@ -6,7 +6,8 @@ import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .files import safe_name, save_figure
+from .errors import ResultsError
+from .files import RunLock, safe_name, save_figure
 from .study import load_study
 
 log = logging.getLogger("pipeline")
@@ -42,7 +43,7 @@ def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
         if candidates is not None or resume or scheduler or seed_from or device or store:
             raise ValueError(f"{path}: --candidates, --resume, --scheduler, --from, --device "
                              "and --store apply to sweeps; this study is a scene")
-        return run_scene_study(study, out, pictures=pictures)
+        return run_scene_study(study, out, pictures=pictures, overwrite=overwrite)
     if study.search is not None:
         if candidates is not None or chunk_size is not None:
             raise ValueError(f"{path}: --candidates and --chunk-size size a Monte-Carlo sweep; "
@@ -123,7 +124,24 @@ def solve_scene(study):
     return res
 
 
-def run_scene_study(study, out, pictures=True) -> RunOutcome:
+def run_scene_study(study, out, pictures=True, overwrite=False) -> RunOutcome:
+    """Solve a scene and write its results file and pictures: like a sweep, a
+    scene takes the run lock of its file and replaces an earlier file only with
+    ``overwrite`` (and never an unfinished run's)."""
+    out = Path(out)
+    with RunLock(out):
+        from .sweep import Journal
+        if Journal(out).exists():
+            raise ResultsError(out, "is being written by an unfinished sweep or search (its "
+                                    f"journal {out.name}.parts is beside it); write the scene "
+                                    "to another file with -o")
+        if out.exists() and not overwrite:
+            raise ResultsError(out, "already exists; --overwrite replaces it, -o writes "
+                                    "another file")
+        return _write_scene_study(study, out, pictures)
+
+
+def _write_scene_study(study, out, pictures) -> RunOutcome:
     from .kernels import config as kc
     from .scene_file import write_scene
     res = solve_scene(study)

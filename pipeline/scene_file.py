@@ -6,13 +6,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import h5py
 import numpy as np
 
 from .kernels import config as kc
 from .files import replacing
 from .scene import real_motion
-from .storage import STATUS_ENUM, coordinate, put, status_table, write_root_attrs
+from .storage import STATUS_ENUM, coordinate, hdf5_image, put, status_table, write_root_attrs
 
 
 def _curves(g, res, curves, study):
@@ -137,7 +136,7 @@ def write_scene(res, path):
     study = res.study
     path = Path(path)
     plan = res.plan
-    with replacing(path) as tmp, h5py.File(tmp, "w") as f:
+    with replacing(path) as tmp, hdf5_image(tmp) as f:
         write_root_attrs(f, "scene", study, status=kc.STATUS_NAMES[res.status])
         m = f.create_group("mechanism")
         m.attrs["point_names"] = list(plan.point_names[:plan.n_visible])

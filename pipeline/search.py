@@ -61,7 +61,7 @@ from .files import RunLock
 from .kernels import config as kc
 from .pareto import crowding_distance, nondominated_rank
 from .search_spec import METHODS, SearchSpec
-from .storage import (COMPRESSION, ResultsError, attach, attr_text, coordinate,
+from .storage import (COMPRESSION, ResultsError, attach, attr_text, coordinate, hdf5_writing,
                       open_results)
 from .sweep import (Journal, SweepFile, SweepInterrupted, SweepOutcome, SweepProblem,
                     _connect, aside_or_done, bounded_finite, build_problem, check_existing,
@@ -378,7 +378,7 @@ class SearchFile:
         evaluated: the first evaluation, which compiles a new mechanism)."""
         self.sf.create()
         n, ngen = sum(self.sizes), len(self.sizes)
-        with h5py.File(self.path, "r+") as f:
+        with hdf5_writing(self.path, expendable=False) as f:
             for k, v in self.attrs.items():
                 f.attrs[k] = v
             f.attrs["kind_detail"] = "search"
@@ -509,7 +509,7 @@ def _run_locked(study, out, seed_from, resume, overwrite, scheduler, client, n_j
             if fresh:       # the first generation before the manifest that makes a journal
                 journal.dir.mkdir(parents=True, exist_ok=True)
                 _save_first(journal, x0)
-                journal.start(want)
+                journal.start(dict(want, replaces=out.exists()))
             return _generations(study, out, journal, problem, x0, client, n_jobs, progress,
                                 on_generation, stop_after,
                                 {"search_method": search.method, "population": search.population,
@@ -529,7 +529,8 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
     search = study.search
     planned = search.sizes()
     box = SweepBlackBox(problem)
-    sfile = SearchFile(out, study, problem, search, planned, attrs)
+    work = journal.working_file(out)      # out, or its replacement in the journal folder
+    sfile = SearchFile(work, study, problem, search, planned, attrs)
     with compile_notice() as prep:
         scale = hv_scale(problem)
         sfile.create(scale)
@@ -548,7 +549,7 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
     bar = _progress(search, progress)
     t0 = time.perf_counter()
     try:
-        with h5py.File(out, "r+") as f:
+        with hdf5_writing(work, expendable=False) as f:
             d = sfile.datasets(f)
             flushed = time.monotonic()
             writing = True
@@ -606,9 +607,9 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
     if sizes != planned:
         # a generation came out smaller (pymoo found too few new designs) or the
         # search ended early: the file is written again, to its true size, from the journal
-        sfile = SearchFile(out, study, problem, search, sizes, attrs)
+        sfile = SearchFile(work, study, problem, search, sizes, attrs)
         sfile.create(scale)
-        with h5py.File(out, "r+") as f:
+        with hdf5_writing(work, expendable=False) as f:
             d = sfile.datasets(f)
             for gen, row in enumerate(history):
                 sfile.write(d, gen, *journal.load(gen)[:3], row)

@@ -5,6 +5,8 @@ every dataset carries ``units`` and ``long_name``."""
 from __future__ import annotations
 
 import datetime as _dt
+import os
+from contextlib import contextmanager
 from pathlib import Path
 
 import h5py
@@ -185,15 +187,121 @@ def put(group, name, data, units, long_name, dims=None, **attrs):
     return d
 
 
+@contextmanager
+def hdf5_writing(path, mode="r+", expendable=True):
+    """``h5py.File(path, mode)`` for a file this run can rebuild or throw away,
+    closed in a defined order whatever happens.
+
+    When a write fails (a full disk), HDF5 keeps dirty pages it cannot flush: a
+    plain close then fails again and leaves objects that crash the interpreter
+    when it exits.  So on an error the file's bytes are given up first
+    (truncated: the space comes back, and HDF5 can then close it cleanly), and
+    the error goes on to the caller.  ``expendable``: a temporary file (given up
+    on any error); otherwise (a sweep's own file, rebuilt from its journal by
+    --resume) only an input/output error gives it up, and an interruption
+    leaves it flushed and readable."""
+    from .files import errno_of, naming
+    import sys
+    # an HDF5 object closed while the block runs (a dataset let go) writes its
+    # pages then; if that fails, h5py can only report it as "Exception ignored":
+    # such errors are collected here and fail the block instead
+    lost, hook = [], sys.unraisablehook
+
+    def collect(u):
+        if isinstance(u.exc_value, (OSError, RuntimeError)) and not lost:
+            lost.append(u.exc_value)
+        elif not isinstance(u.exc_value, (OSError, RuntimeError)):
+            hook(u)
+    sys.unraisablehook = collect
+    f = h5py.File(path, mode)
+    try:
+        yield f
+        if lost:
+            raise lost[0]
+        f.flush()
+        if lost:
+            raise lost[0]
+    except BaseException as e:
+        io_error = isinstance(e, (OSError, RuntimeError))
+        give_up = expendable or io_error
+        if not give_up:
+            try:
+                f.flush()
+            except Exception:
+                give_up = True
+        if give_up:
+            try:
+                os.truncate(path, 0)
+            except OSError:
+                pass
+        try:
+            f.close()
+        except Exception:
+            pass
+        sys.unraisablehook = hook
+        if isinstance(e, RuntimeError) and errno_of(e):
+            raise naming(e, path) from None     # the system's error, as an OSError
+        raise
+    try:
+        f.close()
+    finally:
+        sys.unraisablehook = hook
+
+
+# the largest file an update is made on in memory (hdf5_image); a larger one is
+# updated on disk, in a copy (hdf5_writing)
+IMAGE_LIMIT = 2 << 30
+
+
+@contextmanager
+def hdf5_image(target, start=None):
+    """An HDF5 file built in memory, its bytes written to ``target`` (a
+    temporary file of ``files.replacing``) when the block completes: HDF5 never
+    writes to the disk itself, so a full disk is one OSError from that last
+    write, and a failure anywhere leaves nothing to clean up.  ``start``: a
+    file to begin from (an update of it); one over IMAGE_LIMIT is updated on
+    disk in a copy instead."""
+    import io
+    import shutil
+    if start is not None and os.path.getsize(start) > IMAGE_LIMIT:
+        shutil.copyfile(start, target)
+        with hdf5_writing(target) as f:
+            yield f
+        return
+    buf = io.BytesIO(b"" if start is None else Path(start).read_bytes())
+    f = h5py.File(buf, "r+" if start is not None else "w")
+    try:
+        yield f
+    finally:
+        f.close()
+    with open(target, "wb") as out:
+        out.write(buf.getbuffer())
+
+
 def open_results(path, kind=None):
     """Open a results file read-only, checking that it is ours (and of ``kind``)."""
     path = Path(path)
     if not path.exists():
         raise ResultsError(path, "file not found")
+    if path.is_dir():
+        raise ResultsError(path, "is a folder, not a results file")
     try:
         f = h5py.File(path, "r")
     except OSError as e:
-        raise ResultsError(path, f"not a readable HDF5 file ({e})") from None
+        if "unable to lock file" in str(e) or isinstance(e, BlockingIOError):
+            raise ResultsError(path, "another run or program has this file open for writing; "
+                                     "wait for it to finish") from None
+        raise ResultsError(path, "not a readable HDF5 file (" + " ".join(str(e).split())
+                           + ")") from None
+    try:
+        return _checked(f, path, kind)
+    except (RuntimeError, OSError, KeyError) as e:     # damaged bytes inside the file
+        f.close()
+        raise ResultsError(path, "damaged results file (" + " ".join(str(e).split())
+                           + ")") from None
+
+
+def _checked(f, path, kind):
     if f.attrs.get("format") != FORMAT:
         f.close()
         raise ResultsError(path, "not a pipeline results file (no format attribute "
@@ -203,6 +311,8 @@ def open_results(path, kind=None):
         f.close()
         raise ResultsError(path, f"is a {got} result, this command needs a {kind} result")
     missing = [n for n in REQUIRED.get(attr_text(f.attrs.get("kind")), ()) if n not in f]
+    if attr_text(f.attrs.get("store", "all")) == "feasible" and "candidate" not in f:
+        missing.append("candidate (the sweep index of each kept row)")
     n = {f[k].shape[0] for k in ("candidates/status", "candidates/params", "candidates/feasible")
          if k in f} if attr_text(f.attrs.get("kind")) == "sweep" else set()
     if missing or len(n) > 1:

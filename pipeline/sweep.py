@@ -31,9 +31,9 @@ import numpy as np
 
 from .kernels import config as kc
 from .kernels import sweep as ks
-from .files import RunLock, replacing
+from .files import RunLock, fault_point, refuse_link, replacing
 from .limits import CHUNK_WHY, MAX_CHUNK
-from .storage import (COMPRESSION, FORMAT, STATUS_ENUM, ResultsError, attach, attr_text,
+from .storage import (COMPRESSION, FORMAT, STATUS_ENUM, ResultsError, attach, attr_text, hdf5_image, hdf5_writing,
                       coordinate, put, status_table, units_attr, write_root_attrs)
 from .sweep_spec import METRICS, SweepSpec, draw_candidates, draw_checked, parameter_rows
 
@@ -259,10 +259,17 @@ def bounded_finite(spec: SweepSpec, metrics):
 
 # ----------------------------------------------------------------- journal
 class Journal:
-    """Finished chunks saved atomically next to the results file."""
+    """Finished chunks saved atomically next to the results file.
+
+    A run that replaces an earlier file (``--overwrite``) writes its new HDF5
+    file inside the journal folder (``working_file``), so that the earlier file
+    keeps its own name, untouched, until the new one is complete and renamed
+    over it (``finish_run``); a run into a new name writes the results file
+    itself as it goes (it can be analysed while unfinished)."""
 
     def __init__(self, out: Path):
         self.dir = out.with_name(out.name + ".parts")
+        refuse_link(self.dir, "a run's journal folder")
 
     def exists(self):
         return (self.dir / "manifest.json").exists()
@@ -272,7 +279,24 @@ class Journal:
         self._atomic(self.dir / "manifest.json", json.dumps(manifest, indent=1).encode())
 
     def manifest(self):
-        return json.loads((self.dir / "manifest.json").read_text())
+        p = self.dir / "manifest.json"
+        try:
+            man = json.loads(p.read_text(encoding="utf-8"))
+        except (UnicodeDecodeError, ValueError) as e:
+            raise ResultsError(p, f"damaged journal manifest ({type(e).__name__}: "
+                                  f"{str(e).splitlines()[0][:80]}); the run cannot be resumed: "
+                                  "delete the folder and run again") from None
+        if not isinstance(man, dict):
+            raise ResultsError(p, "damaged journal manifest (not a JSON object); the run "
+                                  "cannot be resumed: delete the folder and run again")
+        return man
+
+    def working_file(self, out: Path) -> Path:
+        """Where this run writes its HDF5 file: ``out``, or, for a run that
+        replaces an earlier file, a file in the journal folder."""
+        if self.exists() and self.manifest().get("replaces", False):
+            return self.dir / "replacement.h5"
+        return out
 
     def _atomic(self, path, data: bytes):
         with replacing(path) as tmp:    # the one atomic writer (files.replacing)
@@ -350,7 +374,7 @@ class SweepFile:
         spec, plan = self.spec, self.problem.plan
         n, nv = spec.candidates, len(spec.variables)
         ch = min(spec.chunk_size, n)
-        with replacing(self.path) as tmp, h5py.File(tmp, "w") as f:
+        with replacing(self.path) as tmp, hdf5_image(tmp) as f:
             write_root_attrs(f, "sweep", self.study, seed=spec.seed, sampler=spec.sampler,
                              n_candidates=n, chunk_size=spec.chunk_size,
                              positions_per_revolution=spec.positions,
@@ -363,8 +387,10 @@ class SweepFile:
                 k = f.create_dataset("candidate", (0,), "i8", maxshape=(None,), chunks=(ch,),
                                      **COMPRESSION)
             else:
-                k = f.create_dataset("candidate", data=np.arange(n), chunks=(ch,),
-                                     **COMPRESSION)
+                k = f.create_dataset("candidate", (n,), "i8", chunks=(ch,), **COMPRESSION)
+                step = ch * max(1, (1 << 20) // ch)     # a million at a time, not n at once
+                for lo in range(0, n, step):
+                    k[lo:min(lo + step, n)] = np.arange(lo, min(lo + step, n))
             k.attrs.update(units="1", long_name="candidate index (its row of the sweep's draws)")
             k.make_scale("candidate")
             gnames = constraint_names(self.has_margin, spec)
@@ -640,11 +666,6 @@ def run_sweep(study, out, *, candidates=None, resume=False, overwrite=False, sch
                            progress, stop_after_chunks)
 
 
-def _replaced(out: Path) -> Path:
-    """Where a finished file waits while --overwrite replaces it."""
-    return out.with_name(f".{out.name}.replaced")
-
-
 def _run_sizes(out: Path):
     """(candidates, chunk size) of the run that wrote ``out``: from its journal
     if it was interrupted, else from the file; (None, None) if neither says."""
@@ -679,7 +700,8 @@ def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, 
     try:
         with nothing_left_before_first(out, journal, fresh, "chunk"):
             if fresh:
-                journal.start(manifest_for(study, spec))
+                journal.start(dict(manifest_for(study, spec), replaces=out.exists()))
+            sf.path = journal.working_file(out)
             return _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs,
                                progress, stop_after_chunks)
     finally:
@@ -710,13 +732,12 @@ def compile_notice():
 def aside_or_done(out: Path, journal: Journal, resume: bool, overwrite: bool, unit: str,
                   summary):
     """Before a run (sweep or search) writes: with --overwrite the finished file
-    steps aside until the new run has saved its first ``unit`` (a run that fails
-    or is stopped before that puts it back: nothing_left_before_first); a
-    --resume of a finished run returns its outcome (``summary(out)``), else None."""
+    stays as it is, under its name, until the new run is complete (the new one
+    is written in the journal folder, ``Journal.working_file``); a --resume of
+    a finished run returns its outcome (``summary(out)``), else None."""
     if overwrite and out.exists() and not resume:
-        log.info("replacing %s (kept aside as %s until the new run has saved its first "
-                 "%s)", out, _replaced(out).name, unit)
-        os.replace(out, _replaced(out))
+        log.info("replacing %s when the new run is complete (until then it stays as it is)",
+                 out)
     if resume and not journal.exists() and out.exists():
         log.info("%s is already complete; nothing to resume", out)
         return SweepOutcome("sweep", out, [], summary(out))
@@ -726,16 +747,16 @@ def aside_or_done(out: Path, journal: Journal, resume: bool, overwrite: bool, un
 @contextlib.contextmanager
 def nothing_left_before_first(out: Path, journal: Journal, fresh: bool, unit: str):
     """A fresh run (sweep or search) that fails or is stopped before its first
-    ``unit`` is saved leaves nothing behind, and a file it was to replace
-    (``--overwrite``) comes back."""
+    ``unit`` is saved leaves nothing behind; a file it was to replace
+    (``--overwrite``) was never touched."""
+    replaces = out.exists()
     try:
         yield
     except BaseException as e:
         if fresh and not journal.done():
             journal.remove()
-            out.unlink(missing_ok=True)
-            if _replaced(out).exists():
-                os.replace(_replaced(out), out)
+            if not replaces:
+                out.unlink(missing_ok=True)
             if isinstance(e, KeyboardInterrupt):
                 raise SweepInterrupted(f"{out}: interrupted before the first {unit} finished; "
                                        "nothing was written") from None
@@ -750,7 +771,8 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
         sf.create()
     finished = set(journal.done())
     t0 = time.perf_counter()
-    with h5py.File(out, "r+") as f:
+    work = sf.path
+    with hdf5_writing(work, expendable=False) as f:
         d = sf.datasets(f)
         for c in sorted(finished):
             sf.write_chunk(d, c, *journal.load(c))    # kept rows and counts, if any
@@ -761,7 +783,7 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
     bar = _progress(spec, len(finished), progress)
     computed = 0
     try:
-        with h5py.File(out, "r+") as f:
+        with hdf5_writing(work, expendable=False) as f:
             d = sf.datasets(f)
             flushed = time.monotonic()
             for c, x, status, metrics, rejected in _chunks(problem, todo, client, n_jobs):
@@ -775,6 +797,7 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
                 else:
                     journal.save(c, x, status, metrics, rejected)   # the source of truth
                     sf.write_chunk(d, c, x, status, metrics, rejected)
+                fault_point("chunk-written", out)
                 if time.monotonic() - flushed > 1.0:    # the HDF5 file: once a second
                     f.flush()
                     flushed = time.monotonic()
@@ -786,7 +809,7 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
         raise SweepInterrupted(f"{out}: interrupted with {done} of {spec.n_chunks} chunks "
                                "saved; run again with --resume to continue") from None
     bar.close()
-    with h5py.File(out, "r+") as f:
+    with hdf5_writing(work, expendable=False) as f:
         sf.sort_rows(f)
     return finish_run(out, journal, client, time.perf_counter() - t0, prep[0], computed,
                       summarize, "candidates", device=problem.device_name)
@@ -795,16 +818,20 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
 def finish_run(out: Path, journal: Journal, client, wall: float, compile_s: float,
                computed: int, summary, unit: str, device: str = "cpu") -> SweepOutcome:
     """A run (sweep or search) has written everything: the file is marked
-    complete, the journal and a file it replaced go, and its outcome says the
-    wall time, the compile time apart and the throughput (``summary(out)``:
-    the file's own summary; ``unit``: what was computed)."""
-    with h5py.File(out, "r+") as f:
+    complete (a replacement is renamed over the file it replaces only now), the
+    journal goes, and its outcome says the wall time, the compile time apart
+    and the throughput (``summary(out)``: the file's own summary; ``unit``:
+    what was computed)."""
+    work = journal.working_file(out)
+    with hdf5_writing(work, expendable=False) as f:
         f.attrs["complete"] = True
         f.attrs["wall_time_s"] = wall
         f.attrs["engine"] = "dask" if client is not None else "local"
         f.attrs["device"] = device
+    if work != out:
+        with replacing(out) as tmp:     # the earlier file is replaced whole, now
+            os.replace(work, tmp)
     journal.remove()
-    _replaced(out).unlink(missing_ok=True)     # the new run is complete: the old one goes
     res = summary(out)
     res["wall_time"] = f"{wall:.1f} s"
     if compile_s > 1.0:
@@ -880,8 +907,13 @@ def status_counts(f) -> dict:
         c = f["progress/status_counts"][()][done].sum(axis=0)
         by_status, n_feasible = c[:-1], int(c[-1])
     else:
-        st = f["candidates/status"][()]
-        by_status = np.bincount(st.astype(np.int64), minlength=len(kc.STATUS_NAMES))
+        st = f["candidates/status"][()].astype(np.int64)
+        bad = (st < 0) | (st >= len(kc.STATUS_NAMES))
+        if bad.any():
+            raise ResultsError(f.filename, f"damaged results file: {int(bad.sum()):,} "
+                                           "candidates have a status code outside "
+                                           f"0..{len(kc.STATUS_NAMES) - 1}")
+        by_status = np.bincount(st, minlength=len(kc.STATUS_NAMES))
         n_feasible = int(f["candidates/feasible"][()].sum())
     n = int(by_status.sum())
     out = {}
