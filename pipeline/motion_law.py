@@ -38,6 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .limits import ANGLE, LAW_VALUE
+
 LAWS = ("linear", "cycloidal", "harmonic")
 ALIGN = ("best", "fixed")
 INTERPOLATIONS = ("linear", "cubic")
@@ -132,7 +134,7 @@ class MotionLaw:
 def parse_motion_law(sec) -> MotionLaw:
     """[output.motion_law] (``sec``: a ``pipeline.study.Section``)."""
     align = sec.string("align", "best", choices=ALIGN)
-    phase = sec.number("phase", 0.0)
+    phase = sec.number("phase", 0.0, within=ANGLE)
     has_phases, has_table = sec.has("phases"), sec.has("angles") or sec.has("values")
     if has_phases == has_table:
         raise sec.error("", "give either phases = [{ from, to, law, level }, ...] or a table "
@@ -143,8 +145,8 @@ def parse_motion_law(sec) -> MotionLaw:
         law = MotionLaw(phases=_phases(sec), align=align, phase=phase)
         sec.done()
         return law
-    angles = sec.numbers("angles")
-    values = sec.numbers("values")
+    angles = sec.numbers("angles", within=ANGLE)
+    values = sec.numbers("values", within=LAW_VALUE)
     interpolation = sec.string("interpolation", "linear", choices=INTERPOLATIONS)
     if len(angles) != len(values):
         raise sec.error("values", f"{len(values)} values for {len(angles)} angles")
@@ -173,8 +175,8 @@ def _phases(sec):
         raise sec.error("phases", "at least one phase is needed")
     raw = []
     for it in items:
-        start = it.number("from")
-        end = it.number("to")
+        start = it.number("from", within=ANGLE)
+        end = it.number("to", within=ANGLE)
         law = it.string("law", choices=("dwell",) + LAWS)
         if law == "dwell":
             level = None

@@ -11,11 +11,15 @@ from __future__ import annotations
 
 import math
 import tomllib
+import unicodedata
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .errors import StudyError
-from .limits import MAX_POSITIONS, POSITIONS_WHY
+from . import limits as lim
+from .limits import (MAX_NAME_LENGTH, MAX_POSITIONS, MAX_STUDY_BYTES, MAX_TABLE_POINTS,
+                     MAX_TITLE_LENGTH, NAME_WHY, POSITIONS_WHY, STUDY_BYTES_WHY,
+                     TABLE_POINTS_WHY, TITLE_WHY)
 from .model import (PRP, RPP, RPR, RRP, RRR, Attach, Body, CentreOfMass, ClassIII,
                     ClassIIISlider, Crank, Law, Load, Mechanism, RotaryInput, Slide, SliderInput,
                     group_label)
@@ -37,6 +41,7 @@ class Section:
         self.used = set()
 
     def path(self, key):
+        key = _key(key)
         return f"{self.where}.{key}" if self.where else key
 
     def error(self, key, reason):
@@ -53,7 +58,8 @@ class Section:
             return default
         return self.data[key]
 
-    def number(self, key, default=_MISSING, positive=False, nonzero=False):
+    def number(self, key, default=_MISSING, positive=False, nonzero=False, within=None):
+        """A finite number; ``within``: its ``limits.Range`` (plausible values)."""
         v = self.raw(key, default)
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise self.error(key, f"expected a number, got {_show(v)}")
@@ -67,7 +73,16 @@ class Section:
             raise self.error(key, f"must be positive, got {v:g}")
         if nonzero and v == 0:
             raise self.error(key, "must not be zero")
+        if within is not None:
+            self.check_range(key, v, within)
         return v
+
+    def check_range(self, key, v, within, what=""):
+        """Refuse ``v`` outside ``within`` (a ``limits.Range``), naming the field
+        and the range."""
+        if not within.holds(v):
+            unit = f" {within.unit}" if within.unit else ""
+            raise self.error(key, f"{what}{v:g}{unit} is out of range: {within.words()}")
 
     def integer(self, key, default=_MISSING, minimum=None, choices=None, maximum=None,
                 why=""):
@@ -90,8 +105,38 @@ class Section:
         if not isinstance(v, str):
             raise self.error(key, f"expected a string, got {_show(v)}")
         if choices is not None and v not in choices:
-            raise self.error(key, f"must be one of {', '.join(choices)}, got {v!r}")
+            raise self.error(key, f"must be one of {', '.join(choices)}, got {_quote(v)}")
         return v
+
+    def name(self, key, default=_MISSING, maximum=MAX_NAME_LENGTH, why=NAME_WHY,
+             empty=False):
+        """A name (of a point, a group, a body, ...): a string of printable
+        characters, at most ``maximum`` long (``name_problem``); the empty
+        default of an optional name passes, and ``empty`` lets an empty name
+        pass (a label that may be blank: the study's name and title)."""
+        v = self.string(key, default)
+        if v == "" and (empty or default == ""):
+            return v
+        problem = name_problem(v, maximum, why)
+        if problem:
+            raise self.error(key, problem)
+        return v
+
+    def names(self, key, n=None, default=_MISSING, maximum=MAX_NAME_LENGTH, why=NAME_WHY):
+        """A list of names (``name``), or None where the default is None."""
+        v = self.strings(key, n, default)
+        for k, x in enumerate(v or ()):
+            problem = name_problem(x, maximum, why)
+            if problem:
+                raise self.error(key, f"name {k + 1}: {problem}")
+        return v
+
+    def key_name(self, key, maximum=MAX_NAME_LENGTH, why=NAME_WHY):
+        """A key of this table that is a name (a fixed point, a sweep variable)."""
+        problem = name_problem(key, maximum, why)
+        if problem:     # (an empty key too: its path shows it quoted, '')
+            raise StudyError(self.file, self.path(key), problem)
+        return key
 
     def strings(self, key, n=None, default=_MISSING):
         v = self.raw(key, default)
@@ -103,7 +148,7 @@ class Section:
             raise self.error(key, f"expected {n} names, got {len(v)}")
         return tuple(v)
 
-    def numbers(self, key, n=None, default=_MISSING):
+    def numbers(self, key, n=None, default=_MISSING, within=None):
         v = self.raw(key, default)
         if not isinstance(v, list) or not all(
                 isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
@@ -117,6 +162,9 @@ class Section:
                                   "(about 1.8e308)") from None
         if not all(math.isfinite(x) for x in out):
             raise self.error(key, "numbers must be finite")
+        if within is not None:
+            for k, x in enumerate(out):
+                self.check_range(key, x, within, f"number {k + 1}: ")
         return out
 
     def table(self, key, default=_MISSING):
@@ -135,13 +183,58 @@ class Section:
         """Reject keys nobody asked for (typos must not be silently ignored)."""
         extra = sorted(set(self.data) - self.used)
         if extra:
-            raise self.error(extra[0], f"unknown key {extra[0]!r}"
+            raise self.error(extra[0], f"unknown key {_quote(extra[0])}"
                              + (f" (known here: {', '.join(sorted(self.used))})" if self.used else ""))
 
 
 def _show(v):
     s = repr(v)
     return f"{type(v).__name__} {s[:40]}"
+
+
+def _quote(v, limit=40):
+    """A user's text in a message: repr() (one line: every character that is
+    not printable escaped), cut after ``limit`` characters."""
+    v = str(v)
+    return repr(v) if len(v) <= limit else f"{v[:limit]!r}... ({len(v):,} characters)"
+
+
+def _key(key):
+    """A table key in a field's path: bare where it is a plain word, else quoted."""
+    k = str(key)
+    if k and len(k) <= MAX_NAME_LENGTH and all(c.isascii() and (c.isalnum() or c in "_-")
+                                               for c in k):
+        return k
+    return _quote(k)
+
+
+_CATEGORIES = {"Cc": "a control character", "Cf": "a format character",
+               "Zl": "a line separator", "Zp": "a paragraph separator",
+               "Zs": "a space other than U+0020", "Co": "a private-use character",
+               "Cn": "an unassigned code point", "Cs": "a surrogate"}
+
+
+def name_problem(v: str, maximum=MAX_NAME_LENGTH, why=NAME_WHY):
+    """Why ``v`` cannot be a name, or None.  A name is data (a label in tables,
+    pictures and messages; in generated kernels only inside comments written by
+    ascii()), so any printable character is allowed (quotes, backslashes, #,
+    slashes, letters of any script); refused: the empty name, more than
+    ``maximum`` characters, a character that is not printable (control and
+    format characters such as NUL, tab, CR, LF, U+0085, U+200B, line and
+    paragraph separators U+2028/U+2029, spaces other than U+0020) and
+    surrounding spaces."""
+    if not v:
+        return "a name must not be empty"
+    if len(v) > maximum:
+        return f"a name is at most {maximum} characters ({why}), got {len(v):,}"
+    for i, c in enumerate(v):
+        if not c.isprintable():
+            cat = unicodedata.category(c)
+            return (f"a name holds printable characters only: character {i + 1} is "
+                    f"U+{ord(c):04X}, {_CATEGORIES.get(cat, cat)}")
+    if v != v.strip():
+        return "a name must not begin or end with a space"
+    return None
 
 
 # ----------------------------------------------------------------- study objects
@@ -207,7 +300,9 @@ def load_study(path) -> Study:
     """Read and validate a study file."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        # at most one character past the limit is read (a huge file, /dev/zero)
+        with open(path, encoding="utf-8") as f:
+            text = f.read(MAX_STUDY_BYTES + 1)
     except FileNotFoundError:
         raise StudyError(path, "", "file not found") from None
     except (OSError, UnicodeDecodeError) as e:
@@ -216,6 +311,9 @@ def load_study(path) -> Study:
 
 
 def parse_study(text: str, path="<study>") -> Study:
+    if len(text) > MAX_STUDY_BYTES or len(text.encode("utf-8", "surrogatepass")) > MAX_STUDY_BYTES:
+        raise StudyError(path, "", f"a study file is at most {MAX_STUDY_BYTES:,} bytes "
+                                   f"({STUDY_BYTES_WHY}); this one is larger")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
@@ -223,8 +321,9 @@ def parse_study(text: str, path="<study>") -> Study:
     root = Section(path, "", data)
     head = root.table("study")
     kind = head.string("kind", choices=KINDS)
-    name = head.string("name")
-    title = head.string("title", default=name)
+    name = head.name("name", empty=True)
+    title = head.name("title", default=name, maximum=MAX_TITLE_LENGTH, why=TITLE_WHY,
+                      empty=True)
     head.done()
     mech = parse_mechanism(root.table("mechanism"), name)
     output = parse_output(root.table("output", default={}), mech)
@@ -238,6 +337,7 @@ def parse_study(text: str, path="<study>") -> Study:
         sweep = parse_sweep(root, mech, output)
     elif root.has("sweep"):
         raise root.error("sweep", "a [sweep] section needs study.kind = \"sweep\"")
+    _check_law_grids(path, mech, output, sweep)
     search = None
     if root.has("search"):
         if kind != "sweep":
@@ -261,7 +361,8 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
     fixed = {}
     fx = sec.table("fixed")
     for p in list(fx.data):
-        fixed[p] = fx.numbers(p, n=2)
+        fx.key_name(p)
+        fixed[p] = fx.numbers(p, n=2, within=lim.OFFSET)
     fx.done()
     known = set(fixed)
     defined = {p: fx.path(p) for p in fixed}
@@ -295,36 +396,37 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
         known.add(pname)
 
     cs = sec.table("crank")
-    pivot = cs.string("pivot")
+    pivot = cs.name("pivot")
     if pivot not in fixed:
         raise cs.error("pivot", f"the crank pivot {pivot!r} must be a fixed point (mechanism.fixed)")
-    tip = cs.string("tip")
+    tip = cs.name("tip")
     define(cs, "tip", tip)
-    crank = Crank(pivot=pivot, tip=tip, length=cs.number("length", positive=True),
-                  phiM0=math.radians(cs.number("phiM0", 0.0)),
-                  omega1=cs.number("omega1", nonzero=True),
-                  eps1=cs.number("eps1", 0.0),
+    crank = Crank(pivot=pivot, tip=tip,
+                  length=cs.number("length", positive=True, within=lim.LENGTH),
+                  phiM0=math.radians(cs.number("phiM0", 0.0, within=lim.ANGLE)),
+                  omega1=cs.number("omega1", nonzero=True, within=lim.OMEGA),
+                  eps1=cs.number("eps1", 0.0, within=lim.EPS),
                   rot=cs.integer("rot", -1 if cs.data.get("omega1", 1) < 0 else 1, choices=(-1, 1)),
-                  phi0=math.radians(cs.number("phi0", 0.0)))
+                  phi0=math.radians(cs.number("phi0", 0.0, within=lim.ANGLE)))
     cs.done()
 
     groups = []
     names = set()
     for g in sec.tables("groups"):
         t = g.string("type", choices=GROUP_TYPES)
-        gname = g.string("name", "")
+        gname = g.name("name", "")
         if gname:
             if gname in names:
                 raise g.error("name", f"group name {gname!r} is used twice")
             names.add(gname)
 
         def pnt(key):
-            p = g.string(key)
+            p = g.name(key)
             need(g, key, p)
             return p
 
         def pair(key, optional=False):
-            v = g.strings(key, n=2, default=None if optional else _MISSING)
+            v = g.names(key, n=2, default=None if optional else _MISSING)
             if v is None:
                 return None
             for p in v:
@@ -338,52 +440,55 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
 
         if t == "RRR":
             a, c = pnt("A"), pnt("C")
-            b = g.string("B")
+            b = g.name("B")
             define(g, "B", b)
-            grp = RRR(a, c, b, g.number("L_AB", positive=True), g.number("L_CB", positive=True),
-                      mode(), gname)
+            grp = RRR(a, c, b, g.number("L_AB", positive=True, within=lim.LENGTH),
+                      g.number("L_CB", positive=True, within=lim.LENGTH), mode(), gname)
         elif t == "RRP":
             a, gp = pnt("A"), pnt("guide_point")
             link = pair("guide_link", optional=True)
-            b = g.string("B")
+            b = g.name("B")
             define(g, "B", b)
-            grp = RRP(a, b, gp, math.radians(g.number("guide_angle", 0.0)),
-                      g.number("L_AB", positive=True), mode(), link, gname)
+            grp = RRP(a, b, gp, math.radians(g.number("guide_angle", 0.0, within=lim.ANGLE)),
+                      g.number("L_AB", positive=True, within=lim.LENGTH), mode(), link, gname)
         elif t == "RPR":
             blk, piv = pnt("block"), pnt("pivot")
-            end = g.string("guide_end")
+            end = g.name("guide_end")
             define(g, "guide_end", end)
-            grp = RPR(blk, piv, end, g.number("guide_length", positive=True),
-                      g.number("offset", 0.0), mode(), gname)
+            grp = RPR(blk, piv, end, g.number("guide_length", positive=True, within=lim.LENGTH),
+                      g.number("offset", 0.0, within=lim.OFFSET), mode(), gname)
         elif t == "PRP":
             guides = []
             for i in (1, 2):
                 gp = pnt(f"guide{i}_point")
                 link = pair(f"guide{i}_link", optional=True)
-                guides.append((gp, link, math.radians(g.number(f"guide{i}_angle", 0.0)),
-                               g.number(f"guide{i}_offset", 0.0)))
+                angle = g.number(f"guide{i}_angle", 0.0, within=lim.ANGLE)
+                guides.append((gp, link, math.radians(angle),
+                               g.number(f"guide{i}_offset", 0.0, within=lim.OFFSET)))
             if guides[0][1] is None and guides[1][1] is None and \
                     abs(math.sin(guides[1][2] - guides[0][2])) < PARALLEL_SIN:
                 raise g.error("guide2_angle", "the two guides are parallel (guide1_angle = "
                               f"{math.degrees(guides[0][2]):g} deg, guide2_angle = "
                               f"{math.degrees(guides[1][2]):g} deg): the blocks' lines never "
                               "meet in one point")
-            b = g.string("B")
+            b = g.name("B")
             define(g, "B", b)
             grp = PRP(b, guides[0][0], guides[0][2], guides[1][0], guides[1][2],
                       guides[0][3], guides[1][3], guides[0][1], guides[1][1], gname)
         elif t == "RPP":
             a, gp = pnt("A"), pnt("guide_point")
             link = pair("guide_link", optional=True)
-            slot = math.radians(g.number("slot_angle", 90.0))
+            slot = math.radians(g.number("slot_angle", 90.0, within=lim.ANGLE))
             if abs(math.sin(slot)) < PARALLEL_SIN:
                 raise g.error("slot_angle", f"the slot runs along the guide "
                               f"({math.degrees(slot):g} deg from it): the block cannot move "
                               "the yoke")
-            b = g.string("B")
+            b = g.name("B")
             define(g, "B", b)
-            grp = RPP(a, b, gp, math.radians(g.number("guide_angle", 0.0)), slot,
-                      g.number("guide_offset", 0.0), g.number("slot_offset", 0.0), link, gname)
+            grp = RPP(a, b, gp, math.radians(g.number("guide_angle", 0.0, within=lim.ANGLE)), slot,
+                      g.number("guide_offset", 0.0, within=lim.OFFSET),
+                      g.number("slot_offset", 0.0, within=lim.OFFSET),
+                      link, gname)
         elif t == "class3":
             inp, p6 = pnt("input"), pnt("pivot_4")
             slider = _class3_slider(g, need) if g.has("slider") else None
@@ -391,18 +496,18 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
                 raise g.error("pivot_5", "required field is missing (or, for a block on a "
                                          "guide in place of lead 5-7, a slider table)")
             p7 = pnt("pivot_5") if slider is None else None
-            joints = g.strings("joints", n=3)
+            joints = g.names("joints", n=3)
             for p in joints:
                 define(g, "joints", p)
-            start = g.numbers("start", n=2)
+            start = g.numbers("start", n=2, within=lim.ANGLE)
             leads = ("L23", "L34", "L45", "L35", "L46") + (("L57",) if slider is None else ())
-            L = {k: g.number(k, positive=True) for k in leads}
+            L = {k: g.number(k, positive=True, within=lim.LENGTH) for k in leads}
             if not (L["L45"] < L["L34"] + L["L35"] and L["L34"] < L["L45"] + L["L35"]
                     and L["L35"] < L["L34"] + L["L45"]):
                 raise g.error("L45", "the ternary link 3-4-5 is not a triangle "
                                      f"(L34={L['L34']:g}, L45={L['L45']:g}, L35={L['L35']:g})")
             common = dict(a0=math.radians(start[0]), b0=math.radians(start[1]),
-                          phi_start=math.radians(g.number("phi_start", 0.0)),
+                          phi_start=math.radians(g.number("phi_start", 0.0, within=lim.ANGLE)),
                           orientation=g.integer("orientation", 1, choices=(-1, 1)),
                           name=gname or "triad")
             if slider is None:
@@ -419,20 +524,23 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
                 raise g.error(first, f"the {t.replace('_', ' ')}'s {first.replace('_', ' ')} "
                               f"{p0!r} must be a fixed point (mechanism.fixed): the input is "
                               "driven from the frame")
-            p1 = g.string(moved)
+            p1 = g.name(moved)
             define(g, moved, p1)
             law = parse_law(g.table("law"), rotary)
             if rotary:
-                grp = RotaryInput(p0, p1, g.number("length", positive=True), law, gname)
+                grp = RotaryInput(p0, p1, g.number("length", positive=True, within=lim.LENGTH),
+                                  law, gname)
             else:
-                grp = SliderInput(p0, p1, math.radians(g.number("guide_angle", 0.0)), law, gname)
+                angle = g.number("guide_angle", 0.0, within=lim.ANGLE)
+                grp = SliderInput(p0, p1, math.radians(angle), law,
+                                  gname)
         else:  # attach
             base = pnt("base")
             along = pair("along", optional=True)
-            p = g.string("point")
+            p = g.name("point")
             define(g, "point", p)
-            grp = Attach(p, base, along, math.radians(g.number("angle", 0.0)),
-                         g.number("length", positive=True), gname)
+            grp = Attach(p, base, along, math.radians(g.number("angle", 0.0, within=lim.ANGLE)),
+                         g.number("length", positive=True, within=lim.LENGTH), gname)
         g.done()
         groups.append(grp)
 
@@ -440,53 +548,59 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
     body_names = {}
     if sec.has("bodies"):
         for b in sec.tables("bodies"):
-            bname = b.string("name")
+            bname = b.name("name")
             if bname in body_names:
                 raise b.error("name", f"body name {bname!r} is used twice")
-            joints = b.strings("joints")
+            if f"S[{bname}]" in known:
+                raise b.error("name", f"the centre of mass of body {bname!r} is the point "
+                                      f"'S[{bname}]', and the mechanism has a point of that "
+                                      "name already (mechanism.fixed or a group's): rename one")
+            joints = b.names("joints")
             for p in joints:
                 need(b, "joints", p)
             cm = b.table("com")
-            base = cm.string("base")
+            base = cm.name("base")
             need(cm, "base", base)
-            along = cm.strings("along", n=2, default=None)
+            along = cm.names("along", n=2, default=None)
             for p in along or ():
                 need(cm, "along", p)
-            com = CentreOfMass(base, along, cm.number("lS", 0.0),
-                               math.radians(cm.number("US", 0.0)))
+            com = CentreOfMass(base, along, cm.number("lS", 0.0, within=lim.OFFSET),
+                               math.radians(cm.number("US", 0.0, within=lim.ANGLE)))
             cm.done()
-            turns = b.strings("turns_with", n=2, default=None)
+            turns = b.names("turns_with", n=2, default=None)
             for p in turns or ():
                 need(b, "turns_with", p)
-            body = Body(bname, joints, b.number("mass", positive=True),
+            body = Body(bname, joints, b.number("mass", positive=True, within=lim.MASS),
                         b.number("J_S", 0.0), com, turns)
             if body.J_S < 0:
                 raise b.error("J_S", "must not be negative")
+            b.check_range("J_S", body.J_S, lim.INERTIA)
             b.done()
             body_names[bname] = b.path("name")
             bodies.append(body)
         _check_joints(sec, bodies, fixed)
+    _check_labels(sec, groups, bodies)
     if sec.has("slides"):
         for s in sec.tables("slides"):
-            slider = s.string("slider")
-            guide = s.string("guide", "ground")
+            slider = s.name("slider")
+            guide = s.name("guide", "ground")
             for key, v in (("slider", slider), ("guide", guide)):
                 if v != "ground" and v not in body_names:
                     raise s.error(key, f"unknown body {v!r}")
-            along = s.strings("along", n=2, default=None)
+            along = s.names("along", n=2, default=None)
             for p in along or ():
                 need(s, "along", p)
             slides.append(Slide(slider, None if guide == "ground" else guide,
-                                math.radians(s.number("angle", 0.0)), along))
+                                math.radians(s.number("angle", 0.0, within=lim.ANGLE)), along))
             s.done()
             slides[-1] = _check_slide(s, slides[-1], groups, bodies, fixed)
     if sec.has("loads"):
         from .expressions import parse_expression
         for ld in sec.tables("loads"):
-            body = ld.string("body")
+            body = ld.name("body")
             if body not in body_names:
                 raise ld.error("body", f"unknown body {body!r}")
-            point = ld.string("point", "")
+            point = ld.name("point", "")
             if point:
                 need(ld, "point", point)
             comp = {}
@@ -499,7 +613,7 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
             loads.append(Load(body, point or None, comp["fx"], comp["fy"], comp["moment"],
                               where=f"{ld.file}: {ld.where}"))
             ld.done()
-    gravity = sec.number("gravity", 9.81)
+    gravity = sec.number("gravity", 9.81, within=lim.GRAVITY)
     sec.done()
     return Mechanism(name=name, fixed=fixed, crank=crank, groups=tuple(groups),
                      bodies=tuple(bodies), slides=tuple(slides), loads=tuple(loads),
@@ -512,12 +626,13 @@ def parse_law(s: Section, rotary: bool) -> Law:
     kind = s.string("type", choices=LAW_TYPES)
     unit = "deg" if rotary else "mm"
     to_q = math.radians if rotary else float
-    phase = math.radians(s.number("phase", 0.0))
+    q_range = lim.ANGLE if rotary else lim.OFFSET     # the input's angle (deg) or stroke (mm)
+    phase = math.radians(s.number("phase", 0.0, within=lim.ANGLE))
     if kind == "linear":
         if not rotary:
             raise s.error("type", "a slider input cannot follow a linear law: its stroke would "
                                   "grow without end; use harmonic, cycloidal or table")
-        ratio = s.number("ratio", nonzero=True)
+        ratio = s.number("ratio", nonzero=True, within=lim.RATIO)
         if ratio != round(ratio):
             raise s.error("ratio", f"must be a whole number, got {ratio:g}: the geared crank "
                           "must be back at its start when the main crank has made its one "
@@ -529,11 +644,17 @@ def parse_law(s: Section, rotary: bool) -> Law:
         if not 0.0 < rise < 360.0:
             raise s.error("rise", f"the rise takes a part of the cycle: more than 0 and less "
                                   f"than 360 deg, got {rise:g}")
-        law = Law(kind, phase=phase, start=to_q(s.number("start", 0.0)),
-                  travel=to_q(s.number("travel", nonzero=True)), rise=math.radians(rise))
+        law = Law(kind, phase=phase, start=to_q(s.number("start", 0.0, within=q_range)),
+                  travel=to_q(s.number("travel", nonzero=True, within=q_range)),
+                  rise=math.radians(rise))
     else:
-        cycle = s.numbers("cycle")
-        values = s.numbers("values")
+        for key in ("cycle", "values"):
+            v = s.data.get(key)
+            if isinstance(v, list) and len(v) > MAX_TABLE_POINTS:
+                raise s.error(key, f"a table law has at most {MAX_TABLE_POINTS:,} points "
+                                   f"({TABLE_POINTS_WHY}), got {len(v):,}")
+        cycle = s.numbers("cycle", within=lim.ANGLE)
+        values = s.numbers("values", within=q_range)
         if len(cycle) < 4:
             raise s.error("cycle", f"a table needs at least 4 points for its periodic spline, "
                                    f"got {len(cycle)}")
@@ -558,6 +679,83 @@ def parse_law(s: Section, rotary: bool) -> Law:
     return law
 
 
+def law_grid_problem(law: Law, positions: int):
+    """(field, reason) where the law is steeper than ``positions`` crank
+    positions per revolution resolve (``limits.LAW_MIN_POSITIONS``), else
+    None: a rise or a return over fewer than LAW_MIN_POSITIONS steps, a geared
+    crank turning once in fewer, a table whose shortest spline piece spans
+    fewer than TABLE_LAW_MIN_POSITIONS steps.  Between positions such a law
+    swings unseen, and the peaks refined from the positions' samples would be
+    wrong (an OK with a peak acceleration a thousand times too small)."""
+    step = 360.0 / positions                                    # deg
+    fuzz = 1.0 - 1e-9          # the angles went through radians: 8 steps is 8 steps
+    need = lim.LAW_MIN_POSITIONS
+    if law.kind in ("harmonic", "cycloidal"):
+        rise = math.degrees(law.rise)
+        short = min(rise, 360.0 - rise)
+        if short >= need * step * fuzz:
+            return None
+        which = "rise" if rise <= 180.0 else "return"
+        return "rise", (f"the {law.kind} law's {which} takes {short:g} deg of the cycle: "
+                        f"{short / step:.3g} steps of the {positions:,} positions "
+                        f"({step:g} deg each); the law needs at least {need} positions "
+                        f"within its rise and its return ({lim.LAW_POSITIONS_WHY}): give a "
+                        f"rise of {need * step:g} to {360.0 - need * step:g} deg, or "
+                        f"{math.ceil(need * 360.0 / short):,} positions")
+    if law.kind == "linear":
+        turns = abs(law.ratio)
+        if positions >= need * turns:
+            return None
+        return "ratio", (f"the geared crank turns {turns:g} times per cycle: "
+                         f"{positions / turns:.3g} of the {positions:,} positions per turn; it "
+                         f"needs at least {need} ({lim.LAW_POSITIONS_WHY}): a ratio of at "
+                         f"most {positions // need:,}, or {math.ceil(need * turns):,} positions")
+    cycle = [math.degrees(c) for c, _ in law.table]
+    gaps = [(b - a, a, b) for a, b in zip(cycle, cycle[1:] + [cycle[0] + 360.0])]
+    gap, a, b = min(gaps)
+    need = lim.TABLE_LAW_MIN_POSITIONS
+    if gap >= need * step * fuzz:
+        return None
+    return "cycle", (f"the table's shortest spline piece, {a:g} to {b:g} deg, spans "
+                     f"{gap / step:.3g} steps of the {positions:,} positions ({step:g} deg "
+                     f"each); every piece needs at least {need} ({lim.LAW_POSITIONS_WHY}): "
+                     f"space the cycle angles at least {need * step:g} deg apart, or give "
+                     f"{math.ceil(need * 360.0 / gap):,} positions")
+
+
+def _check_law_grids(path, mech, output, sweep):
+    """Every input law resolved by the positions that sample it: the scene's
+    dense revolution (a sweep's candidates are shown as scenes too) and a
+    sweep's positions; a swept rise_angle at both ends of its bounds."""
+    grids = [(output.dense_positions, "output.dense_positions")]
+    if sweep is not None:
+        grids.append((sweep.positions, "sweep.positions"))
+    positions, where = min(grids)
+    for k, g in enumerate(mech.groups):
+        law = getattr(g, "law", None)
+        if law is None:
+            continue
+        problem = law_grid_problem(law, positions)
+        if problem:
+            key, reason = problem
+            raise StudyError(path, f"mechanism.groups[{k}].law.{key}",
+                             f"{reason} ({where} = {positions:,})")
+    if sweep is None:
+        return
+    labels = mech.compile().group_names
+    for v in sweep.variables:
+        owner, _, key = v.param.rpartition(".")
+        if key != "rise_angle":
+            continue
+        law = mech.groups[labels.index(owner) - 1].law       # group_names[0]: the crank
+        for end, x in (("min", v.low), ("max", v.high)):
+            problem = law_grid_problem(replace(law, rise=x * v.factor), positions)
+            if problem:
+                raise StudyError(path, f"sweep.variables.{_key(v.name)}.{end}",
+                                 f"{v.param} = {x:g} {v.units}: {problem[1]} ({where} = "
+                                 f"{positions:,})")
+
+
 def _class3_slider(g: Section, need):
     """The ``slider`` table of a class III group whose lead 5-7 is a block on a
     guide: (guide point, angle rad, offset mm, guide link or None).  The table
@@ -567,18 +765,36 @@ def _class3_slider(g: Section, need):
             raise g.error(key, "a class III group with a slider has no lead 5-7: the slider "
                                "table (point, angle, offset) takes the place of pivot_5 and L57")
     s = g.table("slider")
-    point = s.string("point")
+    point = s.name("point")
     need(s, "point", point)
-    link = s.strings("link", n=2, default=None)
+    link = s.names("link", n=2, default=None)
     if link is not None:
         for p in link:
             need(s, "link", p)
         if link[0] == link[1]:
             raise s.error("link", "a link needs two different points")
-    angle = math.radians(s.number("angle"))
-    offset = s.number("offset", 0.0)
+    angle = math.radians(s.number("angle", within=lim.ANGLE))
+    offset = s.number("offset", 0.0, within=lim.OFFSET)
     s.done()
     return point, angle, offset, link
+
+
+def _check_labels(sec, groups, bodies):
+    """A group's name is the label of its parameters (label.key: the sweep's
+    variables name them): it must differ from the labels the plan gives the
+    crank ('crank'), the unnamed groups ('RRR[2]': type and position) and the
+    centres of mass ('S[body]')."""
+    taken = {"crank": "the crank"}
+    for k, g in enumerate(groups, start=1):
+        if not g.name:
+            taken[group_label(g, k)] = f"the unnamed group mechanism.groups[{k - 1}]"
+    for b in bodies:
+        taken[f"S[{b.name}]"] = f"the centre of mass of body {b.name!r}"
+    for k, g in enumerate(groups, start=1):
+        if g.name in taken:
+            raise StudyError(sec.file, f"{sec.path('groups')}[{k - 1}].name",
+                             f"the group name {g.name!r} is the label of {taken[g.name]} "
+                             "(parameters are named label.key): choose another name")
 
 
 def _check_joints(sec, bodies, fixed):
@@ -829,16 +1045,17 @@ def _parse_pins(sec: Section, mech: Mechanism) -> dict:
     if not sec.has("pins"):
         return {}
     p = sec.table("pins")
-    length = p.number("length", 10.0, positive=True)
-    sigma = p.number("sigma", 200.0, positive=True)
+    length = p.number("length", 10.0, positive=True, within=lim.LENGTH)
+    sigma = p.number("sigma", 200.0, positive=True, within=lim.STRESS)
     joints = set(mech.compile().joint_names)
     over = []
     for key in [k for k in p.data if k not in ("length", "sigma")]:
         if key not in joints:
-            raise p.error(key, f"unknown joint {key!r}; joints: {', '.join(sorted(joints))}")
+            raise p.error(key, f"unknown joint {_quote(key)}; joints: "
+                               f"{', '.join(sorted(joints))}")
         j = p.table(key)
-        over.append((key, j.number("length", length, positive=True),
-                     j.number("sigma", sigma, positive=True)))
+        over.append((key, j.number("length", length, positive=True, within=lim.LENGTH),
+                     j.number("sigma", sigma, positive=True, within=lim.STRESS)))
         j.done()
     p.done()
     return {"pin_length": length, "pin_sigma": sigma, "pin_overrides": tuple(over)}
@@ -848,14 +1065,15 @@ def parse_output(sec: Section, mech: Mechanism) -> OutputSpec:
     known = set(mech.fixed) | {mech.crank.tip}
     for g in mech.groups:
         known.update(g.writes())
-    labels = sec.strings("links", default=[]) or ()
+    # a link's label is a_b (two point names, or their numbers n of Pn)
+    labels = sec.names("links", default=[], maximum=2 * MAX_NAME_LENGTH + 1) or ()
     links = tuple(parse_link(sec, "links", lab, known) for lab in labels)
-    wp = sec.string("working_point", mech.groups[-1].writes()[-1] if mech.groups else mech.crank.tip)
+    wp = sec.name("working_point", mech.groups[-1].writes()[-1] if mech.groups else mech.crank.tip)
     if wp not in known:
         raise sec.error("working_point", f"unknown point {wp!r}")
     rocker = None
     if sec.has("rocker"):
-        rocker = sec.strings("rocker", n=2)
+        rocker = sec.names("rocker", n=2)
         for p in rocker:
             if p not in known:
                 raise sec.error("rocker", f"unknown point {p!r}")
@@ -892,15 +1110,15 @@ def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
     cases = []
     names = set()
     for c in sec.tables("cases"):
-        name = c.string("name")
+        name = c.name("name")
         if name in names or not name.replace("_", "").isalnum():
             raise c.error("name", f"case name {name!r} must be unique and made of letters, "
                                   "digits and _")
         names.add(name)
-        t_end = c.number("t_end", 10.0, positive=True)
+        t_end = c.number("t_end", 10.0, positive=True, within=lim.DURATION)
         # RK4 step: 1e-4 s keeps phi1 within 1e-7 rad of DOP853 over 10 s at ~125 rad/s
-        dt = c.number("dt", 1e-4, positive=True)
-        sample = c.number("sample_dt", 0.01, positive=True)
+        dt = c.number("dt", 1e-4, positive=True, within=lim.DURATION)
+        sample = c.number("sample_dt", 0.01, positive=True, within=lim.DURATION)
         if dt > sample:
             raise c.error("dt", f"the integration step {dt:g} s exceeds the sampling step {sample:g} s")
         if abs(sample / dt - round(sample / dt)) > 1e-9 * (sample / dt):
@@ -909,13 +1127,20 @@ def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
         if abs(t_end / sample - round(t_end / sample)) > 1e-9 * (t_end / sample):
             raise c.error("t_end", f"t_end = {t_end:g} s must be a whole number of sampling "
                                    f"steps (sample_dt = {sample:g} s)")
+        if t_end / dt > lim.MAX_DYNAMICS_STEPS:
+            raise c.error("t_end", f"t_end / dt = {t_end / dt:,.0f} integration steps; at most "
+                                   f"{lim.MAX_DYNAMICS_STEPS:,} ({lim.DYNAMICS_STEPS_WHY})")
+        if t_end / sample > lim.MAX_DYNAMICS_SAMPLES:
+            raise c.error("t_end", f"t_end / sample_dt = {t_end / sample:,.0f} samples; at most "
+                                   f"{lim.MAX_DYNAMICS_SAMPLES:,} ({lim.DYNAMICS_SAMPLES_WHY})")
         cases.append(DynamicsCase(
-            name=name, phi_start=math.radians(c.number("phi_start")),
-            omega_start=c.number("omega_start", 0.0),
+            name=name, phi_start=math.radians(c.number("phi_start", within=lim.ANGLE)),
+            omega_start=c.number("omega_start", 0.0, within=lim.OMEGA),
             M1=parse_expression(c.raw("M1", 0.0), f"{c.file}: {c.path('M1')}"),
             damping=c.number("damping", 0.0), t_end=t_end, dt=dt, sample_dt=sample))
         if cases[-1].damping < 0:
             raise c.error("damping", "must not be negative")
+        c.check_range("damping", cases[-1].damping, lim.DAMPING)
         c.done()
         # M1 and the loads must be constant, 2*pi-periodic in phi, or functions of t alone
         from .dynamics import check_drive
@@ -932,7 +1157,10 @@ def stored_study(attrs, results_path=None):
     text = attrs.get("study_toml")
     if not text:
         return None
-    origin = attr_text(attrs.get("study_file", "?"))
-    label = f"{results_path} (the study stored from {origin})" if results_path else origin
-    study = parse_study(attr_text(text), label)
+    origin = str(attr_text(attrs.get("study_file", "?")))
+    # the file's own word for where it came from is data too: shown quoted where it
+    # is not one printable line (a message stays one line)
+    shown = origin if origin.isprintable() and len(origin) <= 4096 else _quote(origin, 200)
+    label = f"{results_path} (the study stored from {shown})" if results_path else shown
+    study = parse_study(str(attr_text(text)), label)
     return replace(study, path=Path(origin))

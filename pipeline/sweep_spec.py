@@ -17,8 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import qmc
 
-from .limits import (CANDIDATES_WHY, CHUNK_WHY, MAX_CANDIDATES, MAX_CHUNK, MAX_POSITIONS,
-                     POSITIONS_WHY)
+from . import limits as lim
+from .limits import (CANDIDATES_WHY, CHUNK_WHY, MAX_CANDIDATES, MAX_CHUNK, MAX_NAME_LENGTH,
+                     MAX_POSITIONS, POSITIONS_WHY)
 
 SAMPLERS = ("uniform", "lhs", "sobol")
 DEVICES = ("cpu", "gpu", "auto")     # [sweep] device, --device
@@ -180,6 +181,32 @@ def parameter_domain(name):
     return None
 
 
+def parameter_range(name):
+    """(range, scale): the ``limits.Range`` of a mechanism parameter's values
+    as a study file gives them, and the factor to the plan's units (pi/180
+    for an angle: the plan holds radians); None for a parameter without one
+    (an assembly mode, an orientation)."""
+    owner, _, key = name.rpartition(".")
+    if key in ("x", "y"):
+        return lim.OFFSET, 1.0
+    if key == "mass":
+        return lim.MASS, 1.0
+    if key == "J_S":
+        return lim.INERTIA, 1.0
+    if key == "ratio":
+        return lim.RATIO, 1.0
+    if owner.startswith("S[") and key == "length":      # a centre of mass's distance
+        return lim.OFFSET, 1.0
+    if key in ("length", "guide_length") or (key.startswith("L") and key[1:2] in
+                                             "0123456789_"):
+        return lim.LENGTH, 1.0
+    if key.endswith("offset") or key in ("start", "stroke"):
+        return lim.OFFSET, 1.0
+    if key.endswith("angle") or key in ("phiM0", "a0", "b0", "phi_start"):
+        return lim.ANGLE, math.pi / 180.0
+    return None
+
+
 def parse_sweep(root, mech, output) -> SweepSpec:
     """Read [sweep] of a study (``root`` is the study's top Section)."""
     from .model import compile_mechanism
@@ -190,8 +217,10 @@ def parse_sweep(root, mech, output) -> SweepSpec:
     variables = []
     vs = sec.table("variables")
     for name in list(vs.data):
+        vs.key_name(name)
         v = vs.table(name)
-        param = v.string("param")
+        # a parameter is label.key (a group's, a body's or a point's label)
+        param = v.name("param", maximum=2 * MAX_NAME_LENGTH)
         if param not in plan.par_names:
             close = [p for p in plan.par_names if not p.startswith("S[")]
             raise v.error("param", f"no mechanism parameter {param!r}; known: {', '.join(close)}")
@@ -199,7 +228,7 @@ def parse_sweep(root, mech, output) -> SweepSpec:
             raise v.error("param", f"{param} is a gear ratio, a whole number (the cycle is one "
                                    "revolution of the main crank): it cannot be drawn from a "
                                    "range; run one study per ratio")
-        units = v.string("units", "deg" if param.endswith(("phiM0", "angle")) else "mm")
+        units = v.name("units", "deg" if param.endswith(("phiM0", "angle")) else "mm")
         factor = math.pi / 180.0 if units == "deg" else 1.0
         ref = float(plan.par[plan.param(param)]) / factor
         low = v.number("min", ref - spread * abs(ref))
@@ -218,13 +247,14 @@ def parse_sweep(root, mech, output) -> SweepSpec:
             raise sec.error("spread", f"{param} is {domain[2]}, but its default bounds reach "
                                       f"{low:g} (reference {ref:g} -/+ spread {spread:g}); "
                                       f"give variables.{name}.min and max")
+        _check_bounds_range(sec, v, name, param, low, high, units, factor, ref, spread)
         v.done()
         variables.append(Variable(name, param, low, high, units, factor))
     vs.done()
     if not variables:
         raise sec.error("variables", "a sweep needs at least one design variable")
-    metrics = tuple(sec.strings("metrics", default=list(DEFAULT_METRICS)))
-    objectives = tuple(sec.strings("objectives", default=["dwell_error", "peak_reaction"]))
+    metrics = tuple(sec.names("metrics", default=list(DEFAULT_METRICS)))
+    objectives = tuple(sec.names("objectives", default=["dwell_error", "peak_reaction"]))
     for key, names in (("metrics", metrics), ("objectives", objectives)):
         for m in names:
             if m not in METRICS:
@@ -251,8 +281,9 @@ def parse_sweep(root, mech, output) -> SweepSpec:
         mm = sec.table("mass_model")
         for body in list(mm.data):
             if body not in bodies:
+                mm.key_name(body)
                 raise mm.error(body, f"unknown body {body!r}")
-            p = mm.string(body)
+            p = mm.name(body, maximum=2 * MAX_NAME_LENGTH)
             if p not in plan.par_names:
                 raise mm.error(body, f"no mechanism parameter {p!r}")
             if not float(plan.par[plan.param(p)]) > 0.0:
@@ -275,7 +306,7 @@ def parse_sweep(root, mech, output) -> SweepSpec:
         chunk_size=sec.integer("chunk_size", 10000, minimum=1, maximum=MAX_CHUNK,
                                why=CHUNK_WHY),
         metrics=metrics, objectives=objectives,
-        stroke_radius=sec.number("stroke_radius", positive=True),
+        stroke_radius=sec.number("stroke_radius", positive=True, within=lim.LENGTH),
         stroke_bounds=stroke, margin_min=margin_min,
         mass_model=tuple(mass_model),
         scheduler=sec.string("scheduler", "") or None,
@@ -308,6 +339,26 @@ def parse_sweep(root, mech, output) -> SweepSpec:
     return spec
 
 
+def _check_bounds_range(sec, v, name, param, low, high, units, factor, ref, spread):
+    """Refuse a design variable's bounds that leave the plausible range of its
+    parameter (``parameter_range``): the bounds' own field, or ``spread``
+    where the bounds are its defaults."""
+    found = parameter_range(param)
+    if found is None:
+        return
+    rng, scale = found
+    for key, x in (("min", low), ("max", high)):
+        if rng.holds(x * factor / scale):
+            continue
+        shown = f"{x:g} {units}" if units == rng.unit or not rng.unit else \
+            f"{x:g} {units} ({x * factor / scale:g} {rng.unit})"
+        if key in v.data:
+            raise v.error(key, f"{param}: {shown} is out of range: {rng.words()}")
+        raise sec.error("spread", f"{param}: its default {key} {shown} (reference {ref:g} "
+                                  f"-/+ spread {spread:g}) is out of range: {rng.words()}; "
+                                  f"give variables.{name}.min and max")
+
+
 def _check_available(sec, key, m, mech, output):
     """Refuse a metric the study cannot compute, naming the field."""
     if METRICS[m][2] == "law" and output.motion_law is None:
@@ -333,6 +384,7 @@ def _parse_constraints(cons, mech, output):
         if key in ("stroke", "singularity_margin_min") and not isinstance(v, dict):
             continue
         if key not in METRICS:
+            cons.key_name(key)
             raise cons.error(key, f"unknown constraint {key!r}: give stroke = [min, max], "
                                   "singularity_margin_min = ..., or a metric = { min = ..., "
                                   f"max = ... }}; metrics: {', '.join(METRICS)}")

@@ -155,3 +155,73 @@ def test_slides_that_agree_or_cannot_be_judged_load(studies, name, changes):
 def test_every_shipped_study_loads(studies):
     for path in sorted(studies.glob("*.toml")):
         load_study(path)
+
+
+# ------------------------------------------------------------------ plausible ranges
+# (study, change, field, reason fragment): an absurd finite number is refused where it
+# is read, naming the field and the range (pipeline.limits)
+RANGE_CASES = [
+    ("feed_fivebar", ("ratio = 1,", "ratio = 1e300,"), "groups[0].law.ratio",
+     "a gear ratio is -100 to 100"),
+    ("slotted_rocker_prp", ("guide2_offset = 0.0", "guide2_offset = 1e300"),
+     "groups[1].guide2_offset", "is -10,000 to 10,000 mm"),
+    ("scotch_yoke_rpp", ("slot_offset = 0.0", "slot_offset = 1e300"), "groups[0].slot_offset",
+     "is -10,000 to 10,000 mm"),
+    ("warp_feed_fourbar", ("phiM0 = 0.0", "phiM0 = 1e300"), "crank.phiM0",
+     "an angle is -3,600 to 3,600 deg"),
+    ("ov7_base", ("L_AB = 105.0", "L_AB = 1e-300"), "groups[0].L_AB",
+     "a length is 0.001 to 10,000 mm"),
+    ("ov7_base", ("L_AB = 105.0", "L_AB = 2e4"), "groups[0].L_AB", "a length is"),
+    ("ov7_base", ("P4 = [26.0, 98.7]", "P4 = [26.0, -1e9]"), "fixed.P4", "number 2: -1e+09 mm"),
+    ("warp_feed_fourbar", ("eps1 = 0.0", "eps1 = 1e9"), "crank.eps1", "rad/s^2"),
+    ("takeup_dynamics", ("omega1 = 125.0", "omega1 = 1e6"), "crank.omega1",
+     "an angular speed is -10,000 to 10,000 rad/s"),
+    ("takeup_dynamics", ("mass = 0.200", "mass = 1e9"), "bodies[0].mass", "a mass is more than 0"),
+    ("takeup_dynamics", ("J_S = 325e-6", "J_S = 1e300"), "bodies[0].J_S", "a moment of inertia"),
+    ("takeup_dynamics", ("phi_start = 269.18", "phi_start = 1e300"), "cases[0].phi_start",
+     "an angle"),
+    ("takeup_dynamics", ("damping = 2e-4 ", "damping = 1e300 "), "cases[0].damping",
+     "a damping coefficient"),
+    ("takeup_dynamics", ("t_end = 10.0 ", "t_end = 1e300 "), "cases[0].t_end", "a duration"),
+    ("takeup_dynamics", ("dt = 1e-4 ", "dt = 1e-11 "), "cases[0].t_end",
+     "integration steps; at most 100,000,000"),
+    ("cam_rocker_input", ("travel = 40.0", "travel = 1e300"), "groups[0].law.travel",
+     "an angle"),
+    ("actuator_slider_input", ("24.0, 24.0, 24.0", "24.0, 1e300, 24.0"), "groups[0].law.values",
+     "number 7: 1e+300 mm is out of range"),
+    ("ov7_synthesis", ('P6x = { param = "P6.x" }', 'P6x = { param = "P6.x", min = -1e9, max = 0 }'),
+     "sweep.variables.P6x.min", "P6.x: -1e+09 mm is out of range"),
+    ("ov7_synthesis", ('P6x = { param = "P6.x" }',
+                       'P6x = { param = "P6.x", min = 0, max = 1e300 }'),
+     "sweep.variables.P6x.max", "out of range"),
+]
+
+
+@pytest.mark.parametrize("name,change,field,reason", RANGE_CASES,
+                         ids=[f"{c[0]}:{c[2]}:{c[1][1][-8:]}" for c in RANGE_CASES])
+def test_an_absurd_number_is_refused_naming_the_field_and_the_range(studies, name, change,
+                                                                     field, reason):
+    text = (studies / f"{name}.toml").read_text()
+    assert change[0] in text, change[0]
+    with pytest.raises(StudyError) as e:
+        parse_study(text.replace(change[0], change[1], 1), "r.toml")
+    msg = str(e.value)
+    assert field in msg and reason in msg and len(msg.splitlines()) == 1, msg
+
+
+def test_a_huge_table_law_and_a_huge_study_file_are_refused(studies, tmp_path):
+    text = (studies / "actuator_slider_input.toml").read_text()
+    old = text[text.index("cycle = ["):text.index("] }", text.index("cycle = ["))]
+    n = 10_001
+    cycle = ", ".join(f"{360.0 * k / n:.6f}" for k in range(n))
+    values = ", ".join("0.0" for _ in range(n))
+    with pytest.raises(StudyError, match=r"law.cycle: a table law has at most 10,000 points "
+                                         r".*got 10,001"):
+        parse_study(text.replace(old, f"cycle = [{cycle}], values = [{values}"), "t.toml")
+    big = tmp_path / "big.toml"
+    big.write_text(text + "#" * 1_000_001 + "\n")
+    with pytest.raises(StudyError, match=r"big.toml: a study file is at most 1,000,000 bytes"):
+        load_study(big)
+    # a results file's stored copy is held to the same bound
+    with pytest.raises(StudyError, match="at most 1,000,000 bytes"):
+        parse_study(text + "#" * 1_000_001, "stored")

@@ -21,6 +21,7 @@ import math
 
 from ..kernels import config as kc
 from ..kernels import inputs as ik
+from .names import text
 
 
 class Emitter:
@@ -40,20 +41,22 @@ class Emitter:
 
     # -- helpers
     def k(self, key):
-        return self.n.K(self.label, key)
+        return self.n.K(self.g, key)
 
     def p(self, j):
-        return self.n.P(self.ix[j])
+        """The index constant of the group's point j (gidx column j)."""
+        return self.n.I(self.ix[j])
+
+    def xy(self, j):
+        """The lane path's locals of the group's point j: stem of p3x, p3y."""
+        return self.n.xy(self.ix[j])
 
     def pname(self, j):
-        return self.plan.point_names[self.ix[j]]
+        """The user's name of point j, for a comment (``names.text``)."""
+        return text(self.plan.point_names[self.ix[j]])
 
     def keys(self):
-        o = int(self.plan.goff[self.g])
-        end = o
-        while end < len(self.plan.par_names) and self.plan.par_names[end].startswith(self.label + "."):
-            end += 1
-        return [self.plan.par_names[i].split(".", 1)[1] for i in range(o, end)]
+        return list(self.n.group_keys[self.g])
 
     def params(self):
         return [self.k(key) for key in self.keys()]
@@ -62,7 +65,7 @@ class Emitter:
         return []
 
     def title(self):
-        return f"group {self.g}: {type(self).__name__[:-len('Emitter')]} {self.label!r}"
+        return f"group {self.g}: {type(self).__name__[:-len('Emitter')]} {text(self.label)}"
 
     def careful(self):
         raise NotImplementedError
@@ -96,7 +99,7 @@ class CrankEmitter(Emitter):
     def lanes(self):
         # e(phi1 + phiM0) = e(phi1) rotated by phiM0: the table's cos/sin times
         # the candidate's hoisted cos/sin (no library call)
-        o, t = self.n.point[self.pname(0)], self.n.point[self.pname(1)]
+        o, t = self.xy(0), self.xy(1)
         c, s, L = lane(f"{self.k('phiM0')}_cos"), lane(f"{self.k('phiM0')}_sin"), \
             lane(self.k("length"))
         return [f"# {self.title()}: {t} = {o} + L e(phi1) rotated by phiM0 (table cos/sin)",
@@ -125,7 +128,7 @@ class RRREmitter(Emitter):
                 (self.k("k"), f"{lcb} * {lcb} - {lab} * {lab}")]
 
     def lanes(self):
-        A, C, B = (self.n.point[self.pname(j)] for j in range(3))
+        A, C, B = (self.xy(j) for j in range(3))
         lab, lcb, w = (lane(self.k(x)) for x in ("L_AB", "L_CB", "W"))
         inv_cb, inv_ab_cb, kk = (lane(self.k(x)) for x in ("inv_cb", "inv_ab_cb", "k"))
         return [
@@ -307,7 +310,7 @@ class AttachEmitter(Emitter):
                 (f"{self.k('angle')}_sin", f"math.sin({self.k('angle')})")]
 
     def lanes(self):
-        base, a, b, out = (self.n.point[self.pname(j)] for j in (0, 1, 2, 3))
+        base, a, b, out = (self.xy(j) for j in (0, 1, 2, 3))
         c, s, L = lane(f"{self.k('angle')}_cos"), lane(f"{self.k('angle')}_sin"), \
             lane(self.k("length"))
         return [f"# {self.title()}: {out} = {base} + rot({a}->{b}, angle, length), "
@@ -330,13 +333,13 @@ class InputEmitter(Emitter):
         self.i = [int(x) for x in plan.input_group].index(g)
         self.kind = int(plan.input_kind[self.i])
         self.law = int(plan.input_law[self.i])
-        self.table = f"LAW_{names.K(self.label, 'spline')}"
+        self.table = f"LAW_{names.K(g, 'spline')}"
 
     def module_constants(self):
         if self.law != ik.LAW_TABLE:
             return []
         knots, coef = self.plan.input_tables[self.i]
-        return [f"# the periodic spline of {self.label!r}'s table: knots (rad) and coefficients",
+        return [f"# the periodic spline of {text(self.label)}'s table: knots (rad) and coefficients",
                 _wrap_line(f"{self.table}_KNOTS = np.array({[float(x) for x in knots]!r})"),
                 _wrap_line(f"{self.table}_COEF = np.array({coef.tolist()!r})")]
 
@@ -473,10 +476,9 @@ def constants_of(plan, n, ems):
     """(local name, expression) of every per-candidate constant: the fixed
     pivots, each group's parameters and what its emitter derives from them."""
     consts = []
-    for fi in plan.fixed_idx:
-        p = plan.point_names[int(fi)]
-        for c in "xy":
-            consts.append((n.param[f"{p}.{c}"], f"par[PAR_{n.param[f'{p}.{c}']}]"))
+    for off in plan.fixed_off:
+        for j in (int(off), int(off) + 1):          # x, y
+            consts.append((n.par(j), f"par[PAR_{n.par(j)}]"))
     for e in ems:
         for k in e.params():
             consts.append((k, f"par[PAR_{k}]"))

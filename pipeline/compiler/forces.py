@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from ..kernels.inputs import ROTARY
 from .emit import literal
+from .names import text
 
 MM = 1e-3
 
@@ -115,7 +116,7 @@ def force_kernel(plan, names) -> str:
 
     sym = _Sym()
     L = sym.lines
-    P = [names.I(p) for p in plan.point_names]
+    P = [names.I(i) for i in range(len(plan.point_names))]
     A: dict = {}                       # (row, col) -> entry
 
     def add(r, c, v):
@@ -164,7 +165,7 @@ def force_kernel(plan, names) -> str:
         angle = literal(float(plan.slide_angle[k]))
         if follow:
             angle = " + ".join([literal(float(plan.slide_angle[k] - plan.slide_declared[k]))]
-                               + [f"par[PAR_{names.param[plan.par_names[i]]}]" for i in follow])
+                               + [f"par[PAR_{names.par(i)}]" for i in follow])
         if plan.slide_dir[k, 0] >= 0:
             a_, b_ = (int(v) for v in plan.slide_dir[k])
             th = sym.var(f"math.atan2(pos[{P[b_]}, 1] - pos[{P[a_]}, 1], pos[{P[b_]}, 0] - "
@@ -195,18 +196,18 @@ def force_kernel(plan, names) -> str:
         body = int(plan.input_body[k])
         col = col_in + k
         a_, b_ = (P[int(v)] for v in plan.input_points[k])
-        label = plan.input_names[k]
+        label = text(plan.input_names[k])
         if int(plan.input_kind[k]) == ROTARY:
-            L.append(f"# input {label!r}: a drive moment on its link; q' = (r x r') / |r|^2")
+            L.append(f"# input {label}: a drive moment on its link; q' = (r x r') / |r|^2")
             add(3 * body + 2, col, 1.0)
             shares.append(sym.var(
                 f"((pos[{b_}, 0] - pos[{a_}, 0]) * (d1[{b_}, 1] - d1[{a_}, 1]) - "
                 f"(pos[{b_}, 1] - pos[{a_}, 1]) * (d1[{b_}, 0] - d1[{a_}, 0])) / "
                 f"((pos[{b_}, 0] - pos[{a_}, 0]) ** 2 + (pos[{b_}, 1] - pos[{a_}, 1]) ** 2)"))
         else:
-            L.append(f"# input {label!r}: a drive force along its guide at the block; "
+            L.append(f"# input {label}: a drive force along its guide at the block; "
                      "q' = u . (block' - guide point') in m")
-            g = names.param[f"{label}.guide_angle"]
+            g = names.K(int(plan.input_group[k]), "guide_angle")
             ux = sym.var(f"math.cos(par[PAR_{g}])")
             uy = sym.var(f"math.sin(par[PAR_{g}])")
             s_ = int(plan.body_com[body])

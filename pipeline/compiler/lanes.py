@@ -30,6 +30,7 @@ import textwrap
 
 from ..kernels.watch import ERR_FACTOR
 from .emit import ClassIIIEmitter, _wrap_line, constant_names, lane
+from .names import text
 
 NEWTON_STEPS = 2          # Newton steps per position after the predictor
 SMALL_ANGLE = 0.05        # largest rotation taken by the cos/sin series, rad
@@ -51,7 +52,7 @@ def _rot_lines(c, s, delta):
 def _triad_lines(e, names):
     """Lane lines of one class III group: predictor, NEWTON_STEPS Newton steps,
     the confirming evaluation and the checks."""
-    P2, P6, P7, P3, P4, P5 = (names.point[e.pname(j)] for j in range(6))
+    P2, P6, P7, P3, P4, P5 = (e.xy(j) for j in range(6))
     k = e.k
     t = f"t{e.triad_row}"
     L23, L34, L35, L46, L57 = (lane(k(x)) for x in ("L23", "L34", "L35", "L46", "L57"))
@@ -141,9 +142,10 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
     watched = [e for e in kin if e.watched and watch]
     for i, e in enumerate(watched):
         rows += [f"w{i}_{x}" for x in ("k3", "k2", "k1")]    # margin^2 at k-3, k-2, k-1
-    piv, pt = names.point[rocker[0]], names.point[rocker[1]]
-    src = [f"ROCKER_PIVOT = {names.I(rocker[0])}",
-           f"ROCKER_POINT = {names.I(rocker[1])}",
+    ipiv, ipt = plan.point(rocker[0]), plan.point(rocker[1])
+    piv, pt = names.xy(ipiv), names.xy(ipt)
+    src = [f"ROCKER_PIVOT = {names.I(ipiv)}   # {text(rocker[0])}",
+           f"ROCKER_POINT = {names.I(ipt)}   # {text(rocker[1])}",
            f"LANES = {width}",
            f"HAS_LANES = {fast}   # every kinematic group has a lane form",
            f"NEWTON_STEPS = {NEWTON_STEPS}   # Newton steps per position in the lanes",
@@ -172,7 +174,7 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
     for e in triads:
         t = f"t{e.triad_row}"
         j = e.triad_row
-        P2, P3, P4 = (names.I(e.pname(x)) for x in (0, 3, 4))
+        P2, P3, P4 = (e.p(x) for x in (0, 3, 4))
         a(f"# {e.title()}: e(a), e(b) at phis[0] and the first increment from the analogs")
         a(f"av = state[{j}, S_A]")
         a(f"bv = state[{j}, S_B]")
@@ -249,11 +251,10 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
             "        # constant count is unrolled instead, and stays scalar)",
             "        for l in range(n_lanes):"]
     inner = ["bad = False", "low = False", "big = False", "margin = S[R_margin, l]"]
-    for fi in plan.fixed_idx:
-        p = plan.point_names[int(fi)]
-        pn = names.point[p]
-        inner += [f"{pn}x = S[R_{names.param[p + '.x']}, l]",
-                  f"{pn}y = S[R_{names.param[p + '.y']}, l]"]
+    for fi, off in zip(plan.fixed_idx, plan.fixed_off):
+        pn = names.xy(fi)
+        inner += [f"{pn}x = S[R_{names.par(off)}, l]",
+                  f"{pn}y = S[R_{names.par(int(off) + 1)}, l]"]
     for e in kin:
         inner += (_triad_lines(e, names) if isinstance(e, ClassIIIEmitter) else e.lanes())
         if e in watched:

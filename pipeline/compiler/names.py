@@ -1,49 +1,85 @@
-"""Names of the generated source: Python identifiers derived from the plan's
-point and parameter names, so a reader of a generated kernel sees ``P3`` and
-``triad_L34`` rather than array offsets."""
+"""Names of the generated source.
+
+A study's names (points, groups, bodies, inputs) are the user's text: they
+are data, never code.  Every identifier of a generated module is therefore
+made from the plan's indices and the emitters' own keys: point ``i`` is
+``I_i`` (its index constant) and ``p{i}x``/``p{i}y`` (its coordinates in the
+lane path); parameter ``key`` of group ``g`` is ``g{g}_key`` (``PAR_g{g}_key``
+its column); the coordinates of fixed point ``i`` are ``fix{i}_x``/``fix{i}_y``,
+the mass data of body ``b`` ``body{b}_mass``/``body{b}_J_S``.  A user's name
+appears only in comments, written by ``text`` (``ascii()``: one line of
+printable ASCII, whatever the name holds), next to the definition it names,
+so a reader of a generated kernel still sees which point ``I_3`` is.
+"""
 
 from __future__ import annotations
 
-import keyword
-import re
 
-
-def ident(label: str) -> str:
-    """A Python identifier for a plan label: 'S[crank].length' -> 'S_crank_length'."""
-    s = re.sub(r"[^0-9A-Za-z]+", "_", label).strip("_") or "x"
-    if s[0].isdigit():
-        s = "n" + s
-    if keyword.iskeyword(s):
-        s += "_"
-    return s
+def text(name) -> str:
+    """A user's name as it may appear in the generated source: in a comment,
+    quoted and escaped by ``ascii()`` (no line break, no quote that could end a
+    string, no non-ASCII character such as U+2028 that some readers take for a
+    line break)."""
+    return ascii(str(name))
 
 
 class Names:
-    """Unique identifiers for the points and parameters of one plan."""
+    """Identifiers for the points, parameters and groups of one plan, from
+    their indices (never from the names the user gave them)."""
 
     def __init__(self, plan):
         self.plan = plan
-        taken: set[str] = set()
+        par_names = plan.par_names
+        owner: dict[int, str] = {}             # parameter index -> local identifier
+        for i, off in zip(plan.fixed_idx, plan.fixed_off):
+            owner[int(off)] = f"fix{int(i)}_x"
+            owner[int(off) + 1] = f"fix{int(i)}_y"
+        for b, off in enumerate(plan.body_mass_off):
+            owner[int(off)] = f"body{b}_mass"
+            owner[int(off) + 1] = f"body{b}_J_S"
+        # each group's parameters: from its offset to the next group's, less the
+        # bodies' mass data that follow a centre of mass; the key is the emitter's
+        # (after "label."), checked to be an identifier of the code's own
+        self.group_keys: list[list[str]] = []
+        self._group_param: dict[tuple[int, str], str] = {}
+        n_groups = len(plan.codes)
+        for g in range(n_groups):
+            lo = int(plan.goff[g])
+            hi = int(plan.goff[g + 1]) if g + 1 < n_groups else len(par_names)
+            prefix = plan.group_names[g] + "."
+            keys = []
+            for j in range(lo, hi):
+                if j in owner:
+                    continue
+                name = par_names[j]
+                key = name[len(prefix):] if name.startswith(prefix) else ""
+                if not key.isidentifier() or not key.isascii():
+                    raise ValueError(f"parameter {j} of group {g} ({text(name)}) has no "
+                                     "key of the emitters")
+                owner[j] = f"g{g}_{key}"
+                self._group_param[(g, key)] = owner[j]
+                keys.append(key)
+            self.group_keys.append(keys)
+        self.par_local = [owner.get(j, f"par{j}") for j in range(len(par_names))]
 
-        def unique(base):
-            name, k = base, 2
-            while name in taken:
-                name, k = f"{base}_{k}", k + 1
-            taken.add(name)
-            return name
+    # -- points
+    def I(self, point: int) -> str:
+        """Name of the constant holding the row of point ``point`` (its index) in
+        pos/d1/d2."""
+        return f"I_{int(point)}"
 
-        self.point = {p: unique(ident(p)) for p in plan.point_names}
-        self.param = {p: unique(ident(p)) for p in plan.par_names}
+    def xy(self, point: int) -> str:
+        """Stem of the lane path's locals of point ``point``: ``p3`` (p3x, p3y)."""
+        return f"p{int(point)}"
 
-    def I(self, point: str) -> str:
-        """Name of the constant holding the index of ``point`` in pos/d1/d2."""
-        return "I_" + self.point[point]
+    # -- parameters
+    def par(self, j: int) -> str:
+        """Local name of parameter ``j`` of the row (``PAR_`` + it: its column)."""
+        return self.par_local[int(j)]
 
-    def P(self, index: int) -> str:
-        return self.I(self.plan.point_names[index])
-
-    def K(self, group_label: str, key: str) -> str:
-        """Local name of a per-candidate constant: a parameter of the row, or a
-        constant derived from them (named after its group)."""
-        label = f"{group_label}.{key}"
-        return self.param[label] if label in self.param else ident(label)
+    def K(self, g: int, key: str) -> str:
+        """Local name of a per-candidate constant of group ``g``: its parameter
+        ``key``, or a constant derived from them (``key`` is the emitter's)."""
+        if not (key.isidentifier() and key.isascii()):
+            raise ValueError(f"{key!r} is not an emitter's key")
+        return self._group_param.get((int(g), key), f"g{int(g)}_{key}")
