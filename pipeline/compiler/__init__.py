@@ -25,6 +25,7 @@ import sys
 import threading
 from pathlib import Path
 
+from ..files import write_text
 from ..kernels.config import LANE_WIDTH as LANES   # candidates per block of the lane path
 from .generate import generate
 
@@ -120,9 +121,7 @@ def _imported(src: str, mod_name: str):
         folder.mkdir(parents=True, exist_ok=True)
         path = folder / f"{mod_name}.py"
         if not path.exists() or path.read_text() != src:
-            tmp = path.with_name(f"{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
-            tmp.write_text(src)
-            os.replace(tmp, path)
+            write_text(path, src)       # a new temporary file, renamed when complete
         if str(folder) not in sys.path:
             sys.path.insert(0, str(folder))
         importlib.invalidate_caches()
