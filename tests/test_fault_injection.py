@@ -347,6 +347,19 @@ def test_a_sweep_on_a_full_disk_ends_in_one_line(studies, tmp_path, size):
 
 
 @needs_root
+def test_a_search_on_a_full_disk_ends_in_one_line(studies, tmp_path):
+    text = (studies / "ov7_search.toml").read_text()
+    assert "evaluations = 20000" in text
+    study = tmp_path / "search.toml"
+    study.write_text(text.replace("evaluations = 20000", "evaluations = 100000"))
+    with small_disk(tmp_path / "disk", "2m") as disk:
+        rc, err = cli("run", study, "-o", disk / "s.h5", "-q")
+        assert rc == 2, err
+        assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+        assert "No space left on device" in err and str(disk) in err, err
+
+
+@needs_root
 def test_a_scene_on_a_full_disk_keeps_the_earlier_result(studies, tmp_path):
     with small_disk(tmp_path / "disk", "2m") as disk:
         out = disk / "base.h5"
