@@ -46,7 +46,8 @@ def library_digest() -> str:
     """Digest of every kernel and compiler source the generated modules depend on."""
     if not _DIGEST:
         here = Path(__file__).resolve().parent
-        files = sorted(here.glob("*.py")) + sorted((here.parent / "kernels").glob("*.py"))
+        files = (sorted(here.glob("*.py")) + sorted((here / "skeleton").glob("*.py"))
+                 + sorted((here.parent / "kernels").glob("*.py")))
         h = hashlib.sha256()
         from ..kernels.config import FASTMATH, LANE_FASTMATH
         for flags in (FASTMATH, LANE_FASTMATH):    # the flags too

@@ -26,11 +26,11 @@ increments, atan of a small argument by its series.
 from __future__ import annotations
 
 import re
-import textwrap
 
 from ..kernels.watch import ERR_FACTOR
 from .emit import ClassIIIEmitter, _wrap_line, constant_names, lane
 from .names import text
+from .skeleton import part
 
 NEWTON_STEPS = 2          # Newton steps per position after the predictor
 SMALL_ANGLE = 0.05        # largest rotation taken by the cos/sin series, rad
@@ -155,7 +155,7 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
     src += [f"R_{r} = {i}" for i, r in enumerate(rows)]
     src.append("")
     if not fast:
-        src += [textwrap.dedent(NO_LANE_FORM)]
+        src += ["\n" + no_lane_path("A group without a lane form")]
         return "\n".join(src) + "\n"
 
     # setup_lane: one candidate into one lane (its constants, the careful solve at
@@ -345,19 +345,20 @@ def _split(line, width=90):
     return _wrap_line(line, width).split("\n")
 
 
-NO_LANE_FORM = '''
-    @njit(**JIT)
-    def setup_lane(pars, i, l, phis, tols, S, theta, pos, d1, d2, margins, state):
-        """A group without a lane form: every candidate takes the careful path."""
-        return -1
+# the lane path's constants where there is no output rocker (not a sweep)
+NO_ROCKER = ("ROCKER_PIVOT = 0", "ROCKER_POINT = 0", "LANES = 1", "HAS_LANES = False",
+             "N_LANE_ROWS = 2", "THETA_COLS = 1", "R_margin = 0", "R_flag = 1",
+             "NEWTON_STEPS = 0")
 
 
-    @njit(**JIT)
-    def block_walk(S, theta, cph_tab, sph_tab, phis, tols, settings):
-        return
+def no_lane_path(why):
+    """``setup_lane``, ``block_walk`` and ``lanes_apply`` of a module without a lane
+    path (pipeline/compiler/skeleton/no_lanes.py): every candidate takes the careful
+    path, for the reason ``why``."""
+    return part("no_lanes").format(why=why)
 
 
-    @njit(**JIT)
-    def lanes_apply(phis, tols):
-        return False
-'''
+def no_rocker_kernel():
+    """The lane path of a module without an output rocker: its constants, and
+    no lane path."""
+    return "\n".join(NO_ROCKER) + "\n\n\n" + no_lane_path("No output rocker declared")

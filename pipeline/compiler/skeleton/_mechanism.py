@@ -1,0 +1,22 @@
+"""The names a generated module defines from its mechanism's plan, declared for
+linters and readers of the skeleton files (which import them from here above
+their marker line).  Nothing imports this at run time: each generated module
+writes its own (``pipeline.compiler.generate``, ``lanes``, ``forces``).
+"""
+
+# the plan's constants (generate)
+N_POINTS = N_GROUPS = N_TRIADS = N_BODIES = N_JOINTS = N_SLIDES = N_INPUTS = 0
+GRAVITY = 0.0
+BODY_COM = BODY_TURN = BODY_MASS_OFF = LOAD_BODY = LOAD_POINT = None     # index arrays
+WATCH_G = None      # the groups the walks watch between positions
+N_WATCH = 0
+
+# the lane path's constants (lanes: a sweep's output rocker and lane rows)
+ROCKER_PIVOT = ROCKER_POINT = LANES = NEWTON_STEPS = N_LANE_ROWS = THETA_COLS = 0
+R_margin = R_flag = 0
+
+# kernels written from the plan
+constants = position = start = transmission = None     # generate
+advance = None              # generate: skeleton advance_closed or advance_newton
+forces_at = None            # forces
+setup_lane = block_walk = lanes_apply = None    # lanes (or skeleton no_lanes)

@@ -1,0 +1,75 @@
+"""``advance`` of a mechanism with class III groups: continuation by predictor
+and Newton corrector, the step halved on a failure.
+
+The text below the marker line is pasted into the generated module
+(``pipeline.compiler.generate``); the imports above it declare, for linters and
+readers, the names the generated module gives it."""
+
+from .header import (njit, JIT, OK, BRANCH_JUMP, NEWTON_MAXITER, T_SUBSTEP, T_MIN_STEP,
+                     accept, predict, restore, step_limit)
+from ._mechanism import (N_GROUPS, position)
+
+# ---- the skeleton: from here on, pasted into the generated module ----
+@njit(**JIT)
+def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, with_com):
+    """Continuation from ``phi_from`` to ``phi_to``, then the solve at
+    ``phi_to`` to ``order``: secant predictor, Newton corrector, steps bounded
+    by ``step_limit``; a step whose Newton fails or jumps branch (det J
+    changes sign, or the correction exceeds tols[T_JUMP]) is retried at half
+    the size, down to tols[T_MIN_STEP] of the full step, and only then
+    reported.  Returns the first non-OK status met on the way
+    (margins[N_GROUPS]: its group; margins[N_GROUPS + 1]: the last angle
+    reached, margins[N_GROUPS + 2]: the angle of the failing step).  (One call
+    site of ``position``: numba inlines per call site, and compile time grows
+    with every copy.)"""
+    status = OK
+    group = -1.0
+    margins[N_GROUPS + 1] = phi_from
+    margins[N_GROUPS + 2] = phi_to
+    direction = 1.0 if phi_to >= phi_from else -1.0
+    h_min = tols[T_SUBSTEP] * tols[T_MIN_STEP]
+    h_cap = tols[T_SUBSTEP]
+    phi = phi_from
+    straight = False
+    while True:
+        if straight:
+            # after a failure at the smallest step: straight to phi_to from the
+            # last good solution (a scene still shows what can be shown)
+            final = True
+            target = phi_to
+            h = 0.0
+        else:
+            h = max(min(step_limit(state, tols), h_cap), h_min)
+            final = abs(phi_to - phi) <= h
+            target = phi_to if final else phi + direction * h
+            predict(state, target - phi)
+        dphi = target - phi
+        st = position(K, target, order if final else 0, tols, state, pos, d1, d2, margins,
+                      with_com and final)
+        if straight:
+            margins[N_GROUPS] = group      # the group of the failure reported
+            return status
+        # retry decisions use the intended step h, never the rounded dphi
+        # (phi + h - phi can exceed h_min by an ulp forever)
+        if (st == NEWTON_MAXITER or st == BRANCH_JUMP) and min(h, abs(dphi)) > h_min:
+            restore(state)
+            h_cap = 0.5 * min(h, abs(dphi))
+            continue
+        if st == OK:
+            accept(state, dphi)
+            h_cap = min(2.0 * h_cap, tols[T_SUBSTEP])
+            phi = target
+            margins[N_GROUPS + 1] = phi
+            if final:
+                return status
+            continue
+        # a failure at the smallest step is a fact about the candidate
+        if status == OK:
+            status = st
+            group = margins[N_GROUPS]
+            margins[N_GROUPS + 2] = target
+        if st == NEWTON_MAXITER:
+            restore(state)
+        if final:
+            return status
+        straight = True

@@ -1,0 +1,148 @@
+"""The sweep's entry points of a generated module: ``evaluate`` (lock-step lanes,
+the careful path for the rest) and ``batch`` (full kinematics of many candidates).
+
+The text below the marker line is pasted into the generated module
+(``pipeline.compiler.generate``); the imports above it declare, for linters and
+readers, the names the generated module gives it."""
+
+from .header import (math, np, njit, JIT_ALLOC, OK, work, force_work, dwell_lanes,
+                     M_FAIL_PHI, M_FORCES_DONE, M_FAIL_GROUP, N_METRICS, SET_DWELL_W,
+                     SET_WANT_LAW)
+from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
+                         N_INPUTS, constants, advance, forces_at, LANES, N_LANE_ROWS,
+                         THETA_COLS, R_margin, R_flag, setup_lane, block_walk, lanes_apply)
+from .careful import (settle, walk_angle, walk_start, watch, watch_work)
+
+# ---- the skeleton: from here on, pasted into the generated module ----
+@njit(**JIT_ALLOC)
+def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metrics):
+    """The sweep's stages for rows lo .. hi - 1 of ``pars``.  Candidates that
+    assemble at the first crank position fill the lanes of a block, which
+    walks the revolution in lock-step; the others, and every lane the fast
+    path cannot vouch for, take the careful path.  A lane's numbers do not
+    depend on its neighbours (every lane runs the same vector instructions),
+    so a candidate gets the same numbers whatever the thread, chunk or engine
+    that runs it.  Serial: the caller runs ranges on threads
+    (``pipeline.compiler.parallel``; the kernels release the GIL)."""
+    npos = phis.shape[0]
+    w = int(settings[SET_DWELL_W])
+    # the crank's cos/sin table, shared by every candidate: the positions, the
+    # closing angle and two past it (the watch's windows wrap round the close)
+    cph = np.empty(npos + 3)
+    sph = np.empty(npos + 3)
+    close = phi_close if math.isfinite(phi_close) else phis[0]
+    for k in range(npos + 3):
+        phi = walk_angle(phis, k, close)
+        cph[k] = math.cos(phi)
+        sph[k] = math.sin(phi)
+    # work arrays: once per call, never per candidate
+    S = np.empty((N_LANE_ROWS, LANES))
+    theta = np.empty((npos + 3, LANES * THETA_COLS))
+    col = np.empty(npos)
+    trail = np.empty((npos + 1, max(THETA_COLS - 1, 1)))
+    W5 = np.empty((5, npos + w + 1, LANES))
+    err = np.empty(LANES)
+    start_k = np.empty(LANES, np.int64)
+    full = np.empty(LANES)
+    qmax = np.empty(npos + w + 1, np.int64)
+    qmin = np.empty(npos + w + 1, np.int64)
+    idx = np.empty(LANES, np.int64)
+    corr = np.empty(npos)
+    want_law = settings[SET_WANT_LAW] != 0.0
+    wk = work(N_POINTS, N_GROUPS, N_TRIADS)
+    fw = force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS)
+    ww = watch_work()
+    pos, d1, d2, margins, state, _ = wk
+    fast = lanes_apply(phis, tols)
+    filled = 0
+    for i in range(lo, hi + 1):          # i == hi: the last, partial block
+        if i < hi:
+            code = -1
+            if fast:
+                # np.int64(...): no literal argument, one compiled version
+                code = setup_lane(pars, i, np.int64(filled), phis, tols, S, theta, pos, d1,
+                                  d2, margins, state)
+            if code == OK:
+                idx[filled] = i
+                filled += 1
+            elif code > 0:
+                # it fails at phis[0], the careful path's first step: that is its report
+                for c in range(N_METRICS):
+                    metrics[i, c] = math.nan
+                metrics[i, M_FORCES_DONE] = 0.0
+                metrics[i, M_FAIL_PHI] = phis[0]
+                metrics[i, M_FAIL_GROUP] = margins[N_GROUPS]
+                status[i] = code
+            else:
+                status[i] = settle(pars[i], np.int64(-1), phis, phi_close, tols, settings,
+                                   loads, col, trail, qmax, qmin, 0.0, np.int64(-1), 0.0,
+                                   0.0, wk, fw, ww, corr, metrics[i])
+        if filled == LANES or (i == hi and filled > 0):
+            for l in range(filled, LANES):     # pad a partial block with lane 0
+                for r in range(N_LANE_ROWS):
+                    S[r, l] = S[r, 0]
+                for q in range(THETA_COLS):
+                    theta[0, q * LANES + l] = theta[0, q * LANES]
+            block_walk(S, theta, cph, sph, phis, tols, settings)
+            dwell_lanes(theta, npos, w, LANES, W5, err, start_k, full)
+            for l in range(filled):
+                # the lane vouches for its candidate unless it flagged itself
+                vouched = np.int64(1) if S[R_flag, l] == 0.0 else np.int64(0)
+                for k in range(npos):
+                    for q in range(THETA_COLS - 1):
+                        trail[k, q] = theta[k, (1 + q) * LANES + l]
+                if want_law:     # the lane's rocker angles, for the law error
+                    for k in range(npos):
+                        col[k] = theta[k, l]
+                status[idx[l]] = settle(pars[idx[l]], vouched, phis, phi_close, tols,
+                                        settings, loads, col, trail, qmax, qmin, err[l],
+                                        start_k[l], full[l], S[R_margin, l], wk, fw, ww,
+                                        corr, metrics[idx[l]])
+            filled = 0
+
+
+@njit(**JIT_ALLOC)
+def batch(pars, lo, hi, phis, order, tols, point, with_forces, omega1, eps1, loads, status,
+          peak_acc, peak_reaction):
+    """For each parameter row: status over the revolution (watched between
+    positions, without the closing position), the peak acceleration analog
+    |r''| of ``point`` (mm/rad^2) and, with_forces, the peak joint reaction
+    (N).  NaN peaks with an OK status would be an unflagged failure (the
+    stress suite checks there are none).  Rows lo .. hi - 1; the caller runs
+    ranges on threads."""
+    pos, d1, d2, margins, state, _ = work(N_POINTS, N_GROUPS, N_TRIADS)
+    work_a, work_b, loads_out, r_out, slide_out = force_work(N_BODIES, N_JOINTS,
+                                                             N_SLIDES + N_INPUTS)
+    ww = watch_work()
+    for i in range(lo, hi):
+        par = pars[i]
+        K = constants(par)
+        phi_prev = walk_start(K, phis[0], state)
+        st = OK
+        acc = 0.0
+        peak = 0.0
+        finite = True
+        for k in range(phis.shape[0]):
+            s = advance(K, phi_prev, phis[k], order, tols, state, pos, d1, d2, margins,
+                        np.bool_(True))
+            phi_prev = phis[k]
+            if s != OK:
+                st = s
+                break
+            a = math.hypot(d2[point, 0], d2[point, 1])
+            finite = finite and math.isfinite(a)
+            acc = max(acc, a)
+            if with_forces:
+                forces_at(par, pos, d1, d2, omega1, eps1, loads[k], work_a, work_b,
+                          loads_out, r_out, slide_out)
+                for j in range(N_JOINTS):
+                    r = math.hypot(r_out[j, 0], r_out[j, 1])
+                    finite = finite and math.isfinite(r)
+                    peak = max(peak, r)
+            s = watch(K, k, phis[k], tols, state, pos, d1, d2, margins, ww)
+            if s != OK:     # a failure between positions
+                st = s
+                break
+        status[i] = st
+        peak_acc[i] = acc if (st == OK and finite) else math.nan
+        peak_reaction[i] = peak if (st == OK and with_forces) else math.nan
