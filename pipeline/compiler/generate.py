@@ -153,7 +153,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
           "dyads and the class III leads (``pipeline.peaks.transmission_items``); inf\n"
           "where the mechanism has none.",
           body))
-    w(_spaced(part("careful")))
+    w(_spaced(part("watch") + part("careful") + part("crank_dynamics")))
     if rocker is not None:
         w(lane_kernel(plan, n, ems, rocker, lanes_width, watch))
     else:

@@ -11,7 +11,8 @@ from .header import (math, np, njit, JIT_ALLOC, OK, work, force_work, dwell_lane
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, constants, advance, forces_at, LANES, N_LANE_ROWS,
                          THETA_COLS, R_margin, R_flag, setup_lane, block_walk, lanes_apply)
-from .careful import (settle, walk_angle, walk_start, watch, watch_work)
+from .careful import settle, walk_angle, walk_start
+from .watch import watch, watch_work
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 @njit(**JIT_ALLOC)
