@@ -25,7 +25,7 @@ from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank
 from .storage import ResultsError, attr_text, candidate_ids, open_results, read_units, row_of
 from .study import stored_study
-from .sweep import status_counts
+from .sweep_file import status_counts
 
 FORMATS = ("table", "json", "csv")
 

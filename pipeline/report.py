@@ -25,7 +25,7 @@ from .analysis import analyze, has_analysis, read_analysis, read_sweep
 from .browse import design_table, ranking, rerun_candidate
 from .files import write_text
 from .storage import attr_text, open_results
-from .sweep import status_counts
+from .sweep_file import status_counts
 
 log = logging.getLogger("pipeline")
 

@@ -130,7 +130,7 @@ def run_scene_study(study, out, pictures=True, overwrite=False) -> RunOutcome:
     ``overwrite`` (and never an unfinished run's)."""
     out = Path(out)
     with RunLock(out):
-        from .sweep import Journal
+        from .journal import Journal
         if Journal(out).exists():
             raise ResultsError(out, "is being written by an unfinished sweep or search (its "
                                     f"journal {out.name}.parts is beside it); write the scene "

@@ -63,10 +63,12 @@ from .pareto import crowding_distance, nondominated_rank
 from .search_spec import METHODS, SearchSpec
 from .storage import (COMPRESSION, ResultsError, attach, attr_text, coordinate, hdf5_writing,
                       open_results)
-from .sweep import (Journal, SweepFile, SweepInterrupted, SweepOutcome, SweepProblem,
-                    _connect, aside_or_done, bounded_finite, build_problem, check_existing,
-                    compile_notice, constraint_names, constraints, finish_run, metric_values,
-                    nothing_left_before_first, summarize)
+from .journal import Journal
+from .objectives import bounded_finite, constraint_names, constraints, metric_values
+from .sweep import (SweepInterrupted, SweepOutcome, SweepProblem, _connect, aside_or_done,
+                    build_problem, check_existing, compile_notice, finish_run,
+                    nothing_left_before_first)
+from .sweep_file import SweepFile, summarize
 from .sweep_spec import SweepSpec, draw_checked, parameter_rows
 
 log = logging.getLogger("pipeline")
