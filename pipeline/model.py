@@ -7,14 +7,14 @@ parser converts from degrees), masses kg, moments of inertia kg*m^2.
 
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .groups import (PPR, PRP, RPP, RPR, RRP, RRR, Attach, ClassIII,  # noqa: F401 (the model's)
+                     ClassIIISlider, GroupType, Law, RotaryInput, SliderInput)
 from .kernels import config as kc
-from .kernels import inputs as ik
 
 
 # ----------------------------------------------------------------- groups
@@ -38,294 +38,9 @@ class Crank:
         return (self.tip,)
 
 
-@dataclass(frozen=True)
-class RRR:
-    """B joined to known A by link A-B and to known C by link C-B; mode W."""
-    A: str
-    C: str
-    B: str
-    L_AB: float
-    L_CB: float
-    W: int
-    name: str = ""
-
-    def reads(self):
-        return (self.A, self.C)
-
-    def writes(self):
-        return (self.B,)
-
-
-@dataclass(frozen=True)
-class RRP:
-    """Slider B on a guide line through G (fixed direction, or turning with the
-    link guide_link), joined to known A by link A-B; mode W = side along the guide."""
-    A: str
-    B: str
-    guide_point: str
-    guide_angle: float       # rad: absolute, or relative to guide_link
-    L_AB: float
-    W: int
-    guide_link: tuple[str, str] | None = None
-    name: str = ""
-
-    def reads(self):
-        return (self.A, self.guide_point) + (self.guide_link or ())
-
-    def writes(self):
-        return (self.B,)
-
-
-@dataclass(frozen=True)
-class RPR:
-    """Coulisse: a block pinned at known point ``block`` slides on a guide turning
-    about ``pivot``; ``guide_end`` = pivot + guide_length along the guide."""
-    block: str
-    pivot: str
-    guide_end: str
-    guide_length: float
-    offset: float = 0.0
-    W: int = 1
-    name: str = ""
-
-    def reads(self):
-        return (self.block, self.pivot)
-
-    def writes(self):
-        return (self.guide_end,)
-
-
-@dataclass(frozen=True)
-class PRP:
-    """Two blocks joined by the revolute B, each sliding on a known guide.
-
-    Guide i runs through the known point ``guide{i}_point`` with the absolute
-    direction ``guide{i}_angle``, or, with ``guide{i}_link`` = (a, b), with the
-    direction of the link a->b plus ``guide{i}_angle`` (a slot in that link);
-    block i carries B at the perpendicular distance ``guide{i}_offset`` from
-    its guide, on the side of the guide's direction turned +90 deg.  B is
-    where the two lines meet; the group cannot be assembled where the guides
-    are parallel."""
-    B: str
-    guide1_point: str
-    guide1_angle: float          # rad: absolute, or relative to guide1_link
-    guide2_point: str
-    guide2_angle: float
-    guide1_offset: float = 0.0   # mm
-    guide2_offset: float = 0.0
-    guide1_link: tuple[str, str] | None = None
-    guide2_link: tuple[str, str] | None = None
-    name: str = ""
-
-    def reads(self):
-        return ((self.guide1_point,) + (self.guide1_link or ()) + (self.guide2_point,)
-                + (self.guide2_link or ()))
-
-    def writes(self):
-        return (self.B,)
-
-
-@dataclass(frozen=True)
-class RPP:
-    """Scotch yoke: a block pinned at the known point A slides in a slot of a
-    yoke, and the yoke slides on a guide.
-
-    The guide runs through the known point ``guide_point`` with the absolute
-    direction ``guide_angle``, or, with ``guide_link`` = (a, b), the direction
-    of the link a->b plus ``guide_angle``; the yoke's reference point B travels
-    on the line at the perpendicular distance ``guide_offset`` from the guide
-    (on the side of its direction turned +90 deg).  The slot is fixed in the
-    yoke at ``slot_angle`` from the guide, through B; the block's pin A runs at
-    ``slot_offset`` from the slot's line (on its +90 deg side).  The yoke turns
-    with the guide; the group cannot be assembled with the slot along the
-    guide (slot_angle = 0 or 180 deg)."""
-    A: str
-    B: str
-    guide_point: str
-    guide_angle: float           # rad: absolute, or relative to guide_link
-    slot_angle: float            # rad, relative to the guide
-    guide_offset: float = 0.0    # mm
-    slot_offset: float = 0.0     # mm
-    guide_link: tuple[str, str] | None = None
-    name: str = ""
-
-    def reads(self):
-        return (self.A, self.guide_point) + (self.guide_link or ())
-
-    def writes(self):
-        return (self.B,)
-
-
-@dataclass(frozen=True)
-class Law:
-    """Motion law of an input against the cycle angle phi1
-    (``pipeline.kernels.inputs``): ``linear`` (q = phase + ratio phi1, a
-    geared second crank), ``harmonic`` or ``cycloidal`` (a rise by ``travel``
-    from ``start`` over ``rise`` rad of the cycle from ``phase``, and the
-    return), or ``table`` (a periodic cubic spline through ``table``:
-    (cycle angle, value) pairs, shifted by ``phase``).  Values are rad for a
-    rotary input, mm for a slider input; cycle angles rad."""
-    kind: str
-    ratio: float = 1.0
-    phase: float = 0.0
-    start: float = 0.0
-    travel: float = 0.0
-    rise: float = math.pi
-    table: tuple = ()
-
-    # the law's keys in the parameter row -> its fields
-    FIELDS = {"ratio": "ratio", "phase_angle": "phase", "start_angle": "start", "start": "start",
-              "travel_angle": "travel", "stroke": "travel", "rise_angle": "rise"}
-
-    @property
-    def code(self):
-        from .kernels import inputs
-        return {v: k for k, v in inputs.LAW_NAMES.items()}[self.kind]
-
-    def parameters(self, rotary):
-        """(key, value) of the law's entries in the parameter row; angle keys
-        end in "angle" (a sweep reads them in degrees)."""
-        if self.kind == "linear":
-            return [("ratio", self.ratio), ("phase_angle", self.phase)]
-        if self.kind == "table":
-            return [("phase_angle", self.phase)]
-        start, travel = ("start_angle", "travel_angle") if rotary else ("start", "stroke")
-        return [(start, self.start), (travel, self.travel), ("phase_angle", self.phase),
-                ("rise_angle", self.rise)]
-
-    def spline(self):
-        """(knots (n + 1), coefficients (4, n)) of the periodic cubic spline
-        through the table, closed after one cycle (2 pi)."""
-        from scipy.interpolate import CubicSpline
-        t = np.array([p[0] for p in self.table], dtype=np.float64)
-        v = np.array([p[1] for p in self.table], dtype=np.float64)
-        t = np.append(t, t[0] + 2.0 * math.pi)
-        v = np.append(v, v[0])
-        s = CubicSpline(t, v, bc_type="periodic")
-        return s.x.copy(), np.ascontiguousarray(s.c)
-
-
-@dataclass(frozen=True)
-class RotaryInput:
-    """A link turned about the fixed ``pivot`` to the absolute angle given by
-    ``law`` of the cycle angle: ``tip`` = pivot + length e(q(phi1)).  An
-    oscillating rocker driven by a cam, or a second crank geared to the
-    first (linear law)."""
-    pivot: str
-    tip: str
-    length: float
-    law: Law
-    name: str = ""
-
-    def reads(self):
-        return (self.pivot,)
-
-    def writes(self):
-        return (self.tip,)
-
-
-@dataclass(frozen=True)
-class SliderInput:
-    """A block moved along a fixed guide by ``law`` of the cycle angle: the
-    guide runs through the fixed ``guide_point`` at the absolute direction
-    ``guide_angle``; ``block`` = guide_point + q(phi1) e(guide_angle).  A
-    linear actuator with a stroke law."""
-    guide_point: str
-    block: str
-    guide_angle: float
-    law: Law
-    name: str = ""
-
-    def reads(self):
-        return (self.guide_point,)
-
-    def writes(self):
-        return (self.block,)
-
-
-@dataclass(frozen=True)
-class ClassIII:
-    """Triad of DOMAIN.md sections 3 and 5 (lead 2-3, ternary 3-4-5, leads 4-6, 5-7)."""
-    input: str
-    pivot_4: str
-    pivot_5: str
-    joints: tuple[str, str, str]   # names of vertices 3, 4, 5
-    L23: float
-    L34: float
-    L45: float
-    L35: float
-    L46: float
-    L57: float
-    a0: float                      # start guess at phi_start, rad
-    b0: float
-    phi_start: float = 0.0
-    orientation: int = 1           # sign of U435
-    name: str = "triad"
-
-    def reads(self):
-        return (self.input, self.pivot_4, self.pivot_5)
-
-    def writes(self):
-        return self.joints
-
-
-@dataclass(frozen=True)
-class ClassIIISlider:
-    """The class III group with a slider in place of lead 5-7: lead 2-3 from
-    ``input``, the ternary link 3-4-5, lead 4-6 to ``pivot_4``, and a block
-    pinned at vertex 5 that slides on a guide line.
-
-    The guide runs through the known point ``guide_point`` with the absolute
-    direction ``guide_angle``, or, with ``guide_link`` = (a, b), the direction
-    of the link a->b plus ``guide_angle``; the block carries vertex 5 at the
-    perpendicular distance ``guide_offset`` from the guide, on the side of its
-    direction turned +90 deg (the convention of RRP, PRP and RPP).  Unknowns,
-    start guess and branch as ``ClassIII``."""
-    input: str
-    pivot_4: str
-    guide_point: str
-    joints: tuple[str, str, str]   # names of vertices 3, 4, 5
-    L23: float
-    L34: float
-    L45: float
-    L35: float
-    L46: float
-    guide_angle: float             # rad: absolute, or relative to guide_link
-    guide_offset: float            # mm
-    a0: float                      # start guess at phi_start, rad
-    b0: float
-    phi_start: float = 0.0
-    orientation: int = 1           # sign of U435
-    guide_link: tuple[str, str] | None = None
-    name: str = "triad"
-
-    def reads(self):
-        return (self.input, self.pivot_4, self.guide_point) + (self.guide_link or ())
-
-    def writes(self):
-        return self.joints
-
-
-@dataclass(frozen=True)
-class Attach:
-    """Point rigidly attached to a link: base + rot(along vector, angle, length);
-    with along=None the direction is the absolute ``angle`` (translating body)."""
-    point: str
-    base: str
-    along: tuple[str, str] | None
-    angle: float
-    length: float
-    name: str = ""
-
-    def reads(self):
-        return (self.base,) + (self.along or ())
-
-    def writes(self):
-        return (self.point,)
-
-
-Group = (Crank | RRR | RRP | RPR | PRP | RPP | ClassIII | ClassIIISlider | Attach | RotaryInput
-         | SliderInput)
+# the group types after the crank: one module each in pipeline.groups (their
+# fields, study parsing, plan row, emitter, transmission angles, drawing, guides)
+Group = Crank | GroupType
 
 
 # ----------------------------------------------------------------- bodies and loads
@@ -516,57 +231,11 @@ def compile_mechanism(m: Mechanism) -> Plan:
          [("length", c.length), ("phiM0", c.phiM0)])
     for k, g in enumerate(m.groups, start=1):
         label = group_label(g, k)
-        if isinstance(g, RRR):
-            emit(kc.G_RRR, [pt(g.A), pt(g.C), pt(g.B)], label,
-                 [("L_AB", g.L_AB), ("L_CB", g.L_CB), ("W", g.W)])
-        elif isinstance(g, RRP):
-            ga, gb = (pt(g.guide_link[0]), pt(g.guide_link[1])) if g.guide_link else (-1, -1)
-            emit(kc.G_RRP, [pt(g.A), pt(g.guide_point), pt(g.B), ga, gb], label,
-                 [("L_AB", g.L_AB), ("guide_angle", g.guide_angle), ("W", g.W)])
-        elif isinstance(g, RPR):
-            emit(kc.G_RPR, [pt(g.block), pt(g.pivot), pt(g.guide_end)], label,
-                 [("offset", g.offset), ("guide_length", g.guide_length), ("W", g.W)])
-        elif isinstance(g, PRP):
-            links = []
-            for link in (g.guide1_link, g.guide2_link):
-                links += [pt(link[0]), pt(link[1])] if link else [-1, -1]
-            emit(kc.G_PRP, [pt(g.guide1_point), links[0], links[1], pt(g.guide2_point),
-                            links[2], links[3], pt(g.B)], label,
-                 [("guide1_angle", g.guide1_angle), ("guide1_offset", g.guide1_offset),
-                  ("guide2_angle", g.guide2_angle), ("guide2_offset", g.guide2_offset)])
-        elif isinstance(g, RPP):
-            ga, gb = (pt(g.guide_link[0]), pt(g.guide_link[1])) if g.guide_link else (-1, -1)
-            emit(kc.G_RPP, [pt(g.A), pt(g.guide_point), ga, gb, pt(g.B)], label,
-                 [("guide_angle", g.guide_angle), ("guide_offset", g.guide_offset),
-                  ("slot_angle", g.slot_angle), ("slot_offset", g.slot_offset)])
-        elif isinstance(g, ClassIII):
-            emit(kc.G_CLASS3, [pt(g.input), pt(g.pivot_4), pt(g.pivot_5)]
-                 + [pt(j) for j in g.joints], label,
-                 [("L23", g.L23), ("L34", g.L34), ("L45", g.L45), ("L35", g.L35),
-                  ("L46", g.L46), ("L57", g.L57), ("orientation", g.orientation),
-                  ("a0", g.a0), ("b0", g.b0), ("phi_start", g.phi_start)])
-        elif isinstance(g, ClassIIISlider):
-            ga, gb = (pt(g.guide_link[0]), pt(g.guide_link[1])) if g.guide_link else (-1, -1)
-            emit(kc.G_CLASS3_SLIDER, [pt(g.input), pt(g.pivot_4), pt(g.guide_point)]
-                 + [pt(j) for j in g.joints] + [ga, gb], label,
-                 [("L23", g.L23), ("L34", g.L34), ("L45", g.L45), ("L35", g.L35),
-                  ("L46", g.L46), ("guide_angle", g.guide_angle),
-                  ("guide_offset", g.guide_offset), ("orientation", g.orientation),
-                  ("a0", g.a0), ("b0", g.b0), ("phi_start", g.phi_start)])
-        elif isinstance(g, Attach):
-            ia, ib = (pt(g.along[0]), pt(g.along[1])) if g.along else (-1, -1)
-            emit(kc.G_ATTACH, [pt(g.base), ia, ib, pt(g.point)], label,
-                 [("angle", g.angle), ("length", g.length)])
-        elif isinstance(g, (RotaryInput, SliderInput)):
-            rotary = isinstance(g, RotaryInput)
-            ends = (g.pivot, g.tip) if rotary else (g.guide_point, g.block)
-            first = [("length", g.length)] if rotary else [("guide_angle", g.guide_angle)]
-            inputs.append((len(codes), ik.ROTARY if rotary else ik.SLIDER, g.law.code,
-                           [pt(ends[0]), pt(ends[1])], g, label))
-            emit(kc.G_INPUT, [pt(ends[0]), pt(ends[1])], label,
-                 first + g.law.parameters(rotary))
-        else:  # pragma: no cover - the parser only builds the types above
-            raise TypeError(f"unknown group {g!r}")
+        entry = g.input_row(pt)
+        if entry is not None:
+            inputs.append((len(codes), *entry, g, label))
+        code, idx, values = g.plan_row(pt)
+        emit(code, idx, label, values)
     n_visible = len(names)
     n_kinematic = len(codes)
 
@@ -613,7 +282,7 @@ def compile_mechanism(m: Mechanism) -> Plan:
     for i, b in enumerate(m.bodies):
         if c.pivot in b.joints and c.tip in b.joints:
             crank_body = i
-    input_body = [_driven_body(m, g) for (*_, g, _l) in inputs]
+    input_body = [g.driven_body(m) for (*_, g, _l) in inputs]
     lb = [body_index[ld.body] for ld in m.loads]
     lp = [index[ld.point] if ld.point else -1 for ld in m.loads]
 
@@ -640,20 +309,6 @@ def compile_mechanism(m: Mechanism) -> Plan:
                            for i in inputs),
         input_names=tuple(i[5] for i in inputs),
     )
-
-
-def _driven_body(m: Mechanism, g) -> int:
-    """The body an input's drive acts on: the one jointed at the pivot and the
-    tip of a rotary input, the one sliding on the ground at a slider input's
-    block; -1 if no body is declared for it."""
-    for i, b in enumerate(m.bodies):
-        if isinstance(g, RotaryInput):
-            if g.pivot in b.joints and g.tip in b.joints:
-                return i
-        elif g.block in b.joints and any(s.slider == b.name and s.guide is None
-                                         for s in m.slides):
-            return i
-    return -1
 
 
 def natural_key(name):

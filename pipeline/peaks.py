@@ -111,39 +111,16 @@ def transmission_items(mech):
       force to the pin along the normal of guide 1, and block 2 moves along
       guide 2 (either way round), so mu = the angle between the two guides
       (0 where they are parallel; sin mu is the group's margin);
-    * RPP (Scotch yoke): the block pushes the yoke along the slot's normal,
+    * RPP (Scotch yoke; and PPR, the same chain): the block pushes the yoke along the slot's normal,
       and the yoke moves along its guide, so mu = the angle between the slot
       and the guide, |slot_angle| folded: constant over the revolution, a
-      design quantity (90 deg for the classic yoke)."""
-    from .model import PRP, RPP, RPR, RRP, RRR, ClassIII
+      design quantity (90 deg for the classic yoke).
+
+    Each group type gives its own items (its ``transmission`` hook,
+    ``pipeline.groups``)."""
     out = []
-    half = 0.5 * math.pi
     for g in mech.groups:
-        if isinstance(g, RRR):
-            out.append((g.name or f"{g.A}-{g.B}-{g.C}", "dyad", (g.A, g.B, g.C)))
-        elif isinstance(g, ClassIII):
-            p3, p4, p5 = g.joints
-            label = g.name or "class III"
-            out.append((f"{label} lead {p4}-{g.pivot_4}", "lead",
-                        (p4, g.pivot_4, g.input, p3, p5, g.pivot_5)))
-            out.append((f"{label} lead {p5}-{g.pivot_5}", "lead",
-                        (p5, g.pivot_5, g.input, p3, p4, g.pivot_4)))
-        elif isinstance(g, RRP):
-            ga, gb = g.guide_link or (None, None)
-            out.append((g.name or f"RRP {g.A}-{g.B}", "lines",
-                        ((g.A, g.B, 0.0), (ga, gb, g.guide_angle + half))))
-        elif isinstance(g, RPR):
-            out.append((g.name or f"RPR {g.pivot}-{g.block}", "lines",
-                        ((g.pivot, g.block, 0.0), (g.pivot, g.guide_end, half))))
-        elif isinstance(g, PRP):
-            a1, b1 = g.guide1_link or (None, None)
-            a2, b2 = g.guide2_link or (None, None)
-            out.append((g.name or f"PRP {g.B}", "lines",
-                        ((a1, b1, g.guide1_angle), (a2, b2, g.guide2_angle))))
-        elif isinstance(g, RPP):
-            ga, gb = g.guide_link or (None, None)
-            out.append((g.name or f"RPP {g.A}-{g.B}", "lines",
-                        ((ga, gb, g.guide_angle), (ga, gb, g.guide_angle + g.slot_angle))))
+        out += g.transmission()     # the group type's items (pipeline.groups)
     return out
 
 

@@ -11,230 +11,19 @@ from __future__ import annotations
 
 import math
 import tomllib
-import unicodedata
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from .errors import StudyError
 from . import limits as lim
-from .limits import (MAX_NAME_LENGTH, MAX_POSITIONS, MAX_STUDY_BYTES, MAX_TABLE_POINTS,
-                     MAX_TITLE_LENGTH, NAME_WHY, POSITIONS_WHY, STUDY_BYTES_WHY,
-                     TABLE_POINTS_WHY, TITLE_WHY)
-from .model import (PRP, RPP, RPR, RRP, RRR, Attach, Body, CentreOfMass, ClassIII,
-                    ClassIIISlider, Crank, Law, Load, Mechanism, RotaryInput, Slide, SliderInput,
-                    group_label)
-
-
-_MISSING = object()
-
-
-class Section:
-    """A table of the study being read: tracks its location and the keys used,
-    so that unknown keys are reported."""
-
-    def __init__(self, file, where, data):
-        self.file = file
-        self.where = where
-        if not isinstance(data, dict):
-            raise StudyError(file, where, f"expected a table, got {type(data).__name__}")
-        self.data = data
-        self.used = set()
-
-    def path(self, key):
-        key = _key(key)
-        return f"{self.where}.{key}" if self.where else key
-
-    def error(self, key, reason):
-        return StudyError(self.file, self.path(key) if key else self.where, reason)
-
-    def has(self, key):
-        return key in self.data
-
-    def raw(self, key, default=_MISSING):
-        self.used.add(key)
-        if key not in self.data:
-            if default is _MISSING:
-                raise self.error(key, "required field is missing")
-            return default
-        return self.data[key]
-
-    def number(self, key, default=_MISSING, positive=False, nonzero=False, within=None):
-        """A finite number; ``within``: its ``limits.Range`` (plausible values)."""
-        v = self.raw(key, default)
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise self.error(key, f"expected a number, got {_show(v)}")
-        try:
-            v = float(v)
-        except OverflowError:
-            raise self.error(key, "beyond the range of a 64-bit float (about 1.8e308)") from None
-        if not math.isfinite(v):
-            raise self.error(key, f"must be finite, got {v}")
-        if positive and not v > 0:
-            raise self.error(key, f"must be positive, got {v:g}")
-        if nonzero and v == 0:
-            raise self.error(key, "must not be zero")
-        if within is not None:
-            self.check_range(key, v, within)
-        return v
-
-    def check_range(self, key, v, within, what=""):
-        """Refuse ``v`` outside ``within`` (a ``limits.Range``), naming the field
-        and the range."""
-        if not within.holds(v):
-            unit = f" {within.unit}" if within.unit else ""
-            raise self.error(key, f"{what}{v:g}{unit} is out of range: {within.words()}")
-
-    def integer(self, key, default=_MISSING, minimum=None, choices=None, maximum=None,
-                why=""):
-        """An integer; ``maximum`` with ``why``: a limit and the reason for it."""
-        v = self.raw(key, default)
-        if isinstance(v, bool) or not isinstance(v, int):
-            raise self.error(key, f"expected an integer, got {_show(v)}")
-        if not -2**63 <= v < 2**63:
-            raise self.error(key, f"{v} is beyond the range of a 64-bit integer")
-        if minimum is not None and v < minimum:
-            raise self.error(key, f"must be at least {minimum}, got {v}")
-        if maximum is not None and v > maximum:
-            raise self.error(key, f"at most {maximum:,} ({why}), got {v:,}")
-        if choices is not None and v not in choices:
-            raise self.error(key, f"must be one of {', '.join(map(str, choices))}, got {v}")
-        return v
-
-    def string(self, key, default=_MISSING, choices=None):
-        v = self.raw(key, default)
-        if not isinstance(v, str):
-            raise self.error(key, f"expected a string, got {_show(v)}")
-        if choices is not None and v not in choices:
-            raise self.error(key, f"must be one of {', '.join(choices)}, got {_quote(v)}")
-        return v
-
-    def name(self, key, default=_MISSING, maximum=MAX_NAME_LENGTH, why=NAME_WHY,
-             empty=False):
-        """A name (of a point, a group, a body, ...): a string of printable
-        characters, at most ``maximum`` long (``name_problem``); the empty
-        default of an optional name passes, and ``empty`` lets an empty name
-        pass (a label that may be blank: the study's name and title)."""
-        v = self.string(key, default)
-        if v == "" and (empty or default == ""):
-            return v
-        problem = name_problem(v, maximum, why)
-        if problem:
-            raise self.error(key, problem)
-        return v
-
-    def names(self, key, n=None, default=_MISSING, maximum=MAX_NAME_LENGTH, why=NAME_WHY):
-        """A list of names (``name``), or None where the default is None."""
-        v = self.strings(key, n, default)
-        for k, x in enumerate(v or ()):
-            problem = name_problem(x, maximum, why)
-            if problem:
-                raise self.error(key, f"name {k + 1}: {problem}")
-        return v
-
-    def key_name(self, key, maximum=MAX_NAME_LENGTH, why=NAME_WHY):
-        """A key of this table that is a name (a fixed point, a sweep variable)."""
-        problem = name_problem(key, maximum, why)
-        if problem:     # (an empty key too: its path shows it quoted, '')
-            raise StudyError(self.file, self.path(key), problem)
-        return key
-
-    def strings(self, key, n=None, default=_MISSING):
-        v = self.raw(key, default)
-        if v is None:
-            return None
-        if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
-            raise self.error(key, f"expected a list of strings, got {_show(v)}")
-        if n is not None and len(v) != n:
-            raise self.error(key, f"expected {n} names, got {len(v)}")
-        return tuple(v)
-
-    def numbers(self, key, n=None, default=_MISSING, within=None):
-        v = self.raw(key, default)
-        if not isinstance(v, list) or not all(
-                isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
-            raise self.error(key, f"expected a list of numbers, got {_show(v)}")
-        if n is not None and len(v) != n:
-            raise self.error(key, f"expected {n} numbers, got {len(v)}")
-        try:
-            out = tuple(float(x) for x in v)
-        except OverflowError:
-            raise self.error(key, "a number is beyond the range of a 64-bit float "
-                                  "(about 1.8e308)") from None
-        if not all(math.isfinite(x) for x in out):
-            raise self.error(key, "numbers must be finite")
-        if within is not None:
-            for k, x in enumerate(out):
-                self.check_range(key, x, within, f"number {k + 1}: ")
-        return out
-
-    def table(self, key, default=_MISSING):
-        v = self.raw(key, default)
-        if v is None:
-            return None
-        return Section(self.file, self.path(key), v)
-
-    def tables(self, key, default=_MISSING):
-        v = self.raw(key, default)
-        if not isinstance(v, list):
-            raise self.error(key, f"expected an array of tables ([[{self.path(key)}]]), got {_show(v)}")
-        return [Section(self.file, f"{self.path(key)}[{i}]", x) for i, x in enumerate(v)]
-
-    def done(self):
-        """Reject keys nobody asked for (typos must not be silently ignored)."""
-        extra = sorted(set(self.data) - self.used)
-        if extra:
-            raise self.error(extra[0], f"unknown key {_quote(extra[0])}"
-                             + (f" (known here: {', '.join(sorted(self.used))})" if self.used else ""))
-
-
-def _show(v):
-    s = repr(v)
-    return f"{type(v).__name__} {s[:40]}"
-
-
-def _quote(v, limit=40):
-    """A user's text in a message: repr() (one line: every character that is
-    not printable escaped), cut after ``limit`` characters."""
-    v = str(v)
-    return repr(v) if len(v) <= limit else f"{v[:limit]!r}... ({len(v):,} characters)"
-
-
-def _key(key):
-    """A table key in a field's path: bare where it is a plain word, else quoted."""
-    k = str(key)
-    if k and len(k) <= MAX_NAME_LENGTH and all(c.isascii() and (c.isalnum() or c in "_-")
-                                               for c in k):
-        return k
-    return _quote(k)
-
-
-_CATEGORIES = {"Cc": "a control character", "Cf": "a format character",
-               "Zl": "a line separator", "Zp": "a paragraph separator",
-               "Zs": "a space other than U+0020", "Co": "a private-use character",
-               "Cn": "an unassigned code point", "Cs": "a surrogate"}
-
-
-def name_problem(v: str, maximum=MAX_NAME_LENGTH, why=NAME_WHY):
-    """Why ``v`` cannot be a name, or None.  A name is data (a label in tables,
-    pictures and messages; in generated kernels only inside comments written by
-    ascii()), so any printable character is allowed (quotes, backslashes, #,
-    slashes, letters of any script); refused: the empty name, more than
-    ``maximum`` characters, a character that is not printable (control and
-    format characters such as NUL, tab, CR, LF, U+0085, U+200B, line and
-    paragraph separators U+2028/U+2029, spaces other than U+0020) and
-    surrounding spaces."""
-    if not v:
-        return "a name must not be empty"
-    if len(v) > maximum:
-        return f"a name is at most {maximum} characters ({why}), got {len(v):,}"
-    for i, c in enumerate(v):
-        if not c.isprintable():
-            cat = unicodedata.category(c)
-            return (f"a name holds printable characters only: character {i + 1} is "
-                    f"U+{ord(c):04X}, {_CATEGORIES.get(cat, cat)}")
-    if v != v.strip():
-        return "a name must not begin or end with a space"
-    return None
+from .errors import StudyError
+from .groups import GROUP_TYPES as _GROUP_CLASSES, SOLVED_KEYS, SOLVED_LISTS
+from .groups.law import law_grid_problem
+from .limits import (MAX_NAME_LENGTH, MAX_POSITIONS, MAX_STUDY_BYTES, MAX_TITLE_LENGTH,
+                     POSITIONS_WHY, STUDY_BYTES_WHY, TITLE_WHY)
+from .model import Body, CentreOfMass, Crank, Load, Mechanism, Slide, group_label
+from .slide_check import check_slide as _check_slide
+# the study file's tables (the reader of every section; name_problem: a name's check)
+from .study_section import _MISSING, Section, _key, _quote, name_problem  # noqa: F401
 
 
 # ----------------------------------------------------------------- study objects
@@ -351,10 +140,45 @@ def parse_study(text: str, path="<study>") -> Study:
 
 
 # ----------------------------------------------------------------- mechanism
-GROUP_TYPES = ("RRR", "RRP", "RPR", "PRP", "RPP", "class3", "attach", "rotary_input",
-               "slider_input")
-LAW_TYPES = ("harmonic", "cycloidal", "table", "linear")
-PARALLEL_SIN = 1e-9     # |sin| of the angle between two guides below this: parallel
+GROUP_TYPES = tuple(_GROUP_CLASSES)      # the study's group `type`s (pipeline.groups)
+
+
+class Fields:
+    """What a group type's parser (``GroupType.parse``) reads its points with:
+    a known point, a link of two, a point it solves, the assembly mode; and
+    the fixed points."""
+
+    def __init__(self, fixed, need, define):
+        self.fixed = fixed
+        self.need = need            # need(section, key, point): refuse an unknown point
+        self._define = define
+
+    def point(self, s, key):
+        """A known point (solved by the crank or a group before)."""
+        p = s.name(key)
+        self.need(s, key, p)
+        return p
+
+    def pair(self, s, key, optional=False):
+        """A link (a, b) of two known points, or None where optional and absent."""
+        v = s.names(key, n=2, default=None if optional else _MISSING)
+        if v is None:
+            return None
+        for p in v:
+            self.need(s, key, p)
+        if v[0] == v[1]:
+            raise s.error(key, "a link needs two different points")
+        return v
+
+    def define(self, s, key, p=None):
+        """A point the group solves (its name read from ``key`` unless given)."""
+        if p is None:
+            p = s.name(key)
+        self._define(s, key, p)
+        return p
+
+    def mode(self, s, key="W"):
+        return s.integer(key, choices=(-1, 1))
 
 
 def parse_mechanism(sec: Section, name: str) -> Mechanism:
@@ -371,13 +195,14 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
     later = {}
     for i, g in enumerate(sec.data.get("groups", []) if isinstance(sec.data.get("groups"), list) else []):
         if isinstance(g, dict):
-            for key in ("B", "guide_end", "point", "tip", "block"):
+            for key in SOLVED_KEYS:
                 if isinstance(g.get(key), str):
                     later.setdefault(g[key], f"{sec.path('groups')}[{i}].{key}")
-            if isinstance(g.get("joints"), list):
-                for p in g["joints"]:
-                    if isinstance(p, str):
-                        later.setdefault(p, f"{sec.path('groups')}[{i}].joints")
+            for key in SOLVED_LISTS:
+                if isinstance(g.get(key), list):
+                    for p in g[key]:
+                        if isinstance(p, str):
+                            later.setdefault(p, f"{sec.path('groups')}[{i}].{key}")
 
     def need(s, key, pname):
         if pname not in known:
@@ -412,6 +237,7 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
 
     groups = []
     names = set()
+    fields = Fields(fixed, need, define)
     for g in sec.tables("groups"):
         t = g.string("type", choices=GROUP_TYPES)
         gname = g.name("name", "")
@@ -419,128 +245,7 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
             if gname in names:
                 raise g.error("name", f"group name {gname!r} is used twice")
             names.add(gname)
-
-        def pnt(key):
-            p = g.name(key)
-            need(g, key, p)
-            return p
-
-        def pair(key, optional=False):
-            v = g.names(key, n=2, default=None if optional else _MISSING)
-            if v is None:
-                return None
-            for p in v:
-                need(g, key, p)
-            if v[0] == v[1]:
-                raise g.error(key, "a link needs two different points")
-            return v
-
-        def mode(key="W"):
-            return g.integer(key, choices=(-1, 1))
-
-        if t == "RRR":
-            a, c = pnt("A"), pnt("C")
-            b = g.name("B")
-            define(g, "B", b)
-            grp = RRR(a, c, b, g.number("L_AB", positive=True, within=lim.LENGTH),
-                      g.number("L_CB", positive=True, within=lim.LENGTH), mode(), gname)
-        elif t == "RRP":
-            a, gp = pnt("A"), pnt("guide_point")
-            link = pair("guide_link", optional=True)
-            b = g.name("B")
-            define(g, "B", b)
-            grp = RRP(a, b, gp, math.radians(g.number("guide_angle", 0.0, within=lim.ANGLE)),
-                      g.number("L_AB", positive=True, within=lim.LENGTH), mode(), link, gname)
-        elif t == "RPR":
-            blk, piv = pnt("block"), pnt("pivot")
-            end = g.name("guide_end")
-            define(g, "guide_end", end)
-            grp = RPR(blk, piv, end, g.number("guide_length", positive=True, within=lim.LENGTH),
-                      g.number("offset", 0.0, within=lim.OFFSET), mode(), gname)
-        elif t == "PRP":
-            guides = []
-            for i in (1, 2):
-                gp = pnt(f"guide{i}_point")
-                link = pair(f"guide{i}_link", optional=True)
-                angle = g.number(f"guide{i}_angle", 0.0, within=lim.ANGLE)
-                guides.append((gp, link, math.radians(angle),
-                               g.number(f"guide{i}_offset", 0.0, within=lim.OFFSET)))
-            if guides[0][1] is None and guides[1][1] is None and \
-                    abs(math.sin(guides[1][2] - guides[0][2])) < PARALLEL_SIN:
-                raise g.error("guide2_angle", "the two guides are parallel (guide1_angle = "
-                              f"{math.degrees(guides[0][2]):g} deg, guide2_angle = "
-                              f"{math.degrees(guides[1][2]):g} deg): the blocks' lines never "
-                              "meet in one point")
-            b = g.name("B")
-            define(g, "B", b)
-            grp = PRP(b, guides[0][0], guides[0][2], guides[1][0], guides[1][2],
-                      guides[0][3], guides[1][3], guides[0][1], guides[1][1], gname)
-        elif t == "RPP":
-            a, gp = pnt("A"), pnt("guide_point")
-            link = pair("guide_link", optional=True)
-            slot = math.radians(g.number("slot_angle", 90.0, within=lim.ANGLE))
-            if abs(math.sin(slot)) < PARALLEL_SIN:
-                raise g.error("slot_angle", f"the slot runs along the guide "
-                              f"({math.degrees(slot):g} deg from it): the block cannot move "
-                              "the yoke")
-            b = g.name("B")
-            define(g, "B", b)
-            grp = RPP(a, b, gp, math.radians(g.number("guide_angle", 0.0, within=lim.ANGLE)), slot,
-                      g.number("guide_offset", 0.0, within=lim.OFFSET),
-                      g.number("slot_offset", 0.0, within=lim.OFFSET),
-                      link, gname)
-        elif t == "class3":
-            inp, p6 = pnt("input"), pnt("pivot_4")
-            slider = _class3_slider(g, need) if g.has("slider") else None
-            if slider is None and not g.has("pivot_5"):
-                raise g.error("pivot_5", "required field is missing (or, for a block on a "
-                                         "guide in place of lead 5-7, a slider table)")
-            p7 = pnt("pivot_5") if slider is None else None
-            joints = g.names("joints", n=3)
-            for p in joints:
-                define(g, "joints", p)
-            start = g.numbers("start", n=2, within=lim.ANGLE)
-            leads = ("L23", "L34", "L45", "L35", "L46") + (("L57",) if slider is None else ())
-            L = {k: g.number(k, positive=True, within=lim.LENGTH) for k in leads}
-            if not (L["L45"] < L["L34"] + L["L35"] and L["L34"] < L["L45"] + L["L35"]
-                    and L["L35"] < L["L34"] + L["L45"]):
-                raise g.error("L45", "the ternary link 3-4-5 is not a triangle "
-                                     f"(L34={L['L34']:g}, L45={L['L45']:g}, L35={L['L35']:g})")
-            common = dict(a0=math.radians(start[0]), b0=math.radians(start[1]),
-                          phi_start=math.radians(g.number("phi_start", 0.0, within=lim.ANGLE)),
-                          orientation=g.integer("orientation", 1, choices=(-1, 1)),
-                          name=gname or "triad")
-            if slider is None:
-                grp = ClassIII(inp, p6, p7, joints, **L, **common)
-            else:
-                point, angle, offset, link = slider
-                grp = ClassIIISlider(inp, p6, point, joints, **L, guide_angle=angle,
-                                     guide_offset=offset, guide_link=link, **common)
-        elif t in ("rotary_input", "slider_input"):
-            rotary = t == "rotary_input"
-            first, moved = ("pivot", "tip") if rotary else ("guide_point", "block")
-            p0 = pnt(first)
-            if p0 not in fixed:
-                raise g.error(first, f"the {t.replace('_', ' ')}'s {first.replace('_', ' ')} "
-                              f"{p0!r} must be a fixed point (mechanism.fixed): the input is "
-                              "driven from the frame")
-            p1 = g.name(moved)
-            define(g, moved, p1)
-            law = parse_law(g.table("law"), rotary)
-            if rotary:
-                grp = RotaryInput(p0, p1, g.number("length", positive=True, within=lim.LENGTH),
-                                  law, gname)
-            else:
-                angle = g.number("guide_angle", 0.0, within=lim.ANGLE)
-                grp = SliderInput(p0, p1, math.radians(angle), law,
-                                  gname)
-        else:  # attach
-            base = pnt("base")
-            along = pair("along", optional=True)
-            p = g.name("point")
-            define(g, "point", p)
-            grp = Attach(p, base, along, math.radians(g.number("angle", 0.0, within=lim.ANGLE)),
-                         g.number("length", positive=True, within=lim.LENGTH), gname)
+        grp = _GROUP_CLASSES[t].parse(g, fields, gname)
         g.done()
         groups.append(grp)
 
@@ -620,109 +325,6 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
                      gravity=gravity)
 
 
-def parse_law(s: Section, rotary: bool) -> Law:
-    """An input's motion law against the cycle angle phi1 (angles in deg, a
-    slider's travel in mm); see ``pipeline.kernels.inputs``."""
-    kind = s.string("type", choices=LAW_TYPES)
-    unit = "deg" if rotary else "mm"
-    to_q = math.radians if rotary else float
-    q_range = lim.ANGLE if rotary else lim.OFFSET     # the input's angle (deg) or stroke (mm)
-    phase = math.radians(s.number("phase", 0.0, within=lim.ANGLE))
-    if kind == "linear":
-        if not rotary:
-            raise s.error("type", "a slider input cannot follow a linear law: its stroke would "
-                                  "grow without end; use harmonic, cycloidal or table")
-        ratio = s.number("ratio", nonzero=True, within=lim.RATIO)
-        if ratio != round(ratio):
-            raise s.error("ratio", f"must be a whole number, got {ratio:g}: the geared crank "
-                          "must be back at its start when the main crank has made its one "
-                          "revolution of the cycle (for a ratio of 1/n, make the slower crank "
-                          "the main crank and give the other the ratio n)")
-        law = Law("linear", ratio=ratio, phase=phase)
-    elif kind in ("harmonic", "cycloidal"):
-        rise = s.number("rise", 180.0)
-        if not 0.0 < rise < 360.0:
-            raise s.error("rise", f"the rise takes a part of the cycle: more than 0 and less "
-                                  f"than 360 deg, got {rise:g}")
-        law = Law(kind, phase=phase, start=to_q(s.number("start", 0.0, within=q_range)),
-                  travel=to_q(s.number("travel", nonzero=True, within=q_range)),
-                  rise=math.radians(rise))
-    else:
-        for key in ("cycle", "values"):
-            v = s.data.get(key)
-            if isinstance(v, list) and len(v) > MAX_TABLE_POINTS:
-                raise s.error(key, f"a table law has at most {MAX_TABLE_POINTS:,} points "
-                                   f"({TABLE_POINTS_WHY}), got {len(v):,}")
-        cycle = s.numbers("cycle", within=lim.ANGLE)
-        values = s.numbers("values", within=q_range)
-        if len(cycle) < 4:
-            raise s.error("cycle", f"a table needs at least 4 points for its periodic spline, "
-                                   f"got {len(cycle)}")
-        if len(values) != len(cycle):
-            raise s.error("values", f"one value ({unit}) per cycle angle: {len(cycle)} cycle "
-                                    f"angles, {len(values)} values")
-        for k in range(1, len(cycle)):
-            if not cycle[k] > cycle[k - 1]:
-                raise s.error("cycle", f"cycle angles must increase: {cycle[k]:g} deg follows "
-                                       f"{cycle[k - 1]:g} deg")
-        if cycle[-1] == cycle[0] + 360.0:
-            if values[-1] != values[0]:
-                raise s.error("values", f"the cycle closes at {cycle[-1]:g} deg with "
-                              f"{values[-1]:g} {unit}, but starts with {values[0]:g} {unit}")
-            cycle, values = cycle[:-1], values[:-1]
-        elif not cycle[-1] < cycle[0] + 360.0:
-            raise s.error("cycle", f"the table spans one cycle: the last angle "
-                                   f"({cycle[-1]:g} deg) must be less than the first + 360 deg")
-        law = Law("table", phase=phase,
-                  table=tuple((math.radians(c), to_q(v)) for c, v in zip(cycle, values)))
-    s.done()
-    return law
-
-
-def law_grid_problem(law: Law, positions: int):
-    """(field, reason) where the law is steeper than ``positions`` crank
-    positions per revolution resolve (``limits.LAW_MIN_POSITIONS``), else
-    None: a rise or a return over fewer than LAW_MIN_POSITIONS steps, a geared
-    crank turning once in fewer, a table whose shortest spline piece spans
-    fewer than TABLE_LAW_MIN_POSITIONS steps.  Between positions such a law
-    swings unseen, and the peaks refined from the positions' samples would be
-    wrong (an OK with a peak acceleration a thousand times too small)."""
-    step = 360.0 / positions                                    # deg
-    fuzz = 1.0 - 1e-9          # the angles went through radians: 8 steps is 8 steps
-    need = lim.LAW_MIN_POSITIONS
-    if law.kind in ("harmonic", "cycloidal"):
-        rise = math.degrees(law.rise)
-        short = min(rise, 360.0 - rise)
-        if short >= need * step * fuzz:
-            return None
-        which = "rise" if rise <= 180.0 else "return"
-        return "rise", (f"the {law.kind} law's {which} takes {short:g} deg of the cycle: "
-                        f"{short / step:.3g} steps of the {positions:,} positions "
-                        f"({step:g} deg each); the law needs at least {need} positions "
-                        f"within its rise and its return ({lim.LAW_POSITIONS_WHY}): give a "
-                        f"rise of {need * step:g} to {360.0 - need * step:g} deg, or "
-                        f"{math.ceil(need * 360.0 / short):,} positions")
-    if law.kind == "linear":
-        turns = abs(law.ratio)
-        if positions >= need * turns:
-            return None
-        return "ratio", (f"the geared crank turns {turns:g} times per cycle: "
-                         f"{positions / turns:.3g} of the {positions:,} positions per turn; it "
-                         f"needs at least {need} ({lim.LAW_POSITIONS_WHY}): a ratio of at "
-                         f"most {positions // need:,}, or {math.ceil(need * turns):,} positions")
-    cycle = [math.degrees(c) for c, _ in law.table]
-    gaps = [(b - a, a, b) for a, b in zip(cycle, cycle[1:] + [cycle[0] + 360.0])]
-    gap, a, b = min(gaps)
-    need = lim.TABLE_LAW_MIN_POSITIONS
-    if gap >= need * step * fuzz:
-        return None
-    return "cycle", (f"the table's shortest spline piece, {a:g} to {b:g} deg, spans "
-                     f"{gap / step:.3g} steps of the {positions:,} positions ({step:g} deg "
-                     f"each); every piece needs at least {need} ({lim.LAW_POSITIONS_WHY}): "
-                     f"space the cycle angles at least {need * step:g} deg apart, or give "
-                     f"{math.ceil(need * 360.0 / gap):,} positions")
-
-
 def _check_law_grids(path, mech, output, sweep):
     """Every input law resolved by the positions that sample it: the scene's
     dense revolution (a sweep's candidates are shown as scenes too) and a
@@ -756,29 +358,6 @@ def _check_law_grids(path, mech, output, sweep):
                                  f"{positions:,})")
 
 
-def _class3_slider(g: Section, need):
-    """The ``slider`` table of a class III group whose lead 5-7 is a block on a
-    guide: (guide point, angle rad, offset mm, guide link or None).  The table
-    replaces ``pivot_5`` and ``L57``."""
-    for key in ("pivot_5", "L57"):
-        if g.has(key):
-            raise g.error(key, "a class III group with a slider has no lead 5-7: the slider "
-                               "table (point, angle, offset) takes the place of pivot_5 and L57")
-    s = g.table("slider")
-    point = s.name("point")
-    need(s, "point", point)
-    link = s.names("link", n=2, default=None)
-    if link is not None:
-        for p in link:
-            need(s, "link", p)
-        if link[0] == link[1]:
-            raise s.error("link", "a link needs two different points")
-    angle = math.radians(s.number("angle", within=lim.ANGLE))
-    offset = s.number("offset", 0.0, within=lim.OFFSET)
-    s.done()
-    return point, angle, offset, link
-
-
 def _check_labels(sec, groups, bodies):
     """A group's name is the label of its parameters (label.key: the sweep's
     variables name them): it must differ from the labels the plan gives the
@@ -810,220 +389,6 @@ def _check_joints(sec, bodies, fixed):
             raise sec.error("bodies", f"point {p!r} joins {n} links ({', '.join(who)}"
                             + (", ground" if p in fixed else "") + "); only binary joints are "
                             "supported: split it into two points")
-
-
-# ----------------------------------------------------------------- slides against the guides
-SLIDE_ANGLE_TOL = math.radians(1e-3)   # rad: two lines closer than 0.001 deg are one
-
-
-def _deg(angle):
-    return f"{math.degrees(angle):g} deg"
-
-
-def _along_words(link, angle):
-    return f"along {link[0]}->{link[1]} + {_deg(angle)}" if link else f"at {_deg(angle)}"
-
-
-def _guides(groups, fixed):
-    """The sliding pairs the groups define: (who, point, (link, angle), host,
-    words, params).  The slider carries ``point``; the guide's direction is
-    the link a->b turned by angle, or the absolute angle (link None); host:
-    the points the guide's body carries (None: the ground); params: the
-    group's parameters (plan names) whose sum is that angle."""
-    out = []
-    for k, g in enumerate(groups):
-        kind = type(g).__name__
-        who = (f"the {kind} group {g.name!r}" if g.name
-               else f"the {kind} group mechanism.groups[{k}]")
-        label = group_label(g, k + 1)
-        n = len(out)
-
-        def host(point, link):
-            return link if link else (None if point in fixed else (point,))
-
-        def words(link, angle):
-            return _along_words(link, angle) + ("" if link else " (absolute)")
-
-        if isinstance(g, RRP):
-            out.append((who, g.B, (g.guide_link, g.guide_angle),
-                        host(g.guide_point, g.guide_link), words(g.guide_link, g.guide_angle)))
-        elif isinstance(g, RPR):
-            out.append((who, g.block, ((g.pivot, g.guide_end), 0.0), (g.pivot,),
-                        f"along {g.pivot}->{g.guide_end} (its guide, turning about {g.pivot})"))
-        elif isinstance(g, PRP):
-            for i, (gp, link, angle) in enumerate(
-                    ((g.guide1_point, g.guide1_link, g.guide1_angle),
-                     (g.guide2_point, g.guide2_link, g.guide2_angle)), start=1):
-                out.append((who, g.B, (link, angle), host(gp, link),
-                            f"on guide {i} {words(link, angle)}"))
-        elif isinstance(g, RPP):
-            out.append((who, g.B, (g.guide_link, g.guide_angle), host(g.guide_point, g.guide_link),
-                        words(g.guide_link, g.guide_angle)))
-            out.append((who, g.A, (g.guide_link, g.guide_angle + g.slot_angle), (g.B,),
-                        f"along its slot, {_deg(g.slot_angle)} from its guide "
-                        f"{words(g.guide_link, g.guide_angle)}"))
-        elif isinstance(g, SliderInput):
-            out.append((who, g.block, (None, g.guide_angle), None,
-                        words(None, g.guide_angle)))
-        elif isinstance(g, ClassIIISlider):
-            out.append((who, g.joints[2], (g.guide_link, g.guide_angle),
-                        host(g.guide_point, g.guide_link), words(g.guide_link, g.guide_angle)))
-        keys = {RRP: [("guide_angle",)], PRP: [("guide1_angle",), ("guide2_angle",)],
-                RPP: [("guide_angle",), ("guide_angle", "slot_angle")],
-                SliderInput: [("guide_angle",)],
-                ClassIIISlider: [("guide_angle",)]}.get(type(g), [()] * (len(out) - n))
-        out[n:] = [o + (tuple(f"{label}.{key}" for key in ks),) for o, ks in zip(out[n:], keys)]
-    return out
-
-
-def _same_directions(groups):
-    """{(a, b): (link, angle)}: the direction a->b is that of ``link`` turned
-    by ``angle`` (the absolute angle where link is None), modulo 180 deg, by
-    the groups' own geometry: an attached point, a coulisse without offset
-    (pivot->block along its guide), a guide's point and the point sliding on
-    it without offset (RRP, PRP, RPP), the yoke's point and the block in its
-    slot without offset."""
-    same = {}
-    for g in groups:
-        if isinstance(g, Attach):
-            same.setdefault((g.base, g.point), (g.along, g.angle))
-        elif isinstance(g, RPR) and g.offset == 0.0:
-            same.setdefault((g.pivot, g.block), ((g.pivot, g.guide_end), 0.0))
-        elif isinstance(g, RRP):
-            same.setdefault((g.guide_point, g.B), (g.guide_link, g.guide_angle))
-        elif isinstance(g, PRP):
-            for gp, link, angle, off in ((g.guide1_point, g.guide1_link, g.guide1_angle,
-                                          g.guide1_offset),
-                                         (g.guide2_point, g.guide2_link, g.guide2_angle,
-                                          g.guide2_offset)):
-                if off == 0.0:
-                    same.setdefault((gp, g.B), (link, angle))
-        elif isinstance(g, RPP):
-            if g.guide_offset == 0.0:
-                same.setdefault((g.guide_point, g.B), (g.guide_link, g.guide_angle))
-            if g.slot_offset == 0.0:
-                same.setdefault((g.B, g.A), (g.guide_link, g.guide_angle + g.slot_angle))
-        elif isinstance(g, SliderInput):
-            same.setdefault((g.guide_point, g.block), (None, g.guide_angle))
-        elif isinstance(g, ClassIIISlider) and g.guide_offset == 0.0:
-            same.setdefault((g.guide_point, g.joints[2]), (g.guide_link, g.guide_angle))
-    return same
-
-
-def _reduce(direction, same, fixed):
-    """A direction (link, angle) rewritten through ``same`` and the fixed
-    points until its link is none (absolute) or one nothing rewrites; the
-    link's ends in name order (the angle turned by 180 deg if swapped)."""
-    link, angle = direction
-    for _ in range(64):
-        if link is None:
-            return None, angle
-        a, b = link
-        if a in fixed and b in fixed:
-            dx, dy = fixed[b][0] - fixed[a][0], fixed[b][1] - fixed[a][1]
-            if dx or dy:
-                return None, angle + math.atan2(dy, dx)
-        if (a, b) in same:
-            link, turn = same[(a, b)]
-        elif (b, a) in same:
-            link, turn = same[(b, a)]
-            turn += math.pi
-        else:
-            break
-        angle += turn
-    return (tuple(link), angle) if link[0] <= link[1] else ((link[1], link[0]), angle + math.pi)
-
-
-def _carries(body, groups):
-    """The points a body is declared to carry: its joints, its centre of mass's
-    base and along link, what it turns with, and the points attached to those
-    (attach groups, a coulisse's guide end)."""
-    pts = set(body.joints) | {body.com.base}
-    pts |= set(body.com.along or ()) | set(body.turns_with or ())
-    for g in groups:
-        if isinstance(g, Attach) and g.base in pts and set(g.along or ()) <= pts:
-            pts.add(g.point)
-        elif isinstance(g, RPR) and g.pivot in pts:
-            pts.add(g.guide_end)
-    return pts
-
-
-def _check_slide(s: Section, slide: Slide, groups, bodies, fixed):
-    """Refuse a slide whose direction contradicts the guide of the group whose
-    sliding pair it is (its forces would be silently wrong).
-
-    The pair: the slider body has the group's sliding point among its joints
-    (or as its centre of mass's base), and the slide's guide is the ground for
-    a guide of fixed direction through a fixed point, else a body that carries
-    the guide's link (or its point).  Only one pair may match (or all matches
-    agree); an ambiguous slide is not checked.  Both directions are reduced
-    through the groups' geometry (``_same_directions``) and the fixed points;
-    it is an error when
-
-    * they come down to the same link (or both to absolute angles) and differ
-      by more than 0.001 deg modulo 180 deg (``.angle``);
-    * the slide follows a link that neither the slider nor its guide carries
-      (``.along``);
-    * the guide turns with a link, the slide's guide body turns (it declares
-      turns_with or a centre of mass along a link), and the slide gives a fixed
-      angle (``.along``).
-
-    Anything else (e.g. another link of the guide's own body) is not flagged:
-    its angle to the guide's link is not known before the kinematics.
-
-    Returns the slide, following the guide's angle parameters (``follows``)
-    where it is written along the guide's own link (or both are absolute):
-    a sweep that turns the guide turns the slide with it."""
-    by_name = {b.name: b for b in bodies}
-    slider = by_name[slide.slider]
-    guide = by_name[slide.guide] if slide.guide else None
-    guide_pts = _carries(guide, groups) if guide else None
-    same = _same_directions(groups)
-    matches = []
-    for who, point, direction, host, words, params in _guides(groups, fixed):
-        if point not in slider.joints and point != slider.com.base:
-            continue
-        if (host is None) != (guide is None) or (host and not set(host) <= guide_pts):
-            continue
-        matches.append((who, point, _reduce(direction, same, fixed), words, direction, params))
-    if not matches:
-        return slide
-    (who, point, (glink, gangle), words, direction, params) = matches[0]
-    for m in matches[1:]:
-        if m[2][0] != glink or abs(math.sin(m[2][1] - gangle)) > math.sin(SLIDE_ANGLE_TOL):
-            return slide    # ambiguous: the slider carries the sliding point of two pairs
-    slink, sangle = _reduce((slide.along, slide.angle), same, fixed)
-    says = _along_words(slide.along, slide.angle) if slide.along else _deg(slide.angle)
-    guide_words = f"{who} guides {point} {words}"
-    if slink == glink:
-        if abs(math.sin(sangle - gangle)) > math.sin(SLIDE_ANGLE_TOL):
-            raise s.error("angle", f"{guide_words}; this slide says {says} (lines "
-                                   f"{_fold_deg(sangle - gangle):.4g} deg apart: the slide's "
-                                   "normal force would be taken across the wrong line)")
-        if params and slide.along == direction[0]:
-            # written along the guide's own link (or both absolute): the slide turns with
-            # the guide's parameters when a sweep varies them
-            return replace(slide, follows=params, follows_declared=direction[1])
-        return slide
-    if slide.along and not (set(slide.along) <= fixed.keys()):
-        pts = _carries(slider, groups) | (guide_pts or set(fixed))
-        if not set(slide.along) <= pts:
-            a, b = slide.along
-            raise s.error("along", f"this slide follows {a}->{b}, a link of neither the slider "
-                                   f"{slide.slider!r} nor its guide "
-                                   f"{slide.guide or 'ground'!r}; {guide_words}")
-    if slink is None and glink is not None and guide is not None and \
-            (guide.turns_with or guide.com.along):
-        raise s.error("along", f"{guide_words}, turning with its body {guide.name!r}; this "
-                               f"slide gives the fixed direction {_deg(slide.angle)} (give "
-                               "along = [a, b], a link of the guide's body, and the angle "
-                               "from it)")
-    return slide
-
-
-def _fold_deg(angle):
-    """The angle between two lines that differ by ``angle``, in [0, 90] deg."""
-    return math.degrees(math.atan2(abs(math.sin(angle)), abs(math.cos(angle))))
 
 
 def parse_link(s: Section, key, label, known):
