@@ -14,6 +14,7 @@ import numpy as np
 
 from .errors import ResultsError
 from .files import refuse_link, replacing
+from .kernels import sweep as ks
 from .sweep_spec import SweepSpec
 
 JOURNAL_VERSION = 3        # 2: chunks carry the draws rejected before solving; 3: 18 metric columns
@@ -98,8 +99,10 @@ def manifest_for(study, spec: SweepSpec):
     return {"journal_version": JOURNAL_VERSION, "study_sha256":
             hashlib.sha256(study.text.encode()).hexdigest(), "study_file": str(study.path),
             "candidates": spec.candidates, "chunk_size": spec.chunk_size, "seed": spec.seed,
-            "sampler": spec.sampler, "positions": spec.positions, "store": spec.store}
+            "sampler": spec.sampler, "positions": spec.positions, "store": spec.store,
+            "metric_columns": ks.N_METRICS}
 
 
-# what a journal written before a manifest key existed meant by it
-MANIFEST_DEFAULTS = {"store": "all"}
+# what a journal written before a manifest key existed meant by it (18 metric
+# columns: journal version 3's)
+MANIFEST_DEFAULTS = {"store": "all", "metric_columns": 18}

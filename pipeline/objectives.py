@@ -10,40 +10,13 @@ import numpy as np
 
 from .kernels import config as kc
 from .kernels import sweep as ks
-from .sweep_spec import METRICS, SweepSpec
+from .sweep_spec import SweepSpec
 
-# kernel metric column of each stored metric, and a conversion to its units
-COLUMN = {
-    "dwell_error": (ks.M_DWELL, 1.0),
-    "stroke": (ks.M_STROKE, 1.0),
-    "singularity_margin": (ks.M_MARGIN, 1.0),
-    "dwell_start": (ks.M_DWELL_START, 180.0 / math.pi),
-    "newton_iterations": (ks.M_NEWTON_MEAN, 1.0),
-    "peak_reaction": (ks.M_PEAK_R, 1.0),
-    "peak_joint": (ks.M_PEAK_JOINT, 1.0),
-    "peak_phi": (ks.M_PEAK_PHI, 180.0 / math.pi),
-    "peak_M_bal": (ks.M_PEAK_MBAL, 1.0),
-    "peak_acceleration": (ks.M_PEAK_ACC, 1.0),
-    "peak_eps": (ks.M_PEAK_EPS, 1.0),
-    "min_transmission_angle": (ks.M_MIN_TRANS, 180.0 / math.pi),
-    "law_error": (ks.M_LAW_RMS, 1.0),
-    "law_error_max": (ks.M_LAW_MAX, 1.0),
-    "law_shift": (ks.M_LAW_SHIFT, 180.0 / math.pi),
-}
-# metrics derived from a column: (column, factor, offset)
-DERIVED = {
-    "transmission_deviation": (ks.M_MIN_TRANS, -180.0 / math.pi, 90.0),
-}
-
-
-def metric_values(metrics, name):
-    """The stored values (in the metric's units) of metric ``name`` from the
-    kernels' metric rows ``metrics`` (n, N_METRICS)."""
-    if name in DERIVED:
-        col, factor, offset = DERIVED[name]
-        return metrics[:, col] * factor + offset
-    col, factor = COLUMN[name]
-    return metrics[:, col] * factor
+# a metric's column and units: the catalogue (pipeline.metrics); COLUMN and DERIVED
+# are its earlier forms, kept for one release
+from .metrics import BY_NAME, METRICS, metric_values  # noqa: E402,F401
+COLUMN = {m.name: (m.column, m.factor) for m in BY_NAME.values() if not m.offset}
+DERIVED = {m.name: (m.column, m.factor, m.offset) for m in BY_NAME.values() if m.offset}
 
 
 def _bound_columns(spec: SweepSpec):

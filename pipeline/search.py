@@ -59,11 +59,12 @@ from pymoo.core.repair import Repair
 
 from .files import RunLock
 from .kernels import config as kc
+from .kernels import sweep as ks
 from .pareto import crowding_distance, nondominated_rank
 from .search_spec import METHODS, SearchSpec
 from .storage import (COMPRESSION, ResultsError, attach, attr_text, coordinate, hdf5_writing,
                       open_results)
-from .journal import Journal
+from .journal import MANIFEST_DEFAULTS, Journal
 from .objectives import bounded_finite, constraint_names, constraints, metric_values
 from .sweep import (SweepInterrupted, SweepOutcome, SweepProblem, _connect, aside_or_done,
                     build_problem, check_existing, compile_notice, finish_run,
@@ -430,7 +431,8 @@ def manifest_for(study, search: SearchSpec, x0, seeded_from, n_seeded):
             "study_file": str(study.path), "method": search.method,
             "population": search.population, "offspring": search.offspring,
             "generations": search.generations, "seed": search.seed,
-            "positions": study.sweep.positions, "pymoo": pymoo.__version__,
+            "positions": study.sweep.positions, "metric_columns": ks.N_METRICS,
+            "pymoo": pymoo.__version__,
             "first_generation_sha256": hashlib.sha256(x0.tobytes()).hexdigest(),
             "seeded_from": str(seeded_from) if seeded_from else "", "seeded": n_seeded}
 
@@ -458,7 +460,8 @@ def _check_existing(out: Path, journal: Journal, study, want, resume, overwrite)
         # resumed without --from: the first generation is the journal's
         skip = {"study_file", "seeded_from"} | (set() if want.get("seeded_from")
                                                  else {"first_generation_sha256", "seeded"})
-        return [k for k in want if k not in skip and man.get(k) != want[k]]
+        return [k for k in want if k not in skip
+                and man.get(k, MANIFEST_DEFAULTS.get(k)) != want[k]]
 
     check_existing(out, journal, resume, overwrite, journal_diff=journal_diff,
                    same_results=lambda f: (f.attrs.get("study_toml") == study.text and

@@ -30,47 +30,8 @@ STORES = ("all", "feasible")         # [sweep] store, --store
 # draw); any other chunk starts a fresh engine, so the points are the same
 _SOBOL: dict = {}
 _SOBOL_LOCK = threading.Lock()
-METRICS = {
-    # name: (units, long name, stage that computes it: "positions" (stage 1), "law"
-    # (stage 1, with [output.motion_law]), "kinematics", "transmission", "forces"
-    # (stage 2, candidates that meet the stroke and margin constraints))
-    "dwell_error": ("1", "dwell error: best window range / revolution range", "positions"),
-    "stroke": ("mm", "stroke of the working point: radius x rocker swing", "positions"),
-    "singularity_margin": ("1", "min |det J| / (4 L23 L46 L57 max(L34, L35)) over the revolution "
-                           "(a class III group with a slider: / (L23 L46 max(L34, L35)))",
-                           "positions"),
-    "dwell_start": ("deg", "crank angle phi1 where the best dwell window starts", "positions"),
-    "newton_iterations": ("1", "mean Newton iterations per position", "positions"),
-    "peak_reaction": ("N", "largest joint reaction over all joints and positions", "forces"),
-    "peak_joint": ("1", "index of the joint with the peak reaction", "forces"),
-    "peak_phi": ("deg", "crank angle phi1 of the peak reaction", "forces"),
-    "peak_M_bal": ("N*m", "largest |balancing moment| over the revolution", "forces"),
-    "peak_acceleration": ("m/s^2", "largest |acceleration| of the working point at the "
-                          "operating speed, the largest of the grid's positions (not refined "
-                          "between them: within O(step^2) of the scene's refined peak)",
-                          "kinematics"),
-    "peak_eps": ("1/s^2", "largest |angular acceleration| of the output rocker at the operating "
-                 "speed, the largest of the grid's positions (not refined between them)",
-                 "kinematics"),
-    "min_transmission_angle": ("deg", "smallest transmission angle (RRR dyads at the middle "
-                               "joint, class III leads, the slider dyads' force against the "
-                               "driven member's motion) over the revolution, the smallest of the "
-                               "grid's positions (not refined between them)", "transmission"),
-    "transmission_deviation": ("deg", "90 deg - min_transmission_angle: the largest deviation "
-                               "of a transmission angle from 90 deg (an objective to minimise)",
-                               "transmission"),
-    "law_error": ("1", "RMS deviation of the normalised rocker angle (0 at the dwell, 1 at the "
-                  "full swing) from the motion law over the revolution", "law"),
-    "law_error_max": ("1", "largest deviation of the normalised rocker angle from the motion "
-                      "law over the revolution", "law"),
-    "law_shift": ("deg", "cycle-angle shift of the motion law that fits best (align = best; 0 "
-                  "for align = fixed): the mounting phase phiM0 - rot x law_shift puts the "
-                  "design on the law as given", "law"),
-}
-DEFAULT_METRICS = ("dwell_error", "peak_reaction", "stroke", "singularity_margin",
-                   "dwell_start", "peak_joint", "peak_phi", "peak_M_bal", "newton_iterations")
-# larger is better: not an objective (all are minimised); what to minimise instead
-NOT_OBJECTIVES = {"min_transmission_angle": "transmission_deviation"}
+# the metrics, their units, stages and senses: one catalogue (pipeline.metrics)
+from .metrics import DEFAULT_METRICS, METRICS, NOT_OBJECTIVES  # noqa: E402,F401
 NOT_BOUNDED = {"peak_joint": "an index, not a quantity"}
 
 
