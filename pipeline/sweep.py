@@ -30,7 +30,8 @@ from .kernels import config as kc
 from .kernels import sweep as ks
 from .limits import CHUNK_WHY, MAX_CHUNK
 from .storage import FORMAT, ResultsError, hdf5_writing
-from .sweep_spec import SweepSpec, draw_checked, parameter_rows
+from .sampling import draw_checked
+from .sweep_spec import SweepSpec, parameter_rows
 # the journal, the objectives and the results file have modules of their own; their
 # names stay importable from here (search, browse, report and the tests use them)
 from .journal import JOURNAL_VERSION, MANIFEST_DEFAULTS, Journal, manifest_for  # noqa: F401

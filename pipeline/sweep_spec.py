@@ -10,26 +10,25 @@ count, the engine or the order in which chunks run.
 from __future__ import annotations
 
 import math
-import threading
-import warnings
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.stats import qmc
 
 from . import limits as lim
 from .limits import (CANDIDATES_WHY, CHUNK_WHY, MAX_CANDIDATES, MAX_CHUNK, MAX_NAME_LENGTH,
                      MAX_POSITIONS, POSITIONS_WHY)
 
+if TYPE_CHECKING:      # the type apply_design returns; model imports nothing from here
+    from .model import Mechanism
+
 SAMPLERS = ("uniform", "lhs", "sobol")
 DEVICES = ("cpu", "gpu", "auto")     # [sweep] device, --device
 STORES = ("all", "feasible")         # [sweep] store, --store
 
-# the Sobol engine of the last chunk drawn, per (seed, dimension): the next chunk
-# continues it (scrambling a new engine and fast-forwarding costs more than the
-# draw); any other chunk starts a fresh engine, so the points are the same
-_SOBOL: dict = {}
-_SOBOL_LOCK = threading.Lock()
+# drawing a chunk's candidates has a module of its own (pipeline.sampling); its
+# names stay importable from here for one release
+from .sampling import REDRAW_ROUNDS, draw_candidates, draw_checked, draw_unit  # noqa: E402,F401
 # the metrics, their units, stages and senses: one catalogue (pipeline.metrics)
 from .metrics import DEFAULT_METRICS, METRICS, NOT_OBJECTIVES  # noqa: E402,F401
 NOT_BOUNDED = {"peak_joint": "an index, not a quantity"}
@@ -383,72 +382,6 @@ def _parse_constraints(cons, mech, output):
                                                    "{ min = ... } says the same")
     cons.done()
     return tuple(stroke), margin_min, tuple(bounds)
-
-
-def draw_unit(spec: SweepSpec, chunk: int) -> np.ndarray:
-    """Chunk ``chunk``'s candidates as points of the unit cube (n, n_vars)."""
-    lo, hi = spec.chunk_bounds(chunk)
-    d = len(spec.variables)
-    if spec.sampler == "sobol":
-        with _SOBOL_LOCK:
-            key = (spec.seed, d)
-            s, at = _SOBOL.get(key, (None, -1))
-            if at != lo:      # not the continuation of the last chunk: a fresh engine
-                s = qmc.Sobol(d, scramble=True, seed=np.random.default_rng(spec.seed))
-                if lo:
-                    s.fast_forward(lo)
-            with warnings.catch_warnings():  # chunks of one sequence need not be powers of 2
-                warnings.simplefilter("ignore", UserWarning)
-                u = s.random(hi - lo)
-            _SOBOL[key] = (s, hi)
-            return u
-    child = np.random.SeedSequence(spec.seed).spawn(spec.n_chunks)[chunk]
-    rng = np.random.default_rng(child)
-    if spec.sampler == "lhs":
-        return qmc.LatinHypercube(d, seed=rng).random(hi - lo)
-    return rng.random((hi - lo, d))
-
-
-# rejection rounds per chunk: with the acceptance >= 1 % that parse_sweep checks, a draw
-# is still broken after 5,000 rounds with probability 0.99^5000 = 1.5e-22
-REDRAW_ROUNDS = 5000
-
-
-def draw_candidates(spec: SweepSpec, chunk: int) -> np.ndarray:
-    """Design variables of chunk ``chunk`` (n, n_vars) in their units."""
-    return draw_checked(spec, chunk)[0]
-
-
-def draw_checked(spec: SweepSpec, chunk: int):
-    """(x, rejected): chunk ``chunk``'s design variables, every row a buildable
-    design (``spec.triangles``), and the number of draws rejected per triangle.
-
-    Rows that break a triangle are redrawn uniformly in the bounds from a
-    stream of their own, seeded by (seed, chunk): rejection sampling, so the
-    accepted designs are distributed as the sampler's over the buildable part
-    of the box, and the same on any number of threads or workers."""
-    u = draw_unit(spec, chunk)
-    low = np.array([v.low for v in spec.variables])
-    high = np.array([v.high for v in spec.variables])
-    x = low + u * (high - low)
-    rejected = np.zeros(len(spec.triangles), np.int64)
-    if not spec.triangles:
-        return x, rejected
-    rng = None
-    for _ in range(REDRAW_ROUNDS):
-        bad = np.zeros(x.shape[0], bool)
-        for k, t in enumerate(spec.triangles):
-            b = t.broken(x) & ~bad       # counted once, for the first triangle it breaks
-            rejected[k] += int(b.sum())
-            bad |= b
-        if not bad.any():
-            return x, rejected
-        if rng is None:
-            rng = np.random.default_rng([spec.seed, chunk, 0x7EDA])
-        x[bad] = low + rng.random((int(bad.sum()), len(low))) * (high - low)
-    raise ValueError(f"chunk {chunk}: designs still break a triangle inequality after "
-                     f"{REDRAW_ROUNDS} redraws; narrow the bounds of "
-                     + ", ".join(n for t in spec.triangles for n in t.names))
 
 
 def geometry_problems(plan, par) -> list:
