@@ -116,7 +116,7 @@ def cmd_show(a):
         raise ValueError(f"{a.results} is a sweep: say which design to show with --candidate "
                          "ID (an index, 'knee' or 'reference')")
     else:
-        from .browse import show
+        from .show import show
         info = show(a.results, a.candidate, a.output)
     if not a.quiet:
         _print(info, a.format)

@@ -13,7 +13,6 @@ from __future__ import annotations
 import base64
 import datetime as _dt
 import html
-import io
 import logging
 import math
 from pathlib import Path
@@ -22,145 +21,19 @@ import numpy as np
 
 from .version import __version__
 from .analysis import analyze, has_analysis, read_analysis, read_sweep
-from .browse import design_table, ranking, rerun_candidate
+from .candidate import rerun_candidate
 from .files import write_text
+from .ranking import design_table, ranking
+from .report_assets import CSS, SCRIPT
+from .report_figures import (_letters, _png, design_figure, importance_figure, pareto_figure,
+                             search_figure)
 from .storage import attr_text, open_results
 from .sweep_file import status_counts
+# the page's assets and pictures have modules of their own (report_assets,
+# report_figures); their names stay importable from here for one release
+from .report_figures import MAX_FRONT_POINTS, MAX_GREY  # noqa: F401
 
 log = logging.getLogger("pipeline")
-
-MAX_GREY = 60_000       # infeasible points drawn in the Pareto plot (seeded subsample)
-MAX_FRONT_POINTS = 200_000
-
-CSS = """
-body { font-family: -apple-system, "Segoe UI", Helvetica, Arial, sans-serif; margin: 0 auto;
-       max-width: 1180px; padding: 1.2em 2em 3em; color: #222; line-height: 1.4; }
-h1 { font-size: 1.55em; margin-bottom: 0.1em; }
-h2 { font-size: 1.2em; border-bottom: 1px solid #ccc; padding-bottom: 0.2em; margin-top: 1.8em; }
-.sub { color: #555; margin-top: 0; }
-table { border-collapse: collapse; font-size: 0.85em; margin: 0.5em 0; }
-th, td { padding: 0.2em 0.6em; text-align: right; border-bottom: 1px solid #e4e4e4; }
-th { background: #f3f3f3; }
-td.l, th.l { text-align: left; white-space: nowrap; }
-.wide { overflow-x: auto; max-width: 100%; }
-img { max-width: 100%; height: auto; }
-.cards { display: flex; flex-wrap: wrap; gap: 14px; }
-.motion img { max-width: 48%; align-self: flex-start; }
-.card { border: 1px solid #ddd; border-radius: 6px; padding: 8px; width: 350px; }
-.card h3 { font-size: 0.95em; margin: 0.1em 0 0.3em; }
-.card table { font-size: 0.78em; width: 100%; }
-.kv td:first-child { text-align: left; color: #555; }
-pre { background: #f7f7f7; border: 1px solid #ddd; padding: 0.8em; font-size: 0.8em;
-      overflow-x: auto; }
-.note { color: #555; font-size: 0.9em; }
-tr.knee td { background: #fff4d6; }
-table.sortable th { cursor: pointer; }
-table.sortable th:hover { background: #e6eef8; }
-#explorer { display: flex; flex-wrap: wrap; gap: 16px; align-items: flex-start; }
-#explorer svg { border: 1px solid #ddd; background: #fff; }
-#explorer circle.pt { fill: #9ab; fill-opacity: 0.55; cursor: pointer; }
-#explorer circle.f1 { fill: #c22; fill-opacity: 0.9; }
-#explorer circle.sel { stroke: #000; stroke-width: 2; }
-#tip { position: absolute; pointer-events: none; background: #fffbe8; border: 1px solid #cc9;
-       padding: 3px 6px; font-size: 0.8em; display: none; }
-#design-panel { min-width: 320px; max-width: 520px; font-size: 0.9em; }
-"""
-
-SCRIPT = """
-(function () {
-  // sortable tables: a click on a header sorts by that column (again: reversed)
-  function cellValue(td) {
-    var t = td.textContent.trim(), v = parseFloat(t);
-    return isNaN(v) ? t : v;
-  }
-  Array.prototype.forEach.call(document.querySelectorAll('table.sortable'), function (table) {
-    Array.prototype.forEach.call(table.tHead.rows[0].cells, function (th, col) {
-      th.addEventListener('click', function () {
-        var body = table.tBodies[0], rows = Array.prototype.slice.call(body.rows);
-        var asc = th.dataset.order !== 'asc';
-        rows.sort(function (a, b) {
-          var x = cellValue(a.cells[col]), y = cellValue(b.cells[col]);
-          return (x < y ? -1 : x > y ? 1 : 0) * (asc ? 1 : -1);
-        });
-        rows.forEach(function (r) { body.appendChild(r); });
-        th.dataset.order = asc ? 'asc' : 'desc';
-      });
-    });
-  });
-  // the front explorer: hover a point for its numbers, click it for the design
-  var data = document.getElementById('explorer-data');
-  if (data) {
-    var d = JSON.parse(data.textContent), tip = document.getElementById('tip');
-    var panel = document.getElementById('design-panel');
-    function label(k) {
-      var p = d.points[k];
-      return '#' + p.i + ' (front ' + (p.f || '-') + '): ' + d.objectives.map(function (o, j) {
-        return o + ' ' + p.m[j].toPrecision(4) + (d.objective_units[j] && d.objective_units[j] !== '1' ? ' ' + d.objective_units[j] : '');
-      }).join(', ');
-    }
-    function el(tag, text, cls) {   // text only: names and units never become markup
-      var e = document.createElement(tag);
-      if (text !== undefined) { e.textContent = text; }
-      if (cls) { e.className = cls; }
-      return e;
-    }
-    function show(k, circle) {
-      var p = d.points[k], table = el('table', undefined, 'kv');
-      function row(label, value) {
-        var tr = el('tr'); tr.appendChild(el('td', label)); tr.appendChild(el('td', value));
-        table.appendChild(tr);
-      }
-      d.objectives.forEach(function (o, j) {
-        row(o + ' [' + d.objective_units[j] + ']', p.m[j].toPrecision(5));
-      });
-      d.names.forEach(function (n, j) { row(n + ' [' + d.units[j] + ']', p.v[j].toPrecision(5)); });
-      var pic = d.drawings[String(p.i)];
-      panel.textContent = '';
-      panel.appendChild(el('h3', 'Candidate ' + p.i + (p.f ? ', front ' + p.f : '')));
-      if (pic) {   // the embedded drawing and curves of a front-1 design
-        var img = el('img');
-        img.alt = 'design ' + p.i;
-        img.setAttribute('src', pic);
-        panel.appendChild(img);
-      } else {
-        panel.appendChild(el('p', 'Its drawing and curves: pipeline show ' + d.file +
-                                  ' --candidate ' + p.i, 'note'));
-      }
-      panel.appendChild(table);
-      panel.dataset.candidate = String(p.i);
-      Array.prototype.forEach.call(document.querySelectorAll('#explorer circle.sel'), function (c) { c.classList.remove('sel'); });
-      circle.classList.add('sel');
-    }
-    Array.prototype.forEach.call(document.querySelectorAll('#explorer circle.pt'), function (c) {
-      var k = Number(c.dataset.k);
-      c.addEventListener('mouseenter', function (e) {
-        tip.textContent = label(k); tip.style.display = 'block';
-        tip.style.left = (e.pageX + 12) + 'px'; tip.style.top = (e.pageY + 12) + 'px';
-      });
-      c.addEventListener('mouseleave', function () { tip.style.display = 'none'; });
-      c.addEventListener('click', function () { show(k, c); });
-    });
-  }
-  window.addEventListener('error', function () {
-    document.body.dataset.jsErrors = String(Number(document.body.dataset.jsErrors || 0) + 1);
-  });
-  window.addEventListener('load', function () {
-    var imgs = Array.prototype.slice.call(document.images);
-    var ok = imgs.filter(function (i) { return i.complete && i.naturalWidth > 0; }).length;
-    document.body.dataset.imagesTotal = String(imgs.length);
-    document.body.dataset.imagesOk = String(ok);
-    document.body.dataset.imagesLoaded = (imgs.length > 0 && ok === imgs.length) ? 'true' : 'false';
-  });
-})();
-"""
-
-
-def _png(fig, dpi=100) -> str:
-    import matplotlib.pyplot as plt
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
-    plt.close(fig)
-    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
 
 
 def _img(uri, alt):
@@ -181,108 +54,6 @@ def _fmt(v, digits=4):
     return f"{v:.{digits}g}"
 
 
-def _letters(k):
-    return [chr(ord("A") + i) if i < 26 else f"R{i}" for i in range(k)]
-
-
-# ----------------------------------------------------------------- figures
-def _plain_fmt(v, _pos=None):
-    return f"{v:g}"
-
-
-def _plain_2_5_fmt(v, _pos=None):
-    """Minor log ticks: label only 2 and 5 times a power of ten."""
-    if not v > 0:
-        return ""
-    lead = v / 10 ** math.floor(math.log10(v) + 1e-12)
-    return f"{v:g}" if round(lead) in (2, 5) and abs(lead - round(lead)) < 1e-6 else ""
-
-
-def _formatters():
-    from matplotlib.ticker import FuncFormatter
-    return FuncFormatter(_plain_fmt), FuncFormatter(_plain_2_5_fmt)
-
-
-def pareto_figure(data, ana) -> str:
-    import matplotlib.colors
-    import matplotlib.pyplot as plt
-    F, rank = data.F, ana.rank
-    o = data.objectives
-    _plain, _plain_2_5 = _formatters()
-    fig, ax = plt.subplots(figsize=(10.5, 6.2), layout="constrained")
-    finite = np.isfinite(F[:, :2]).all(axis=1) if F.shape[1] >= 2 else np.zeros(len(F), bool)
-    if F.shape[1] < 2:
-        ax.text(0.5, 0.5, "one objective: no Pareto plot", ha="center", transform=ax.transAxes)
-        return _png(fig)
-    x, y = F[:, 0], F[:, 1]
-    logx = bool((x[finite] > 0).all()) and finite.any()
-    logy = bool((y[finite] > 0).all()) and finite.any()
-    rng = np.random.default_rng(data.seed)
-    grey = np.flatnonzero(finite & (rank == 0))
-    if grey.size > MAX_GREY:
-        grey = np.sort(rng.choice(grey, MAX_GREY, replace=False))
-    if grey.size:
-        ax.scatter(x[grey], y[grey], s=3, c="0.75", lw=0, rasterized=True,
-                   label=f"infeasible ({int((finite & (rank == 0)).sum())} with both "
-                         "objectives)")
-    feas = np.flatnonzero(rank > 1)
-    if feas.size > MAX_FRONT_POINTS:
-        feas = np.sort(rng.choice(feas, MAX_FRONT_POINTS, replace=False))
-    nf = int(rank.max(initial=0))
-    if feas.size:
-        sc = ax.scatter(x[feas], y[feas], s=4, c=rank[feas], cmap="viridis_r", lw=0,
-                        norm=matplotlib.colors.LogNorm(vmin=2, vmax=max(nf, 3)),
-                        rasterized=True, alpha=0.8, label="feasible, fronts 2 ...")
-        cb = fig.colorbar(sc, ax=ax, pad=0.01)
-        cb.set_label("Pareto front (rank)")
-        ticks = [t for t in (2, 3, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000)
-                 if t <= max(nf, 3)]
-        cb.set_ticks(ticks, labels=[str(t) for t in ticks])
-        cb.ax.minorticks_off()
-    f1 = ana.front1
-    if f1.size:
-        ax.plot(x[f1], y[f1], "-", color="C3", lw=1.2, zorder=4)
-        ax.scatter(x[f1], y[f1], s=28, color="C3", ec="k", lw=0.5, zorder=5,
-                   label=f"front 1 ({f1.size} designs)")
-    reps = ana.representatives
-    for lab, i in zip(_letters(len(reps)), reps):
-        ax.annotate(lab, (x[i], y[i]), textcoords="offset points", xytext=(6, 6), fontsize=10,
-                    weight="bold", color="C3", zorder=7)
-    if ana.knee >= 0:
-        ax.scatter([x[ana.knee]], [y[ana.knee]], s=140, marker="D", facecolor="none",
-                   ec="k", lw=1.6, zorder=6, label=f"knee (#{data.id(ana.knee)})")
-    ro = np.asarray(ana.reference.get("objectives", [np.nan, np.nan]), float)
-    if ro.size >= 2 and np.isfinite(ro[:2]).all():
-        ax.scatter([ro[0]], [ro[1]], s=260, marker="*", color="gold", ec="k", lw=1.0, zorder=6,
-                   label=f"reference design (front {int(ana.reference['rank'])})")
-    for on, axis, setter in ((logx, ax.xaxis, ax.set_xscale), (logy, ax.yaxis, ax.set_yscale)):
-        if on:
-            setter("log")
-            axis.set_major_formatter(_plain)
-            axis.set_minor_formatter(_plain_2_5)
-    ax.set_xlabel(f"{o[0]} [{data.objective_units[0]}] (minimised)")
-    ax.set_ylabel(f"{o[1]} [{data.objective_units[1]}] (minimised)")
-    ax.grid(alpha=0.3, which="both")
-    if ax.get_legend_handles_labels()[0]:     # nothing to label when nothing is feasible
-        ax.legend(fontsize=8, loc="upper right", markerscale=0.7, framealpha=0.9)
-    ax.set_title(f"{int(data.feasible.sum())} feasible of {data.n} candidates in {nf} fronts",
-                 fontsize=10)
-    return _png(fig)
-
-
-def search_figure(h) -> str:
-    """Hypervolume of the feasible front against the evaluations of an
-    adaptive search (``/search`` of the file)."""
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7.5, 3.6), layout="constrained")
-    ax.plot(h["evaluations"], h["hypervolume"], "-", color="C0", lw=1.5)
-    ax.set_xlabel("evaluations")
-    ax.set_ylabel("hypervolume of the feasible front")
-    ax.grid(alpha=0.3)
-    ax.set_title(f"{h['method']}: {len(h['evaluations'])} generations", fontsize=10)
-    return _png(fig)
-
-
 def _search_history(f):
     """The per-generation history of a search file (None for a sweep)."""
     if "search" not in f:
@@ -291,45 +62,6 @@ def _search_history(f):
     return {"method": str(attr_text(g.attrs.get("method", "?"))),
             "normalisation": str(attr_text(g.attrs.get("normalisation", ""))),
             "evaluations": g["evaluations"][()], "hypervolume": g["hypervolume"][()]}
-
-
-def importance_figure(data, ana) -> str:
-    import matplotlib.pyplot as plt
-    objs = list(data.objectives)
-    fig, axes = plt.subplots(1, len(objs), figsize=(5.2 * len(objs), 3.8), layout="constrained",
-                             squeeze=False)
-    names = data.names
-    ypos = np.arange(len(names))
-    for ax, o in zip(axes[0], objs):
-        m = ana.models.get(o, {})
-        if not m.get("fitted"):
-            ax.text(0.5, 0.5, f"no model:\n{attr_text(m.get('reason', 'not fitted'))}", ha="center",
-                    va="center", transform=ax.transAxes, wrap=True, fontsize=9)
-            ax.set_axis_off()
-            ax.set_title(o, fontsize=10)
-            continue
-        mean, std = np.asarray(m["mean"]), np.asarray(m["std"])
-        ax.barh(ypos, mean, xerr=std, color="C0", alpha=0.85, capsize=2)
-        ax.set_yticks(ypos, names)
-        ax.invert_yaxis()
-        ax.axvline(0, color="k", lw=0.6)
-        ax.set_xlabel("drop of held-out R$^2$ when shuffled")
-        ax.grid(alpha=0.3, axis="x")
-        ax.set_title(f"{o}: held-out R$^2$ = {float(m['r2_test']):.3f}\n"
-                     f"({attr_text(m.get('target', ''))} target, {int(m.get('n_train', 0))} train / "
-                     f"{int(m.get('n_test', 0))} test)", fontsize=10)
-    return _png(fig)
-
-
-def design_figure(run) -> str:
-    import matplotlib.pyplot as plt
-    from .plots import draw_positions
-    fig, ax = plt.subplots(figsize=(3.6, 4.4), layout="constrained")
-    draw_positions(ax, run.scene, run.table, highlight=0, key="horizontal", joint_key=False)
-    ax.set_xlabel("x [mm]", fontsize=8)
-    ax.set_ylabel("y [mm]", fontsize=8)
-    ax.tick_params(labelsize=7)
-    return _png(fig, dpi=90)
 
 
 ANIMATION_FRAMES = 60       # the animated design: one revolution in 3 s (about 0.5 MB)
@@ -343,7 +75,7 @@ def motion_html(path, ana) -> str:
     ([output.motion_law]), else the OV-7 cycle of DOMAIN.md section 9 that the
     synthesis is for."""
     from .animate import gif_bytes, motion_of
-    from .browse import OV7_PHASES
+    from .show import OV7_PHASES
     from .plots import cyclogram_figure, stated_cycle
     if ana.knee >= 0:
         cid, why = int(ana.knee), "the knee of front 1"
@@ -388,7 +120,7 @@ def explorer_html(path, data, ana) -> str:
     curves.  Plain SVG and a few lines of script: one offline file."""
     import json
 
-    from .browse import candidate_figure
+    from .show import candidate_figure
     feas = np.nonzero(data.feasible & np.isfinite(data.F).all(axis=1))[0]
     if data.F.shape[1] < 2:
         return '<p class="note">The explorer plots two objectives; this study has one.</p>'

@@ -3,24 +3,9 @@
 driving the sweep's evaluator, one generation per batch through the compiled
 kernels (``SweepProblem.evaluate_rows``: all cores, or split into Dask tasks).
 
-The problem is the [sweep] section's: its design variables and bounds, its
-objectives, its constraints g <= 0 and its feasibility rule.  pymoo sees
-
-* F: the objectives in their stored units; where one is NaN (a failed
-  candidate, or forces skipped for a candidate already infeasible) the finite
-  stand-in ``FAILED_OBJECTIVE``, which only infeasible candidates carry;
-* G: the stored constraints (0 where a failed candidate has none) and one more,
-  ``evaluable``: 0 for a candidate whose status is OK (and whose objectives are
-  finite if it meets its constraints), ``FAILED_VIOLATION`` otherwise.  A
-  failed status is thus a violated constraint, worse than any violation of a
-  real one, and pymoo's feasibility (CV = 0) is exactly the stored ``feasible``.
-
-Triangle inequalities of the variables (``sweep_spec.Triangle``) are met by a
-**repair**, not a constraint: they are known before solving, so a proposed
-design that breaks one is moved along the straight line towards a buildable
-centre of the bounds until it is buildable (just inside the boundary; the
-buildable part of the box is convex, so the line crosses its boundary once).
-No evaluation is spent on a design that could only be BAD_GEOMETRY.  The first
+The problem pymoo sees (the objectives and constraints as F and G, the repair
+of triangle inequalities, the front's hypervolume) is search_problem.py's; the
+results file's layout and reading it back are search_file.py's.  The first
 generation is the project's own Sobol draws (impossible triangles redrawn, as
 the sweep does), after the front of an earlier results file if one is given
 (``--from``): explore with the Monte-Carlo sweep, then refine.
@@ -49,160 +34,35 @@ import io
 import logging
 import math
 import time
-from dataclasses import dataclass, fields, replace
+from dataclasses import replace
 from pathlib import Path
 
-import h5py
 import numpy as np
-from pymoo.core.problem import Problem
-from pymoo.core.repair import Repair
 
 from .files import RunLock
-from .kernels import config as kc
 from .kernels import sweep as ks
 from .pareto import crowding_distance, nondominated_rank
+from .search_file import SearchFile, search_summary
+from .search_problem import FrontTracker, SweepBlackBox, TriangleRepair, _broken, hv_scale
 from .search_spec import METHODS, SearchSpec
-from .storage import (COMPRESSION, ResultsError, attach, attr_text, coordinate, hdf5_writing,
-                      open_results)
+from .storage import ResultsError, attr_text, hdf5_writing, open_results
 from .journal import MANIFEST_DEFAULTS, Journal
-from .objectives import bounded_finite, constraint_names, constraints, metric_values
 from .sweep import (SweepInterrupted, SweepOutcome, SweepProblem, _connect, aside_or_done,
                     build_problem, check_existing, compile_notice, finish_run,
                     nothing_left_before_first)
-from .sweep_file import SweepFile, summarize
 from .sweep_spec import SweepSpec, draw_checked, parameter_rows
+# the problem pymoo sees and the results file have modules of their own
+# (search_problem, search_file); their names stay importable from here for one release
+from .search_problem import (FAILED_OBJECTIVE, FAILED_VIOLATION, HV_REFERENCE,  # noqa: F401
+                             NORMALISATION, REPAIR_STEP, buildable_centre, hypervolume,
+                             pymoo_view, repair_triangles)
+from .search_file import (HISTORY, GenerationLayout, SearchHistory,  # noqa: F401
+                          generation_layout, read_history)
 
 log = logging.getLogger("pipeline")
 
 JOURNAL_KIND = "search"
 JOURNAL_VERSION = 1
-FAILED_VIOLATION = 1e12   # the `evaluable` constraint of a failed candidate: above any real one
-FAILED_OBJECTIVE = 1e12   # pymoo's stand-in for an objective that is NaN (infeasible rows only)
-HV_REFERENCE = 1.1        # reference point of the hypervolume, in every normalised objective
-REPAIR_STEP = 1e-3        # a repaired design lies this fraction of the way on past the boundary
-NORMALISATION = ("each objective divided by the study's reference design's (1 where that is "
-                 "not a positive number); reference point 1.1 in every objective")
-
-# per generation, in /search: name, dtype, units, long name
-HISTORY = (
-    ("evaluations", "i8", "1", "designs evaluated up to and including the generation"),
-    ("hypervolume", "f8", "1", "hypervolume of the feasible front so far (normalised objectives, "
-                               "reference point 1.1)"),
-    ("front_size", "i8", "1", "designs on the feasible front so far"),
-    ("feasible", "i8", "1", "feasible designs so far"),
-    ("repaired", "i8", "1", "proposals moved inside the triangle inequalities while the "
-                            "generation was made"),
-)
-
-
-# ----------------------------------------------------------------- the problem pymoo sees
-def pymoo_view(spec: SweepSpec, status, metrics, has_margin):
-    """(F, G) of evaluated rows as pymoo sees them (see the module's text)."""
-    F = np.stack([metric_values(metrics, o) for o in spec.objectives], axis=1)
-    G, cv = constraints(spec, metrics, status, has_margin)
-    finite = np.isfinite(F).all(axis=1) & bounded_finite(spec, metrics)
-    evaluable = (status == kc.OK) & ~((cv == 0) & ~finite)
-    G = np.concatenate([np.where(np.isnan(G), 0.0, G),
-                        np.where(evaluable, 0.0, FAILED_VIOLATION)[:, None]], axis=1)
-    return np.where(np.isfinite(F), F, FAILED_OBJECTIVE), G
-
-
-class SweepBlackBox(Problem):
-    """The sweep's evaluator as a vectorised pymoo problem: design-variable
-    rows X -> (F, G), one batch through the compiled kernels.  ``run_search``
-    drives an algorithm by ask and tell; this works with
-    ``pymoo.optimize.minimize`` too."""
-
-    def __init__(self, problem: SweepProblem, evaluate=None):
-        spec = problem.spec
-        self.sweep = problem
-        self.has_margin = bool(np.isin(problem.plan.codes, kc.CLASS3_GROUPS).any())
-        self.constraint_labels = constraint_names(self.has_margin, spec) + ["evaluable"]
-        self._rows = evaluate or (lambda pars: problem.evaluate_rows(pars))
-        super().__init__(n_var=len(spec.variables), n_obj=len(spec.objectives),
-                         n_ieq_constr=len(self.constraint_labels),
-                         xl=np.array([v.low for v in spec.variables]),
-                         xu=np.array([v.high for v in spec.variables]))
-
-    def results(self, X):
-        """(status, metrics) of design-variable rows X."""
-        return self._rows(parameter_rows(self.sweep.plan, self.sweep.spec, np.asarray(X, float)))
-
-    def view(self, status, metrics):
-        return pymoo_view(self.sweep.spec, status, metrics, self.has_margin)
-
-    def _evaluate(self, X, out, *args, **kwargs):
-        out["F"], out["G"] = self.view(*self.results(X))
-
-
-# ----------------------------------------------------------------- triangles: a repair
-def buildable_centre(spec: SweepSpec) -> np.ndarray:
-    """A point strictly inside the bounds and every triangle: the mean of the
-    buildable points of a fixed uniform probe of the box (the buildable part is
-    convex, so its points' mean is inside it)."""
-    lo = np.array([v.low for v in spec.variables])
-    hi = np.array([v.high for v in spec.variables])
-    if not spec.triangles:
-        return 0.5 * (lo + hi)
-    x = lo + np.random.default_rng(0).random((40000, len(lo))) * (hi - lo)
-    ok = ~_broken(spec.triangles, x)
-    return x[ok].mean(axis=0)
-
-
-def _broken(triangles, x):
-    bad = np.zeros(x.shape[0], bool)
-    for t in triangles:
-        bad |= t.broken(x)
-    return bad
-
-
-def _slack(t, x):
-    """The three inequalities of triangle ``t`` as g < 0 (linear in x)."""
-    a, b, c = t.sides(x)
-    return np.stack([a - b - c, b - a - c, c - a - b], axis=1)
-
-
-def repair_triangles(triangles, centre, X, lo, hi):
-    """(X with every design that breaks a triangle moved towards ``centre``
-    until it is buildable, number of designs moved).  Designs that are
-    buildable are returned unchanged, bit for bit."""
-    X = np.array(X, float)
-    bad = _broken(triangles, X)
-    if not bad.any():
-        return X, 0
-    x = X[bad]
-    need = np.zeros(len(x))
-    for t in triangles:
-        gx, gc = _slack(t, x), _slack(t, centre[None, :])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            cross = np.where(gx >= 0, gx / (gx - gc), 0.0)
-        need = np.maximum(need, cross.max(axis=1))
-    step = need + REPAIR_STEP * (1.0 - need)
-    y = np.clip(x + step[:, None] * (centre - x), lo, hi)
-    y[_broken(triangles, y)] = centre       # rounding at the boundary: the centre itself
-    X[bad] = y
-    return X, int(bad.sum())
-
-
-class TriangleRepair(Repair):
-    """pymoo's repair hook: proposals that break a triangle inequality moved
-    inside it (``repair_triangles``); ``count`` counts them."""
-
-    def __init__(self, spec: SweepSpec):
-        super().__init__()
-        self.triangles = spec.triangles
-        self.centre = buildable_centre(spec)
-        self.lo = np.array([v.low for v in spec.variables])
-        self.hi = np.array([v.high for v in spec.variables])
-        self.count = 0
-
-    def _do(self, problem, X, **kwargs):
-        if not self.triangles:
-            return X
-        X, n = repair_triangles(self.triangles, self.centre, X, self.lo, self.hi)
-        self.count += n
-        return X
-
 
 # ----------------------------------------------------------------- the first generation
 def initial_designs(spec: SweepSpec, search: SearchSpec, seeds=None) -> np.ndarray:
@@ -266,43 +126,6 @@ def make_algorithm(search: SearchSpec, x0: np.ndarray, repair: TriangleRepair):
                repair=repair)
 
 
-def hv_scale(problem: SweepProblem) -> np.ndarray:
-    """The normalisation of the objectives: the reference design's values (1
-    where a value is not a positive number)."""
-    st, met = problem.evaluate_rows(np.ascontiguousarray(problem.plan.par[None, :]), False)
-    ref = np.array([metric_values(met, o)[0] for o in problem.spec.objectives])
-    return np.where((st[0] == kc.OK) & np.isfinite(ref) & (ref > 0), ref, 1.0)
-
-
-class FrontTracker:
-    """The feasible front of every candidate so far (objectives divided by
-    ``scale``) and its hypervolume against HV_REFERENCE."""
-
-    def __init__(self, scale):
-        from pymoo.indicators.hv import HV
-        self.scale = np.asarray(scale, float)
-        self.front = np.zeros((0, len(self.scale)))
-        self.feasible = 0
-        self._hv = HV(ref_point=np.full(len(self.scale), HV_REFERENCE))
-
-    def add(self, F, feasible) -> float:
-        feasible = np.asarray(feasible, bool)
-        self.feasible += int(feasible.sum())
-        Z = np.concatenate([self.front, F[feasible] / self.scale])
-        self.front = Z[nondominated_rank(Z) == 1] if len(Z) else Z
-        return self.hypervolume
-
-    @property
-    def hypervolume(self) -> float:
-        return float(self._hv(self.front)) if len(self.front) else 0.0
-
-
-def hypervolume(F, feasible, scale) -> float:
-    """Hypervolume of the feasible rows of F, normalised as the search's."""
-    t = FrontTracker(scale)
-    return t.add(np.asarray(F, float), feasible)
-
-
 # ----------------------------------------------------------------- evaluation engines
 class _Local:
     def __init__(self, problem: SweepProblem, n_jobs):
@@ -337,90 +160,6 @@ class _Dask:
                    for lo, hi in zip(cuts[:-1], cuts[1:])]
         parts = self.client.gather(futures)
         return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]))
-
-
-# ----------------------------------------------------------------- the results file
-@dataclass(frozen=True)
-class GenerationLayout(SweepSpec):
-    """The sweep spec as the results file sees a search: chunk c of the sweep
-    layout is generation c, rows offsets[c] .. offsets[c + 1]."""
-    offsets: tuple = (0,)
-
-    @property
-    def n_chunks(self):
-        return len(self.offsets) - 1
-
-    def chunk_bounds(self, c):
-        return self.offsets[c], self.offsets[c + 1]
-
-
-def generation_layout(spec: SweepSpec, search: SearchSpec, sizes) -> GenerationLayout:
-    offsets = tuple(int(v) for v in np.concatenate([[0], np.cumsum(sizes)]))
-    n = offsets[-1]
-    kw = {f.name: getattr(spec, f.name) for f in fields(SweepSpec)}
-    kw.update(candidates=n, chunk_size=min(n, max(max(sizes), 10000)), seed=search.seed,
-              sampler=f"{search.method} search (pymoo)")
-    return GenerationLayout(**kw, offsets=offsets)
-
-
-class SearchFile:
-    """A search's results file: the sweep layout (``SweepFile``) with
-    candidates/generation and the per-generation history in /search."""
-
-    def __init__(self, path: Path, study, problem: SweepProblem, search: SearchSpec, sizes,
-                 attrs: dict):
-        self.sf = SweepFile(path, study, problem)
-        self.sf.spec = generation_layout(problem.spec, search, sizes)
-        self.path = Path(path)
-        self.search = search
-        self.sizes = list(sizes)
-        self.attrs = attrs
-
-    def create(self, scale):
-        """The file, with every candidate unwritten (its reference design
-        evaluated: the first evaluation, which compiles a new mechanism)."""
-        self.sf.create()
-        n, ngen = sum(self.sizes), len(self.sizes)
-        with hdf5_writing(self.path, expendable=False) as f:
-            for k, v in self.attrs.items():
-                f.attrs[k] = v
-            f.attrs["kind_detail"] = "search"
-            f.attrs["n_generations"] = ngen
-            d = f["candidates"].create_dataset("generation", (n,), "i4",
-                                               chunks=(self.sf.spec.chunk_size,),
-                                               **COMPRESSION, fillvalue=-1)
-            d.attrs.update(units="1", long_name="generation of the search that proposed the "
-                                                "candidate (0: the first population)")
-            attach(d, ("candidate",))
-            g = f.create_group("search")
-            g.attrs.update(long_name="adaptive search, per generation", method=self.search.method,
-                           population=self.search.population, offspring=self.search.offspring,
-                           normalisation=NORMALISATION,
-                           hv_reference_point=np.full(len(scale), HV_REFERENCE),
-                           hv_scale=np.asarray(scale, float),
-                           objectives=list(self.sf.spec.objectives))
-            coordinate(g, "generation", np.arange(ngen), "1", "generation of the search")
-            for name, dtype, units, long in HISTORY:
-                h = g.create_dataset(name, (ngen,), dtype,
-                                     fillvalue=np.nan if dtype == "f8" else -1)
-                h.attrs.update(units=units, long_name=long)
-                attach(h, ("generation",))
-
-    def datasets(self, f):
-        d = self.sf.datasets(f)
-        d["candidates/generation"] = f["candidates/generation"]
-        for name, *_ in HISTORY:
-            d[f"search/{name}"] = f[f"search/{name}"]
-        return d
-
-    def write(self, d, gen, x, status, metrics, row):
-        """Generation ``gen``'s candidates and its history ``row``."""
-        self.sf.write_chunk(d, gen, x, status, metrics,
-                            np.zeros(len(self.sf.spec.triangles), np.int64))
-        lo, hi = self.sf.spec.chunk_bounds(gen)
-        d["candidates/generation"][lo:hi] = gen
-        for name, *_ in HISTORY:
-            d[f"search/{name}"][gen] = row[name]
 
 
 # ----------------------------------------------------------------- journal
@@ -626,45 +365,3 @@ def _progress(search: SearchSpec, enabled):
     from tqdm import tqdm
     return tqdm(total=search.evaluations, unit="eval", unit_scale=True, disable=not enabled,
                 smoothing=0.1, desc=f"search {search.method}", dynamic_ncols=True)
-
-
-# ----------------------------------------------------------------- reading it back
-@dataclass
-class SearchHistory:
-    method: str
-    evaluations: np.ndarray
-    hypervolume: np.ndarray
-    front_size: np.ndarray
-    feasible: np.ndarray
-    normalisation: str
-    scale: np.ndarray
-
-
-def read_history(f) -> SearchHistory | None:
-    """The per-generation history of an open results file (None for a sweep)."""
-    if "search" not in f:
-        return None
-    g = f["search"]
-    return SearchHistory(method=str(attr_text(g.attrs.get("method", "?"))),
-                         evaluations=g["evaluations"][()], hypervolume=g["hypervolume"][()],
-                         front_size=g["front_size"][()], feasible=g["feasible"][()],
-                         normalisation=str(attr_text(g.attrs.get("normalisation", ""))),
-                         scale=np.asarray(g.attrs.get("hv_scale", [])))
-
-
-def search_summary(out) -> dict:
-    """The sweep's summary with the search's lines."""
-    s = summarize(out)
-    with h5py.File(out, "r") as f:
-        h = read_history(f)
-        if h is not None:
-            s["search"] = (f"{h.method}, {len(h.evaluations)} generations, "
-                           f"{int(h.evaluations[-1]):,} evaluations" if len(h.evaluations)
-                           else h.method)
-            if len(h.hypervolume):
-                s["hypervolume"] = (f"{h.hypervolume[-1]:.4f} (feasible front; "
-                                    f"{NORMALISATION})")
-            seeded = attr_text(f.attrs.get("seeded_from", ""))
-            if seeded:
-                s["seeded from"] = f"{int(f.attrs.get('n_seeded', 0))} designs of {seeded}"
-    return s

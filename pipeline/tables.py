@@ -40,7 +40,7 @@ def _frame(cols: dict, units: dict) -> pd.DataFrame:
 def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
     """The candidates of a sweep file: all, only the feasible ones, or those of
     Pareto fronts 1 .. ``front``.  The rows equal the HDF5 datasets."""
-    from .browse import ranking
+    from .ranking import ranking
     from .analysis import variable_units
     with open_results(path, "sweep") as f:
         p = f["candidates/params"]
