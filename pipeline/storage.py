@@ -248,6 +248,22 @@ def hdf5_writing(path, mode="r+", expendable=True):
         sys.unraisablehook = hook
 
 
+# free space kept beside a results file that HDF5 writes in place: HDF5 cannot
+# recover from a write that fails (its objects are left half-closed and crash the
+# interpreter later), so a write that could fill the disk is refused before it starts
+HDF5_HEADROOM = 4 << 20
+
+
+def room_for(path, nbytes: int):
+    """Refuse (OSError ENOSPC naming ``path``) an HDF5 write of about ``nbytes``
+    into ``path`` where the disk has less than that plus HDF5_HEADROOM free."""
+    import errno
+    import shutil
+    free = shutil.disk_usage(Path(path).parent).free
+    if free < nbytes + HDF5_HEADROOM:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+
+
 # the largest file an update is made on in memory (hdf5_image); a larger one is
 # updated on disk, in a copy (hdf5_writing)
 IMAGE_LIMIT = 2 << 30

@@ -29,7 +29,7 @@ from .files import RunLock, fault_point, replacing
 from .kernels import config as kc
 from .kernels import sweep as ks
 from .limits import CHUNK_WHY, MAX_CHUNK
-from .storage import FORMAT, ResultsError, hdf5_writing
+from .storage import FORMAT, ResultsError, hdf5_writing, room_for
 from .sampling import draw_checked
 from .sweep_spec import SweepSpec, parameter_rows
 # the journal, the objectives and the results file have modules of their own; their
@@ -421,6 +421,7 @@ def finish_run(out: Path, journal: Journal, client, wall: float, compile_s: floa
     and the throughput (``summary(out)``: the file's own summary; ``unit``:
     what was computed)."""
     work = journal.working_file(out)
+    room_for(work, 0)
     with hdf5_writing(work, expendable=False) as f:
         f.attrs["complete"] = True
         f.attrs["wall_time_s"] = wall

@@ -14,7 +14,8 @@ from .kernels import sweep as ks
 from .objectives import (bounded_finite, constraint_names, constraint_units, constraints,
                          metric_values)
 from .storage import (COMPRESSION, STATUS_ENUM, ResultsError, attach, attr_text, coordinate,
-                      hdf5_image, put, status_table, units_attr, write_root_attrs)
+                      hdf5_image, put, room_for, status_table, units_attr,
+                      write_root_attrs)
 from .sweep_spec import METRICS
 
 
@@ -190,6 +191,7 @@ class SweepFile:
         """Write one chunk's rows into the datasets ``d`` (``datasets(f)``): all
         its candidates, or (store = feasible) the rows ``index`` kept, appended,
         with the chunk's ``counts``."""
+        room_for(self.path, 2 * (x.nbytes + metrics.nbytes) + status.nbytes)
         cols, G, cv, feasible = self._rows(status, metrics)
         if index is None:
             lo, hi = self.spec.chunk_bounds(chunk)
@@ -231,6 +233,7 @@ class SweepFile:
         index = f["candidate"][()]
         if (np.diff(index) > 0).all():
             return
+        room_for(self.path, sum(f[name].nbytes for name in self.row_names()))
         order = np.argsort(index, kind="stable")
         for name in self.row_names():
             f[name][...] = f[name][()][order]

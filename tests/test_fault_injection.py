@@ -333,10 +333,12 @@ needs_root = pytest.mark.skipif(
 
 
 @needs_root
-@pytest.mark.parametrize("size", ["3m", "1m"])
+@pytest.mark.parametrize("size", ["12m", "3m", "1m"])
 def test_a_sweep_on_a_full_disk_ends_in_one_line(studies, tmp_path, size):
-    """3 MiB: the disk fills while HDF5 writes (it used to end in a segfault);
-    1 MiB: while the journal saves a chunk."""
+    """12 MiB: the disk fills after some chunks; 3 MiB: before HDF5 writes the
+    first (it used to end in a segfault: a write HDF5 meets a full disk in is now
+    refused before it starts, storage.room_for); 1 MiB: while the journal saves
+    a chunk."""
     with small_disk(tmp_path / "disk", size) as disk:
         out = disk / "s.h5"
         rc, err = cli("run", studies / "ov7_synthesis.toml", "-o", out, "--candidates", 200000,
