@@ -518,7 +518,8 @@ def stored_study(attrs, results_path=None):
     """The study rebuilt from the TOML stored verbatim in a results file's root
     attributes; None if the file has none.  Its errors name the results file
     (the stored copy is what is wrong, not the study file it came from)."""
-    from .storage import attr_text
+    def attr_text(v):        # an HDF5 string attribute (h5py may hand back bytes)
+        return v.decode() if isinstance(v, bytes) else v
     text = attrs.get("study_toml")
     if not text:
         return None
