@@ -17,13 +17,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from naive_pareto import brute_force_rank, dominates_ref
+from support.naive_pareto import brute_force_rank, dominates_ref
 from pipeline.analysis import analyze
 from pipeline.browse import rerun_candidate
 from pipeline.cli import main
 from pipeline.study import load_study
 from pipeline.sweep import run_sweep
-from tolerances import SWEEP_VS_SCENE_REL
+from support.tolerances import SWEEP_VS_SCENE_REL
 
 N = 3000
 # the run's date and duration, and HDF5's dimension-scale bookkeeping (object references)

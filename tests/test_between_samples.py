@@ -6,7 +6,7 @@ every crank angle of the revolution, not only at the samples; a failure
 reports the crank angle where it happens (the first one met from phi0 in the
 crank's direction of travel) and the group that fails.
 
-Cases are constructed with known answers (tests/lock_cases.py): four-bars
+Cases are constructed with known answers (tests/support/lock_cases.py): four-bars
 locked on either side, offset slider-cranks, coulisses and class III triads
 that cannot pass a range 0.01 to 2 deg wide at a random phase relative to the
 crank grid; parallelograms that pass a collinear position (where the branch
@@ -23,13 +23,13 @@ from collections import Counter
 import numpy as np
 import pytest
 
-import lock_cases as lc
+from support import lock_cases as lc
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
 from pipeline.scene import run_scene, solve_curves
 from pipeline.study import load_study, parse_study
 from pipeline.sweep import build_problem
-from stress_cases import near_singular_triads
+from support.stress_cases import near_singular_triads
 
 ANGLE_TOL_DEG = 1e-6            # reported failure angle vs the exact boundary
 DYAD_LOCK = {kc.NO_ASSEMBLY, kc.SINGULAR}            # SINGULAR: the boundary is a tangency

@@ -1,6 +1,6 @@
 """The class III group with a slider in place of lead 5-7 (a block pinned at
 vertex 5 slides on a guide line): study format, kinematics against the
-60-digit reference of tests/naive.py (points as unknowns, not the kernel's
+60-digit reference of tests/support/naive.py (points as unknowns, not the kernel's
 angles), kinetostatics (virtual power, and the dense solve with the block's
 slide), the between-sample watch, and a sweep over its dimensions with its
 Pareto analysis."""
@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-import naive
+from support import naive
 from pipeline.compiler import kernels_for
 from pipeline.compiler.emit import EMITTERS
 from pipeline.forces import scene_forces
@@ -22,7 +22,7 @@ from pipeline.model import ClassIIISlider
 from pipeline.scene import revolution_angles, run_scene, solve_curves
 from pipeline.study import StudyError, load_study, parse_study
 from test_forces import virtual_power
-from tolerances import MP_REFERENCE_REL, REACTION_REL, SELF_FD_REL, VIRTUAL_POWER_REL
+from support.tolerances import MP_REFERENCE_REL, REACTION_REL, SELF_FD_REL, VIRTUAL_POWER_REL
 
 DEG = math.pi / 180.0
 N_CYCLE = 72                    # positions of a full cycle compared with the reference
@@ -236,7 +236,7 @@ def test_virtual_power_identity(studies, eps1):
 
 def test_reactions_and_slide_force_match_the_dense_solve(studies):
     """Every revolute reaction, the block's slide (normal force N, couple C) and
-    M_bal against tests/naive.py's dense solve on its 60-digit kinematics."""
+    M_bal against tests/support/naive.py's dense solve on its 60-digit kinematics."""
     eps1 = 420.0
     study = _with_crank(load_study(studies / f"{SCENE}.toml"), eps1=eps1)
     plan, c = _cycle(study, 12)
@@ -380,7 +380,7 @@ SWEEP_N = 160
 
 @pytest.fixture(scope="module")
 def slider_sweep(studies, tmp_path_factory):
-    from sweep_helpers import run_and_analyze
+    from support.sweep_helpers import run_and_analyze
     return run_and_analyze(studies / f"{SWEEP}.toml",
                            tmp_path_factory.mktemp("class3_slider_sweep") / "sweep.h5", SWEEP_N)
 
@@ -391,7 +391,7 @@ def test_sweep_matches_the_scene_path(slider_sweep):
     those of its own scene, and the margin constraint applies."""
     import h5py
     from pipeline.sweep_spec import apply_design
-    from tolerances import SWEEP_VS_SCENE_REL
+    from support.tolerances import SWEEP_VS_SCENE_REL
     study, path = slider_sweep
     with h5py.File(path, "r") as f:
         x = f["candidates/params"][()]
@@ -423,7 +423,7 @@ def test_sweep_matches_the_scene_path(slider_sweep):
 def test_pareto_analysis_of_the_sweep(slider_sweep):
     """The fronts of the stored analysis are those of a brute-force dominance
     test over the feasible candidates."""
-    from sweep_helpers import assert_fronts_are_the_brute_force_rank
+    from support.sweep_helpers import assert_fronts_are_the_brute_force_rank
     assert_fronts_are_the_brute_force_rank(slider_sweep[1])
 
 

@@ -23,7 +23,7 @@ from pipeline.scene import revolution_angles, solve_curves
 from pipeline.study import load_study
 from pipeline.sweep import build_problem
 from pipeline.sweep_spec import draw_candidates, parameter_rows
-from tolerances import KERNEL_AGREEMENT
+from support.tolerances import KERNEL_AGREEMENT
 
 STUDIES = Path(__file__).resolve().parent.parent / "studies"
 

@@ -10,13 +10,13 @@ import pandas as pd
 import pytest
 from scipy.optimize import brentq
 
-from naive import naive_c_lagrange_terms
+from support.naive import naive_c_lagrange_terms
 from pipeline import dynamics as dy
 from pipeline.cli import main
 from pipeline.kernels import config as kc
 from pipeline.study import DynamicsCase, StudyError, load_study, parse_study
 from pipeline.expressions import parse_expression
-from tolerances import ANALOG_REL
+from support.tolerances import ANALOG_REL
 
 # tolerances of this file (explicit; never loosened to make a test pass)
 TERMS_REL = ANALOG_REL        # J, J'/2, Q vs the FD oracle, relative to each term's scale

@@ -7,13 +7,13 @@ import math
 import numpy as np
 import pytest
 
-import naive
+from support import naive
 from pipeline.forces import pin_diameter, scene_forces
 from pipeline.kernels import config as kc
 from pipeline.kernels.geometry import angle_analogs
 from pipeline.scene import revolution_angles, run_scene, solve_curves
 from pipeline.study import load_study
-from tolerances import REACTION_REL, VIRTUAL_POWER_REL
+from support.tolerances import REACTION_REL, VIRTUAL_POWER_REL
 
 
 def virtual_power(study, plan, curves, fr):

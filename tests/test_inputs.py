@@ -1,7 +1,7 @@
 """Inputs besides the crank: an oscillating rocker driven through a swing by a
 cam law, a slider driven along its guide by a stroke table, and a second crank
 geared to the first.  Study format, the laws against their definitions, the
-kinematics against the 60-digit reference of tests/naive.py over a full
+kinematics against the 60-digit reference of tests/support/naive.py over a full
 cycle, kinetostatics against the naive dense solve (with the inputs' drives as
 unknowns) and virtual power with eps1 != 0, and a sweep over an input's
 dimensions with its Pareto analysis."""
@@ -13,14 +13,14 @@ import mpmath
 import numpy as np
 import pytest
 
-import naive
+from support import naive
 from pipeline.kernels import config as kc
 from pipeline.kernels.inputs import linear_law, rise_return, table_law
 from pipeline.model import Law, RotaryInput, SliderInput
 from pipeline.scene import revolution_angles, run_scene, solve_curves
 from pipeline.study import StudyError, load_study
 from test_forces import virtual_power
-from tolerances import MP_REFERENCE_REL, REACTION_REL, VIRTUAL_POWER_REL
+from support.tolerances import MP_REFERENCE_REL, REACTION_REL, VIRTUAL_POWER_REL
 
 DEG = math.pi / 180.0
 N_CYCLE = 36
@@ -312,7 +312,7 @@ SWEEP_N = 160
 
 @pytest.fixture(scope="module")
 def cam_sweep(studies, tmp_path_factory):
-    from sweep_helpers import run_and_analyze
+    from support.sweep_helpers import run_and_analyze
     return run_and_analyze(studies / "cam_rocker_input_sweep.toml",
                            tmp_path_factory.mktemp("cam_sweep") / "cam.h5", SWEEP_N)
 
@@ -324,7 +324,7 @@ def test_sweep_over_the_cam_law_matches_the_scene_path(cam_sweep):
     import h5py
     from pipeline.forces import scene_forces
     from pipeline.sweep_spec import apply_design
-    from tolerances import SWEEP_VS_SCENE_REL
+    from support.tolerances import SWEEP_VS_SCENE_REL
     study, path = cam_sweep
     with h5py.File(path, "r") as f:
         x = f["candidates/params"][()]
@@ -357,7 +357,7 @@ def test_sweep_over_the_cam_law_matches_the_scene_path(cam_sweep):
 
 
 def test_pareto_analysis_of_the_cam_sweep(cam_sweep):
-    from sweep_helpers import assert_fronts_are_the_brute_force_rank
+    from support.sweep_helpers import assert_fronts_are_the_brute_force_rank
     assert_fronts_are_the_brute_force_rank(cam_sweep[1])
 
 

@@ -7,11 +7,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import naive
+from support import naive
 from pipeline.kernels import config as kc
 from pipeline.scene import revolution_angles, run_scene, solve_curves
 from pipeline.study import load_study
-from tolerances import ANALOG_REL, CLOSURE_MM, REFERENCE_MM, SELF_FD_REL
+from support.tolerances import ANALOG_REL, CLOSURE_MM, REFERENCE_MM, SELF_FD_REL
 
 SCENES = {"ov7_base": "ov7_base_positions.csv", "ov7_class3": "ov7_class3_positions.csv"}
 
@@ -43,7 +43,7 @@ def _naive_analogs(name, phi):
 
 def test_analogs_match_independent_solver(scene):
     """Exact first and second analogs against 8th-order finite differences of
-    the fsolve solver (tests/naive.py), relative to each quantity's scale."""
+    the fsolve solver (tests/support/naive.py), relative to each quantity's scale."""
     name, study, res = scene
     t = res.table
     worst = 0.0
@@ -102,7 +102,7 @@ def test_closure_residuals_and_link_lengths(scene):
 
 
 def test_velocity_is_derivative_of_position(scene):
-    """In-product check independent of tests/naive.py: a central difference of
+    """In-product check independent of tests/support/naive.py: a central difference of
     the kernel's own positions reproduces its analogs."""
     name, study, res = scene
     plan = res.plan

@@ -22,7 +22,7 @@ from pipeline.scene import real_motion, revolution_angles, run_scene, solve_curv
 from pipeline.study import StudyError, load_study, parse_study
 from pipeline.sweep import build_problem, metric_values, run_sweep
 from pipeline.sweep_spec import apply_design, draw_checked, parameter_rows
-from tolerances import SWEEP_VS_SCENE_REL
+from support.tolerances import SWEEP_VS_SCENE_REL
 
 OV7_LAW = """
 [output.motion_law]

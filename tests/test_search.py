@@ -17,7 +17,7 @@ from pipeline.storage import ResultsError
 from pipeline.study import StudyError, load_study
 from pipeline.sweep import COLUMN, SweepInterrupted, build_problem, run_sweep
 from pipeline.sweep_spec import parameter_rows
-from sweep_helpers import assert_same_results
+from support.sweep_helpers import assert_same_results
 
 POP, GENS = 24, 5          # 24 + 5 x 24 = 144 evaluations
 SEARCH = f"""

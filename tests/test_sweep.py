@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-import naive
+from support import naive
 from pipeline.forces import scene_forces
 from pipeline.kernels import config as kc
 from pipeline.kernels.metrics import dwell_error
@@ -23,8 +23,8 @@ from pipeline.storage import ResultsError
 from pipeline.study import StudyError, load_study
 from pipeline.sweep import SweepInterrupted, build_problem, run_sweep
 from pipeline.sweep_spec import apply_design, draw_candidates, parameter_rows
-from sweep_helpers import assert_same_results
-from tolerances import SWEEP_VS_SCENE_REL
+from support.sweep_helpers import assert_same_results
+from support.tolerances import SWEEP_VS_SCENE_REL
 
 N, CHUNK = 1200, 300
 

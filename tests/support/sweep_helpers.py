@@ -45,7 +45,7 @@ def run_and_analyze(study_path, out, candidates):
 def assert_fronts_are_the_brute_force_rank(path, min_feasible=20):
     """The fronts of a sweep's stored analysis are those of a brute-force
     dominance test over its feasible candidates, and the knee is on front 1."""
-    from naive_pareto import brute_force_rank
+    from support.naive_pareto import brute_force_rank
     from pipeline.analysis import read_analysis, read_sweep
     from pipeline.storage import open_results
     data = read_sweep(path)

@@ -20,6 +20,6 @@ WELL_INSIDE_REL = 1e-6       # this far (relative) from a toggle a group must be
 # magnifies it a few times (measured: 5.5e-12 worst of 10^4; 5e-13 when both
 # paths are pushed to 1e-15).  Statuses must be identical.
 KERNEL_AGREEMENT = 2e-11
-MP_REFERENCE_REL = 1e-12     # slider dyads (PRP, RPP) vs the 30-digit solve of tests/naive.py:
+MP_REFERENCE_REL = 1e-12     # slider dyads (PRP, RPP) vs the 30-digit solve of tests/support/naive.py:
                              # positions and analogs, relative to each one's largest value over
                              # the revolution (the acceptance figure)
