@@ -19,8 +19,8 @@ from pipeline.kernels.inputs import linear_law, rise_return, table_law
 from pipeline.model import Law, RotaryInput, SliderInput
 from pipeline.scene import revolution_angles, run_scene, solve_curves
 from pipeline.study import StudyError, load_study
-from test_forces import virtual_power
-from support.tolerances import MP_REFERENCE_REL, REACTION_REL, VIRTUAL_POWER_REL
+from support.power import virtual_power
+from support.tolerances import FAIL_ANGLE_RAD, MP_REFERENCE_REL, REACTION_MP_REL, VIRTUAL_POWER_REL
 
 DEG = math.pi / 180.0
 N_CYCLE = 36
@@ -260,15 +260,15 @@ def test_reactions_and_drives_match_the_naive_dense_solve(studies, name, naive_f
         ref = naive_fn(float(phi), omega1=crank.omega1, eps1=crank.eps1)
         scale = max(np.abs(ref[j]).max() for j in plan.joint_names)
         for j, jn in enumerate(plan.joint_names):
-            assert np.abs(fr.R[k, j] - ref[jn]).max() <= REACTION_REL * scale, (phi, jn)
+            assert np.abs(fr.R[k, j] - ref[jn]).max() <= REACTION_MP_REL * scale, (phi, jn)
         for s, sn in enumerate(plan.slide_names):
-            assert np.abs(fr.slide[k, s] - ref[sn]).max() <= REACTION_REL * scale, (phi, sn)
+            assert np.abs(fr.slide[k, s] - ref[sn]).max() <= REACTION_MP_REL * scale, (phi, sn)
         drive, share = fr.drive[k, 0]
-        assert abs(drive - ref[input_name]) <= REACTION_REL * (abs(ref[input_name]) + 1e-3)
+        assert abs(drive - ref[input_name]) <= REACTION_MP_REL * (abs(ref[input_name]) + 1e-3)
         want_share = ref[input_name] * ref["q1"][input_name]
-        assert abs(share - want_share) <= REACTION_REL * (abs(ref["M_bal"]) + abs(want_share))
+        assert abs(share - want_share) <= REACTION_MP_REL * (abs(ref["M_bal"]) + abs(want_share))
         assert abs(fr.M_bal[k] - (ref["M_bal"] + want_share)) <= \
-            REACTION_REL * (abs(ref["M_bal"]) + abs(want_share))
+            REACTION_MP_REL * (abs(ref["M_bal"]) + abs(want_share))
 
 
 def test_the_drives_are_in_the_scene_file(studies, tmp_path):
@@ -385,7 +385,7 @@ def test_a_lock_between_two_positions_is_found_where_it_begins(studies, law, lin
     sinker bar cannot be reached in a window (34 deg wide down to under 2)
     that 36 positions may straddle.  The link folds at the window's first
     angle, a dead position the crank cannot pass: SINGULAR there (from the law's own formula by brentq), within
-    1e-6 deg, for the smooth cycloidal law and for a harmonic one whose
+    1e-10 rad, for the smooth cycloidal law and for a harmonic one whose
     acceleration jumps at the top (rise 130 deg); the top of the swing lies
     5 deg from the nearest position."""
     from scipy.optimize import brentq
@@ -401,12 +401,19 @@ def test_a_lock_between_two_positions_is_found_where_it_begins(studies, law, lin
                      close_at=2 * math.pi)
     lw = rocker.law
 
-    def gap(p):      # > 0 where the link cannot reach the guide x = 80 mm
-        q = rise_return(p, lw.start, lw.travel, lw.phase, lw.rise, law == "cycloidal")[0]
-        return 80.0 - (30.0 + 35.0 * math.cos(q)) - link
+    def gap(p):      # > 0 where the link cannot reach the guide x = 80 mm (naive.py, 30 digits)
+        with mpmath.workdps(30):
+            q = naive.mp_rise_return(mpmath.mpf(p), lw.start, lw.travel, lw.phase, lw.rise,
+                                     law == "cycloidal")
+            return float(80 - (30 + 35 * mpmath.cos(q)) - link)
 
+    # bracket on a fine grid with the law's closed form (README), then brentq on gap
     grid = np.radians(np.linspace(0.0, 360.0, 360001))
-    v = np.array([gap(p) for p in grid])
+    u = (grid - lw.phase) % (2 * math.pi)
+    x = np.where(u < lw.rise, u / lw.rise, (2 * math.pi - u) / (2 * math.pi - lw.rise))
+    f = x - np.sin(2 * math.pi * x) / (2 * math.pi) if law == "cycloidal" else \
+        (1 - np.cos(math.pi * x)) / 2
+    v = 80.0 - (30.0 + 35.0 * np.cos(lw.start + lw.travel * f)) - link
     k = int(np.argmax(v > 0))
     assert k > 0 and (v > 0).sum() < len(v) * 0.1
     begin = brentq(gap, grid[k - 1], grid[k], xtol=1e-15)
@@ -415,7 +422,7 @@ def test_a_lock_between_two_positions_is_found_where_it_begins(studies, law, lin
         assert not any(inside)
     assert c.overall == kc.SINGULAR          # the dyad folds there: a dead position
     assert plan.group_names[int(c.fail_group)] == "lift"
-    assert abs(math.degrees(c.fail_phi - begin)) <= 1e-6, math.degrees(c.fail_phi - begin)
+    assert abs(c.fail_phi - begin) <= FAIL_ANGLE_RAD, c.fail_phi - begin
 
 
 def test_the_drives_are_in_reactions_csv(studies, tmp_path):
