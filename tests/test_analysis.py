@@ -326,7 +326,7 @@ def chromium():
         path = shutil.which(name)
         if path:
             return path
-    pytest.skip("headless Chromium is not installed (CI installs it: apt-get install chromium)")
+    pytest.fail("headless Chromium is not installed (.ci/run installs it: apt-get install chromium)")
 
 
 def test_report_is_self_contained(cli_run):

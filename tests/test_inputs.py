@@ -271,21 +271,44 @@ def test_reactions_and_drives_match_the_naive_dense_solve(studies, name, naive_f
             REACTION_MP_REL * (abs(ref["M_bal"]) + abs(want_share))
 
 
-def test_the_drives_are_in_the_scene_file(studies, tmp_path):
+@pytest.mark.parametrize("name,naive_fn,input_name,units", [
+    ("cam_rocker_input", None, "rocker", "N*m"),
+    ("actuator_slider_input", naive.naive_forces_actuator, "actuator", "N")])
+def test_the_drives_are_in_the_scene_file(studies, tmp_path, name, naive_fn, input_name, units):
+    """A scene file keeps each input's drive and share at the table and dense
+    positions, named and with units; the actuator's are naive.py's dense solve
+    (60-digit kinematics) at every table position, and every share is the
+    drive times dq/dphi1 (the cam's law from naive.py's closed form)."""
     import h5py
     from pipeline.runner import run_study
-    out = tmp_path / "cam.h5"
-    run_study(studies / "cam_rocker_input.toml", out)
+    study = load_study(studies / f"{name}.toml")
+    crank = study.mechanism.crank
+    out = tmp_path / f"{name}.h5"
+    run_study(studies / f"{name}.toml", out)
     with h5py.File(out, "r") as f:
-        g = f["forces/dense"] if "forces/dense" in f else None
-        found = []
-        f.visititems(lambda n, o: found.append(n) if n.endswith("input_drive") else None)
-        assert found, "no input_drive dataset"
-        d = f[found[0]]
-        assert d.attrs["units"] == "N*m" and list(d.attrs["inputs"]) == ["rocker"]
-        assert np.isfinite(d[...]).all()
-        share = f[found[0].replace("input_drive", "input_share")][...]
-        assert np.isfinite(share).all() and np.abs(share).max() > 0
+        for grid in ("table", "dense"):
+            d = f[f"{grid}/input_drive"]
+            assert d.attrs["units"] == units and list(d.attrs["inputs"]) == [input_name]
+            assert f[f"{grid}/input_share"].attrs["units"] == "N*m"
+        phi = np.radians(f["table/phi1"][()])
+        drive = f["table/input_drive"][:, 0]
+        share = f["table/input_share"][:, 0]
+    assert len(phi) == 13
+    law = study.mechanism.groups[0].law
+    for k in range(12):
+        if naive_fn is not None:
+            ref = naive_fn(float(phi[k]), omega1=crank.omega1, eps1=crank.eps1)
+            assert abs(drive[k] - ref[input_name]) <= \
+                REACTION_MP_REL * (abs(ref[input_name]) + 1e-3), (k, drive[k], ref[input_name])
+            q1 = ref["q1"][input_name]
+        else:      # the cam's dq/dphi1 (rad/rad), the law differentiated at 30 digits
+            with mpmath.workdps(30):
+                q1 = float(mpmath.diff(lambda x: naive.mp_rise_return(
+                    x, law.start, law.travel, law.phase, law.rise, law.kind == "cycloidal"),
+                    mpmath.mpf(float(phi[k]))))
+            assert np.isfinite(drive[k])
+        assert abs(share[k] - drive[k] * q1) <= REACTION_MP_REL * (abs(share[k]) + 1e-3), k
+    assert np.abs(share).max() > 0
 
 
 @pytest.mark.parametrize("name", STUDIES)

@@ -257,12 +257,25 @@ def test_animation_writes_a_gif_with_the_frames_asked(scenes, tmp_path):
         frame_indices(motion_of(res), MAX_FRAMES + 1)
     with pytest.raises(ValueError, match=".gif"):
         write_animation(motion_of(res), tmp_path / "a.avi", frames=4)
-    if shutil.which("ffmpeg") is None:
+    # MP4 through ffmpeg (.ci/run installs it: never skipped): an MP4 container
+    # holding the 4 frames asked for (counted by ffprobe)
+    assert shutil.which("ffmpeg") and shutil.which("ffprobe"), "apt-get install ffmpeg"
+    write_animation(motion_of(res), tmp_path / "a.mp4", frames=4)
+    assert (tmp_path / "a.mp4").read_bytes()[4:8] == b"ftyp"
+    import subprocess
+    probe = subprocess.run(["ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0",
+                            "-show_entries", "stream=nb_read_frames", "-of", "csv=p=0",
+                            str(tmp_path / "a.mp4")], capture_output=True, text=True, check=True)
+    assert probe.stdout.strip() == "4"
+    # and without ffmpeg, a clear error
+    import pipeline.animate as an
+    real_which = an.shutil.which
+    try:
+        an.shutil.which = lambda name, *a, **k: None if name == "ffmpeg" else real_which(name)
         with pytest.raises(ValueError, match="ffmpeg"):
-            write_animation(motion_of(res), tmp_path / "a.mp4", frames=4)
-    else:
-        write_animation(motion_of(res), tmp_path / "a.mp4", frames=4)
-        assert (tmp_path / "a.mp4").stat().st_size > 1000
+            write_animation(motion_of(res), tmp_path / "b.mp4", frames=4)
+    finally:
+        an.shutil.which = real_which
 
 
 def test_a_failing_mechanism_is_animated_up_to_where_it_fails(studies, tmp_path):

@@ -3,11 +3,6 @@
 import dataclasses
 import math
 import os
-import re
-import signal
-import subprocess
-import sys
-import time
 
 import h5py
 import numpy as np
@@ -23,7 +18,7 @@ from pipeline.storage import ResultsError
 from pipeline.study import StudyError, load_study
 from pipeline.sweep import SweepInterrupted, build_problem, run_sweep
 from pipeline.sweep_spec import apply_design, draw_candidates, parameter_rows
-from support.sweep_helpers import assert_same_results
+from support.sweep_helpers import assert_same_results, kill_9_after_chunks
 from support.tolerances import DWELL_VS_NAIVE_REL, SWEEP_VS_SCENE_REL
 
 N, CHUNK = 1200, 300
@@ -192,20 +187,13 @@ def test_interrupted_then_resumed_equals_uninterrupted(baseline, synthesis, tmp_
 
 
 def test_kill_9_then_resume_equals_uninterrupted(baseline, synthesis, tmp_path):
-    """A real kill -9 of a running sweep (at whatever moment it is), then --resume."""
+    """A real kill -9 of a running sweep (held after its 5th journal entry, so the
+    kill always lands mid-run), then --resume."""
     out = tmp_path / "k.h5"
     n, chunk = 6000, 100
-    cmd = [sys.executable, "-m", "pipeline.cli", "run", str(synthesis.path), "-o", str(out),
-           "--candidates", str(n), "--chunk-size", str(chunk), "-q"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    parts = tmp_path / "k.h5.parts"
-    deadline = time.time() + 120
-    while time.time() < deadline and len(list(parts.glob("chunk_*.npz"))) < 5:
-        assert proc.poll() is None, proc.stderr.read().decode()
-        time.sleep(0.05)
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
-    assert len(list(parts.glob("chunk_*.npz"))) < n // chunk, "the run finished before the kill"
+    left = kill_9_after_chunks(["run", synthesis.path, "-o", out, "--candidates", n,
+                                "--chunk-size", chunk, "-q"], tmp_path / "k.h5.parts", 5)
+    assert left == 5
     run_sweep(synthesis, out, candidates=n, chunk_size=chunk, progress=False, resume=True)
     ref = tmp_path / "ref.h5"
     run_sweep(synthesis, ref, candidates=n, chunk_size=chunk, progress=False)
@@ -268,7 +256,7 @@ def test_thread_count_does_not_change_results(synthesis, tmp_path, baseline):
 
 
 def test_dask_cluster_equals_local(synthesis, tmp_path, baseline):
-    distributed = pytest.importorskip("dask.distributed")
+    import dask.distributed as distributed
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
                                   dashboard_address=None) as cluster:
         out = tmp_path / "dask.h5"

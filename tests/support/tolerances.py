@@ -99,6 +99,8 @@ SWEEP_VS_SCENE_REL = 1e-9    # sweep metrics recomputed through the scene path
 # the dwell error of mechanism B at 360 positions, package against naive.py's
 # fsolve revolution: both exact positions (measured 8.7e-15 relative)
 DWELL_VS_NAIVE_REL = 1e-12
+# its law error against the OV-7 law: naive.py's rocker angles, every shift by brute force
+LAW_VS_NAIVE_REL = 1e-12
 
 # property tests of the group kernels (tests/test_kernel_properties.py)
 LENGTH_REL = 1e-9            # link lengths / guide constraints kept by a group, relative
