@@ -62,3 +62,23 @@ def reference_dir():
     if not REFERENCE.exists():
         pytest.fail(f"the shared reference tables are missing: {REFERENCE}")
     return REFERENCE
+
+
+# The main job's study (studies/ov7_synthesis.toml), swept once per session with
+# fewer candidates (support.sweep_helpers.SYNTHESIS_N); tests read this file and
+# copy it (support.sweep_helpers.copy_of) before changing it (analyze, resume, ...).
+@pytest.fixture(scope="session")
+def synthesis_sweep(tmp_path_factory):
+    """Path of the session's sweep of the main job's study.  Read it; copy it to
+    change it."""
+    import h5py
+
+    from pipeline.study import load_study
+    from pipeline.sweep import run_sweep
+    from support.sweep_helpers import SYNTHESIS_CHUNK, SYNTHESIS_N
+    out = tmp_path_factory.mktemp("synthesis_sweep") / "ov7_synthesis.h5"
+    run_sweep(load_study(STUDIES / "ov7_synthesis.toml"), out, candidates=SYNTHESIS_N,
+              chunk_size=SYNTHESIS_CHUNK, progress=False)
+    with h5py.File(out, "r") as f:
+        assert f["candidates/feasible"][()].sum() >= 50, "the sweep needs feasible designs"
+    return out

@@ -10,15 +10,20 @@ import pipeline
 from pipeline.cli import main
 from pipeline.kernels import config as kc
 
-N = 1500
+from support.sweep_helpers import SYNTHESIS_N as N
+from support.sweep_helpers import copy_of
 
 
 @pytest.fixture(scope="module")
-def sweep(tmp_path_factory, studies):
-    out = tmp_path_factory.mktemp("api") / "s.h5"
-    res = pipeline.run(pipeline.load_study(studies / "ov7_synthesis.toml"), out, candidates=N)
-    assert res.results == out
-    return out
+def sweep(tmp_path_factory, synthesis_sweep):
+    """This module's copy of the session's sweep of the main job's study."""
+    return copy_of(synthesis_sweep, tmp_path_factory.mktemp("api"), "s.h5")
+
+
+def test_run_returns_where_it_wrote(tmp_path, studies):
+    res = pipeline.run(pipeline.load_study(studies / "ov7_synthesis.toml"), tmp_path / "s.h5",
+                       candidates=40)
+    assert res.results == tmp_path / "s.h5" and pipeline.open(res.results).shape[0] == 40
 
 
 def test_the_package_offers_its_api():

@@ -18,10 +18,10 @@ from pipeline.storage import read_units
 
 
 @pytest.fixture(scope="module")
-def files(tmp_path_factory, studies):
+def files(tmp_path_factory, studies, synthesis_sweep):
+    from support.sweep_helpers import copy_of
     d = tmp_path_factory.mktemp("formats")
-    sweep = d / "sweep.h5"
-    pipeline.run(studies / "ov7_synthesis.toml", sweep, candidates=800)
+    sweep = copy_of(synthesis_sweep, d, "sweep.h5")
     from pipeline.analysis import analyze
     analyze(sweep)
     scenes = [pipeline.run(studies / f"{s}.toml", d / f"{s}.h5", pictures=False).results

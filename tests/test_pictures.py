@@ -330,11 +330,10 @@ def test_run_writes_the_new_pictures_and_show_animates_the_scene(studies, tmp_pa
 
 
 @pytest.fixture(scope="module")
-def small_sweep(tmp_path_factory, studies):
-    from pipeline.sweep import run_sweep
-    out = tmp_path_factory.mktemp("sweep") / "s.h5"
-    run_sweep(load_study(studies / "ov7_synthesis.toml"), out, candidates=300, progress=False)
-    return out
+def small_sweep(tmp_path_factory, synthesis_sweep):
+    """This module's copy of the session's sweep of the main job's study."""
+    from support.sweep_helpers import copy_of
+    return copy_of(synthesis_sweep, tmp_path_factory.mktemp("sweep"), "s.h5")
 
 
 def test_show_animates_a_sweep_candidate(small_sweep, tmp_path, capsys):

@@ -18,7 +18,7 @@ from pipeline.study import StudyError, load_study
 from pipeline.sweep import COLUMN, SweepInterrupted, build_problem, run_sweep
 from pipeline.sweep_spec import parameter_rows
 from support.naive_pareto import hypervolume_2d_ref
-from support.sweep_helpers import assert_same_results, kill_9_after_chunks
+from support.sweep_helpers import assert_same_results, copy_of, kill_9_after_chunks
 
 POP, GENS = 24, 5          # 24 + 5 x 24 = 144 evaluations
 SEARCH = f"""
@@ -379,13 +379,11 @@ def test_a_short_generation_gives_a_file_of_the_true_size(small, tmp_path, monke
 
 
 # ---------------------------------------------------------------- explore, then refine
-def test_seeded_from_a_sweep_front(small, studies, tmp_path, capsys):
+def test_seeded_from_a_sweep_front(small, studies, tmp_path, capsys, synthesis_sweep):
     from pipeline.analysis import read_sweep
     from pipeline.cli import main
     from pipeline.pareto import nondominated_rank
-    sweep = tmp_path / "sweep.h5"
-    run_sweep(load_study(studies / "ov7_synthesis.toml"), sweep, candidates=1200,
-              chunk_size=600, progress=False)
+    sweep = copy_of(synthesis_sweep, tmp_path, "sweep.h5")
     out = tmp_path / "refined.h5"
     assert main(["run", str(small.path), "-o", str(out), "--from", str(sweep), "-q"]) == 0
     data = read_sweep(sweep)

@@ -18,10 +18,11 @@ from pipeline.storage import ResultsError
 from pipeline.study import StudyError, load_study
 from pipeline.sweep import SweepInterrupted, build_problem, run_sweep
 from pipeline.sweep_spec import apply_design, draw_candidates, parameter_rows
-from support.sweep_helpers import assert_same_results, kill_9_after_chunks
+from support.sweep_helpers import (SYNTHESIS_CHUNK, SYNTHESIS_N, assert_same_results, copy_of,
+                                   kill_9_after_chunks)
 from support.tolerances import DWELL_VS_NAIVE_REL, SWEEP_VS_SCENE_REL
 
-N, CHUNK = 1200, 300
+N, CHUNK = SYNTHESIS_N, SYNTHESIS_CHUNK      # the session's sweep's
 
 
 @pytest.fixture(scope="module")
@@ -30,10 +31,9 @@ def synthesis(studies):
 
 
 @pytest.fixture(scope="module")
-def baseline(synthesis, tmp_path_factory):
-    out = tmp_path_factory.mktemp("sweep") / "base.h5"
-    run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False)
-    return out
+def baseline(synthesis_sweep, tmp_path_factory):
+    """This module's copy of the session's sweep of the main job's study."""
+    return copy_of(synthesis_sweep, tmp_path_factory.mktemp("sweep"), "base.h5")
 
 
 # ---------------------------------------------------------------- dwell kernel
@@ -255,13 +255,23 @@ def test_thread_count_does_not_change_results(synthesis, tmp_path, baseline):
     assert_same_results(baseline, out)
 
 
-def test_dask_cluster_equals_local(synthesis, tmp_path, baseline):
+@pytest.mark.parametrize("processes", [False, True], ids=["threads", "worker-processes"])
+def test_dask_cluster_equals_local(synthesis, tmp_path, baseline, processes):
+    """The same file from a Dask cluster as from the local run, bit for bit: with
+    workers in this process, and with two worker processes (the problem is
+    pickled to them; each loads the kernels from the session's compile cache,
+    which they inherit through the environment)."""
     import dask.distributed as distributed
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=processes,
                                   dashboard_address=None) as cluster:
         out = tmp_path / "dask.h5"
         run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False,
                   scheduler=cluster.scheduler_address)
+        if processes:       # the workers are other processes, with the session's caches
+            with distributed.Client(cluster) as client:
+                seen = client.run(lambda: (os.getpid(), os.environ.get("PIPELINE_CACHE_DIR")))
+            assert len(seen) == 2 and os.getpid() not in {pid for pid, _ in seen.values()}
+            assert {d for _, d in seen.values()} == {os.environ["PIPELINE_CACHE_DIR"]}
     assert_same_results(baseline, out)
     with h5py.File(out, "r") as f:
         assert f.attrs["engine"] == "dask"

@@ -3,7 +3,22 @@
 import h5py
 import numpy as np
 
+# the session's sweep of the main job's study (tests/conftest.py: synthesis_sweep)
+SYNTHESIS_N, SYNTHESIS_CHUNK = 3000, 1000
+
 VOLATILE = {"created", "wall_time_s", "engine"}
+
+
+def copy_of(src, folder, name=None):
+    """A copy of the file ``src`` in ``folder`` (made if needed), named ``name``
+    (default: src's name); returns its path."""
+    import shutil
+    from pathlib import Path
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    dst = folder / (name or Path(src).name)
+    shutil.copy(src, dst)
+    return dst
 REFERENCES = {"DIMENSION_LIST", "REFERENCE_LIST"}   # dimension-scale object references
 
 
