@@ -12,6 +12,7 @@ import pandas as pd
 import pytest
 
 from support import naive as nv
+from support.tolerances import REFERENCE_MM
 
 DEG = math.pi / 180.0
 GRID12 = [-k * 30.0 * DEG for k in range(12)]
@@ -42,7 +43,7 @@ def test_mech_a_reference_table(reference_dir):
     for _, row in ref.iterrows():
         p = nv.mech_a_positions(math.radians(row.phi1_deg))
         for k in ("P2", "P3", "P5", "P7", "P9"):
-            np.testing.assert_allclose(p[k], [row[k + "_x"], row[k + "_y"]], rtol=0, atol=1e-6,
+            np.testing.assert_allclose(p[k], [row[k + "_x"], row[k + "_y"]], rtol=0, atol=REFERENCE_MM,
                                        err_msg=f"{k} at {row.phi1_deg}")
 
 
@@ -67,7 +68,7 @@ def test_mech_b_reference_table(reference_dir):
     res = nv.revolution(nv.mech_b_positions, np.radians(ref.phi1_deg.values))
     for (p, _ab), (_, row) in zip(res, ref.iterrows()):
         for k in ("P2", "P3", "P4", "P5", "P8"):
-            np.testing.assert_allclose(p[k], [row[k + "_x"], row[k + "_y"]], rtol=0, atol=1e-6,
+            np.testing.assert_allclose(p[k], [row[k + "_x"], row[k + "_y"]], rtol=0, atol=REFERENCE_MM,
                                        err_msg=f"{k} at {row.phi1_deg}")
     a0, b0 = res[0][1]
     assert round(math.degrees(a0), 3) == 44.006
