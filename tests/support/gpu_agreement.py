@@ -79,7 +79,7 @@ def compare(pb, pars):
 
 
 def main(path, n):
-    studies = HERE.parent / "studies"
+    studies = HERE.parent.parent / "studies"      # the checkout's studies/
     res = {"simulator": SIMULATOR}
     for name in STUDIES:
         study = load_study(studies / name)
