@@ -64,7 +64,7 @@ from pipeline.files import write_text
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))                 # interpreter, common
-sys.path.insert(0, str(ROOT / "tests"))       # stress_cases
+sys.path.insert(0, str(ROOT / "tests"))       # support.stress_cases
 
 from common import STUDIES, hardware  # noqa: E402
 from interpreter.assembly import solve_revolution  # noqa: E402
@@ -423,7 +423,7 @@ def _diff_notes(case, m, d, context, mr=None):
 
 def stress_case(synthesis, n=STRESS_N):
     from pipeline.sweep import build_problem
-    from stress_cases import near_singular_triads
+    from support.stress_cases import near_singular_triads
     spec = dataclasses.replace(synthesis.sweep, positions=STRESS_POSITIONS,
                                stroke_bounds=(-np.inf, np.inf), margin_min=-np.inf)
     pb = build_problem(synthesis, spec)

@@ -1,7 +1,26 @@
+"""Session set-up shared by every test.
+
+* Compile caches in pytest's temporary folder: the generated kernel modules
+  (``PIPELINE_CACHE_DIR``, default ``~/.cache/pipeline``) and numba's compiled
+  code (``NUMBA_CACHE_DIR``, default the package's ``__pycache__``) go to one
+  folder of this session, set in ``os.environ`` before ``pipeline`` or numba is
+  imported, so every test and every subprocess a test starts (the CLI, Dask
+  worker processes, the GPU simulator) shares one warm cache and nothing is
+  written into the checkout or the home folder.  ``PIPELINE_TEST_CACHE=DIR``
+  keeps that cache in DIR instead (a warm cache between local runs).
+* Hypothesis runs the registered profile ``ci`` (derandomized, no deadline, no
+  example database): the same examples on every run and machine, no
+  wall-clock limit on a loaded machine.  ``HYPOTHESIS_PROFILE=dev`` draws
+  fresh examples.
+* ``tests/`` is on ``sys.path`` for the helpers package ``support``.
+"""
+
+import os
 import sys
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, settings
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -9,14 +28,28 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 STUDIES = ROOT / "studies"
 REFERENCE = ROOT.parent / "shared" / "reference"
 
+# registered and loaded at import, before any test module is collected: a test's
+# own @settings(...) inherits every field it does not set from this profile
+settings.register_profile(
+    "ci", derandomize=True, deadline=None, database=None, print_blob=True,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+settings.register_profile("dev", deadline=None, print_blob=True)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
 
 @pytest.hookimpl(trylast=True)   # after pytest's tmpdir plugin has set up its factory
 def pytest_configure(config):
-    """Hypothesis keeps its example database and a cache of constants in ./.hypothesis
-    (the latter from collection on); tests write only under pytest's temporary
-    folder, so point Hypothesis there (the fixture tmp_path_factory is this factory)."""
+    """Hypothesis's home (its constants cache) and the compile caches in
+    pytest's temporary folder (the factory of the fixture tmp_path_factory)."""
     from hypothesis import configuration
-    configuration.set_hypothesis_home_dir(config._tmp_path_factory.mktemp("hypothesis"))
+    base = config._tmp_path_factory.getbasetemp()
+    configuration.set_hypothesis_home_dir(base / "hypothesis")
+    if "pipeline" in sys.modules or "numba" in sys.modules:
+        raise pytest.UsageError("pipeline or numba was imported before tests/conftest.py "
+                                "could point their caches at pytest's temporary folder")
+    cache = Path(os.environ.get("PIPELINE_TEST_CACHE") or base / "compile-cache")
+    os.environ["PIPELINE_CACHE_DIR"] = str(cache / "modules")
+    os.environ["NUMBA_CACHE_DIR"] = str(cache / "numba")
 
 
 @pytest.fixture(scope="session")
@@ -29,3 +62,23 @@ def reference_dir():
     if not REFERENCE.exists():
         pytest.fail(f"the shared reference tables are missing: {REFERENCE}")
     return REFERENCE
+
+
+# The main job's study (studies/ov7_synthesis.toml), swept once per session with
+# fewer candidates (support.sweep_helpers.SYNTHESIS_N); tests read this file and
+# copy it (support.sweep_helpers.copy_of) before changing it (analyze, resume, ...).
+@pytest.fixture(scope="session")
+def synthesis_sweep(tmp_path_factory):
+    """Path of the session's sweep of the main job's study.  Read it; copy it to
+    change it."""
+    import h5py
+
+    from pipeline.study import load_study
+    from pipeline.sweep import run_sweep
+    from support.sweep_helpers import SYNTHESIS_CHUNK, SYNTHESIS_N
+    out = tmp_path_factory.mktemp("synthesis_sweep") / "ov7_synthesis.h5"
+    run_sweep(load_study(STUDIES / "ov7_synthesis.toml"), out, candidates=SYNTHESIS_N,
+              chunk_size=SYNTHESIS_CHUNK, progress=False)
+    with h5py.File(out, "r") as f:
+        assert f["candidates/feasible"][()].sum() >= 50, "the sweep needs feasible designs"
+    return out

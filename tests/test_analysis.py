@@ -1,7 +1,7 @@
 """Analysis, browsing, show and report of a sweep (`pipeline analyze|browse|show|report`).
 
-One small sweep of the main job's study (ov7_synthesis, fewer candidates) is
-made once per module; tests that write into a file work on copies of it.
+The session's small sweep of the main job's study (conftest.py: synthesis_sweep)
+is copied once per module; tests that write into a file work on copies of it.
 """
 
 import json
@@ -10,22 +10,20 @@ import re
 import shutil
 import subprocess
 from io import StringIO
-from pathlib import Path
 
 import h5py
 import numpy as np
 import pandas as pd
 import pytest
 
-from naive_pareto import brute_force_rank, dominates_ref
+from support.naive_pareto import brute_force_rank, dominates_ref
 from pipeline.analysis import analyze
 from pipeline.browse import rerun_candidate
 from pipeline.cli import main
-from pipeline.study import load_study
-from pipeline.sweep import run_sweep
-from tolerances import SWEEP_VS_SCENE_REL
+from support.sweep_helpers import SYNTHESIS_N as N
+from support.sweep_helpers import copy_of
+from support.tolerances import SWEEP_VS_SCENE_REL
 
-N = 3000
 # the run's date and duration, and HDF5's dimension-scale bookkeeping (object references)
 VOLATILE = {"created", "elapsed_s", "DIMENSION_LIST", "REFERENCE_LIST"}
 COMMANDS = ("analyze", "browse", "show", "report")
@@ -33,26 +31,15 @@ COMMANDS = ("analyze", "browse", "show", "report")
 
 # ---------------------------------------------------------------- fixtures
 @pytest.fixture(scope="module")
-def sweep_file(tmp_path_factory, studies):
-    """The README's main job (studies/ov7_synthesis.toml) with fewer candidates."""
-    study = load_study(studies / "ov7_synthesis.toml")
-    out = tmp_path_factory.mktemp("sweep") / "ov7_synthesis.h5"
-    run_sweep(study, out, candidates=N, chunk_size=1000, progress=False)
-    with h5py.File(out, "r") as f:
-        assert f["candidates/feasible"][()].sum() >= 50, "the small sweep needs feasible designs"
-    return out
-
-
-def copy_of(src, d, name="copy.h5"):
-    d.mkdir(parents=True, exist_ok=True)
-    dst = Path(d) / name
-    shutil.copy(src, dst)
-    return dst
+def sweep_file(tmp_path_factory, synthesis_sweep):
+    """The README's main job (studies/ov7_synthesis.toml) with fewer candidates:
+    this module's copy of the session's sweep."""
+    return copy_of(synthesis_sweep, tmp_path_factory.mktemp("sweep"))
 
 
 @pytest.fixture(scope="module")
 def analyzed(sweep_file, tmp_path_factory):
-    p = copy_of(sweep_file, tmp_path_factory.mktemp("analyzed"))
+    p = copy_of(sweep_file, tmp_path_factory.mktemp("analyzed"), "copy.h5")
     return p, analyze(p)
 
 
@@ -326,7 +313,7 @@ def chromium():
         path = shutil.which(name)
         if path:
             return path
-    pytest.skip("headless Chromium is not installed (CI installs it: apt-get install chromium)")
+    pytest.fail("headless Chromium is not installed (.ci/run installs it: apt-get install chromium)")
 
 
 def test_report_is_self_contained(cli_run):

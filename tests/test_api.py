@@ -10,15 +10,20 @@ import pipeline
 from pipeline.cli import main
 from pipeline.kernels import config as kc
 
-N = 1500
+from support.sweep_helpers import SYNTHESIS_N as N
+from support.sweep_helpers import copy_of
 
 
 @pytest.fixture(scope="module")
-def sweep(tmp_path_factory, studies):
-    out = tmp_path_factory.mktemp("api") / "s.h5"
-    res = pipeline.run(pipeline.load_study(studies / "ov7_synthesis.toml"), out, candidates=N)
-    assert res.results == out
-    return out
+def sweep(tmp_path_factory, synthesis_sweep):
+    """This module's copy of the session's sweep of the main job's study."""
+    return copy_of(synthesis_sweep, tmp_path_factory.mktemp("api"), "s.h5")
+
+
+def test_run_returns_where_it_wrote(tmp_path, studies):
+    res = pipeline.run(pipeline.load_study(studies / "ov7_synthesis.toml"), tmp_path / "s.h5",
+                       candidates=40)
+    assert res.results == tmp_path / "s.h5" and pipeline.open(res.results).shape[0] == 40
 
 
 def test_the_package_offers_its_api():
@@ -71,16 +76,23 @@ def test_export_a_sweep(sweep, tmp_path):
                                rtol=1e-11)
 
 
-def test_parquet_needs_pyarrow_or_round_trips(sweep, tmp_path, capsys):
-    rc = main(["export", str(sweep), "--parquet", str(tmp_path / "pq"), "-q"])
-    try:
-        import pyarrow  # noqa: F401
-    except ImportError:
-        assert rc == 2 and "pip install pyarrow" in capsys.readouterr().err
-        return
-    assert rc == 0
+def test_parquet_round_trips(sweep, tmp_path, capsys):
+    """Parquet export (pyarrow is a [test] dependency: this always runs): every
+    column of the candidates' table, back as written."""
+    assert main(["export", str(sweep), "--parquet", str(tmp_path / "pq"), "-q"]) == 0
     back = pd.read_parquet(tmp_path / "pq" / "candidates.parquet")
-    np.testing.assert_array_equal(back["peak_reaction"], pipeline.open(sweep)["peak_reaction"])
+    df = pipeline.open(sweep)
+    assert len(back) == len(df)
+    for col in ("peak_reaction", "dwell_error", "L12", "feasible"):
+        np.testing.assert_array_equal(back[col], df[col], err_msg=col)
+
+
+def test_parquet_without_pyarrow_says_how_to_get_it(sweep, tmp_path, capsys, monkeypatch):
+    """Without pyarrow (hidden from the import system) the export says what to install."""
+    import sys
+    monkeypatch.setitem(sys.modules, "pyarrow", None)
+    rc = main(["export", str(sweep), "--parquet", str(tmp_path / "pq"), "-q"])
+    assert rc == 2 and "pip install pyarrow" in capsys.readouterr().err
 
 
 def test_open_a_scene(tmp_path, studies):

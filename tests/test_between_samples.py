@@ -6,7 +6,7 @@ every crank angle of the revolution, not only at the samples; a failure
 reports the crank angle where it happens (the first one met from phi0 in the
 crank's direction of travel) and the group that fails.
 
-Cases are constructed with known answers (tests/lock_cases.py): four-bars
+Cases are constructed with known answers (tests/support/lock_cases.py): four-bars
 locked on either side, offset slider-cranks, coulisses and class III triads
 that cannot pass a range 0.01 to 2 deg wide at a random phase relative to the
 crank grid; parallelograms that pass a collinear position (where the branch
@@ -23,15 +23,15 @@ from collections import Counter
 import numpy as np
 import pytest
 
-import lock_cases as lc
+from support import lock_cases as lc
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
 from pipeline.scene import run_scene, solve_curves
 from pipeline.study import load_study, parse_study
 from pipeline.sweep import build_problem
-from stress_cases import near_singular_triads
+from support.stress_cases import near_singular_triads
+from support.tolerances import FAIL_ANGLE_RAD, FAIL_ANGLE_TRIAD_RAD
 
-ANGLE_TOL_DEG = 1e-6            # reported failure angle vs the exact boundary
 DYAD_LOCK = {kc.NO_ASSEMBLY, kc.SINGULAR}            # SINGULAR: the boundary is a tangency
 TRIAD_LOCK = {kc.NO_ASSEMBLY, kc.NEWTON_MAXITER, kc.SINGULAR}
 ORDERS = (kc.POSITIONS, kc.VELOCITIES, kc.ACCELERATIONS)
@@ -56,6 +56,16 @@ def _name(st):
 def _angle_err_deg(got, want):
     """|got - want| in deg, modulo a revolution (NaN-propagating)."""
     return abs(math.remainder(got - want, 2 * math.pi)) * 180.0 / math.pi
+
+
+def _angle_err(got, want):
+    """|got - want| in rad, modulo a revolution (NaN-propagating)."""
+    return abs(math.remainder(got - want, 2 * math.pi))
+
+
+def _angle_tol(case):
+    """The README's figure for a reported failure angle: a class III fold has its own."""
+    return FAIL_ANGLE_TRIAD_RAD if case.structure == "triad" else FAIL_ANGLE_RAD
 
 
 def _row(plan, values):
@@ -101,10 +111,11 @@ def _judge(plan, case, status, fail_phi, fail_group, allowed):
         return f"missed: OK (width {case.width_deg:.4g} deg)"
     if status not in allowed:
         return f"status {_name(status)}, expected one of {sorted(_name(s) for s in allowed)}"
-    err = _angle_err_deg(fail_phi, case.boundary)
-    if not err <= ANGLE_TOL_DEG:
-        return (f"angle {math.degrees(fail_phi):.9f} deg, exact {math.degrees(case.boundary):.9f}"
-                f" deg: off by {err:.3g} deg")
+    err = _angle_err(fail_phi, case.boundary)
+    if not err <= _angle_tol(case):
+        return (f"angle {math.degrees(fail_phi):.12f} deg, exact "
+                f"{math.degrees(case.boundary):.12f} deg: off by {err:.3g} rad "
+                f"(allowed {_angle_tol(case):g})")
     g = plan.group_names.index(case.group)
     if fail_group != g:
         return f"group {fail_group}, expected {g} ({case.group})"
@@ -117,8 +128,8 @@ def _check_curves(plans, cases, allowed):
         plan, c = _solve(plans, case, ORDERS[i % 3])
         statuses[_name(c.overall)] += 1
         if case.expect != "ok" and c.overall != kc.OK:
-            statuses["largest angle error, deg"] = max(
-                statuses["largest angle error, deg"], _angle_err_deg(c.fail_phi, case.boundary))
+            statuses["largest angle error, rad"] = max(
+                statuses["largest angle error, rad"], _angle_err(c.fail_phi, case.boundary))
         why = _judge(plan, case, c.overall, c.fail_phi, c.fail_group, allowed)
         if why:
             problems.append(f"{case.kind} #{i} (n={case.n}, rot={case.rot:+d}, "
@@ -185,7 +196,7 @@ def test_references_agree_with_brute_force(dyad_cases, triad_cases):
 @pytest.mark.parametrize("kind", ["fourbar-stretched", "fourbar-folded", "slider", "coulisse"])
 def test_dyad_locks_are_found(plans, dyad_cases, kind):
     """Every dyad lock, 0.01 to 2 deg wide, is reported: NO_ASSEMBLY (or
-    SINGULAR at the tangency), at its first boundary to 1e-6 deg, with the
+    SINGULAR at the tangency), at its first boundary to 1e-10 rad, with the
     dyad's group index."""
     cases = [c for c in dyad_cases if c.kind == kind]
     assert len(cases) >= 80
@@ -196,7 +207,7 @@ def test_dyad_locks_are_found(plans, dyad_cases, kind):
 def test_parallelograms_are_singular(plans, dyad_cases):
     """A parallelogram passes its collinear position between samples and would
     silently go on as the antiparallelogram: it must come back SINGULAR at the
-    collinear position first met, to 1e-6 deg."""
+    collinear position first met, to 1e-10 rad."""
     cases = [c for c in dyad_cases if c.kind == "parallelogram"]
     assert len(cases) >= 50
     problems, statuses = _check_curves(plans, cases, {kc.SINGULAR})
@@ -205,7 +216,7 @@ def test_parallelograms_are_singular(plans, dyad_cases):
 
 def test_triad_locks_are_found(plans, triad_cases):
     """Class III triads whose lead 5-7 is a hair too long or too short for a
-    range of crank angles: a non-OK status at the fold met first, to 1e-6 deg,
+    range of crank angles: a non-OK status at the fold met first, to 5e-9 rad,
     with the triad's group index."""
     cases = [c for c in triad_cases if c.expect == "lock"]
     assert len(cases) >= 20
@@ -259,7 +270,7 @@ def _scene_text(case, phi0_deg, rot, dense):
 def test_scene_reports_where_and_which_group(tmp_path):
     """A scene study whose four-bar cannot pass a 0.4 deg range between two
     dense samples: SceneResult.failure names the status, the crank angle in
-    deg (to 1e-6 deg of the exact boundary) and the group with its points."""
+    deg (to 1e-10 rad of the exact boundary) and the group with its points."""
     rng = np.random.default_rng(8)
     phi0_deg, rot = 15.0, -1
     while True:     # a range that lies between two dense samples (and between table rows)
@@ -280,8 +291,8 @@ def test_scene_reports_where_and_which_group(tmp_path):
     f = res.failure
     assert f is not None
     assert f["status"] in ("NO_ASSEMBLY", "SINGULAR")
-    err = _angle_err_deg(math.radians(f["phi_deg"]), exact)
-    assert err <= ANGLE_TOL_DEG, (f, math.degrees(exact), err)
+    err = _angle_err(math.radians(f["phi_deg"]), exact)
+    assert err <= FAIL_ANGLE_RAD, (f, math.degrees(exact), err)
     assert f["group"] == "dyad"
     assert "P3" in f["points"] and set(f["points"]) <= {"P2", "P3", "P4"}
     # no sample of the dense curves or of the table falls inside the range
@@ -317,9 +328,9 @@ def _check_sweep(pb, cases, status, metrics, expect):
             continue
         statuses[_name(status[i])] += 1
         if expect != "ok" and status[i] != kc.OK:
-            statuses["largest angle error, deg"] = max(
-                statuses["largest angle error, deg"],
-                _angle_err_deg(float(metrics[i, ks.M_FAIL_PHI]), case.boundary))
+            statuses["largest angle error, rad"] = max(
+                statuses["largest angle error, rad"],
+                _angle_err(float(metrics[i, ks.M_FAIL_PHI]), case.boundary))
         grp = metrics[i, ks.M_FAIL_GROUP]
         why = _judge(pb.plan, case, int(status[i]), float(metrics[i, ks.M_FAIL_PHI]),
                      -1 if math.isnan(grp) else int(grp), allowed)
@@ -334,7 +345,7 @@ def _check_sweep(pb, cases, status, metrics, expect):
 def test_sweep_reports_what_the_lanes_step_over(fourbar_sweep, expect):
     """A four-bar sweep (360 positions: the lock-step lane path applies) whose
     rows mix locked four-bars, parallelograms and healthy ones: every locked
-    row is reported with its refined angle (M_FAIL_PHI, 1e-6 deg) and the RRR
+    row is reported with its refined angle (M_FAIL_PHI, 1e-10 rad) and the RRR
     dyad's group index (M_FAIL_GROUP), parallelograms are SINGULAR, and the
     healthy rows stay OK with M_FAIL_GROUP NaN."""
     pb, cases, status, metrics = fourbar_sweep

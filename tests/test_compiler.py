@@ -23,7 +23,7 @@ from pipeline.scene import revolution_angles, solve_curves
 from pipeline.study import load_study
 from pipeline.sweep import build_problem
 from pipeline.sweep_spec import draw_candidates, parameter_rows
-from tolerances import KERNEL_AGREEMENT
+from support.tolerances import LANE_AGREEMENT_REL, LANE_MARGIN_REL
 
 STUDIES = Path(__file__).resolve().parent.parent / "studies"
 
@@ -109,12 +109,17 @@ def test_lanes_agree_with_the_careful_path(problem, candidates):
     np.testing.assert_array_equal(s_fast, s_ref)
     ok = s_ref == kc.OK
     assert ok.sum() > 100
-    for col in (ks.M_STROKE, ks.M_DWELL, ks.M_MARGIN, ks.M_PEAK_R, ks.M_PEAK_MBAL,
-                ks.M_DWELL_START, ks.M_PEAK_PHI, ks.M_FORCES_DONE):
+    # the README's figures: 1e-12 relative, the singularity margin 7.2e-12 (a small
+    # difference of large products); what is counted or located is identical
+    for col, rel in ((ks.M_STROKE, LANE_AGREEMENT_REL), (ks.M_DWELL, LANE_AGREEMENT_REL),
+                     (ks.M_MARGIN, LANE_MARGIN_REL), (ks.M_PEAK_R, LANE_AGREEMENT_REL),
+                     (ks.M_PEAK_MBAL, LANE_AGREEMENT_REL), (ks.M_DWELL_START, 0.0),
+                     (ks.M_PEAK_PHI, 0.0), (ks.M_FORCES_DONE, 0.0)):
         a, b = m_fast[ok, col], m_ref[ok, col]
         np.testing.assert_array_equal(np.isnan(a), np.isnan(b))
         f = np.isfinite(b)
-        np.testing.assert_allclose(a[f], b[f], rtol=KERNEL_AGREEMENT, atol=0)
+        assert f.sum() > 100, col
+        np.testing.assert_allclose(a[f], b[f], rtol=rel, atol=0, err_msg=f"metric column {col}")
     np.testing.assert_array_equal(m_fast[~ok, ks.M_FAIL_PHI], m_ref[~ok, ks.M_FAIL_PHI])
 
 
@@ -209,3 +214,55 @@ def test_rows_run_in_ranges_on_threads():
     assert sorted(calls) == [(0, 256, "x"), (256, 512, "x"), (512, 768, "x"), (768, 1000, "x")]
     with pytest.raises(ValueError, match="n_jobs"):
         run_rows(kernel, np.zeros((10, 1)), "x", n_jobs=0)
+
+
+# ----------------------------------------------------------------- a second run compiles nothing
+_RUN_AND_COUNT = r"""
+import json, sys
+from numba.core.registry import CPUDispatcher
+from pipeline.cli import main
+code = main(sys.argv[1:])
+hits = misses = 0
+for name, mod in list(sys.modules.items()):
+    if not (name.startswith("pipeline") and mod is not None):
+        continue
+    for obj in list(vars(mod).values()):
+        if isinstance(obj, CPUDispatcher):
+            hits += sum(obj.stats.cache_hits.values())
+            misses += sum(obj.stats.cache_misses.values())
+print(json.dumps({"code": code, "hits": hits, "misses": misses}))
+"""
+
+
+def _cache_files(folder):
+    return {str(p.relative_to(folder)): (p.stat().st_size, p.stat().st_mtime_ns)
+            for p in Path(folder).rglob("*") if p.is_file()}
+
+
+def test_a_second_run_compiles_nothing(tmp_path):
+    """Two processes run the main job's study with one, empty, cache folder (the
+    generated modules and numba's code): the first compiles (numba's cache
+    misses), the second loads every kernel from the cache (hits only, no miss)
+    and leaves the folder exactly as it was (no file written or rewritten)."""
+    import json
+    import os
+    import subprocess
+    import sys
+    cache = tmp_path / "cache"
+    env = dict(os.environ, PIPELINE_CACHE_DIR=str(cache / "modules"),
+               NUMBA_CACHE_DIR=str(cache / "numba"))
+    runs = []
+    for k in range(2):
+        argv = ["run", str(STUDIES / "ov7_synthesis.toml"), "--candidates", "200",
+                "-o", str(tmp_path / f"run{k}.h5"), "-q"]
+        r = subprocess.run([sys.executable, "-c", _RUN_AND_COUNT, *argv], env=env,
+                           capture_output=True, text=True, timeout=600)
+        assert r.returncode == 0, r.stderr[-3000:]
+        runs.append(json.loads(r.stdout.strip().splitlines()[-1]))
+        if k == 0:
+            first = _cache_files(cache)
+    assert runs[0]["code"] == runs[1]["code"] == 0
+    assert runs[0]["misses"] > 0, runs[0]                   # a fresh folder: it compiled
+    assert runs[1]["misses"] == 0 and runs[1]["hits"] > 0, runs[1]
+    assert any(n.endswith(".nbi") for n in first) and any(n.endswith(".py") for n in first)
+    assert _cache_files(cache) == first

@@ -1011,7 +1011,7 @@ _PHI_SMALL = np.array([-1.0, 0.0, 0.5, 3.0])
 _T_SMALL = np.array([0.0, 2.0])
 
 
-@settings(max_examples=600, deadline=2000, database=None)
+@settings(max_examples=600, database=None)   # deadline: the profile's (none)
 @given(text=_random_text)
 def test_fuzz_random_text_parses_or_raises_expression_error(text):
     try:

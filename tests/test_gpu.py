@@ -23,6 +23,7 @@ import pytest
 from pipeline.kernels import sweep as ks
 from pipeline.study import load_study
 from pipeline.sweep import run_sweep
+from support.tolerances import GPU_AGREEMENT_REL
 
 HERE = Path(__file__).resolve().parent
 STUDIES = HERE.parent / "studies"
@@ -30,7 +31,7 @@ SIM = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
 # metrics defined differently on the two CPU paths (pipeline.gpu's docstring):
 # the lanes count a fixed number of Newton steps per position
 PATH_DEFINED = {ks.M_NEWTON_MEAN}
-REL = 1e-12
+REL = GPU_AGREEMENT_REL     # the README's figure
 
 
 def _run(code, env=SIM, timeout=600):
@@ -61,7 +62,7 @@ def _check_agreement(res):
 def simulated(tmp_path_factory):
     out = tmp_path_factory.mktemp("gpu") / "agreement.json"
     _run(f"import runpy, sys; sys.argv = ['x', {str(out)!r}, '60']; "
-         f"runpy.run_path({str(HERE / 'gpu_agreement.py')!r}, run_name='__main__')")
+         f"runpy.run_path({str(HERE / 'support' / 'gpu_agreement.py')!r}, run_name='__main__')")
     return json.loads(out.read_text())
 
 
@@ -177,7 +178,7 @@ def test_store_feasible_keeps_the_feasible_rows_and_every_count(tmp_path):
 
 def test_store_feasible_resumes_to_the_same_file(tmp_path):
     from pipeline.sweep import SweepInterrupted
-    from sweep_helpers import assert_same_results
+    from support.sweep_helpers import assert_same_results
     study = load_study(STUDIES / "ov7_synthesis.toml")
     once, twice = tmp_path / "once.h5", tmp_path / "twice.h5"
     run_sweep(study, once, candidates=600, chunk_size=200, progress=False, store="feasible")
@@ -209,7 +210,7 @@ def test_real_gpu_kernels_agree_with_the_cpu(tmp_path):
     out = tmp_path / "agreement.json"
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
     _run(f"import runpy, sys; sys.argv = ['x', {str(out)!r}, '2000']; "
-         f"runpy.run_path({str(HERE / 'gpu_agreement.py')!r}, run_name='__main__')", env=env,
+         f"runpy.run_path({str(HERE / 'support' / 'gpu_agreement.py')!r}, run_name='__main__')", env=env,
          timeout=1800)
     res = json.loads(out.read_text())
     assert res["simulator"] is False

@@ -1,7 +1,7 @@
 """Inputs besides the crank: an oscillating rocker driven through a swing by a
 cam law, a slider driven along its guide by a stroke table, and a second crank
 geared to the first.  Study format, the laws against their definitions, the
-kinematics against the 60-digit reference of tests/naive.py over a full
+kinematics against the 60-digit reference of tests/support/naive.py over a full
 cycle, kinetostatics against the naive dense solve (with the inputs' drives as
 unknowns) and virtual power with eps1 != 0, and a sweep over an input's
 dimensions with its Pareto analysis."""
@@ -13,14 +13,14 @@ import mpmath
 import numpy as np
 import pytest
 
-import naive
+from support import naive
 from pipeline.kernels import config as kc
 from pipeline.kernels.inputs import linear_law, rise_return, table_law
 from pipeline.model import Law, RotaryInput, SliderInput
 from pipeline.scene import revolution_angles, run_scene, solve_curves
 from pipeline.study import StudyError, load_study
-from test_forces import virtual_power
-from tolerances import MP_REFERENCE_REL, REACTION_REL, VIRTUAL_POWER_REL
+from support.power import virtual_power
+from support.tolerances import FAIL_ANGLE_RAD, MP_REFERENCE_REL, REACTION_MP_REL, VIRTUAL_POWER_REL
 
 DEG = math.pi / 180.0
 N_CYCLE = 36
@@ -260,32 +260,55 @@ def test_reactions_and_drives_match_the_naive_dense_solve(studies, name, naive_f
         ref = naive_fn(float(phi), omega1=crank.omega1, eps1=crank.eps1)
         scale = max(np.abs(ref[j]).max() for j in plan.joint_names)
         for j, jn in enumerate(plan.joint_names):
-            assert np.abs(fr.R[k, j] - ref[jn]).max() <= REACTION_REL * scale, (phi, jn)
+            assert np.abs(fr.R[k, j] - ref[jn]).max() <= REACTION_MP_REL * scale, (phi, jn)
         for s, sn in enumerate(plan.slide_names):
-            assert np.abs(fr.slide[k, s] - ref[sn]).max() <= REACTION_REL * scale, (phi, sn)
+            assert np.abs(fr.slide[k, s] - ref[sn]).max() <= REACTION_MP_REL * scale, (phi, sn)
         drive, share = fr.drive[k, 0]
-        assert abs(drive - ref[input_name]) <= REACTION_REL * (abs(ref[input_name]) + 1e-3)
+        assert abs(drive - ref[input_name]) <= REACTION_MP_REL * (abs(ref[input_name]) + 1e-3)
         want_share = ref[input_name] * ref["q1"][input_name]
-        assert abs(share - want_share) <= REACTION_REL * (abs(ref["M_bal"]) + abs(want_share))
+        assert abs(share - want_share) <= REACTION_MP_REL * (abs(ref["M_bal"]) + abs(want_share))
         assert abs(fr.M_bal[k] - (ref["M_bal"] + want_share)) <= \
-            REACTION_REL * (abs(ref["M_bal"]) + abs(want_share))
+            REACTION_MP_REL * (abs(ref["M_bal"]) + abs(want_share))
 
 
-def test_the_drives_are_in_the_scene_file(studies, tmp_path):
+@pytest.mark.parametrize("name,naive_fn,input_name,units", [
+    ("cam_rocker_input", None, "rocker", "N*m"),
+    ("actuator_slider_input", naive.naive_forces_actuator, "actuator", "N")])
+def test_the_drives_are_in_the_scene_file(studies, tmp_path, name, naive_fn, input_name, units):
+    """A scene file keeps each input's drive and share at the table and dense
+    positions, named and with units; the actuator's are naive.py's dense solve
+    (60-digit kinematics) at every table position, and every share is the
+    drive times dq/dphi1 (the cam's law from naive.py's closed form)."""
     import h5py
     from pipeline.runner import run_study
-    out = tmp_path / "cam.h5"
-    run_study(studies / "cam_rocker_input.toml", out)
+    study = load_study(studies / f"{name}.toml")
+    crank = study.mechanism.crank
+    out = tmp_path / f"{name}.h5"
+    run_study(studies / f"{name}.toml", out)
     with h5py.File(out, "r") as f:
-        g = f["forces/dense"] if "forces/dense" in f else None
-        found = []
-        f.visititems(lambda n, o: found.append(n) if n.endswith("input_drive") else None)
-        assert found, "no input_drive dataset"
-        d = f[found[0]]
-        assert d.attrs["units"] == "N*m" and list(d.attrs["inputs"]) == ["rocker"]
-        assert np.isfinite(d[...]).all()
-        share = f[found[0].replace("input_drive", "input_share")][...]
-        assert np.isfinite(share).all() and np.abs(share).max() > 0
+        for grid in ("table", "dense"):
+            d = f[f"{grid}/input_drive"]
+            assert d.attrs["units"] == units and list(d.attrs["inputs"]) == [input_name]
+            assert f[f"{grid}/input_share"].attrs["units"] == "N*m"
+        phi = np.radians(f["table/phi1"][()])
+        drive = f["table/input_drive"][:, 0]
+        share = f["table/input_share"][:, 0]
+    assert len(phi) == 13
+    law = study.mechanism.groups[0].law
+    for k in range(12):
+        if naive_fn is not None:
+            ref = naive_fn(float(phi[k]), omega1=crank.omega1, eps1=crank.eps1)
+            assert abs(drive[k] - ref[input_name]) <= \
+                REACTION_MP_REL * (abs(ref[input_name]) + 1e-3), (k, drive[k], ref[input_name])
+            q1 = ref["q1"][input_name]
+        else:      # the cam's dq/dphi1 (rad/rad), the law differentiated at 30 digits
+            with mpmath.workdps(30):
+                q1 = float(mpmath.diff(lambda x: naive.mp_rise_return(
+                    x, law.start, law.travel, law.phase, law.rise, law.kind == "cycloidal"),
+                    mpmath.mpf(float(phi[k]))))
+            assert np.isfinite(drive[k])
+        assert abs(share[k] - drive[k] * q1) <= REACTION_MP_REL * (abs(share[k]) + 1e-3), k
+    assert np.abs(share).max() > 0
 
 
 @pytest.mark.parametrize("name", STUDIES)
@@ -312,7 +335,7 @@ SWEEP_N = 160
 
 @pytest.fixture(scope="module")
 def cam_sweep(studies, tmp_path_factory):
-    from sweep_helpers import run_and_analyze
+    from support.sweep_helpers import run_and_analyze
     return run_and_analyze(studies / "cam_rocker_input_sweep.toml",
                            tmp_path_factory.mktemp("cam_sweep") / "cam.h5", SWEEP_N)
 
@@ -324,7 +347,7 @@ def test_sweep_over_the_cam_law_matches_the_scene_path(cam_sweep):
     import h5py
     from pipeline.forces import scene_forces
     from pipeline.sweep_spec import apply_design
-    from tolerances import SWEEP_VS_SCENE_REL
+    from support.tolerances import SWEEP_VS_SCENE_REL
     study, path = cam_sweep
     with h5py.File(path, "r") as f:
         x = f["candidates/params"][()]
@@ -357,7 +380,7 @@ def test_sweep_over_the_cam_law_matches_the_scene_path(cam_sweep):
 
 
 def test_pareto_analysis_of_the_cam_sweep(cam_sweep):
-    from sweep_helpers import assert_fronts_are_the_brute_force_rank
+    from support.sweep_helpers import assert_fronts_are_the_brute_force_rank
     assert_fronts_are_the_brute_force_rank(cam_sweep[1])
 
 
@@ -385,7 +408,7 @@ def test_a_lock_between_two_positions_is_found_where_it_begins(studies, law, lin
     sinker bar cannot be reached in a window (34 deg wide down to under 2)
     that 36 positions may straddle.  The link folds at the window's first
     angle, a dead position the crank cannot pass: SINGULAR there (from the law's own formula by brentq), within
-    1e-6 deg, for the smooth cycloidal law and for a harmonic one whose
+    1e-10 rad, for the smooth cycloidal law and for a harmonic one whose
     acceleration jumps at the top (rise 130 deg); the top of the swing lies
     5 deg from the nearest position."""
     from scipy.optimize import brentq
@@ -401,12 +424,19 @@ def test_a_lock_between_two_positions_is_found_where_it_begins(studies, law, lin
                      close_at=2 * math.pi)
     lw = rocker.law
 
-    def gap(p):      # > 0 where the link cannot reach the guide x = 80 mm
-        q = rise_return(p, lw.start, lw.travel, lw.phase, lw.rise, law == "cycloidal")[0]
-        return 80.0 - (30.0 + 35.0 * math.cos(q)) - link
+    def gap(p):      # > 0 where the link cannot reach the guide x = 80 mm (naive.py, 30 digits)
+        with mpmath.workdps(30):
+            q = naive.mp_rise_return(mpmath.mpf(p), lw.start, lw.travel, lw.phase, lw.rise,
+                                     law == "cycloidal")
+            return float(80 - (30 + 35 * mpmath.cos(q)) - link)
 
+    # bracket on a fine grid with the law's closed form (README), then brentq on gap
     grid = np.radians(np.linspace(0.0, 360.0, 360001))
-    v = np.array([gap(p) for p in grid])
+    u = (grid - lw.phase) % (2 * math.pi)
+    x = np.where(u < lw.rise, u / lw.rise, (2 * math.pi - u) / (2 * math.pi - lw.rise))
+    f = x - np.sin(2 * math.pi * x) / (2 * math.pi) if law == "cycloidal" else \
+        (1 - np.cos(math.pi * x)) / 2
+    v = 80.0 - (30.0 + 35.0 * np.cos(lw.start + lw.travel * f)) - link
     k = int(np.argmax(v > 0))
     assert k > 0 and (v > 0).sum() < len(v) * 0.1
     begin = brentq(gap, grid[k - 1], grid[k], xtol=1e-15)
@@ -415,7 +445,7 @@ def test_a_lock_between_two_positions_is_found_where_it_begins(studies, law, lin
         assert not any(inside)
     assert c.overall == kc.SINGULAR          # the dyad folds there: a dead position
     assert plan.group_names[int(c.fail_group)] == "lift"
-    assert abs(math.degrees(c.fail_phi - begin)) <= 1e-6, math.degrees(c.fail_phi - begin)
+    assert abs(c.fail_phi - begin) <= FAIL_ANGLE_RAD, c.fail_phi - begin
 
 
 def test_the_drives_are_in_reactions_csv(studies, tmp_path):

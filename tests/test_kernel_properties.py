@@ -32,7 +32,7 @@ from pipeline.kernels.groups import attach, crank, rpr, rrp, rrr
 from pipeline.kernels.triad import class3, ternary_angle
 from pipeline.model import ClassIII, Crank, Mechanism, RRR
 from pipeline.scene import solve_curves
-from tolerances import CLOSURE_MM, KERNEL_EXACT_REL, LENGTH_REL, SELF_FD_REL, WELL_INSIDE_REL
+from support.tolerances import CLOSURE_MM, KERNEL_EXACT_REL, LENGTH_REL, SELF_FD_REL, WELL_INSIDE_REL
 
 TOLS = kc.default_tolerances()
 SING = float(TOLS[kc.T_SINGULAR])
@@ -105,7 +105,7 @@ def wrap(x):
     return (x + math.pi) % (2.0 * math.pi) - math.pi
 
 
-# 8th-order central differences, offsets 1..4 (same stencil as tests/naive.py)
+# 8th-order central differences, offsets 1..4 (same stencil as tests/support/naive.py)
 _W1 = (4.0 / 5.0, -1.0 / 5.0, 4.0 / 105.0, -1.0 / 280.0)
 _W2C = -205.0 / 72.0
 _W2 = (8.0 / 5.0, -1.0 / 5.0, 8.0 / 315.0, -1.0 / 560.0)

@@ -7,11 +7,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import naive
+from support import naive
 from pipeline.kernels import config as kc
 from pipeline.scene import revolution_angles, run_scene, solve_curves
 from pipeline.study import load_study
-from tolerances import ANALOG_REL, CLOSURE_MM, REFERENCE_MM, SELF_FD_REL
+from support.tolerances import (ANALOG_REL, CLOSURE_MM, NAIVE_POSITION_MM, NEWTON_ITERATIONS,
+                                NEWTON_TOL,
+                                REFERENCE_MM, SELF_FD_REL)
 
 SCENES = {"ov7_base": "ov7_base_positions.csv", "ov7_class3": "ov7_class3_positions.csv"}
 
@@ -43,7 +45,7 @@ def _naive_analogs(name, phi):
 
 def test_analogs_match_independent_solver(scene):
     """Exact first and second analogs against 8th-order finite differences of
-    the fsolve solver (tests/naive.py), relative to each quantity's scale."""
+    the fsolve solver (tests/support/naive.py), relative to each quantity's scale."""
     name, study, res = scene
     t = res.table
     worst = 0.0
@@ -51,7 +53,7 @@ def test_analogs_match_independent_solver(scene):
         ref = _naive_analogs(name, t.phi[k])
         for p, xy in ref["pos"].items():
             i = res.plan.point(p)
-            np.testing.assert_allclose(t.pos[k, i], xy, atol=REFERENCE_MM)
+            np.testing.assert_allclose(t.pos[k, i], xy, rtol=0, atol=NAIVE_POSITION_MM)
             for mine, theirs in ((t.d1[k, i], ref["d1"][p]), (t.d2[k, i], ref["d2"][p])):
                 scale = max(np.abs(theirs).max(), 1.0)
                 err = np.abs(mine - theirs).max() / scale
@@ -102,7 +104,7 @@ def test_closure_residuals_and_link_lengths(scene):
 
 
 def test_velocity_is_derivative_of_position(scene):
-    """In-product check independent of tests/naive.py: a central difference of
+    """In-product check independent of tests/support/naive.py: a central difference of
     the kernel's own positions reproduces its analogs."""
     name, study, res = scene
     plan = res.plan
@@ -137,3 +139,47 @@ def test_class3_margin_and_iterations(studies):
     assert abs(margin - naive.naive_mech_b_margin(360)[0]) < 1e-9
     assert round(margin, 2) == 0.93
     assert res.dense.iterations.max() <= 6
+
+
+# mechanisms C and D (DOMAIN.md sections 7 and 8): naive.py's names -> the studies'
+NAIVE_CD = {
+    "takeup_dynamics": (naive.mech_c_analogs, {p: p for p in ("P2", "P3", "P4", "P7")},
+                        {"S1": "S[crank]", "S2": "S[rod]", "S3": "S[needle bar]",
+                         "S4": "S[block]", "S5": "S[coulisse]"}),
+    "warp_feed_fourbar": (naive.mech_d_analogs, {p: p for p in ("P2", "P3", "P5")}, {}),
+}
+
+
+@pytest.mark.parametrize("name", list(NAIVE_CD))
+def test_mechanisms_c_and_d_match_the_independent_solver(studies, name):
+    """The take-up (C) and the four-bar (D) at their table positions: every
+    moving point (and C's centres of mass) and every tabulated link's angle,
+    with both analogs, against naive.py's closed forms differentiated by
+    8th-order finite differences."""
+    study = load_study(studies / f"{name}.toml")
+    res = run_scene(study)
+    analogs, points, coms = NAIVE_CD[name]
+    t = res.table
+    labels = study.output.link_labels
+    assert len(t.phi) == 13 and len(labels) == 3
+    for k in range(len(t.phi) - 1):
+        ref = analogs(t.phi[k], links=labels)
+        for theirs, mine in list(points.items()) + list(coms.items()):
+            i = res.plan.point(mine)
+            np.testing.assert_allclose(t.pos[k, i], ref["pos"][theirs], rtol=0,
+                                       atol=NAIVE_POSITION_MM, err_msg=mine)
+            for got, want in ((t.d1[k, i], ref["d1"][theirs]), (t.d2[k, i], ref["d2"][theirs])):
+                err = np.abs(got - want).max() / max(np.abs(want).max(), 1.0)
+                assert err <= ANALOG_REL, (name, mine, np.rad2deg(t.phi[k]), err)
+        for j, lab in enumerate(labels):
+            assert abs(math.remainder(t.links[k, j, 0] - ref["ang"][lab], 2 * math.pi)) < 1e-12, lab
+            for col, r in ((1, ref["ang_d1"][lab]), (2, ref["ang_d2"][lab])):
+                assert abs(t.links[k, j, col] - r) <= ANALOG_REL * max(abs(r), 1.0), (lab, col)
+
+
+def test_newton_takes_two_steps_per_position(studies):
+    """The README's Newton figure: at the default tolerance (1e-12 of the lead
+    lengths) mechanism B's continuation takes 2 Newton steps per position."""
+    res = run_scene(load_study(studies / "ov7_class3.toml"))
+    assert res.tolerances[kc.T_NEWTON_TOL] == NEWTON_TOL
+    assert res.dense.iterations.mean() == pytest.approx(NEWTON_ITERATIONS, abs=0.01)

@@ -22,7 +22,8 @@ from pipeline.scene import real_motion, revolution_angles, run_scene, solve_curv
 from pipeline.study import StudyError, load_study, parse_study
 from pipeline.sweep import build_problem, metric_values, run_sweep
 from pipeline.sweep_spec import apply_design, draw_checked, parameter_rows
-from tolerances import SWEEP_VS_SCENE_REL
+from support import naive
+from support.tolerances import LAW_VS_NAIVE_REL, SWEEP_VS_SCENE_REL
 
 OV7_LAW = """
 [output.motion_law]
@@ -591,7 +592,18 @@ def test_scene_reports_and_stores_the_law_error(studies, tmp_path):
         g = f["motion"]
         assert txt(g["law_error"].attrs["units"]) == "1"
         assert txt(g["law_shift"].attrs["units"]) == "deg"
-        assert 0 < g["law_error"][()] <= g["law_error_max"][()] < 1
+        # naive.py's rocker angles at the scene's 360 positions (psi = k deg: rot = -1,
+        # phi1 = -k deg) against the law's closed form, every shift by brute force
+        theta = np.array(naive.mech_b_rocker_angles(360)[0])
+        psi = np.arange(360.0)
+        p = np.mod(psi, 360.0)
+        y = CLOSED["harmonic"]
+        law = np.where((p >= 30) & (p < 130), y((p - 30) / 100.0),
+                       np.where((p >= 130) & (p < 240), 1.0 - y((p - 130) / 110.0), 0.0))
+        rms, top, s = brute_law_error(theta, law, True)
+        assert g["law_error"][()] == pytest.approx(rms, rel=LAW_VS_NAIVE_REL)
+        assert g["law_error_max"][()] == pytest.approx(top, rel=LAW_VS_NAIVE_REL)
+        assert g["law_shift"][()] == pytest.approx(s * 360.0 / 360)
         assert txt(g.attrs["law_align"]) == "best"
         # every transmission angle on the scene's dimension: the class III group's two leads
         assert [txt(x) for x in f["dyad"][()]] == ["triad lead P4-P6", "triad lead P5-P7"]

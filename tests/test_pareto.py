@@ -1,4 +1,4 @@
-"""Tests of pipeline.pareto against the O(n^2) brute-force reference in tests/naive_pareto.py."""
+"""Tests of pipeline.pareto against the O(n^2) brute-force reference in tests/support/naive_pareto.py."""
 
 from __future__ import annotations
 
@@ -17,10 +17,7 @@ from pipeline.pareto import (
     nondominated_rank,
 )
 
-try:  # tests/ is not a package: pytest puts it on sys.path
-    from naive_pareto import brute_force_rank, crowding_ref, dominates_ref
-except ImportError:  # pragma: no cover - if tests/ ever becomes a package
-    from tests.naive_pareto import brute_force_rank, crowding_ref, dominates_ref
+from support.naive_pareto import brute_force_rank, crowding_ref, dominates_ref
 
 NAN = math.nan
 INF = math.inf

@@ -28,6 +28,7 @@ from pipeline.browse import OV7_PHASES  # noqa: E402
 from pipeline.cli import main  # noqa: E402
 from pipeline.runner import solve_scene  # noqa: E402
 from pipeline.study import load_study  # noqa: E402
+from support import naive  # noqa: E402
 
 SCENES = ("ov7_base", "warp_feed_fourbar", "takeup_dynamics")
 # links of [output] links x 3 panels + moving named points x 2 panels
@@ -125,7 +126,10 @@ def test_cyclogram_dwell_is_the_scenes_dwell_window(scenes):
     assert sum(math.degrees(p.get_width()) for p in cycle.values()) == pytest.approx(360.0)
     assert math.degrees(cycle["dwell"].get_width()) == pytest.approx(150.0)
     assert cycle["dwell"].get_x() == pytest.approx(design["dwell"].get_x())
-    assert "the design dwells from phi1 = -224 deg" in fig.axes[0].get_title()
+    # the best 150 deg window of mechanism A's rocker at the scene's 360 positions
+    # (phi1 = -k deg, rot = -1), by naive.py's fsolve revolution
+    _, k = naive.naive_mech_a_dwell(360)
+    assert f"the design dwells from phi1 = {-k:g} deg for 150 deg" in fig.axes[0].get_title()
 
 
 def test_cyclogram_shows_the_cycle_the_study_states(scenes):
@@ -253,12 +257,25 @@ def test_animation_writes_a_gif_with_the_frames_asked(scenes, tmp_path):
         frame_indices(motion_of(res), MAX_FRAMES + 1)
     with pytest.raises(ValueError, match=".gif"):
         write_animation(motion_of(res), tmp_path / "a.avi", frames=4)
-    if shutil.which("ffmpeg") is None:
+    # MP4 through ffmpeg (.ci/run installs it: never skipped): an MP4 container
+    # holding the 4 frames asked for (counted by ffprobe)
+    assert shutil.which("ffmpeg") and shutil.which("ffprobe"), "apt-get install ffmpeg"
+    write_animation(motion_of(res), tmp_path / "a.mp4", frames=4)
+    assert (tmp_path / "a.mp4").read_bytes()[4:8] == b"ftyp"
+    import subprocess
+    probe = subprocess.run(["ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0",
+                            "-show_entries", "stream=nb_read_frames", "-of", "csv=p=0",
+                            str(tmp_path / "a.mp4")], capture_output=True, text=True, check=True)
+    assert probe.stdout.strip() == "4"
+    # and without ffmpeg, a clear error
+    import pipeline.animate as an
+    real_which = an.shutil.which
+    try:
+        an.shutil.which = lambda name, *a, **k: None if name == "ffmpeg" else real_which(name)
         with pytest.raises(ValueError, match="ffmpeg"):
-            write_animation(motion_of(res), tmp_path / "a.mp4", frames=4)
-    else:
-        write_animation(motion_of(res), tmp_path / "a.mp4", frames=4)
-        assert (tmp_path / "a.mp4").stat().st_size > 1000
+            write_animation(motion_of(res), tmp_path / "b.mp4", frames=4)
+    finally:
+        an.shutil.which = real_which
 
 
 def test_a_failing_mechanism_is_animated_up_to_where_it_fails(studies, tmp_path):
@@ -313,11 +330,10 @@ def test_run_writes_the_new_pictures_and_show_animates_the_scene(studies, tmp_pa
 
 
 @pytest.fixture(scope="module")
-def small_sweep(tmp_path_factory, studies):
-    from pipeline.sweep import run_sweep
-    out = tmp_path_factory.mktemp("sweep") / "s.h5"
-    run_sweep(load_study(studies / "ov7_synthesis.toml"), out, candidates=300, progress=False)
-    return out
+def small_sweep(tmp_path_factory, synthesis_sweep):
+    """This module's copy of the session's sweep of the main job's study."""
+    from support.sweep_helpers import copy_of
+    return copy_of(synthesis_sweep, tmp_path_factory.mktemp("sweep"), "s.h5")
 
 
 def test_show_animates_a_sweep_candidate(small_sweep, tmp_path, capsys):

@@ -7,7 +7,6 @@ import shlex
 import shutil
 from pathlib import Path
 
-import pytest
 
 from pipeline.cli import main
 
@@ -24,22 +23,39 @@ def readme_commands():
 
 
 def smaller(argv):
-    """The same command with a test-sized candidate count."""
+    """The same command with a test-sized candidate count; every run of the main
+    job's study in chunks of 1000 (so that its files draw the same candidates)."""
     argv = list(argv)
     if "--candidates" in argv:
         argv[argv.index("--candidates") + 1] = SMALL
     elif argv[:2] == ["run", "studies/ov7_synthesis.toml"] and "--resume" not in argv:
         argv += ["--candidates", SMALL]
+    if argv[:2] == ["run", "studies/ov7_synthesis.toml"] and "--resume" not in argv:
+        argv += ["--chunk-size", "1000"]
     return argv
 
 
 def test_readme_commands_run_in_order(tmp_path, monkeypatch, capsys):
-    distributed = pytest.importorskip("distributed")
+    """Every command succeeds, and what they write holds: the main job's file, the
+    bigger sweep (interrupted after its first chunk, then continued by the README's
+    --resume line), the cluster run and the feasible-only run have the same
+    candidates and numbers; the scene's tables give the crank tip of DOMAIN.md
+    section 5 and naive.py's eyelet."""
+    import distributed
+    import h5py
+    import numpy as np
+    import pandas as pd
+
+    import pipeline.sweep as sw
+    from support import naive
+    from support.sweep_helpers import assert_same_results
     shutil.copytree(ROOT / "studies", tmp_path / "studies")
     monkeypatch.chdir(tmp_path)
     commands = readme_commands()
     assert commands[0] == "pipeline run studies/ov7_synthesis.toml"
     assert any("--scheduler" in c for c in commands) and any("--resume" in c for c in commands)
+    real_run_sweep = sw.run_sweep
+    results = tmp_path / "results"
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                                   protocol="tcp", dashboard_address=None) as cluster:
         for cmd in commands:
@@ -49,14 +65,47 @@ def test_readme_commands_run_in_order(tmp_path, monkeypatch, capsys):
             argv = [cluster.scheduler_address if a == "tcp://host:8786" else a for a in argv]
             if argv[0] == "compile" and "--show" not in argv:
                 argv += ["-q"]
+            interrupt = "results/big_sweep.h5" in argv and "--resume" not in argv
+            if interrupt:      # as if stopped after its first chunk: the next line resumes it
+                monkeypatch.setattr(sw, "run_sweep", lambda *a, **k: real_run_sweep(
+                    *a, **k, stop_after_chunks=1))
             rc = main(argv)
+            monkeypatch.setattr(sw, "run_sweep", real_run_sweep)
             captured = capsys.readouterr()
-            assert rc == 0, (cmd, captured.err)
-    assert (tmp_path / "results" / "ov7_synthesis.h5").exists()
-    assert (tmp_path / "results" / "big_sweep.h5").exists()
-    assert (tmp_path / "results" / "cluster.h5").exists()
-    assert (tmp_path / "tables" / "points.csv").exists()
-    assert (tmp_path / "report.html").exists()
+            if interrupt:
+                assert rc == 130 and "1 of 3 chunks saved" in captured.err, (cmd, captured.err)
+                assert (results / "big_sweep.h5.parts").exists()
+            else:
+                assert rc == 0, (cmd, captured.err)
+    main_job = results / "ov7_synthesis.h5"
+    with h5py.File(main_job, "r") as f:
+        assert f.attrs["complete"] and f["candidates/status"].shape == (int(SMALL),)
+        feasible = f["candidates/feasible"][()]
+        params = f["candidates/params"][()]
+        dwell = f["metrics/dwell_error"][()]
+    assert_same_results(main_job, results / "big_sweep.h5")      # interrupted, then resumed
+    assert not (results / "big_sweep.h5.parts").exists()
+    assert_same_results(main_job, results / "cluster.h5")
+    with h5py.File(results / "cluster.h5", "r") as f:
+        assert f.attrs["engine"] == "dask"
+    # --store feasible: exactly the main job's feasible rows, with their sweep index
+    with h5py.File(results / "huge.h5", "r") as f:
+        np.testing.assert_array_equal(f["candidate"][()], np.flatnonzero(feasible))
+        np.testing.assert_array_equal(f["candidates/params"][()], params[feasible])
+        np.testing.assert_array_equal(f["metrics/dwell_error"][()], dwell[feasible])
+    # the scene's tables: the crank tip P2 = 50 e(phi1 + 173 deg), the eyelet P8 by naive.py
+    pts = pd.read_csv(tmp_path / "tables" / "points.csv")
+    phi = np.radians(pts["phi1 [deg]"].to_numpy())
+    np.testing.assert_allclose(pts["P2_x [mm]"], 50.0 * np.cos(phi + np.radians(173.0)),
+                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(pts["P2_y [mm]"], 50.0 * np.sin(phi + np.radians(173.0)),
+                               rtol=0, atol=1e-9)
+    for k in (0, 90, 200):
+        p8 = naive.mech_b_positions(phi[k])[0]["P8"]
+        np.testing.assert_allclose(pts.loc[k, ["P8_x [mm]", "P8_y [mm]"]].to_numpy(float), p8,
+                                   rtol=0, atol=1e-9)
+    page = (tmp_path / "report.html").read_text()
+    assert page.startswith("<!DOCTYPE html>") and "knee" in page
 
 
 def test_a_finished_sweep_says_what_comes_next(tmp_path, capsys, studies):
@@ -84,24 +133,48 @@ def test_dynamics_summary_is_a_table_with_units(tmp_path, capsys, studies):
 
 
 def test_a_first_run_says_it_is_compiling(tmp_path, studies, monkeypatch, caplog):
-    """A run whose kernels take more than a second to be ready says so while
-    it waits, and reports the compile time apart from the wall time."""
+    """A run whose kernels take more than a second to be ready says so while it
+    waits, and reports the compile time apart from the wall time.  No clock is
+    trusted: the preparation waits for the notice itself, and the sweep's clock
+    is moved 1000 s on while it prepares, so the compile time must hold those
+    1000 s and the wall time none of them."""
     import logging
+    import threading
     import time
+    import types
 
     import pipeline.sweep as sw
     real = sw.SweepFile.create
+    noticed = threading.Event()
+    offset = [0.0]
+
+    class Notice(logging.Handler):
+        def emit(self, record):
+            if "compiling the kernels" in record.getMessage():
+                noticed.set()
 
     def slow_create(self):
-        time.sleep(1.6)          # as a first compile would
+        assert noticed.wait(600), "no compile notice"      # a hang guard, not a timing
+        offset[0] += 1000.0                                 # as a long first compile would
         return real(self)
+
+    clock = types.SimpleNamespace(perf_counter=lambda: time.perf_counter() + offset[0],
+                                  monotonic=lambda: time.monotonic() + offset[0])
     monkeypatch.setattr(sw.SweepFile, "create", slow_create)
-    study = pipeline_load(studies)
-    with caplog.at_level(logging.INFO, logger="pipeline"):
-        out = sw.run_sweep(study, tmp_path / "s.h5", candidates=300, progress=False)
+    monkeypatch.setattr(sw, "time", clock)
+    handler = Notice()
+    logging.getLogger("pipeline").addHandler(handler)
+    try:
+        study = pipeline_load(studies)
+        with caplog.at_level(logging.INFO, logger="pipeline"):
+            out = sw.run_sweep(study, tmp_path / "s.h5", candidates=300, progress=False)
+    finally:
+        logging.getLogger("pipeline").removeHandler(handler)
     text = caplog.text
     assert "compiling the kernels of this mechanism" in text and "kernels ready after" in text
-    assert "compile_time" in out.summary and float(out.summary["wall_time"].split()[0]) < 1.6
+    compile_s = float(out.summary["compile_time"].split()[0])
+    wall_s = float(out.summary["wall_time"].split()[0])
+    assert compile_s >= 1000.0 and wall_s < 1000.0
 
 
 def pipeline_load(studies):

@@ -24,7 +24,7 @@ from pipeline.storage import read_units
 from pipeline.study import load_study, parse_study
 from pipeline.sweep import build_problem, metric_values
 from pipeline.sweep_spec import apply_design, draw_checked, parameter_rows
-from tolerances import SWEEP_VS_SCENE_REL
+from support.tolerances import SWEEP_VS_SCENE_REL
 
 CSV_REL = 1e-11          # CSV keeps 12 significant digits
 CLOSED_FORM_REL = 1e-9   # kinetostatics against a closed form, relative to the largest term

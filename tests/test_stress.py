@@ -25,7 +25,7 @@ from pipeline.kernels.sweep import (M_DWELL, M_FAIL_GROUP, M_FAIL_PHI, M_FORCES_
 from pipeline.scene import batch_revolutions, revolution_angles, solve_curves
 from pipeline.study import load_study
 from pipeline.sweep import build_problem
-from stress_cases import fourbar_rows, near_singular_triads, scaled_rows
+from support.stress_cases import fourbar_rows, near_singular_triads, scaled_rows
 
 pytestmark = pytest.mark.stress
 

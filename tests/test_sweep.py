@@ -3,18 +3,13 @@
 import dataclasses
 import math
 import os
-import re
-import signal
-import subprocess
-import sys
-import time
 
 import h5py
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-import naive
+from support import naive
 from pipeline.forces import scene_forces
 from pipeline.kernels import config as kc
 from pipeline.kernels.metrics import dwell_error
@@ -23,10 +18,11 @@ from pipeline.storage import ResultsError
 from pipeline.study import StudyError, load_study
 from pipeline.sweep import SweepInterrupted, build_problem, run_sweep
 from pipeline.sweep_spec import apply_design, draw_candidates, parameter_rows
-from sweep_helpers import assert_same_results
-from tolerances import SWEEP_VS_SCENE_REL
+from support.sweep_helpers import (SYNTHESIS_CHUNK, SYNTHESIS_N, assert_same_results, copy_of,
+                                   kill_9_after_chunks)
+from support.tolerances import DWELL_VS_NAIVE_REL, SWEEP_VS_SCENE_REL
 
-N, CHUNK = 1200, 300
+N, CHUNK = SYNTHESIS_N, SYNTHESIS_CHUNK      # the session's sweep's
 
 
 @pytest.fixture(scope="module")
@@ -35,10 +31,9 @@ def synthesis(studies):
 
 
 @pytest.fixture(scope="module")
-def baseline(synthesis, tmp_path_factory):
-    out = tmp_path_factory.mktemp("sweep") / "base.h5"
-    run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False)
-    return out
+def baseline(synthesis_sweep, tmp_path_factory):
+    """This module's copy of the session's sweep of the main job's study."""
+    return copy_of(synthesis_sweep, tmp_path_factory.mktemp("sweep"), "base.h5")
 
 
 # ---------------------------------------------------------------- dwell kernel
@@ -160,7 +155,11 @@ def test_file_contents(baseline, synthesis):
         s = f["metrics/stroke"][()][feas]
         assert ((s >= lo) & (s <= hi)).all()
         assert f["reference/status"][0] == kc.OK
-        assert f["reference/dwell_error"][0] == pytest.approx(0.0721, abs=1e-4)
+        # mechanism B at the study's 360 positions, by naive.py's fsolve revolution
+        assert synthesis.sweep.positions == 360
+        dwell, _, stroke = naive.naive_mech_b_motion(360)
+        assert f["reference/dwell_error"][0] == pytest.approx(dwell, rel=DWELL_VS_NAIVE_REL)
+        assert f["reference/stroke"][0] == pytest.approx(stroke, rel=DWELL_VS_NAIVE_REL)
         assert not os.path.exists(str(baseline) + ".parts")
 
 
@@ -188,20 +187,13 @@ def test_interrupted_then_resumed_equals_uninterrupted(baseline, synthesis, tmp_
 
 
 def test_kill_9_then_resume_equals_uninterrupted(baseline, synthesis, tmp_path):
-    """A real kill -9 of a running sweep (at whatever moment it is), then --resume."""
+    """A real kill -9 of a running sweep (held after its 5th journal entry, so the
+    kill always lands mid-run), then --resume."""
     out = tmp_path / "k.h5"
     n, chunk = 6000, 100
-    cmd = [sys.executable, "-m", "pipeline.cli", "run", str(synthesis.path), "-o", str(out),
-           "--candidates", str(n), "--chunk-size", str(chunk), "-q"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    parts = tmp_path / "k.h5.parts"
-    deadline = time.time() + 120
-    while time.time() < deadline and len(list(parts.glob("chunk_*.npz"))) < 5:
-        assert proc.poll() is None, proc.stderr.read().decode()
-        time.sleep(0.05)
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
-    assert len(list(parts.glob("chunk_*.npz"))) < n // chunk, "the run finished before the kill"
+    left = kill_9_after_chunks(["run", synthesis.path, "-o", out, "--candidates", n,
+                                "--chunk-size", chunk, "-q"], tmp_path / "k.h5.parts", 5)
+    assert left == 5
     run_sweep(synthesis, out, candidates=n, chunk_size=chunk, progress=False, resume=True)
     ref = tmp_path / "ref.h5"
     run_sweep(synthesis, ref, candidates=n, chunk_size=chunk, progress=False)
@@ -263,13 +255,23 @@ def test_thread_count_does_not_change_results(synthesis, tmp_path, baseline):
     assert_same_results(baseline, out)
 
 
-def test_dask_cluster_equals_local(synthesis, tmp_path, baseline):
-    distributed = pytest.importorskip("dask.distributed")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+@pytest.mark.parametrize("processes", [False, True], ids=["threads", "worker-processes"])
+def test_dask_cluster_equals_local(synthesis, tmp_path, baseline, processes):
+    """The same file from a Dask cluster as from the local run, bit for bit: with
+    workers in this process, and with two worker processes (the problem is
+    pickled to them; each loads the kernels from the session's compile cache,
+    which they inherit through the environment)."""
+    import dask.distributed as distributed
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=processes,
                                   dashboard_address=None) as cluster:
         out = tmp_path / "dask.h5"
         run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False,
                   scheduler=cluster.scheduler_address)
+        if processes:       # the workers are other processes, with the session's caches
+            with distributed.Client(cluster) as client:
+                seen = client.run(lambda: (os.getpid(), os.environ.get("PIPELINE_CACHE_DIR")))
+            assert len(seen) == 2 and os.getpid() not in {pid for pid, _ in seen.values()}
+            assert {d for _, d in seen.values()} == {os.environ["PIPELINE_CACHE_DIR"]}
     assert_same_results(baseline, out)
     with h5py.File(out, "r") as f:
         assert f.attrs["engine"] == "dask"

@@ -19,10 +19,11 @@ def _drop_stale_cache():
     sources = sorted(here.glob("*.py"))
     digest = _hashlib.sha256(b"".join(p.read_bytes() for p in sources)).hexdigest()
     modules = {p.stem for p in sources}
-    dirs = [here / "__pycache__"]
+    package = here / "__pycache__"
     user = _os.environ.get("NUMBA_CACHE_DIR")
-    if user:
-        dirs.append(_Path(user))
+    # numba caches in NUMBA_CACHE_DIR when it is set, else beside the sources:
+    # only that folder is checked (nothing is written into the package otherwise)
+    dirs = [_Path(user)] if user else [package]
     for d in dirs:
         stamp = d / "pipeline_kernels.sha256"
         try:
@@ -30,7 +31,7 @@ def _drop_stale_cache():
                 continue
             if d.exists():
                 for f in d.rglob("*.nb[ic]"):
-                    if f.name.split(".", 1)[0] in modules and (d != dirs[0] or f.parent == d):
+                    if f.name.split(".", 1)[0] in modules and (d != package or f.parent == d):
                         f.unlink(missing_ok=True)
             d.mkdir(parents=True, exist_ok=True)
             stamp.write_text(digest)

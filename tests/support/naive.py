@@ -34,6 +34,7 @@ power identity M_bal*omega1 + sum(F . v_S + M * omega) = 0 holds.
 
 from __future__ import annotations
 
+import functools
 import inspect
 import math
 
@@ -613,6 +614,48 @@ def naive_forces_b(phi1, omega1=-94.4, eps1=0.0, guess=None, h=DEFAULT_H):
     return out
 
 
+def naive_c_equilibrium(lo_deg=260.0, hi_deg=275.0):
+    """The take-up's stable equilibrium (deg): Q = 0 without drive, by brentq on
+    the finite-difference generalized force (DOMAIN.md section 10: 268.77 deg)."""
+    from scipy.optimize import brentq
+    q = lambda phi: naive_c_lagrange_terms(phi, M1=0.0)[2]  # noqa: E731
+    return math.degrees(brentq(q, math.radians(lo_deg), math.radians(hi_deg), xtol=1e-14))
+
+
+C_BODIES = {"S1": "crank", "S2": "rod", "S3": "needle bar", "S4": "block", "S5": "coulisse"}
+
+
+def naive_forces_c(phi1, omega1=125.0, eps1=0.0, h=DEFAULT_H):
+    """Reactions R1..R5 (N; force of first-named body on second), the slides'
+    (N, C) and M_bal of the take-up C (DOMAIN.md section 7, no external load):
+    R1 ground->crank (P1), R2 crank->rod (P2), R3 rod->needle bar (P3),
+    R4 rod->block (P4), R5 ground->coulisse (P5); slide[needle bar] the frame's
+    vertical guide on the needle bar, slide[block] the coulisse on the block
+    (along P5->P4; the block turns with the coulisse)."""
+    an = mech_c_analogs(phi1, h)
+    bodies = []
+    for s, (m, J, lk) in C_MASS.items():
+        bodies.append(dict(
+            name=C_BODIES[s], m=m, J=J, ext=[], crank=(s == "S1"),
+            S=an["pos"][s] / 1000.0,
+            vS=an["d1"][s] / 1000.0 * omega1,
+            aS=(an["d2"][s] * omega1 ** 2 + an["d1"][s] * eps1) / 1000.0,
+            omega=an["ang_d1"][lk] * omega1 if lk else 0.0,
+            eps=an["ang_d2"][lk] * omega1 ** 2 + an["ang_d1"][lk] * eps1 if lk else 0.0,
+        ))
+    P = {k: an["pos"][k] / 1000.0 for k in ("P1", "P2", "P3", "P4", "P5")}
+    joints = [
+        ("R1", None, "crank", P["P1"]),
+        ("R2", "crank", "rod", P["P2"]),
+        ("R3", "rod", "needle bar", P["P3"]),
+        ("R4", "rod", "block", P["P4"]),
+        ("R5", None, "coulisse", P["P5"]),
+    ]
+    slides = [("slide[needle bar]", None, "needle bar", 90.0 * DEG),
+              ("slide[block]", "coulisse", "block", an["ang"]["5_4"])]
+    return _kinetostatics(bodies, joints, omega1, eps1, slides)
+
+
 def naive_forces_d(phi1, omega1=60.0, eps1=0.0, h=DEFAULT_H):
     """Reactions R1..R4 (N; force of first-named body on second) and M_bal of
     the four-bar D.  R1 ground->crank (A), R2 crank->coupler (B),
@@ -691,6 +734,16 @@ def mech_a_rocker_angles(n=720):
 def naive_mech_b_dwell(n=720, delta_deg=150.0):
     theta, _ = mech_b_rocker_angles(n)
     return naive_dwell_error(theta, delta_deg)
+
+
+@functools.lru_cache(maxsize=None)
+def naive_mech_b_motion(n=360, delta_deg=150.0):
+    """Mechanism B's output rocker over n positions (cached: several tests ask):
+    (dwell error, index of the best window's first sample, stroke in mm =
+    L78 * (max theta - min theta))."""
+    theta, _ = mech_b_rocker_angles(n)
+    err, k = naive_dwell_error(theta, delta_deg)
+    return err, k, B_DATA["L78"] * (max(theta) - min(theta))
 
 
 def naive_mech_a_dwell(n=720, delta_deg=150.0):

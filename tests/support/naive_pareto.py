@@ -120,3 +120,19 @@ def crowding_ref(F, rank) -> np.ndarray:
                 i = srt[p]
                 out[i] = out[i] + (F[srt[p + 1], k] - F[srt[p - 1], k]) / span
     return np.array(out)
+
+
+def hypervolume_2d_ref(F, reference):
+    """Hypervolume of 2-objective points (minimised) against the point
+    (reference, reference), from the definition: the area of the union of the
+    boxes [f1, ref] x [f2, ref] of the points that dominate the reference,
+    summed as vertical slabs between consecutive distinct f1 (plain loops)."""
+    pts = [(float(a), float(b)) for a, b in np.asarray(F, float)
+           if a < reference and b < reference]
+    xs = sorted({a for a, _ in pts})
+    area = 0.0
+    for i, x in enumerate(xs):
+        right = xs[i + 1] if i + 1 < len(xs) else reference
+        low = min(b for a, b in pts if a <= x)       # the lowest f2 reached left of the slab
+        area += (right - x) * (reference - low)
+    return area

@@ -1,5 +1,5 @@
 """The CUDA kernels against the CPU kernels, on the same candidates: run as a
-script (``python tests/gpu_agreement.py OUT.json [N]``) in a process where
+script (``python tests/support/gpu_agreement.py OUT.json [N]``) in a process where
 numba.cuda is the simulator (NUMBA_ENABLE_CUDASIM=1, set before numba is
 imported) or a real GPU.  For every shipped sweep study (N drawn candidates,
 constraints opened so the force stage runs for every assembled one) and for
@@ -19,9 +19,9 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent))     # tests/: the support package
 
-from stress_cases import near_singular_triads  # noqa: E402
+from support.stress_cases import near_singular_triads  # noqa: E402
 
 from pipeline.gpu import SIMULATOR, GpuSweep  # noqa: E402
 from pipeline.kernels import sweep as ks  # noqa: E402
@@ -79,7 +79,7 @@ def compare(pb, pars):
 
 
 def main(path, n):
-    studies = HERE.parent / "studies"
+    studies = HERE.parent.parent / "studies"      # the checkout's studies/
     res = {"simulator": SIMULATOR}
     for name in STUDIES:
         study = load_study(studies / name)
