@@ -181,7 +181,6 @@ def test_second_run_on_the_same_file_is_refused_at_once(studies, tmp_path, capsy
 
 
 def test_unreachable_scheduler_leaves_nothing(studies, tmp_path, monkeypatch, capsys):
-    pytest.importorskip("distributed")
     import pipeline.sweep as sw
     monkeypatch.setattr(sw, "CONNECT_TIMEOUT", "1s")
     out = tmp_path / "s.h5"
