@@ -3,11 +3,10 @@
 * Compile caches in pytest's temporary folder: the generated kernel modules
   (``PIPELINE_CACHE_DIR``, default ``~/.cache/pipeline``) and numba's compiled
   code (``NUMBA_CACHE_DIR``, default the package's ``__pycache__``) go to one
-  folder of this session, set in ``os.environ`` before ``pipeline`` or numba is
-  imported, so every test and every subprocess a test starts (the CLI, Dask
-  worker processes, the GPU simulator) shares one warm cache and nothing is
-  written into the checkout or the home folder.  ``PIPELINE_TEST_CACHE=DIR``
-  keeps that cache in DIR instead (a warm cache between local runs).
+  folder (``compile_cache`` below), set in ``os.environ`` before ``pipeline`` or
+  numba is imported, so every test and every subprocess a test starts (the CLI,
+  Dask worker processes, the GPU simulator) shares one warm cache and nothing is
+  written into the checkout or the home folder.
 * Hypothesis runs the registered profile ``ci`` (derandomized, no deadline, no
   example database): the same examples on every run and machine, no
   wall-clock limit on a loaded machine.  ``HYPOTHESIS_PROFILE=dev`` draws
@@ -47,9 +46,30 @@ def pytest_configure(config):
     if "pipeline" in sys.modules or "numba" in sys.modules:
         raise pytest.UsageError("pipeline or numba was imported before tests/conftest.py "
                                 "could point their caches at pytest's temporary folder")
-    cache = Path(os.environ.get("PIPELINE_TEST_CACHE") or base / "compile-cache")
+    cache = compile_cache(config, base)
     os.environ["PIPELINE_CACHE_DIR"] = str(cache / "modules")
     os.environ["NUMBA_CACHE_DIR"] = str(cache / "numba")
+
+
+def compile_cache(config, base):
+    """The compile cache of this session.  By default one folder per checkout in
+    pytest's temporary root (/tmp/pytest-of-USER/, beside the numbered session
+    folders, which pytest prunes while this one stays): the session's tests and
+    subprocesses share it, and the next session of the same checkout starts
+    warm (a cold start compiles every mechanism of the suite, minutes on two
+    cores).  Generated modules are named by the hash of their source and numba's
+    code is dropped when a kernel source changes, so a warm cache is never a
+    stale one.  PIPELINE_TEST_CACHE=session: a fresh folder inside this session's
+    temporary folder; PIPELINE_TEST_CACHE=DIR: that folder.  With --basetemp
+    the session's folder is used."""
+    import hashlib
+    choice = os.environ.get("PIPELINE_TEST_CACHE", "")
+    if choice == "session" or (not choice and config.option.basetemp):
+        return base / "compile-cache"
+    if choice:
+        return Path(choice)
+    key = hashlib.sha256(str(ROOT).encode()).hexdigest()[:12]
+    return base.parent / f"pipeline-compile-cache-{key}"
 
 
 @pytest.fixture(scope="session")

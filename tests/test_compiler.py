@@ -240,8 +240,9 @@ def _cache_files(folder):
 
 
 def test_a_second_run_compiles_nothing(tmp_path):
-    """Two processes run the main job's study with one, empty, cache folder (the
-    generated modules and numba's code): the first compiles (numba's cache
+    """Two processes run a study (mechanism A's scene: one of the cheaper ones to
+    compile) with one, empty, cache folder (the generated modules and numba's
+    code): the first compiles (numba's cache
     misses), the second loads every kernel from the cache (hits only, no miss)
     and leaves the folder exactly as it was (no file written or rewritten)."""
     import json
@@ -253,7 +254,7 @@ def test_a_second_run_compiles_nothing(tmp_path):
                NUMBA_CACHE_DIR=str(cache / "numba"))
     runs = []
     for k in range(2):
-        argv = ["run", str(STUDIES / "ov7_synthesis.toml"), "--candidates", "200",
+        argv = ["run", str(STUDIES / "ov7_base.toml"), "--no-pictures",
                 "-o", str(tmp_path / f"run{k}.h5"), "-q"]
         r = subprocess.run([sys.executable, "-c", _RUN_AND_COUNT, *argv], env=env,
                            capture_output=True, text=True, timeout=600)
