@@ -52,24 +52,22 @@ def pytest_configure(config):
 
 
 def compile_cache(config, base):
-    """The compile cache of this session.  By default one folder per checkout in
-    pytest's temporary root (/tmp/pytest-of-USER/, beside the numbered session
-    folders, which pytest prunes while this one stays): the session's tests and
-    subprocesses share it, and the next session of the same checkout starts
-    warm (a cold start compiles every mechanism of the suite, minutes on two
-    cores).  Generated modules are named by the hash of their source and numba's
-    code is dropped when a kernel source changes, so a warm cache is never a
-    stale one.  PIPELINE_TEST_CACHE=session: a fresh folder inside this session's
+    """The compile cache of this session.  By default one folder in pytest's
+    temporary root (/tmp/pytest-of-USER/, beside the numbered session folders,
+    which pytest prunes while this one stays): the session's tests and
+    subprocesses share it, and the next session, of any checkout, starts warm (a
+    cold start compiles every mechanism of the suite: about 20 minutes on two
+    cores).  Generated modules are named by the hash of their source, numba keeps
+    the code of each checkout's kernels under that checkout's own path and drops
+    it when a kernel source changes, so a warm cache is never a stale one.  PIPELINE_TEST_CACHE=session: a fresh folder inside this session's
     temporary folder; PIPELINE_TEST_CACHE=DIR: that folder.  With --basetemp
     the session's folder is used."""
-    import hashlib
     choice = os.environ.get("PIPELINE_TEST_CACHE", "")
     if choice == "session" or (not choice and config.option.basetemp):
         return base / "compile-cache"
     if choice:
         return Path(choice)
-    key = hashlib.sha256(str(ROOT).encode()).hexdigest()[:12]
-    return base.parent / f"pipeline-compile-cache-{key}"
+    return base.parent / "pipeline-compile-cache"
 
 
 @pytest.fixture(scope="session")
