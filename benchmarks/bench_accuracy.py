@@ -212,10 +212,11 @@ from common import best_of
 from pipeline.study import load_study
 from pipeline.sweep import build_problem
 from pipeline.sweep_spec import parameter_rows
+from pipeline.sampling import draw_candidates
 s = load_study({study!r})
 spec = dataclasses.replace(s.sweep, candidates={n}, chunk_size={n})
 pb = build_problem(s, spec)
-rows = parameter_rows(pb.plan, spec, pb.draw(0))
+rows = parameter_rows(pb.plan, spec, draw_candidates(spec, 0))
 t = time.perf_counter(); pb.evaluate_rows(rows[:2], parallel=False); compile_s = time.perf_counter() - t
 secs = best_of(lambda: pb.evaluate_rows(rows, parallel=False), 2)
 st, m = pb.evaluate_rows(rows, parallel=False)

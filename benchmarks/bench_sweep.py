@@ -22,6 +22,7 @@ from common import STUDIES, best_of, first_call, hardware
 def problem(study, full, n, staged=True):
     from pipeline.sweep import build_problem
     from pipeline.sweep_spec import parameter_rows
+    from pipeline.sampling import draw_candidates
     spec = study.sweep
     if not staged:  # constraints that never fail: forces for every assembled candidate
         spec = dataclasses.replace(spec, stroke_bounds=(-np.inf, np.inf), margin_min=-np.inf)
@@ -30,7 +31,7 @@ def problem(study, full, n, staged=True):
                                    objectives=("dwell_error",))
     spec = dataclasses.replace(spec, candidates=n, chunk_size=n)
     pb = build_problem(study, spec)
-    return pb, parameter_rows(pb.plan, spec, pb.draw(0))
+    return pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0))
 
 
 def main(argv=None):

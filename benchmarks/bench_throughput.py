@@ -201,9 +201,10 @@ def _draw(study, n, seed_chunk=0):
     """n candidates of the sweep's own sampler: (problem, parameter rows)."""
     from pipeline.sweep import build_problem
     from pipeline.sweep_spec import parameter_rows
+    from pipeline.sampling import draw_candidates
     spec = dataclasses.replace(study.sweep, candidates=n, chunk_size=n)
     pb = build_problem(study, spec)
-    return pb, parameter_rows(pb.plan, spec, pb.draw(seed_chunk))
+    return pb, parameter_rows(pb.plan, spec, draw_candidates(spec, seed_chunk))
 
 
 def kinematics_case(sizes, repeat, rows):
