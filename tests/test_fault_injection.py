@@ -6,7 +6,6 @@ nothing runs that should not, and the command line ends in one line naming
 the file, exit code 2."""
 
 import errno
-import hashlib
 import os
 import shutil
 import signal
@@ -24,6 +23,7 @@ import pipeline
 import pipeline.files as files
 import pipeline.sweep as sw
 from pipeline.cli import main
+from support.faults import digest, one_line_error
 from pipeline.errors import ResultsError
 from pipeline.files import RunLock
 from pipeline.study import load_study
@@ -31,19 +31,6 @@ from pipeline.sweep import SweepFile, build_problem, run_sweep
 
 ROOT = Path(__file__).resolve().parent.parent
 N = 600
-
-
-def digest(path):
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
-
-def one_line_error(capsys, *needles):
-    err = capsys.readouterr().err.strip()
-    assert "Traceback" not in err, err
-    assert len(err.splitlines()) == 1, err
-    for n in needles:
-        assert str(n) in err, (n, err)
-    return err
 
 
 def cli(*args, env=None, cwd=None):

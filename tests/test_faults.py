@@ -4,7 +4,6 @@ After each fault the earlier result reads back bit for bit, and the command
 line says what happened in one line (exit code 2, no traceback)."""
 
 import errno
-import hashlib
 import os
 import re
 import shutil
@@ -16,25 +15,13 @@ import pytest
 
 import pipeline.files as files
 from pipeline.cli import main
+from support.faults import digest, one_line_error
 from pipeline.study import load_study
 from pipeline.files import RunLock
 from pipeline.sweep import run_sweep
 
 ROOT = Path(__file__).resolve().parent.parent
 N = 2000
-
-
-def digest(path):
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
-
-def one_line_error(capsys, *needles):
-    err = capsys.readouterr().err.strip()
-    assert "Traceback" not in err
-    assert len(err.splitlines()) == 1, err
-    for n in needles:
-        assert n in err, (n, err)
-    return err
 
 
 @pytest.fixture(scope="module")
