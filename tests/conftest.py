@@ -46,7 +46,13 @@ def pytest_configure(config):
     if "pipeline" in sys.modules or "numba" in sys.modules:
         raise pytest.UsageError("pipeline or numba was imported before tests/conftest.py "
                                 "could point their caches at pytest's temporary folder")
-    cache = compile_cache(config, base)
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        # a worker of pytest-xdist: the controller chose the cache (its environment
+        # is the worker's), so every worker shares one
+        cache = Path(os.environ["PIPELINE_TEST_COMPILE_CACHE"])
+    else:
+        cache = compile_cache(config, base)
+        os.environ["PIPELINE_TEST_COMPILE_CACHE"] = str(cache)
     os.environ["PIPELINE_CACHE_DIR"] = str(cache / "modules")
     os.environ["NUMBA_CACHE_DIR"] = str(cache / "numba")
 
@@ -88,15 +94,30 @@ def reference_dir():
 @pytest.fixture(scope="session")
 def synthesis_sweep(tmp_path_factory):
     """Path of the session's sweep of the main job's study.  Read it; copy it to
-    change it."""
+    change it.  Under pytest-xdist the workers share one: the first to ask runs
+    it in the session's common folder, the others wait on the lock and read it."""
+    import fcntl
+
     import h5py
 
     from pipeline.study import load_study
     from pipeline.sweep import run_sweep
     from support.sweep_helpers import SYNTHESIS_CHUNK, SYNTHESIS_N
-    out = tmp_path_factory.mktemp("synthesis_sweep") / "ov7_synthesis.h5"
-    run_sweep(load_study(STUDIES / "ov7_synthesis.toml"), out, candidates=SYNTHESIS_N,
-              chunk_size=SYNTHESIS_CHUNK, progress=False)
+    common = session_folder(tmp_path_factory) / "synthesis_sweep"
+    common.mkdir(exist_ok=True)
+    out = common / "ov7_synthesis.h5"
+    with open(common / "lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not out.exists():
+            run_sweep(load_study(STUDIES / "ov7_synthesis.toml"), out, candidates=SYNTHESIS_N,
+                      chunk_size=SYNTHESIS_CHUNK, progress=False)
     with h5py.File(out, "r") as f:
         assert f["candidates/feasible"][()].sum() >= 50, "the sweep needs feasible designs"
     return out
+
+
+def session_folder(tmp_path_factory):
+    """The folder of this test session that every pytest-xdist worker shares
+    (each worker's own temporary root is a folder inside it)."""
+    base = tmp_path_factory.getbasetemp()
+    return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
