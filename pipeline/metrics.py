@@ -6,8 +6,10 @@ file's ``units`` and ``long_name``), the stage of the kernels that computes it,
 the column of the kernels' metric row it is read from (``pipeline.kernels.sweep``
 ``M_*``) with the conversion to its units, and its sense: every objective is
 minimised, so a metric for which larger is better is no objective and names
-the one to minimise instead.  The study format (``sweep_spec``), the stored
-columns (``objectives``, ``sweep_file``), the summary and the docs read it.
+the one to minimise instead; a rounding-level quantity (a residual) says so,
+and the tests comparing two paths of the kernels compare it absolutely.  The
+study format (``sweep_spec``), the stored columns (``objectives``,
+``sweep_file``), the summary, the docs and those tests read it.
 
 Adding a metric is one entry here plus the kernel code that fills its column
 (a new ``M_*`` column of ``pipeline.kernels.sweep`` and its lines in the
@@ -39,6 +41,8 @@ class Metric:
     factor: float = 1.0         # stored value = row[column] * factor (+ offset)
     offset: float = 0.0
     larger_is_better: str = ""  # the metric to minimise instead (then no objective)
+    rounding: bool = False      # a rounding-level quantity (a residual, units 1): two paths
+                                # of the kernels agree on it absolutely, not relatively
 
     def values(self, metrics):
         """The stored values of this metric from metric rows (n, N_METRICS)."""
