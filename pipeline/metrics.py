@@ -130,7 +130,8 @@ def markdown_table() -> str:
             "| metric | units | stage | objective | what |", "|---|---|---|---|---|"]
     for m in CATALOGUE:
         sense = f"no: minimise `{m.larger_is_better}`" if m.larger_is_better else "yes"
-        rows.append(f"| `{m.name}` | {m.units} | {m.stage} | {sense} | {m.long_name} |")
+        what = m.long_name.replace("|", "\\|")      # |x| would split the table's cells
+        rows.append(f"| `{m.name}` | {m.units} | {m.stage} | {sense} | {what} |")
     return "\n".join(rows) + "\n"
 
 
