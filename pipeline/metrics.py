@@ -103,6 +103,15 @@ CATALOGUE = (
            "fixed): the mounting phase phiM0 - rot x law_shift puts the design on the law as "
            "given",
            "law", ks.M_LAW_SHIFT, RAD_TO_DEG),
+    Metric("equilibrium_residual", "1",
+           "worst relative virtual-power residual of the kinetostatics over the revolution: at "
+           "each position |M_bal omega1 + sum over moving links (F . v_S + M omega)| / the "
+           "largest |term| (M_bal omega1, each link's F . v_S and M omega; F, M: its gravity, "
+           "inertia force and moment and external loads at its centre of mass), every term "
+           "divided by omega1 (the same ratio, defined at omega1 = 0 too); a position where "
+           "every term is exactly 0 (nothing moves, e.g. a cam follower's dwell: the sum is 0 "
+           "too) counts 0; elsewhere the ratio is at most the number of terms",
+           "forces", ks.M_EQUILIBRIUM, rounding=True),
 )
 
 BY_NAME = {m.name: m for m in CATALOGUE}
