@@ -6,8 +6,10 @@ file's ``units`` and ``long_name``), the stage of the kernels that computes it,
 the column of the kernels' metric row it is read from (``pipeline.kernels.sweep``
 ``M_*``) with the conversion to its units, and its sense: every objective is
 minimised, so a metric for which larger is better is no objective and names
-the one to minimise instead.  The study format (``sweep_spec``), the stored
-columns (``objectives``, ``sweep_file``), the summary and the docs read it.
+the one to minimise instead; a rounding-level quantity (a residual) says so,
+and the tests comparing two paths of the kernels compare it absolutely.  The
+study format (``sweep_spec``), the stored columns (``objectives``,
+``sweep_file``), the summary, the docs and those tests read it.
 
 Adding a metric is one entry here plus the kernel code that fills its column
 (a new ``M_*`` column of ``pipeline.kernels.sweep`` and its lines in the
@@ -39,6 +41,8 @@ class Metric:
     factor: float = 1.0         # stored value = row[column] * factor (+ offset)
     offset: float = 0.0
     larger_is_better: str = ""  # the metric to minimise instead (then no objective)
+    rounding: bool = False      # a rounding-level quantity (a residual, units 1): two paths
+                                # of the kernels agree on it absolutely, not relatively
 
     def values(self, metrics):
         """The stored values of this metric from metric rows (n, N_METRICS)."""
@@ -99,6 +103,15 @@ CATALOGUE = (
            "fixed): the mounting phase phiM0 - rot x law_shift puts the design on the law as "
            "given",
            "law", ks.M_LAW_SHIFT, RAD_TO_DEG),
+    Metric("equilibrium_residual", "1",
+           "worst relative virtual-power residual of the kinetostatics over the revolution: at "
+           "each position |M_bal omega1 + sum over moving links (F . v_S + M omega)| / the "
+           "largest |term| (M_bal omega1, each link's F . v_S and M omega; F, M: its gravity, "
+           "inertia force and moment and external loads at its centre of mass), every term "
+           "divided by omega1 (the same ratio, defined at omega1 = 0 too); a position where "
+           "every term is exactly 0 (nothing moves, e.g. a cam follower's dwell: the sum is 0 "
+           "too) counts 0; elsewhere the ratio is at most the number of terms",
+           "forces", ks.M_EQUILIBRIUM, rounding=True),
 )
 
 BY_NAME = {m.name: m for m in CATALOGUE}
@@ -126,7 +139,8 @@ def markdown_table() -> str:
             "| metric | units | stage | objective | what |", "|---|---|---|---|---|"]
     for m in CATALOGUE:
         sense = f"no: minimise `{m.larger_is_better}`" if m.larger_is_better else "yes"
-        rows.append(f"| `{m.name}` | {m.units} | {m.stage} | {sense} | {m.long_name} |")
+        what = m.long_name.replace("|", "\\|")      # |x| would split the table's cells
+        rows.append(f"| `{m.name}` | {m.units} | {m.stage} | {sense} | {what} |")
     return "\n".join(rows) + "\n"
 
 

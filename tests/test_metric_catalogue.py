@@ -18,6 +18,7 @@ def test_every_entry_reads_a_column_of_the_kernels_row():
         assert 0 <= m.column < ks.N_METRICS, m.name
         assert m.stage in mc.STAGES, m.name
         assert m.units and m.long_name, m.name
+        assert not m.rounding or m.units == "1", m.name     # compared absolutely
     assert len(mc.BY_NAME) == len(mc.CATALOGUE)        # one entry per name
     for m in mc.CATALOGUE:
         if m.larger_is_better:

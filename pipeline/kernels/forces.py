@@ -112,6 +112,32 @@ def applied_loads(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn, 
 
 
 @njit(**JIT)
+def equilibrium_residual(pos, d1, d2, m_bal, loads, body_com, body_turn):
+    """The virtual-power residual of one position's kinetostatics, relative:
+    |M_bal + sum over bodies (F . S' + M phi')| / the largest |term| (M_bal,
+    each body's F . S' and M phi'), with (F, M) = ``loads`` (the applied and
+    inertia loads at each centre of mass, N and N*m, as ``applied_loads``
+    writes them), S' the centre's velocity analog (mm, so * MM) and phi' the
+    body's angle analog (0 for a body that does not turn).  This is
+    M_bal omega1 + sum (F . v_S + M omega) over the largest power term, every
+    term divided by omega1: the same ratio, and defined at omega1 = 0 too.
+    0 where every term is exactly 0 (the sum is then exactly 0: nothing is
+    loaded or nothing moves); NaN if any term is."""
+    total = m_bal
+    scale = abs(m_bal)
+    for i in range(body_com.shape[0]):
+        s = body_com[i]
+        pf = (loads[i, 0] * d1[s, 0] + loads[i, 1] * d1[s, 1]) * MM
+        w, _ = body_motion(pos, d1, d2, body_turn[i, 0], body_turn[i, 1], 1.0, 0.0)
+        pm = loads[i, 2] * w
+        total += pf + pm
+        scale = max(scale, abs(pf), abs(pm))
+    if not math.isfinite(total):
+        return math.nan
+    return abs(total) / scale if scale > 0.0 else 0.0
+
+
+@njit(**JIT)
 def _add_force(a, row_body, col, fx_coef, fy_coef, lever_x, lever_y):
     """Unknown force (fx_coef, fy_coef) * x[col] on a body at lever (P - S) [m]."""
     r = 3 * row_body

@@ -7,10 +7,11 @@ Stages, cheapest first:
   2. only for candidates still feasible (status OK, stroke and margin within
      their limits) and only if one of its metrics is asked for: second analogs,
      kinetostatics at every position -> peak reaction, its joint and angle,
-     peak balancing moment; the working point's peak |a| and the output
-     rocker's peak |eps| (SET_WANT_PEAKS); the smallest transmission angle
-     (SET_WANT_TRANSMISSION).  Each is a maximum (minimum) over the grid's
-     positions, not refined between them (``pipeline.peaks`` refines a scene's).
+     peak balancing moment, worst equilibrium residual; the working point's
+     peak |a| and the output rocker's peak |eps| (SET_WANT_PEAKS); the
+     smallest transmission angle (SET_WANT_TRANSMISSION).  Each is a maximum
+     (minimum) over the grid's positions, not refined between them
+     (``pipeline.peaks`` refines a scene's).
 
 The law error (SET_WANT_LAW) is part of stage 1: the rocker angles the
 positions stage has, against the required motion law sampled at the grid
@@ -38,7 +39,8 @@ M_MIN_TRANS = 14    # rad: smallest transmission angle (pipeline.peaks.transmiss
 M_LAW_RMS = 15      # RMS deviation of the normalised rocker angle from the motion law
 M_LAW_MAX = 16      # largest |deviation| (the same alignment and orientation)
 M_LAW_SHIFT = 17    # rad: cycle-angle shift of the law that fits best (0: align fixed)
-N_METRICS = 18
+M_EQUILIBRIUM = 18  # largest relative virtual-power residual of the kinetostatics
+N_METRICS = 19
 
 # slots of the settings vector of a sweep (one float array: the kernels'
 # signatures stay short, and the numba cache is not tied to a study)

@@ -15,9 +15,11 @@ from .header import (math, np, njit, JIT, JIT_ALLOC, OK, BRANCH_JUMP, S_A, S_B, 
                      SET_WANT_FORCES, SET_STROKE_LO, SET_STROKE_HI, SET_MARGIN_MIN, SET_OMEGA1,
                      SET_EPS1, SET_WANT_PEAKS, SET_WORK_POINT, SET_WANT_TRANSMISSION, SET_WANT_LAW,
                      SET_LAW0, LAW_BEST)
+from .header import M_EQUILIBRIUM, equilibrium_residual
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_WATCH, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, constants, start, advance, forces_at, transmission,
                          ROCKER_PIVOT, ROCKER_POINT, NEWTON_STEPS)
+from ._mechanism import BODY_COM, BODY_TURN
 from .watch import (locate, watch, watch_work)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
@@ -258,7 +260,8 @@ def settle(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qma
 def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, fw):
     """Stage 2 at every position of the grid, what the settings ask for:
     kinetostatics (SET_WANT_FORCES: the peak reaction, its joint and angle,
-    the peak |balancing moment|), the working point's peak |a| and the
+    the peak |balancing moment|, the worst relative virtual-power residual:
+    kernels.forces.equilibrium_residual), the working point's peak |a| and the
     output rocker's peak |eps| (SET_WANT_PEAKS), the smallest transmission
     angle (SET_WANT_TRANSMISSION); maxima (minima) over the grid's
     positions.  With ``use_trail`` every position is solved directly from
@@ -280,6 +283,7 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
     peak_j = -1
     peak_phi = math.nan
     peak_m = 0.0
+    worst_eq = 0.0
     peak_a = 0.0
     peak_e = 0.0
     trans = math.inf
@@ -301,6 +305,9 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
                            loads_out, r_out, slide_out)
             if abs(mb) > abs(peak_m) or not math.isfinite(mb):
                 peak_m = mb
+            eq = equilibrium_residual(pos, d1, d2, mb, loads_out, BODY_COM, BODY_TURN)
+            if eq > worst_eq or not math.isfinite(eq):
+                worst_eq = eq
             for j in range(N_JOINTS):
                 r = math.hypot(r_out[j, 0], r_out[j, 1])
                 if r > peak or not math.isfinite(r):
@@ -337,6 +344,7 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
         out[M_PEAK_JOINT] = peak_j
         out[M_PEAK_PHI] = peak_phi
         out[M_PEAK_MBAL] = abs(peak_m)
+        out[M_EQUILIBRIUM] = worst_eq
     if want_p:
         out[M_PEAK_ACC] = peak_a / 1000.0        # m/s^2
         out[M_PEAK_EPS] = peak_e
