@@ -82,7 +82,7 @@ def cmd_compile(a):
 def cmd_bench(a):
     from .bench import run_benchmarks
     out = run_benchmarks(quick=a.quick, echo=(lambda *x: None) if a.quiet else print,
-                         out=a.output)
+                         out=a.output, benchmarks=a.benchmarks)
     if a.quiet:
         print(out)
     return EXIT_OK
@@ -189,9 +189,10 @@ def build_parser():
     e.set_defaults(func=cmd_export)
 
     c = sub.add_parser("compile", parents=[common], help=(
-        "generate and compile the kernels of the studies (all of studies/ by default) ahead "
-        "of time, so their runs compile nothing"))
-    c.add_argument("studies", nargs="*", metavar="STUDY", help="study files (default: all)")
+        "generate and compile the kernels of the studies (all of studies/ here by default) "
+        "ahead of time, so their runs compile nothing"))
+    c.add_argument("studies", nargs="*", metavar="STUDY",
+                   help="study files (default: every studies/*.toml of the current folder)")
     c.add_argument("--show", action="store_true",
                    help="print the generated source of each study's kernels instead")
     c.set_defaults(func=cmd_compile)
@@ -261,6 +262,8 @@ def build_parser():
     bn.add_argument("-o", "--output", metavar="DIR",
                     help="folder for the tables, plots and summary.md (default: results/bench/ "
                          "of the source checkout)")
+    bn.add_argument("--benchmarks", metavar="DIR",
+                    help="the checkout's benchmarks/ folder (default: benchmarks/ here)")
     bn.set_defaults(func=cmd_bench)
 
     dr = sub.add_parser("doctor", parents=[common], help=(

@@ -13,7 +13,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-STUDIES = Path(__file__).resolve().parent.parent / "studies"
+STUDIES = Path("studies")      # of the current folder: a project's studies (as in a checkout)
 
 
 @dataclass
@@ -25,10 +25,16 @@ class Compiled:
 
 
 def study_files(paths=()) -> list[Path]:
-    """The studies named, or every study shipped in studies/."""
+    """The studies named, or every study in the folder studies/ of the current
+    folder (where `pipeline run studies/...` finds them too; the installed
+    package carries no studies)."""
     if paths:
         return [Path(p) for p in paths]
-    return sorted(STUDIES.glob("*.toml"))
+    found = sorted(STUDIES.glob("*.toml"))
+    if not found:
+        raise FileNotFoundError(f"{STUDIES.resolve()}: no study files (*.toml) here; name the "
+                                "studies to compile: pipeline compile STUDY.toml ...")
+    return found
 
 
 def compile_study(study) -> Compiled:

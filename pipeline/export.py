@@ -35,11 +35,6 @@ def export(path, outdir, *, every=1, feasible=False, front=None, parquet=False) 
     return [_write(df, outdir / f"{name}.csv", parquet) for name, df in frames.items()]
 
 
-def export_csv(path, outdir) -> list[Path]:
-    """CSV tables of ``path`` into ``outdir`` (every computed position)."""
-    return export(path, outdir)
-
-
 def _write(df, path, parquet):
     if parquet:
         try:

@@ -9,13 +9,13 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from pipeline.bench import BENCHMARKS
 from pipeline.cli import main
 from support import naive
 from support.tolerances import (CLOSURE_MM, DWELL_360_ABS, DWELL_720_ABS, DWELL_VS_NAIVE_REL,
                                 FD_ACCELERATION_REL, FD_VELOCITY_REL, NEWTON_ITERATIONS,
                                 NEWTON_TOL, PEAK_12_REL, REACTION_FD_REL)
 
+BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
 DEFAULT_OUT = BENCHMARKS.parent / "results" / "bench"
 
 
@@ -26,7 +26,7 @@ def _snapshot(folder):
 def test_bench_quick_writes_tables_and_plots(capsys, tmp_path):
     out = tmp_path / "bench"
     before = _snapshot(DEFAULT_OUT)
-    assert main(["bench", "--quick", "-q", "-o", str(out)]) == 0
+    assert main(["bench", "--quick", "-q", "-o", str(out), "--benchmarks", str(BENCHMARKS)]) == 0
     assert _snapshot(DEFAULT_OUT) == before      # a user's own benchmark output is left alone
     assert Path(capsys.readouterr().out.strip().splitlines()[-1]) == out   # -q prints the folder
     for name in ("a_positions", "b_newton", "c_analogs", "d_rk4", "e_fastmath", "throughput"):
@@ -58,3 +58,17 @@ def test_bench_quick_writes_tables_and_plots(capsys, tmp_path):
     assert (d.order.dropna() > 3.5).all()           # RK4 is fourth order
     e = pd.read_csv(out / "e_fastmath.csv")
     assert e.status_agreement.min() > 0.99
+
+
+def test_bench_and_compile_outside_a_checkout_say_what_to_name(tmp_path, monkeypatch, capsys):
+    """The installed package carries neither benchmarks nor studies: in a folder
+    without them, `bench` and `compile` fail in one line that says what to name,
+    instead of reaching for files beside the package."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["bench", "--quick", "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--benchmarks DIR" in err, err
+    assert main(["compile", "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "pipeline compile STUDY.toml" in err, err
+    assert not any(tmp_path.iterdir())                  # nothing written
