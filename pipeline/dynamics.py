@@ -302,34 +302,6 @@ class CaseResult:
         out["omega1_end"] = _round(float(self.omega1[-1]))
         return out
 
-    def write(self, group):
-        """Datasets under group/<case name> (and the fine tail under .../tail)."""
-        from .storage import put
-        g = group.create_group(self.name)
-        c = self.case
-        g.attrs["method"] = self.method
-        g.attrs["status"] = kc.STATUS_NAMES[self.status]
-        g.attrs["M1"] = c.M1.text
-        g.attrs["damping"] = c.damping
-        g.attrs["phi_start_deg"] = math.degrees(c.phi_start)
-        g.attrs["omega_start"] = c.omega_start
-        g.attrs["t_end"] = c.t_end
-        g.attrs["dt"] = c.dt
-        g.attrs["sample_dt"] = c.sample_dt
-        g.attrs["equation"] = "J(phi) phi'' + (1/2) J'(phi) phi'^2 + b phi' = Q(phi) + M1"
-        for k, v in self.summary().items():
-            if v is not None:
-                g.attrs[f"summary_{k}"] = v
-        for grp, (t, p, w, e) in ((g, (self.t, self.phi1, self.omega1, self.eps1)),
-                                  (g.create_group("tail"), (self.tail_t, self.tail_phi1,
-                                                            self.tail_omega1, self.tail_eps1))):
-            put(grp, "t", t, "s", "time", dims=("t",))
-            put(grp, "phi1", np.rad2deg(p), "deg", "crank angle phi1", dims=("t",))
-            put(grp, "omega1", w, "rad/s", "crank angular velocity omega1", dims=("t",))
-            put(grp, "eps1", e, "rad/s^2", "crank angular acceleration eps1", dims=("t",))
-        g["tail"].attrs["description"] = "every integration step of the last seconds"
-        return g
-
 
 # ----------------------------------------------------------------- integration
 def _grid(case):
@@ -446,17 +418,6 @@ class Reduced:
             return {"equilibria": "none (Q does not change sign over the revolution)"}
         return {"equilibria": ", ".join(f"{p:.4f} deg ({'stable' if st else 'unstable'})"
                                         for p, st in self.equilibria)}
-
-    def write(self, group):
-        from .storage import put
-        group.attrs["long_name"] = ("reduced dynamics of the crank: J(phi) phi'' + (1/2) "
-                                    "J'(phi) phi'^2 = Q(phi) + M1, loads at t = 0")
-        group.attrs["equilibria_deg"] = [p for p, _ in self.equilibria] or [np.nan]
-        group.attrs["equilibria_stable"] = [bool(st) for _, st in self.equilibria] or [False]
-        put(group, "phi1", np.degrees(self.phi), "deg", "crank angle phi1", dims=("phi1",))
-        put(group, "J", self.J, "kg*m^2", "reduced moment of inertia J(phi)", dims=("phi1",))
-        put(group, "half_dJ", self.half_dJ, "kg*m^2", "(1/2) dJ/dphi", dims=("phi1",))
-        put(group, "Q", self.Q, "N*m", "generalised force without M1", dims=("phi1",))
 
 
 def reduced_dynamics(study, plan, n=None) -> Reduced:

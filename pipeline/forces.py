@@ -106,33 +106,6 @@ class Reactions:
         out["peak_M_bal"] = f"{self.M_bal[k]:.3f} N*m at phi1 = {np.rad2deg(self.phi[k]):g} deg"
         return out
 
-    def write(self, g):
-        from .storage import put
-        put(g, "reactions", self.R, "N", "joint reaction (force of the first body on the second)",
-            dims=("phi1", "joint", "axis"), joints=list(self.joint_names))
-        put(g, "M_bal", self.M_bal, "N*m", "balancing moment the main shaft delivers (on the crank; "
-            "with inputs besides the crank, plus their shares)", dims=("phi1",))
-        if self.slide.shape[1]:
-            put(g, "slide_reactions", self.slide, ["N", "N*m"],
-                "prismatic pair: normal force N of the guide on the slider (along the slide's "
-                "direction turned +90 deg) and couple C, at the slider's centre of mass",
-                dims=("phi1", "slide", "slide_component"), slides=list(self.slide_names))
-            put(g, "slide_action", slide_action(self.slide), "mm",
-                "where the normal force acts: e = C/N, its distance from the slider's centre "
-                "of mass along the slide's direction (NaN where N = 0)",
-                dims=("phi1", "slide"), slides=list(self.slide_names))
-        if self.input_names:
-            put(g, "input_drive", self.drive[:, :, 0], list(self.drive_units),
-                "drive of each input besides the crank: a moment on a rotary input, a force "
-                "along the guide of a slider input", dims=("phi1", "input"),
-                inputs=list(self.input_names))
-            put(g, "input_share", self.drive[:, :, 1], "N*m",
-                "each input's share of M_bal: its drive times dq/dphi1", dims=("phi1", "input"),
-                inputs=list(self.input_names))
-        put(g, "body_loads", self.body_loads, ["N", "N", "N*m"],
-            "applied and inertia loads reduced to the centre of mass",
-            dims=("phi1", "body", "load_component"), bodies=list(self.body_names))
-
 
 def scene_forces(mechanism, plan, curves) -> Reactions:
     """Reactions at every position of ``curves`` (which must carry second analogs)."""

@@ -1,15 +1,19 @@
 """A scene's results file: its layout in HDF5 (the mechanism, the table and
 dense curves, the forces and the dynamics cases), written through the plain
-array-and-attribute layer of ``pipeline.storage``."""
+array-and-attribute layer of ``pipeline.storage``.  The computing modules
+(``forces``, ``dynamics``) hand over their results; only this module writes
+them."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
 
 from .kernels import config as kc
 from .files import replacing
+from .forces import slide_action
 from .scene import real_motion
 from .storage import STATUS_ENUM, coordinate, hdf5_image, put, status_table, write_root_attrs
 
@@ -48,7 +52,76 @@ def _curves(g, res, curves, study):
         put(g, "com_velocity", v[:, com], "m/s", "centre-of-mass velocity", dims=sb)
         put(g, "com_acceleration", a[:, com], "m/s^2", "centre-of-mass acceleration", dims=sb)
     if curves.forces is not None:
-        curves.forces.write(g)
+        _reactions(g, curves.forces)
+
+
+def _reactions(g, r):
+    """The reactions of a scene (``forces.Reactions``) at the positions of group ``g``."""
+    put(g, "reactions", r.R, "N", "joint reaction (force of the first body on the second)",
+        dims=("phi1", "joint", "axis"), joints=list(r.joint_names))
+    put(g, "M_bal", r.M_bal, "N*m", "balancing moment the main shaft delivers (on the crank; "
+        "with inputs besides the crank, plus their shares)", dims=("phi1",))
+    if r.slide.shape[1]:
+        put(g, "slide_reactions", r.slide, ["N", "N*m"],
+            "prismatic pair: normal force N of the guide on the slider (along the slide's "
+            "direction turned +90 deg) and couple C, at the slider's centre of mass",
+            dims=("phi1", "slide", "slide_component"), slides=list(r.slide_names))
+        put(g, "slide_action", slide_action(r.slide), "mm",
+            "where the normal force acts: e = C/N, its distance from the slider's centre "
+            "of mass along the slide's direction (NaN where N = 0)",
+            dims=("phi1", "slide"), slides=list(r.slide_names))
+    if r.input_names:
+        put(g, "input_drive", r.drive[:, :, 0], list(r.drive_units),
+            "drive of each input besides the crank: a moment on a rotary input, a force "
+            "along the guide of a slider input", dims=("phi1", "input"),
+            inputs=list(r.input_names))
+        put(g, "input_share", r.drive[:, :, 1], "N*m",
+            "each input's share of M_bal: its drive times dq/dphi1", dims=("phi1", "input"),
+            inputs=list(r.input_names))
+    put(g, "body_loads", r.body_loads, ["N", "N", "N*m"],
+        "applied and inertia loads reduced to the centre of mass",
+        dims=("phi1", "body", "load_component"), bodies=list(r.body_names))
+
+
+def _dynamics_case(group, res):
+    """Datasets of one dynamics case (``dynamics.CaseResult``) under group/<case
+    name> (and the fine tail under .../tail)."""
+    g = group.create_group(res.name)
+    c = res.case
+    g.attrs["method"] = res.method
+    g.attrs["status"] = kc.STATUS_NAMES[res.status]
+    g.attrs["M1"] = c.M1.text
+    g.attrs["damping"] = c.damping
+    g.attrs["phi_start_deg"] = math.degrees(c.phi_start)
+    g.attrs["omega_start"] = c.omega_start
+    g.attrs["t_end"] = c.t_end
+    g.attrs["dt"] = c.dt
+    g.attrs["sample_dt"] = c.sample_dt
+    g.attrs["equation"] = "J(phi) phi'' + (1/2) J'(phi) phi'^2 + b phi' = Q(phi) + M1"
+    for k, v in res.summary().items():
+        if v is not None:
+            g.attrs[f"summary_{k}"] = v
+    for grp, (t, p, w, e) in ((g, (res.t, res.phi1, res.omega1, res.eps1)),
+                              (g.create_group("tail"), (res.tail_t, res.tail_phi1,
+                                                        res.tail_omega1, res.tail_eps1))):
+        put(grp, "t", t, "s", "time", dims=("t",))
+        put(grp, "phi1", np.rad2deg(p), "deg", "crank angle phi1", dims=("t",))
+        put(grp, "omega1", w, "rad/s", "crank angular velocity omega1", dims=("t",))
+        put(grp, "eps1", e, "rad/s^2", "crank angular acceleration eps1", dims=("t",))
+    g["tail"].attrs["description"] = "every integration step of the last seconds"
+    return g
+
+
+def _reduced(group, red):
+    """The crank's reduced dynamics (``dynamics.Reduced``) in ``group``."""
+    group.attrs["long_name"] = ("reduced dynamics of the crank: J(phi) phi'' + (1/2) "
+                                "J'(phi) phi'^2 = Q(phi) + M1, loads at t = 0")
+    group.attrs["equilibria_deg"] = [p for p, _ in red.equilibria] or [np.nan]
+    group.attrs["equilibria_stable"] = [bool(st) for _, st in red.equilibria] or [False]
+    put(group, "phi1", np.degrees(red.phi), "deg", "crank angle phi1", dims=("phi1",))
+    put(group, "J", red.J, "kg*m^2", "reduced moment of inertia J(phi)", dims=("phi1",))
+    put(group, "half_dJ", red.half_dJ, "kg*m^2", "(1/2) dJ/dphi", dims=("phi1",))
+    put(group, "Q", red.Q, "N*m", "generalised force without M1", dims=("phi1",))
 
 
 # the tolerance vector's entries (kernels.config T_*), named, with their units
@@ -153,11 +226,11 @@ def write_scene(res, path):
             _curves(f.create_group(name), res, curves, study)
         if res.dynamics:
             for case in res.dynamics:
-                case.write(f.require_group("dynamics"))
+                _dynamics_case(f.require_group("dynamics"), case)
         if res.peaks:
             _peaks(f.create_group("peaks"), res.peaks, study.output)
         if res.reduced is not None:
-            res.reduced.write(f.create_group("reduced_dynamics"))
+            _reduced(f.create_group("reduced_dynamics"), res.reduced)
         if res.motion:
             g = f.create_group("motion")
             g.attrs["long_name"] = ("the output rocker's dwell and stroke (DOMAIN.md section "

@@ -11,10 +11,8 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from .search_problem import HV_REFERENCE, NORMALISATION
-from .search_spec import SearchSpec
+from .search_spec import HV_REFERENCE, NORMALISATION, SearchSpec
 from .storage import COMPRESSION, attach, attr_text, coordinate, hdf5_writing
-from .sweep import SweepProblem
 from .sweep_file import SweepFile, summarize
 from .sweep_spec import SweepSpec
 
@@ -56,10 +54,10 @@ def generation_layout(spec: SweepSpec, search: SearchSpec, sizes) -> GenerationL
 
 class SearchFile:
     """A search's results file: the sweep layout (``SweepFile``) with
-    candidates/generation and the per-generation history in /search."""
+    candidates/generation and the per-generation history in /search.
+    ``problem``: the sweep's problem (``sweep.SweepProblem``), as ``SweepFile`` takes it."""
 
-    def __init__(self, path: Path, study, problem: SweepProblem, search: SearchSpec, sizes,
-                 attrs: dict):
+    def __init__(self, path: Path, study, problem, search: SearchSpec, sizes, attrs: dict):
         self.sf = SweepFile(path, study, problem)
         self.sf.spec = generation_layout(problem.spec, search, sizes)
         self.path = Path(path)

@@ -35,15 +35,13 @@ from pymoo.core.repair import Repair
 from .kernels import config as kc
 from .objectives import bounded_finite, constraint_names, constraints, metric_values
 from .pareto import nondominated_rank
+from .search_spec import HV_REFERENCE, NORMALISATION  # noqa: F401 (NORMALISATION: the search's)
 from .sweep import SweepProblem
 from .sweep_spec import SweepSpec, parameter_rows
 
 FAILED_VIOLATION = 1e12   # the `evaluable` constraint of a failed candidate: above any real one
 FAILED_OBJECTIVE = 1e12   # pymoo's stand-in for an objective that is NaN (infeasible rows only)
-HV_REFERENCE = 1.1        # reference point of the hypervolume, in every normalised objective
 REPAIR_STEP = 1e-3        # a repaired design lies this fraction of the way on past the boundary
-NORMALISATION = ("each objective divided by the study's reference design's (1 where that is "
-                 "not a positive number); reference point 1.1 in every objective")
 
 
 # ----------------------------------------------------------------- the problem pymoo sees

@@ -21,6 +21,13 @@ from dataclasses import dataclass
 
 from .limits import CANDIDATES_WHY, MAX_CANDIDATES, MAX_POPULATION, POPULATION_WHY
 
+# how a search measures its feasible front: the hypervolume of the objectives divided by the
+# study's reference design's, against this reference point (the runs compute it, the results
+# file records both)
+HV_REFERENCE = 1.1        # reference point of the hypervolume, in every normalised objective
+NORMALISATION = ("each objective divided by the study's reference design's (1 where that is "
+                 "not a positive number); reference point 1.1 in every objective")
+
 # method name -> (pymoo module, class): established optimizers, pymoo's default operators
 METHODS = {
     "nsga2": ("pymoo.algorithms.moo.nsga2", "NSGA2"),
