@@ -33,8 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .version import __version__
-from .files import RunLock, replacing
+from .base.version import __version__
+from .base.files import RunLock, replacing
 from .kernels import config as kc
 from .pareto import crowding_distance, knee_point, nondominated_rank
 from .storage import (ResultsError, attr_text, candidate_ids, coordinate, hdf5_image, open_results, put,

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .files import replacing
+from .base.files import replacing
 
 MAX_FRAMES = 120        # frames per revolution, at most
 FPS = 20                # frames per second: 120 frames = one revolution in 6 s

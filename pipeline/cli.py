@@ -13,7 +13,7 @@ EXIT_USER_ERROR = 2
 
 
 def _user_errors():
-    from .expressions import ExpressionError
+    from .base.expressions import ExpressionError
     from .storage import ResultsError
     from .study import StudyError
     return (StudyError, ResultsError, ExpressionError, FileNotFoundError, ValueError)
@@ -295,7 +295,7 @@ def main(argv=None) -> int:
     except OSError as e:
         # the operating system's word (no space left, read-only, locked): one line
         # naming the file; every write is atomic, so earlier results are intact
-        from .files import os_error_text
+        from .base.files import os_error_text
         text = os_error_text(e)
         named = _file_of(args)
         if named and not e.filename and str(named) not in text:

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import ResultsError
-from .files import refuse_link, replacing
+from .base.errors import ResultsError
+from .base.files import refuse_link, replacing
 from .kernels import sweep as ks
 from .sweep_spec import SweepSpec
 

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .limits import ANGLE, LAW_VALUE
+from .base.limits import ANGLE, LAW_VALUE
 
 LAWS = ("linear", "cycloidal", "harmonic")
 ALIGN = ("best", "fixed")

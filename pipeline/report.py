@@ -19,10 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .version import __version__
+from .base.version import __version__
 from .analysis import analyze, has_analysis, read_analysis, read_sweep
 from .candidate import rerun_candidate
-from .files import write_text
+from .base.files import write_text
 from .ranking import design_table, ranking
 from .report_assets import CSS, SCRIPT
 from .report_figures import (_letters, _png, design_figure, importance_figure, pareto_figure,

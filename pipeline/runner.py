@@ -6,8 +6,8 @@ import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .errors import ResultsError
-from .files import RunLock, safe_name, save_figure
+from .base.errors import ResultsError
+from .base.files import RunLock, safe_name, save_figure
 from .study import load_study
 
 log = logging.getLogger("pipeline")

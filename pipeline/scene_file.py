@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from .kernels import config as kc
-from .files import replacing
+from .base.files import replacing
 from .forces import slide_action
 from .scene import real_motion
 from .storage import STATUS_ENUM, coordinate, hdf5_image, put, status_table, write_root_attrs

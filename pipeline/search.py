@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .files import RunLock
+from .base.files import RunLock
 from .kernels import sweep as ks
 from .pareto import crowding_distance, nondominated_rank
 from .search_file import SearchFile, search_summary

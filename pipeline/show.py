@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from .candidate import STATUS_HELP, CandidateRun, rerun_candidate
-from .files import save_figure
+from .base.files import save_figure
 from .kernels import config as kc
 from .storage import open_results
 

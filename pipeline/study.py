@@ -14,12 +14,12 @@ import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from . import limits as lim
-from .errors import StudyError
+from .base import limits as lim
+from .base.errors import StudyError
 from .groups import GROUP_TYPES as _GROUP_CLASSES, SOLVED_KEYS, SOLVED_LISTS
 from .groups.law import law_grid_problem
-from .limits import (MAX_NAME_LENGTH, MAX_POSITIONS, MAX_STUDY_BYTES, MAX_TITLE_LENGTH,
-                     POSITIONS_WHY, STUDY_BYTES_WHY, TITLE_WHY)
+from .base.limits import (MAX_NAME_LENGTH, MAX_POSITIONS, MAX_STUDY_BYTES, MAX_TITLE_LENGTH,
+                          POSITIONS_WHY, STUDY_BYTES_WHY, TITLE_WHY)
 from .model import Body, CentreOfMass, Crank, Load, Mechanism, Slide, group_label
 from .slide_check import check_slide as _check_slide
 # the study file's tables (the reader of every section; name_problem: a name's check)
@@ -300,7 +300,7 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
             s.done()
             slides[-1] = _check_slide(s, slides[-1], groups, bodies, fixed)
     if sec.has("loads"):
-        from .expressions import parse_expression
+        from .base.expressions import parse_expression
         for ld in sec.tables("loads"):
             body = ld.name("body")
             if body not in body_names:
@@ -468,7 +468,7 @@ def parse_output(sec: Section, mech: Mechanism) -> OutputSpec:
 
 
 def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
-    from .expressions import parse_expression
+    from .base.expressions import parse_expression
     if not mech.bodies:
         raise sec.error("", "crank dynamics needs mass data: declare [[mechanism.bodies]]")
     method = sec.string("method", "rk4", choices=("rk4", "dop853"))

@@ -25,10 +25,10 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from .files import RunLock, fault_point, replacing
+from .base.files import RunLock, fault_point, replacing
 from .kernels import config as kc
 from .kernels import sweep as ks
-from .limits import CHUNK_WHY, MAX_CHUNK
+from .base.limits import CHUNK_WHY, MAX_CHUNK
 from .storage import FORMAT, ResultsError, hdf5_writing, room_for
 from .sampling import draw_checked
 from .sweep_spec import SweepSpec, parameter_rows

@@ -8,7 +8,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from .files import replacing
+from .base.files import replacing
 from .kernels import config as kc
 from .kernels import sweep as ks
 from .objectives import (bounded_finite, constraint_names, constraint_units, constraints,

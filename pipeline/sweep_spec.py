@@ -15,9 +15,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import limits as lim
-from .limits import (CANDIDATES_WHY, CHUNK_WHY, MAX_CANDIDATES, MAX_CHUNK, MAX_NAME_LENGTH,
-                     MAX_POSITIONS, POSITIONS_WHY)
+from .base import limits as lim
+from .base.limits import (CANDIDATES_WHY, CHUNK_WHY, MAX_CANDIDATES, MAX_CHUNK, MAX_NAME_LENGTH,
+                          MAX_POSITIONS, POSITIONS_WHY)
 
 if TYPE_CHECKING:      # the type apply_design returns; model imports nothing from here
     from .model import Mechanism
@@ -170,7 +170,7 @@ def parameter_range(name):
 def parse_sweep(root, mech, output) -> SweepSpec:
     """Read [sweep] of a study (``root`` is the study's top Section)."""
     from .model import compile_mechanism
-    from .errors import StudyError
+    from .base.errors import StudyError
     sec = root.table("sweep")
     plan = compile_mechanism(mech)
     spread = sec.number("spread", 0.2, positive=True)

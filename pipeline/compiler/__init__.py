@@ -25,7 +25,7 @@ import sys
 import threading
 from pathlib import Path
 
-from ..files import write_text
+from ..base.files import write_text
 from ..kernels.config import LANE_WIDTH as LANES   # candidates per block of the lane path
 from .generate import generate
 

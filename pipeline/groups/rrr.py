@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .. import limits as lim
+from ..base import limits as lim
 from ..kernels import config as kc
 from .base import GroupType
 
