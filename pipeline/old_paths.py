@@ -30,6 +30,7 @@ MOVED = {
     "files": "base.files",
     "expressions": "base.expressions",
     "version": "base.version",
+    "pareto": "kernels.pareto",
 }
 
 

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from .analysis import read_analysis, sweep_objectives, variable_units
-from .pareto import crowding_distance, knee_point, nondominated_rank
+from .kernels.pareto import crowding_distance, knee_point, nondominated_rank
 from .storage import attr_text, candidate_ids
 
 

@@ -41,7 +41,7 @@ import numpy as np
 
 from .base.files import RunLock
 from .kernels import sweep as ks
-from .pareto import crowding_distance, nondominated_rank
+from .kernels.pareto import crowding_distance, nondominated_rank
 from .search_file import SearchFile, search_summary
 from .search_problem import FrontTracker, SweepBlackBox, TriangleRepair, _broken, hv_scale
 from .search_spec import METHODS, SearchSpec

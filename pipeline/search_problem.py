@@ -34,7 +34,7 @@ from pymoo.core.repair import Repair
 
 from .kernels import config as kc
 from .objectives import bounded_finite, constraint_names, constraints, metric_values
-from .pareto import nondominated_rank
+from .kernels.pareto import nondominated_rank
 from .search_spec import HV_REFERENCE, NORMALISATION  # noqa: F401 (NORMALISATION: the search's)
 from .sweep import SweepProblem
 from .sweep_spec import SweepSpec, parameter_rows
