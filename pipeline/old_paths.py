@@ -31,6 +31,9 @@ MOVED = {
     "expressions": "base.expressions",
     "version": "base.version",
     "pareto": "kernels.pareto",
+    "groups": "model.groups",
+    "motion_law": "model.motion_law",
+    "metrics": "model.metrics",
 }
 
 

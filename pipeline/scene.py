@@ -13,7 +13,7 @@ import numpy as np
 from .kernels import config as kc
 from .compiler import kernels_for
 from .kernels.geometry import link_angles
-from .model import Plan
+from .model.mechanism import Plan
 
 ORDER = {"positions": kc.POSITIONS, "velocities": kc.VELOCITIES,
          "accelerations": kc.ACCELERATIONS, "forces": kc.ACCELERATIONS}

@@ -16,11 +16,11 @@ from pathlib import Path
 
 from .base import limits as lim
 from .base.errors import StudyError
-from .groups import GROUP_TYPES as _GROUP_CLASSES, SOLVED_KEYS, SOLVED_LISTS
-from .groups.law import law_grid_problem
+from .model.groups import GROUP_TYPES as _GROUP_CLASSES, SOLVED_KEYS, SOLVED_LISTS
+from .model.groups.law import law_grid_problem
 from .base.limits import (MAX_NAME_LENGTH, MAX_POSITIONS, MAX_STUDY_BYTES, MAX_TITLE_LENGTH,
                           POSITIONS_WHY, STUDY_BYTES_WHY, TITLE_WHY)
-from .model import Body, CentreOfMass, Crank, Load, Mechanism, Slide, group_label
+from .model.mechanism import Body, CentreOfMass, Crank, Load, Mechanism, Slide, group_label
 from .slide_check import check_slide as _check_slide
 # the study file's tables (the reader of every section; name_problem: a name's check)
 from .study_section import _MISSING, Section, _key, _quote, name_problem  # noqa: F401
@@ -444,7 +444,7 @@ def parse_output(sec: Section, mech: Mechanism) -> OutputSpec:
                 raise sec.error("rocker", f"unknown point {p!r}")
     law = None
     if sec.has("motion_law"):
-        from .motion_law import parse_motion_law
+        from .model.motion_law import parse_motion_law
         if rocker is None:
             raise sec.error("motion_law", "a motion law is the output rocker's: give "
                                           "output.rocker = [pivot, point]")

@@ -20,7 +20,7 @@ from .base.limits import (CANDIDATES_WHY, CHUNK_WHY, MAX_CANDIDATES, MAX_CHUNK, 
                           MAX_POSITIONS, POSITIONS_WHY)
 
 if TYPE_CHECKING:      # the type apply_design returns; model imports nothing from here
-    from .model import Mechanism
+    from .model.mechanism import Mechanism
 
 SAMPLERS = ("uniform", "lhs", "sobol")
 DEVICES = ("cpu", "gpu", "auto")     # [sweep] device, --device
@@ -30,7 +30,7 @@ STORES = ("all", "feasible")         # [sweep] store, --store
 # names stay importable from here for one release
 from .sampling import REDRAW_ROUNDS, draw_candidates, draw_checked, draw_unit  # noqa: E402,F401
 # the metrics, their units, stages and senses: one catalogue (pipeline.metrics)
-from .metrics import DEFAULT_METRICS, METRICS, NOT_OBJECTIVES  # noqa: E402,F401
+from .model.metrics import DEFAULT_METRICS, METRICS, NOT_OBJECTIVES  # noqa: E402,F401
 NOT_BOUNDED = {"peak_joint": "an index, not a quantity"}
 
 
@@ -169,7 +169,7 @@ def parameter_range(name):
 
 def parse_sweep(root, mech, output) -> SweepSpec:
     """Read [sweep] of a study (``root`` is the study's top Section)."""
-    from .model import compile_mechanism
+    from .model.mechanism import compile_mechanism
     from .base.errors import StudyError
     sec = root.table("sweep")
     plan = compile_mechanism(mech)

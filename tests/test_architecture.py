@@ -108,7 +108,7 @@ def test_importing_the_package_keeps_the_callers_matplotlib_backend():
 LAYERS = {
     "base": ["base"],
     "kernels": ["kernels"],
-    "model": ["model", "groups", "motion_law", "metrics"],
+    "model": ["model"],
     "compute": ["compiler", "gpu"],
     "one design": ["scene", "forces", "peaks", "dynamics"],
     "study": ["study", "study_section", "slide_check", "sweep_spec", "search_spec", "sampling",

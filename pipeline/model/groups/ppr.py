@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..base import limits as lim
+from ...base import limits as lim
 from .rpp import Yoke, parse_yoke
 
 

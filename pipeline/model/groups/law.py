@@ -10,10 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..base import limits as lim
-from ..kernels import config as kc
-from ..kernels import inputs as ik
-from ..base.limits import MAX_TABLE_POINTS, TABLE_POINTS_WHY
+from ...base import limits as lim
+from ...kernels import config as kc
+from ...kernels import inputs as ik
+from ...base.limits import MAX_TABLE_POINTS, TABLE_POINTS_WHY
 from .base import GroupType
 
 LAW_TYPES = ("harmonic", "cycloidal", "table", "linear")

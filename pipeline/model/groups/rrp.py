@@ -9,8 +9,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..base import limits as lim
-from ..kernels import config as kc
+from ...base import limits as lim
+from ...kernels import config as kc
 from .base import HALF, GroupType, guide_words, host, link_points
 
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .kernels import sweep as ks
+from ..kernels import sweep as ks
 
 # the stages of the kernels (pipeline.kernels.sweep): "positions" (stage 1), "law"
 # (stage 1, with [output.motion_law]), "kinematics", "transmission", "forces" (stage

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..base import limits as lim
+from ...base import limits as lim
 from .base import guide_words
 from .law import Input, Law
 

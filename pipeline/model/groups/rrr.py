@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..base import limits as lim
-from ..kernels import config as kc
+from ...base import limits as lim
+from ...kernels import config as kc
 from .base import GroupType
 
 

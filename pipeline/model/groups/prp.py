@@ -13,8 +13,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..base import limits as lim
-from ..kernels import config as kc
+from ...base import limits as lim
+from ...kernels import config as kc
 from .base import PARALLEL_SIN, GroupType, guide_words, host, link_points
 
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from .groups import (PPR, PRP, RPP, RPR, RRP, RRR, Attach, ClassIII,  # noqa: F401 (the model's)
                      ClassIIISlider, GroupType, Law, RotaryInput, SliderInput)
-from .kernels import config as kc
+from ..kernels import config as kc
 
 
 # ----------------------------------------------------------------- groups

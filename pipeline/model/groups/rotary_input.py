@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..base import limits as lim
+from ...base import limits as lim
 from .law import Input, Law
 
 

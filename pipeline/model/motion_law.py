@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .base.limits import ANGLE, LAW_VALUE
+from ..base.limits import ANGLE, LAW_VALUE
 
 LAWS = ("linear", "cycloidal", "harmonic")
 ALIGN = ("best", "fixed")
@@ -122,7 +122,7 @@ class MotionLaw:
     def error(self, theta, crank, phis) -> dict:
         """law_error (RMS), law_error_max and law_shift (deg) of the rocker
         angles ``theta`` at the n positions ``phis`` of a uniform revolution."""
-        from .kernels.metrics import law_error
+        from ..kernels.metrics import law_error
         theta = np.ascontiguousarray(theta, dtype=np.float64)
         n = theta.shape[0]
         law = self.on_grid(crank, phis)
