@@ -34,6 +34,8 @@ MOVED = {
     "groups": "model.groups",
     "motion_law": "model.motion_law",
     "metrics": "model.metrics",
+    "compiler.forces": "compiler.force_equations",
+    "compiler.gpu": "compiler.cuda_source",
 }
 
 

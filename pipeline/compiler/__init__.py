@@ -105,7 +105,7 @@ def kernels_for(plan, rocker=None, watch=True):
 def gpu_kernels_for(plan, rocker=None):
     """The CUDA kernel module of ``plan``'s sweep (``pipeline.compiler.gpu``):
     it imports the CPU module (``kernels_for``) and calls its functions."""
-    from .gpu import gpu_source
+    from .cuda_source import gpu_source
     cpu = kernels_for(plan, rocker)
     src = gpu_source(cpu.__name__)
     return _imported(src, "pipeline_gpu_" + module_name(src)[len("pipeline_mech_"):])
