@@ -96,7 +96,7 @@ def rerun_candidate(path, cid, *, forces=True, n_table=12, positions=None) -> Ca
     rebuilt from the file, the design applied, curves at the study's positions
     and, if ``forces``, the reactions at the operating speed."""
     from .kernels.metrics import dwell_error
-    from .scene import revolution_angles, solve_curves
+    from .solve.scene import revolution_angles, solve_curves
     from .sweep_spec import apply_design
     with open_results(path, "sweep") as f:
         i = resolve_candidate(f, cid)
@@ -117,7 +117,7 @@ def rerun_candidate(path, cid, *, forces=True, n_table=12, positions=None) -> Ca
     dense = solve_curves(plan, revolution_angles(crank, n), kc.ACCELERATIONS, close_at=close)
     table = solve_curves(plan, revolution_angles(crank, n_table), kc.POSITIONS)
     if forces and dense.overall == kc.OK and mech.bodies:
-        from .forces import scene_forces
+        from .solve.reactions import scene_forces
         dense.forces = scene_forces(mech, plan, dense)
     a, b = (plan.point(q) for q in study.output.rocker)
     v = dense.pos[:, b] - dense.pos[:, a]

@@ -36,8 +36,8 @@ def compile_study(study) -> Compiled:
     import numpy as np
 
     from .compiler import kernels_for
-    from .dynamics import integrate, with_changes
-    from .scene import run_scene
+    from .solve.crank_motion import integrate, with_changes
+    from .solve.scene import run_scene
     from .sweep import build_problem
     t = time.perf_counter()     # the kernels' generation, import and compilation (or load)
     mech = study.mechanism

@@ -36,6 +36,10 @@ MOVED = {
     "metrics": "model.metrics",
     "compiler.forces": "compiler.force_equations",
     "compiler.gpu": "compiler.cuda_source",
+    "scene": "solve.scene",
+    "forces": "solve.reactions",
+    "peaks": "solve.peaks",
+    "dynamics": "solve.crank_motion",
 }
 
 

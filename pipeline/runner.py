@@ -86,7 +86,7 @@ def peak_summary(res) -> dict:
     out = dict(point)
     if reactions:
         p = max(reactions, key=lambda q: q.value)
-        from .forces import pin_diameter
+        from .solve.reactions import pin_diameter
         (length, sigma), = res.study.output.pins([p.item])
         out["peak_reaction"] = (f"{p.value:.1f} N at {p.item}, phi1 = {p.phi1:.4f} deg; pin "
                                 f"d_min {float(pin_diameter(p.value, length, sigma)):.2f} mm "
@@ -112,13 +112,13 @@ def peak_summary(res) -> dict:
 def solve_scene(study):
     """Everything a scene study asks for, in memory: its curves (and forces),
     refined peaks, dwell and stroke, dynamics cases and reduced dynamics."""
-    from .peaks import scene_motion, scene_peaks
-    from .scene import run_scene
+    from .solve.peaks import scene_motion, scene_peaks
+    from .solve.scene import run_scene
     res = run_scene(study)
     res.peaks = scene_peaks(res)
     res.motion = scene_motion(res)
     if study.dynamics is not None:
-        from .dynamics import reduced_dynamics, run_dynamics
+        from .solve.crank_motion import reduced_dynamics, run_dynamics
         res.dynamics = run_dynamics(study, res.plan)
         res.reduced = reduced_dynamics(study, res.plan)
     return res
@@ -151,7 +151,7 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
         import matplotlib.pyplot as plt
 
         from . import plots
-        from .dynamics import dynamics_figure
+        from .solve.crank_motion import dynamics_figure
         # made and saved one at a time: a figure is closed before the next is drawn
         figures = [(lambda: plots.scene_figure(res), out.with_suffix(".png")),
                    (lambda: plots.kinematics_figure(res), out.with_name(
@@ -169,7 +169,7 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
             figures.append((lambda case=case: plots.eps1_figure(case),
                             out.with_name(f"{out.stem}_{name}_eps1.png")))
         if res.reduced is not None:
-            from .dynamics import reduced_figure
+            from .solve.crank_motion import reduced_figure
             figures.append((lambda: reduced_figure(res.reduced),
                             out.with_name(f"{out.stem}_reduced.png")))
         for make, path in figures:

@@ -508,7 +508,7 @@ def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
         c.check_range("damping", cases[-1].damping, lim.DAMPING)
         c.done()
         # M1 and the loads must be constant, 2*pi-periodic in phi, or functions of t alone
-        from .dynamics import check_drive
+        from .solve.crank_motion import check_drive
         check_drive(mech, cases[-1], c.file)
     sec.done()
     return DynamicsSpec(cases=tuple(cases), method=method)

@@ -143,8 +143,8 @@ def _device(spec: SweepSpec, distributed) -> str:
 
 
 def build_problem(study, spec: SweepSpec, tols=None, device="cpu") -> SweepProblem:
-    from .forces import sample_loads
-    from .scene import revolution_angles
+    from .solve.reactions import sample_loads
+    from .solve.scene import revolution_angles
     mech = study.mechanism
     plan = mech.compile()
     crank = mech.crank

@@ -95,7 +95,7 @@ def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
 def _peaks_table(f) -> pd.DataFrame:
     """Every stored peak: quantity, item, value, unit, crank angle, the largest
     grid sample it was refined from, and for a joint the pin diameter."""
-    from .forces import pin_diameter
+    from .solve.reactions import pin_diameter
     g = f["peaks"]
     rows = []
     for q in variables(g):
@@ -181,7 +181,7 @@ def scene_tables(path, every=1) -> dict:
                         units[f"{comp}[{name}]"] = unit
             out["bodies"] = _frame(cols, units)
         if "reactions" in d:
-            from .forces import joint_peaks
+            from .solve.reactions import joint_peaks
             R = d["reactions"][()]
             joints = [str(attr_text(x)) for x in d["reactions"].attrs["joints"]]
             cols, units = {"phi1": phi}, {"phi1": "deg"}
@@ -192,7 +192,7 @@ def scene_tables(path, every=1) -> dict:
                 cols[name] = mag[rows, j]
                 units.update({f"{name}_x": "N", f"{name}_y": "N", name: "N"})
             if "slide_reactions" in d:     # prismatic pairs: N, C and where N acts
-                from .forces import slide_action, slide_label
+                from .solve.reactions import slide_action, slide_label
                 S = d["slide_reactions"][rows]
                 E = slide_action(S)
                 for k, name in enumerate(d["slide_reactions"].attrs["slides"]):
@@ -220,7 +220,7 @@ def scene_tables(path, every=1) -> dict:
         if "peaks" in f:
             out["peaks"] = _peaks_table(f)
         if "dynamics" in f:
-            from .dynamics import motion_tables
+            from .solve.crank_motion import motion_tables
             out.update(motion_tables(f["dynamics"]))
         if "reduced_dynamics" in f:
             g = f["reduced_dynamics"]

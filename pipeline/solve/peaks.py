@@ -150,7 +150,7 @@ def scene_peaks(res) -> list[Peak]:
     """Every peak of the scene ``res`` (pipeline.scene.SceneResult), refined."""
     from scipy.optimize import minimize_scalar
 
-    from .forces import scene_forces
+    from .reactions import scene_forces
     study, plan, dense = res.study, res.plan, res.dense
     if dense.overall != 0 or not np.isfinite(dense.pos).all():
         return []      # a scene that does not assemble everywhere has no peaks to refine
@@ -207,7 +207,7 @@ def scene_motion(res) -> dict:
     """Dwell error and stroke of a scene with an output rocker (DOMAIN.md
     section 9, as the sweep computes them), and with [output.motion_law] the
     law error (``pipeline.motion_law``): {} without a rocker."""
-    from .kernels.metrics import dwell_error, relative_angle
+    from ..kernels.metrics import dwell_error, relative_angle
     out_spec = res.study.output
     if out_spec.rocker is None or res.dense.overall != 0:
         return {}

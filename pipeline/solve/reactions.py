@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kernels.inputs import ROTARY
+from ..kernels.inputs import ROTARY
 
 
 PIN_LENGTH_MM = 10.0       # DOMAIN.md section 5: pin of length 10 mm in bending
@@ -117,7 +117,7 @@ def scene_forces(mechanism, plan, curves) -> Reactions:
     R = np.zeros((n, nj, 2))
     S = np.zeros((n, ns + plan.n_inputs, 2))
     M = np.zeros(n)
-    from .compiler import kernels_for
+    from ..compiler import kernels_for
     kernels_for(plan).forces_curve(plan.par, curves.pos, curves.d1, curves.d2, crank.omega1,
                                    crank.eps1, loads, body_loads, R, S, M)
     return Reactions(curves.phi, R, S[:, :ns], M, body_loads, plan.joint_names,

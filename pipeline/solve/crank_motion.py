@@ -33,11 +33,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .kernels import config as kc
-from .compiler import kernels_for
-from .kernels.continuation import MARGIN_SLOTS
-from .base.errors import StudyError
-from .base.files import safe_name
+from ..kernels import config as kc
+from ..compiler import kernels_for
+from ..kernels.continuation import MARGIN_SLOTS
+from ..base.errors import StudyError
+from ..base.files import safe_name
 
 log = logging.getLogger("pipeline")
 
@@ -66,7 +66,7 @@ def _split_field(expr, file):
 def classify_drive(expr, t_end, file="<study>"):
     """"const", "phi" or "t": how ``expr`` enters the dynamics (see the module
     docstring).  Raises StudyError naming the field when it cannot."""
-    from .base.expressions import ExpressionError
+    from ..base.expressions import ExpressionError
     fname, where = _split_field(expr, file)
     if expr.is_constant:
         return "const"
@@ -165,7 +165,7 @@ def _curve(plan, phi, t=0.0, mechanism=None, loads=True, tols=None):
     phis = np.atleast_1d(np.asarray(phi, dtype=np.float64)).ravel().copy()
     ts = np.broadcast_to(np.asarray(t, dtype=np.float64), np.shape(phi)).ravel().copy()
     if loads and n_loads:
-        from .base.expressions import parse_expression
+        from ..base.expressions import parse_expression
         t_max = max(1e-3, float(np.max(ts))) if ts.size else 1e-3
         drive = build_drive(mechanism, parse_expression(0.0, "M1"), t_end=t_max,
                             dt=t_max / 2000)
@@ -535,6 +535,6 @@ def dynamics_figure(case: CaseResult):
 def with_changes(case, **changes):
     """A copy of a DynamicsCase with some fields changed (e.g. damping=0)."""
     if "M1" in changes and not hasattr(changes["M1"], "evaluate"):
-        from .base.expressions import parse_expression
+        from ..base.expressions import parse_expression
         changes["M1"] = parse_expression(changes["M1"], "M1")
     return replace(case, **changes)

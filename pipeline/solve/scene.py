@@ -10,10 +10,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .kernels import config as kc
-from .compiler import kernels_for
-from .kernels.geometry import link_angles
-from .model.mechanism import Plan
+from ..kernels import config as kc
+from ..compiler import kernels_for
+from ..kernels.geometry import link_angles
+from ..model.mechanism import Plan
 
 ORDER = {"positions": kc.POSITIONS, "velocities": kc.VELOCITIES,
          "accelerations": kc.ACCELERATIONS, "forces": kc.ACCELERATIONS}
@@ -110,7 +110,7 @@ def run_scene(study, tols=None) -> SceneResult:
     dense = solve_curves(plan, dense_phis, order, tols,
                          close_at=crank.phi0 + crank.rot * 2.0 * math.pi)
     if out.analysis == "forces":
-        from .forces import scene_forces
+        from .reactions import scene_forces
         table.forces = scene_forces(study.mechanism, plan, table)
         dense.forces = scene_forces(study.mechanism, plan, dense)
     return SceneResult(study, plan, table, dense, tols)
@@ -131,7 +131,7 @@ def batch_revolutions(study, pars, positions, order=kc.ACCELERATIONS, with_force
     """One revolution of every parameter row of ``pars`` (candidates of the
     study's mechanism) on all cores, reduced to (status, peak |r''| of the
     working point [mm/rad^2], peak joint reaction [N])."""
-    from .forces import sample_loads
+    from .reactions import sample_loads
     mech = study.mechanism
     plan = mech.compile()
     phis = revolution_angles(mech.crank, positions)
@@ -141,7 +141,7 @@ def batch_revolutions(study, pars, positions, order=kc.ACCELERATIONS, with_force
     status = np.zeros(n, np.int8)
     acc = np.zeros(n)
     peak = np.zeros(n)
-    from .compiler.parallel import run_rows
+    from ..compiler.parallel import run_rows
     run_rows(kernels_for(plan).batch, np.ascontiguousarray(pars), phis, int(order), tols,
              plan.point(study.output.working_point), bool(with_forces), mech.crank.omega1,
              mech.crank.eps1, loads, status, acc, peak, n_jobs=n_jobs)
