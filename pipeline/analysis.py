@@ -39,7 +39,7 @@ from .kernels import config as kc
 from .kernels.pareto import crowding_distance, knee_point, nondominated_rank
 from .storage import (ResultsError, attr_text, candidate_ids, coordinate, hdf5_image, open_results, put,
                       read_units, remove_group, variables)
-from .study import stored_study
+from .study.reader import stored_study
 
 log = logging.getLogger("pipeline")
 

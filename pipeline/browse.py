@@ -19,7 +19,7 @@ import pandas as pd
 from .analysis import read_analysis, sweep_objectives, variable_units
 from .kernels import config as kc
 from .storage import attr_text, candidate_ids, open_results, read_units
-from .study import stored_study
+from .study.reader import stored_study
 from .sweep_file import status_counts
 # the fronts, one design and its picture have modules of their own (ranking,
 # candidate, show); their names stay importable from here for one release
@@ -185,7 +185,7 @@ def candidate_details(path, cid) -> dict:
 
 def _geometry_problems(f, x) -> list:
     """Which length or triangle inequality a BAD_GEOMETRY candidate breaks."""
-    from .sweep_spec import geometry_problems, parameter_rows
+    from .study.sweep_spec import geometry_problems, parameter_rows
     study = stored_study(f.attrs, f.filename)
     if study is None:
         return []

@@ -15,7 +15,7 @@ from .analysis import variable_units
 from .kernels import config as kc
 from .ranking import ranking
 from .storage import ResultsError, attr_text, candidate_ids, open_results, row_of
-from .study import stored_study
+from .study.reader import stored_study
 
 STATUS_HELP = {
     kc.OK: "assembles over the whole revolution",
@@ -97,7 +97,7 @@ def rerun_candidate(path, cid, *, forces=True, n_table=12, positions=None) -> Ca
     and, if ``forces``, the reactions at the operating speed."""
     from .kernels.metrics import dwell_error
     from .solve.scene import revolution_angles, solve_curves
-    from .sweep_spec import apply_design
+    from .study.sweep_spec import apply_design
     with open_results(path, "sweep") as f:
         i = resolve_candidate(f, cid)
         study = load_study_from_results(f)

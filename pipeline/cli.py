@@ -15,7 +15,7 @@ EXIT_USER_ERROR = 2
 def _user_errors():
     from .base.expressions import ExpressionError
     from .storage import ResultsError
-    from .study import StudyError
+    from .study.reader import StudyError
     return (StudyError, ResultsError, ExpressionError, FileNotFoundError, ValueError)
 
 
@@ -68,7 +68,7 @@ def cmd_export(a):
 def cmd_compile(a):
     from .compile import compile_all, source, study_files
     if a.show:
-        from .study import load_study
+        from .study.reader import load_study
         for p in study_files(a.studies):
             print(source(load_study(p)))
         return EXIT_OK

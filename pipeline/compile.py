@@ -65,5 +65,5 @@ def source(study) -> str:
 
 
 def compile_all(paths=()) -> list[Compiled]:
-    from .study import load_study
+    from .study.reader import load_study
     return [compile_study(load_study(p)) for p in study_files(paths)]

@@ -40,6 +40,12 @@ MOVED = {
     "forces": "solve.reactions",
     "peaks": "solve.peaks",
     "dynamics": "solve.crank_motion",
+    "study_section": "study.section",
+    "slide_check": "study.slide_check",
+    "sweep_spec": "study.sweep_spec",
+    "search_spec": "study.search_spec",
+    "sampling": "study.sampling",
+    "objectives": "study.objectives",
 }
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from .base.errors import ResultsError
 from .base.files import RunLock, safe_name, save_figure
-from .study import load_study
+from .study.reader import load_study
 
 log = logging.getLogger("pipeline")
 
@@ -35,7 +35,7 @@ def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
     results file (and pictures).  A sweep study with a [search] section runs
     its adaptive search, seeded with the front of the results file
     ``seed_from`` if given."""
-    from .study import Study
+    from .study.reader import Study
     study = path if isinstance(path, Study) else load_study(path)
     path = study.path
     out = Path(out) if out else default_output(study)
@@ -187,7 +187,7 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
     summary["table_positions"] = int(res.table.phi.shape[0])
     summary["dense_positions"] = int(res.dense.phi.shape[0])
     if res.status == kc.BAD_GEOMETRY:
-        from .sweep_spec import geometry_problems
+        from .study.sweep_spec import geometry_problems
         summary["reason"] = "; ".join(geometry_problems(res.plan, res.plan.par))
     summary.update(peak_summary(res))
     for case in res.dynamics or ():

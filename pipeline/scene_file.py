@@ -243,7 +243,7 @@ def write_scene(res, path):
             put(g, "stroke", np.float64(res.motion["stroke"]), "mm",
                 "stroke of the working point: radius x rocker swing")
             if "law_error" in res.motion:      # [output.motion_law]
-                from .sweep_spec import METRICS
+                from .study.sweep_spec import METRICS
                 g.attrs["law_align"] = res.motion["law_align"]
                 for key in ("law_error", "law_error_max", "law_shift"):
                     put(g, key, np.float64(res.motion[key]), METRICS[key][0], METRICS[key][1])

@@ -44,13 +44,13 @@ from .kernels import sweep as ks
 from .kernels.pareto import crowding_distance, nondominated_rank
 from .search_file import SearchFile, search_summary
 from .search_problem import FrontTracker, SweepBlackBox, TriangleRepair, _broken, hv_scale
-from .search_spec import METHODS, SearchSpec
+from .study.search_spec import METHODS, SearchSpec
 from .storage import ResultsError, attr_text, hdf5_writing, open_results
 from .journal import MANIFEST_DEFAULTS, Journal
 from .sweep import (SweepInterrupted, SweepOutcome, SweepProblem, _connect, aside_or_done,
                     build_problem, check_existing, compile_notice, finish_run,
                     nothing_left_before_first)
-from .sweep_spec import SweepSpec, draw_checked, parameter_rows
+from .study.sweep_spec import SweepSpec, draw_checked, parameter_rows
 # the problem pymoo sees and the results file have modules of their own
 # (search_problem, search_file); their names stay importable from here for one release
 from .search_problem import (FAILED_OBJECTIVE, FAILED_VIOLATION, HV_REFERENCE,  # noqa: F401

@@ -30,13 +30,13 @@ from .kernels import config as kc
 from .kernels import sweep as ks
 from .base.limits import CHUNK_WHY, MAX_CHUNK
 from .storage import FORMAT, ResultsError, hdf5_writing, room_for
-from .sampling import draw_checked
-from .sweep_spec import SweepSpec, parameter_rows
+from .study.sampling import draw_checked
+from .study.sweep_spec import SweepSpec, parameter_rows
 # the journal, the objectives and the results file have modules of their own; their
 # names stay importable from here (search, browse, report and the tests use them)
 from .journal import JOURNAL_VERSION, MANIFEST_DEFAULTS, Journal, manifest_for  # noqa: F401
-from .objectives import (COLUMN, DERIVED, bounded_finite, constraint_names,  # noqa: F401
-                         constraint_units, constraints, metric_values)
+from .study.objectives import (COLUMN, DERIVED, bounded_finite, constraint_names,  # noqa: F401
+                               constraint_units, constraints, metric_values)
 from .sweep_file import COUNTED, SweepFile, status_counts, summarize  # noqa: F401
 
 log = logging.getLogger("pipeline")
@@ -238,7 +238,7 @@ def run_sweep(study, out, *, candidates=None, resume=False, overwrite=False, sch
     file.  ``device`` (cpu | gpu | auto) and ``store`` (all | feasible)
     override the study's [sweep] device and store."""
     from dataclasses import replace
-    from .sweep_spec import DEVICES, STORES
+    from .study.sweep_spec import DEVICES, STORES
     spec: SweepSpec = study.sweep
     for name, value, allowed in (("device", device, DEVICES), ("store", store, STORES)):
         if value is not None and value not in allowed:

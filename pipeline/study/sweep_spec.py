@@ -15,12 +15,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .base import limits as lim
-from .base.limits import (CANDIDATES_WHY, CHUNK_WHY, MAX_CANDIDATES, MAX_CHUNK, MAX_NAME_LENGTH,
-                          MAX_POSITIONS, POSITIONS_WHY)
+from ..base import limits as lim
+from ..base.limits import (CANDIDATES_WHY, CHUNK_WHY, MAX_CANDIDATES, MAX_CHUNK, MAX_NAME_LENGTH,
+                           MAX_POSITIONS, POSITIONS_WHY)
 
 if TYPE_CHECKING:      # the type apply_design returns; model imports nothing from here
-    from .model.mechanism import Mechanism
+    from ..model.mechanism import Mechanism
 
 SAMPLERS = ("uniform", "lhs", "sobol")
 DEVICES = ("cpu", "gpu", "auto")     # [sweep] device, --device
@@ -30,7 +30,7 @@ STORES = ("all", "feasible")         # [sweep] store, --store
 # names stay importable from here for one release
 from .sampling import REDRAW_ROUNDS, draw_candidates, draw_checked, draw_unit  # noqa: E402,F401
 # the metrics, their units, stages and senses: one catalogue (pipeline.metrics)
-from .model.metrics import DEFAULT_METRICS, METRICS, NOT_OBJECTIVES  # noqa: E402,F401
+from ..model.metrics import DEFAULT_METRICS, METRICS, NOT_OBJECTIVES  # noqa: E402,F401
 NOT_BOUNDED = {"peak_joint": "an index, not a quantity"}
 
 
@@ -169,8 +169,8 @@ def parameter_range(name):
 
 def parse_sweep(root, mech, output) -> SweepSpec:
     """Read [sweep] of a study (``root`` is the study's top Section)."""
-    from .model.mechanism import compile_mechanism
-    from .base.errors import StudyError
+    from ..model.mechanism import compile_mechanism
+    from ..base.errors import StudyError
     sec = root.table("sweep")
     plan = compile_mechanism(mech)
     spread = sec.number("spread", 0.2, positive=True)
@@ -324,7 +324,7 @@ def _check_available(sec, key, m, mech, output):
     if METRICS[m][2] == "law" and output.motion_law is None:
         raise sec.error(key, f"{m} needs the required motion law: declare [output.motion_law]")
     if METRICS[m][2] == "transmission":
-        from .solve.peaks import transmission_items
+        from ..solve.peaks import transmission_items
         if not transmission_items(mech):
             raise sec.error(key, f"{m} needs a dyad or a class III group (the "
                                  "transmission angles of pipeline.peaks); this mechanism has "

@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .base.limits import CANDIDATES_WHY, MAX_CANDIDATES, MAX_POPULATION, POPULATION_WHY
+from ..base.limits import CANDIDATES_WHY, MAX_CANDIDATES, MAX_POPULATION, POPULATION_WHY
 
 # how a search measures its feasible front: the hypervolume of the objectives divided by the
 # study's reference design's, against this reference point (the runs compute it, the results

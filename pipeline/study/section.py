@@ -8,8 +8,8 @@ from __future__ import annotations
 import math
 import unicodedata
 
-from .base.errors import StudyError
-from .base.limits import MAX_NAME_LENGTH, NAME_WHY
+from ..base.errors import StudyError
+from ..base.limits import MAX_NAME_LENGTH, NAME_WHY
 
 
 _MISSING = object()

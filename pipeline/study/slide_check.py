@@ -8,8 +8,8 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from .model.groups.base import along_words as _along_words, deg as _deg
-from .model.mechanism import group_label
+from ..model.groups.base import along_words as _along_words, deg as _deg
+from ..model.mechanism import group_label
 
 SLIDE_ANGLE_TOL = math.radians(1e-3)   # rad: two lines closer than 0.001 deg are one
 

@@ -14,16 +14,16 @@ import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from .base import limits as lim
-from .base.errors import StudyError
-from .model.groups import GROUP_TYPES as _GROUP_CLASSES, SOLVED_KEYS, SOLVED_LISTS
-from .model.groups.law import law_grid_problem
-from .base.limits import (MAX_NAME_LENGTH, MAX_POSITIONS, MAX_STUDY_BYTES, MAX_TITLE_LENGTH,
-                          POSITIONS_WHY, STUDY_BYTES_WHY, TITLE_WHY)
-from .model.mechanism import Body, CentreOfMass, Crank, Load, Mechanism, Slide, group_label
+from ..base import limits as lim
+from ..base.errors import StudyError
+from ..model.groups import GROUP_TYPES as _GROUP_CLASSES, SOLVED_KEYS, SOLVED_LISTS
+from ..model.groups.law import law_grid_problem
+from ..base.limits import (MAX_NAME_LENGTH, MAX_POSITIONS, MAX_STUDY_BYTES, MAX_TITLE_LENGTH,
+                           POSITIONS_WHY, STUDY_BYTES_WHY, TITLE_WHY)
+from ..model.mechanism import Body, CentreOfMass, Crank, Load, Mechanism, Slide, group_label
 from .slide_check import check_slide as _check_slide
 # the study file's tables (the reader of every section; name_problem: a name's check)
-from .study_section import _MISSING, Section, _key, _quote, name_problem  # noqa: F401
+from .section import _MISSING, Section, _key, _quote, name_problem  # noqa: F401
 
 
 # ----------------------------------------------------------------- study objects
@@ -300,7 +300,7 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
             s.done()
             slides[-1] = _check_slide(s, slides[-1], groups, bodies, fixed)
     if sec.has("loads"):
-        from .base.expressions import parse_expression
+        from ..base.expressions import parse_expression
         for ld in sec.tables("loads"):
             body = ld.name("body")
             if body not in body_names:
@@ -444,7 +444,7 @@ def parse_output(sec: Section, mech: Mechanism) -> OutputSpec:
                 raise sec.error("rocker", f"unknown point {p!r}")
     law = None
     if sec.has("motion_law"):
-        from .model.motion_law import parse_motion_law
+        from ..model.motion_law import parse_motion_law
         if rocker is None:
             raise sec.error("motion_law", "a motion law is the output rocker's: give "
                                           "output.rocker = [pivot, point]")
@@ -468,7 +468,7 @@ def parse_output(sec: Section, mech: Mechanism) -> OutputSpec:
 
 
 def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
-    from .base.expressions import parse_expression
+    from ..base.expressions import parse_expression
     if not mech.bodies:
         raise sec.error("", "crank dynamics needs mass data: declare [[mechanism.bodies]]")
     method = sec.string("method", "rk4", choices=("rk4", "dop853"))
@@ -508,7 +508,7 @@ def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
         c.check_range("damping", cases[-1].damping, lim.DAMPING)
         c.done()
         # M1 and the loads must be constant, 2*pi-periodic in phi, or functions of t alone
-        from .solve.crank_motion import check_drive
+        from ..solve.crank_motion import check_drive
         check_drive(mech, cases[-1], c.file)
     sec.done()
     return DynamicsSpec(cases=tuple(cases), method=method)
