@@ -79,7 +79,7 @@ def motion_from_scene_file(path) -> Motion:
     with the links of the study stored in the file."""
     from .candidate import load_study_from_results
     from .plots import _links_to_draw, joint_labels, point_label
-    from .storage import ResultsError, attr_text, open_results
+    from .results.storage import ResultsError, attr_text, open_results
     with open_results(path, "scene") as f:
         study = load_study_from_results(f)
         names = [str(attr_text(x)) for x in f["mechanism"].attrs["point_names"]]
@@ -309,7 +309,7 @@ def gif_bytes(motion: Motion, frames=60, dpi=60) -> bytes:
 def results_kind(path) -> str:
     """'scene' or 'sweep': the kind of a results file (its errors are the
     usual ResultsError)."""
-    from .storage import attr_text, open_results
+    from .results.storage import attr_text, open_results
     with open_results(path) as f:
         return str(attr_text(f.attrs.get("kind", "?")))
 

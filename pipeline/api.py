@@ -54,7 +54,7 @@ def solve_scene(study):
 def open(path):  # noqa: A001 - pipeline.open, as the users asked for it
     """A results file as tables: a sweep's candidates as one DataFrame
     (``candidates``), a scene's tables as {name: DataFrame} (``scene_tables``)."""
-    from .storage import ResultsError, attr_text, open_results
+    from .results.storage import ResultsError, attr_text, open_results
     with open_results(path) as f:
         kind = attr_text(f.attrs["kind"])
     try:

@@ -18,9 +18,9 @@ import pandas as pd
 
 from .analysis import read_analysis, sweep_objectives, variable_units
 from .kernels import config as kc
-from .storage import attr_text, candidate_ids, open_results, read_units
+from .results.storage import attr_text, candidate_ids, open_results, read_units
 from .study.reader import stored_study
-from .sweep_file import status_counts
+from .results.sweep_file import status_counts
 # the fronts, one design and its picture have modules of their own (ranking,
 # candidate, show); their names stay importable from here for one release
 from .candidate import (STATUS_HELP, CandidateRun, load_study_from_results,  # noqa: F401

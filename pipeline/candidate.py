@@ -14,7 +14,7 @@ import numpy as np
 from .analysis import variable_units
 from .kernels import config as kc
 from .ranking import ranking
-from .storage import ResultsError, attr_text, candidate_ids, open_results, row_of
+from .results.storage import ResultsError, attr_text, candidate_ids, open_results, row_of
 from .study.reader import stored_study
 
 STATUS_HELP = {

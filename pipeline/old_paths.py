@@ -46,6 +46,11 @@ MOVED = {
     "search_spec": "study.search_spec",
     "sampling": "study.sampling",
     "objectives": "study.objectives",
+    "storage": "results.storage",
+    "scene_file": "results.scene_file",
+    "sweep_file": "results.sweep_file",
+    "search_file": "results.search_file",
+    "journal": "results.journal",
 }
 
 

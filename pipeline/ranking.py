@@ -12,7 +12,7 @@ import pandas as pd
 
 from .analysis import read_analysis, sweep_objectives, variable_units
 from .kernels.pareto import crowding_distance, knee_point, nondominated_rank
-from .storage import attr_text, candidate_ids
+from .results.storage import attr_text, candidate_ids
 
 
 @dataclass

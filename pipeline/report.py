@@ -27,8 +27,8 @@ from .ranking import design_table, ranking
 from .report_assets import CSS, SCRIPT
 from .report_figures import (_letters, _png, design_figure, importance_figure, pareto_figure,
                              search_figure)
-from .storage import attr_text, open_results
-from .sweep_file import status_counts
+from .results.storage import attr_text, open_results
+from .results.sweep_file import status_counts
 # the page's assets and pictures have modules of their own (report_assets,
 # report_figures); their names stay importable from here for one release
 from .report_figures import MAX_FRONT_POINTS, MAX_GREY  # noqa: F401

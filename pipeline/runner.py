@@ -130,7 +130,7 @@ def run_scene_study(study, out, pictures=True, overwrite=False) -> RunOutcome:
     ``overwrite`` (and never an unfinished run's)."""
     out = Path(out)
     with RunLock(out):
-        from .journal import Journal
+        from .results.journal import Journal
         if Journal(out).exists():
             raise ResultsError(out, "is being written by an unfinished sweep or search (its "
                                     f"journal {out.name}.parts is beside it); write the scene "
@@ -143,7 +143,7 @@ def run_scene_study(study, out, pictures=True, overwrite=False) -> RunOutcome:
 
 def _write_scene_study(study, out, pictures) -> RunOutcome:
     from .kernels import config as kc
-    from .scene_file import write_scene
+    from .results.scene_file import write_scene
     res = solve_scene(study)
     write_scene(res, out)
     pics = []

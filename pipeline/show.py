@@ -12,7 +12,7 @@ import numpy as np
 from .candidate import STATUS_HELP, CandidateRun, rerun_candidate
 from .base.files import save_figure
 from .kernels import config as kc
-from .storage import open_results
+from .results.storage import open_results
 
 # OV-7 cyclogram of the eyelets, main-shaft angle in deg (DOMAIN.md section 9)
 OV7_DWELL_START = 240.0

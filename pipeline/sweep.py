@@ -29,15 +29,15 @@ from .base.files import RunLock, fault_point, replacing
 from .kernels import config as kc
 from .kernels import sweep as ks
 from .base.limits import CHUNK_WHY, MAX_CHUNK
-from .storage import FORMAT, ResultsError, hdf5_writing, room_for
+from .results.storage import FORMAT, ResultsError, hdf5_writing, room_for
 from .study.sampling import draw_checked
 from .study.sweep_spec import SweepSpec, parameter_rows
 # the journal, the objectives and the results file have modules of their own; their
 # names stay importable from here (search, browse, report and the tests use them)
-from .journal import JOURNAL_VERSION, MANIFEST_DEFAULTS, Journal, manifest_for  # noqa: F401
+from .results.journal import JOURNAL_VERSION, MANIFEST_DEFAULTS, Journal, manifest_for  # noqa: F401
 from .study.objectives import (COLUMN, DERIVED, bounded_finite, constraint_names,  # noqa: F401
                                constraint_units, constraints, metric_values)
-from .sweep_file import COUNTED, SweepFile, status_counts, summarize  # noqa: F401
+from .results.sweep_file import COUNTED, SweepFile, status_counts, summarize  # noqa: F401
 
 log = logging.getLogger("pipeline")
 

@@ -19,8 +19,8 @@ import numpy as np
 import pandas as pd
 
 from .kernels import config as kc
-from .storage import (ResultsError, attr_text, candidate_ids, open_results, read_units,
-                      variables)
+from .results.storage import (ResultsError, attr_text, candidate_ids, open_results, read_units,
+                              variables)
 
 
 def with_units(df: pd.DataFrame) -> pd.DataFrame:
@@ -201,7 +201,7 @@ def scene_tables(path, every=1) -> dict:
                     cols[f"e[{lab}]"] = E[:, k]
                     units.update({f"N[{lab}]": "N", f"C[{lab}]": "N*m", f"e[{lab}]": "mm"})
             if "input_drive" in d:        # inputs besides the crank: drive and share
-                from .storage import read_units
+                from .results.storage import read_units
                 D = d["input_drive"][rows]
                 H = d["input_share"][rows]
                 names = [str(attr_text(x)) for x in d["input_drive"].attrs["inputs"]]

@@ -112,7 +112,7 @@ LAYERS = {
     "compute": ["compiler", "gpu"],
     "one design": ["solve"],
     "study": ["study"],
-    "results": ["storage", "scene_file", "sweep_file", "search_file", "journal"],
+    "results": ["results"],
     "runs": ["sweep", "search", "search_problem"],
     "analysis": ["analysis", "ranking", "candidate"],
     "views": ["plots", "dynamics_plots", "animate", "show", "browse", "report", "report_assets",

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .kernels import config as kc
-from .base.files import replacing
-from .solve.reactions import slide_action
-from .solve.scene import real_motion
+from ..kernels import config as kc
+from ..base.files import replacing
+from ..solve.reactions import slide_action
+from ..solve.scene import real_motion
 from .storage import STATUS_ENUM, coordinate, hdf5_image, put, status_table, write_root_attrs
 
 
@@ -158,7 +158,7 @@ def _coordinates(f, plan, study):
     coordinate(f, "slide_component", ["N", "C"], "1", "normal force, couple")
     coordinate(f, "parameter", list(plan.par_names), "1", "compiled mechanism parameter")
     coordinate(f, "tolerance", [n for n, _ in TOLERANCES], "1", "solver tolerance")
-    from .solve.peaks import transmission_items
+    from ..solve.peaks import transmission_items
     coordinate(f, "dyad", [label for label, _, _ in transmission_items(study.mechanism)], "1",
                "transmission angle: RRR dyad (A-B-C, at the middle joint B), class III lead "
                "(J-P: the lead against the line to the meet of the other two leads), or a dyad "
@@ -193,7 +193,7 @@ def _peaks(g, peaks, output=None):
         put(g, f"{q}_grid", grid, ps[0].unit, f"{what} among the dense positions only",
             dims=dims)
         if q == "reaction" and output is not None:   # pin sizing from the peak reactions
-            from .solve.reactions import pin_diameter
+            from ..solve.reactions import pin_diameter
             pins = output.pins([p.item for p in ps])
             put(g, "pin_length", [ln for ln, _ in pins], "mm", "pin length (in bending)",
                 dims=dims)
@@ -243,7 +243,7 @@ def write_scene(res, path):
             put(g, "stroke", np.float64(res.motion["stroke"]), "mm",
                 "stroke of the working point: radius x rocker swing")
             if "law_error" in res.motion:      # [output.motion_law]
-                from .study.sweep_spec import METRICS
+                from ..study.sweep_spec import METRICS
                 g.attrs["law_align"] = res.motion["law_align"]
                 for key in ("law_error", "law_error_max", "law_shift"):
                     put(g, key, np.float64(res.motion[key]), METRICS[key][0], METRICS[key][1])

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .base.errors import ResultsError
-from .base.files import refuse_link, replacing
-from .kernels import sweep as ks
-from .study.sweep_spec import SweepSpec
+from ..base.errors import ResultsError
+from ..base.files import refuse_link, replacing
+from ..kernels import sweep as ks
+from ..study.sweep_spec import SweepSpec
 
 JOURNAL_VERSION = 3        # 2: chunks carry the draws rejected before solving; 3: 18 metric columns
 

@@ -11,10 +11,10 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from .study.search_spec import HV_REFERENCE, NORMALISATION, SearchSpec
+from ..study.search_spec import HV_REFERENCE, NORMALISATION, SearchSpec
 from .storage import COMPRESSION, attach, attr_text, coordinate, hdf5_writing
 from .sweep_file import SweepFile, summarize
-from .study.sweep_spec import SweepSpec
+from ..study.sweep_spec import SweepSpec
 
 # per generation, in /search: name, dtype, units, long name
 HISTORY = (

@@ -8,15 +8,15 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from .base.files import replacing
-from .kernels import config as kc
-from .kernels import sweep as ks
-from .study.objectives import (bounded_finite, constraint_names, constraint_units, constraints,
-                               metric_values)
+from ..base.files import replacing
+from ..kernels import config as kc
+from ..kernels import sweep as ks
+from ..study.objectives import (bounded_finite, constraint_names, constraint_units, constraints,
+                                metric_values)
 from .storage import (COMPRESSION, STATUS_ENUM, ResultsError, attach, attr_text, coordinate,
                       hdf5_image, put, room_for, status_table, units_attr,
                       write_root_attrs)
-from .study.sweep_spec import METRICS
+from ..study.sweep_spec import METRICS
 
 
 # the columns of progress/status_counts: every status, then the feasible candidates

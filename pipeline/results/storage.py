@@ -12,9 +12,9 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from .base.version import __version__
-from .base.errors import ResultsError  # noqa: F401  (raised by every reader of results)
-from .kernels import config as kc
+from ..base.version import __version__
+from ..base.errors import ResultsError  # noqa: F401  (raised by every reader of results)
+from ..kernels import config as kc
 
 FORMAT = "pipeline-results"
 FORMAT_VERSION = "1.2"     # 1.1: status enums, units per column, dimension scales;
@@ -200,7 +200,7 @@ def hdf5_writing(path, mode="r+", expendable=True):
     on any error); otherwise (a sweep's own file, rebuilt from its journal by
     --resume) only an input/output error gives it up, and an interruption
     leaves it flushed and readable."""
-    from .base.files import errno_of, naming
+    from ..base.files import errno_of, naming
     import sys
     # an HDF5 object closed while the block runs (a dataset let go) writes its
     # pages then; if that fails, h5py can only report it as "Exception ignored":
