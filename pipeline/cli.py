@@ -125,7 +125,7 @@ def cmd_show(a):
 
 def cmd_doctor(a):
     try:
-        from .gpu import doctor
+        from .runs.gpu import doctor
     except Exception as e:   # numba.cuda itself does not import
         print(f"numba.cuda does not import: {e}\n--device gpu: not available; "
               "pip install -e '.[gpu]' brings numba-cuda")

@@ -38,7 +38,7 @@ def compile_study(study) -> Compiled:
     from .compiler import kernels_for
     from .solve.crank_motion import integrate, with_changes
     from .solve.scene import run_scene
-    from .sweep import build_problem
+    from .runs.sweep import build_problem
     t = time.perf_counter()     # the kernels' generation, import and compilation (or load)
     mech = study.mechanism
     plan = mech.compile()

@@ -51,6 +51,10 @@ MOVED = {
     "sweep_file": "results.sweep_file",
     "search_file": "results.search_file",
     "journal": "results.journal",
+    "sweep": "runs.sweep",
+    "search": "runs.search",
+    "search_problem": "runs.search_problem",
+    "gpu": "runs.gpu",
 }
 
 

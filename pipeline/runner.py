@@ -53,13 +53,13 @@ def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
             raise ValueError(f"{path}: an adaptive search runs on the CPU and keeps every "
                              "design it evaluates: [sweep] device and store (--device, "
                              "--store) apply to Monte-Carlo sweeps")
-        from .search import run_search
+        from .runs.search import run_search
         return run_search(study, out, seed_from=seed_from, resume=resume, overwrite=overwrite,
                           scheduler=scheduler, n_jobs=n_jobs, progress=progress)
     if seed_from is not None:
         raise ValueError(f"{path}: --from seeds an adaptive search, and this study has no "
                          "[search] section (studies/ov7_search.toml has one)")
-    from .sweep import run_sweep
+    from .runs.sweep import run_sweep
     return run_sweep(study, out, candidates=candidates, resume=resume, overwrite=overwrite,
                      scheduler=scheduler, n_jobs=n_jobs, chunk_size=chunk_size,
                      progress=progress, device=device, store=store)

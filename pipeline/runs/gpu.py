@@ -180,8 +180,8 @@ class GpuSweep:
     """The stages of a sweep problem (``pipeline.sweep.SweepProblem``) on the GPU."""
 
     def __init__(self, problem, batch=BATCH):
-        from .compiler import gpu_kernels_for
-        from .kernels import sweep as ks
+        from ..compiler import gpu_kernels_for
+        from ..kernels import sweep as ks
         self.problem = problem
         self.cpu = problem.kernels
         self.mod = gpu_kernels_for(problem.plan, problem.rocker)
@@ -200,8 +200,8 @@ class GpuSweep:
         """One set of per-thread work arrays (rows: threads of a batch), each
         shaped like the one the CPU path allocates: ``evaluate``'s own four,
         then continuation.work, forces.force_work and the module's watch_work."""
-        from .kernels.continuation import work
-        from .kernels.forces import force_work
+        from ..kernels.continuation import work
+        from ..kernels.forces import force_work
         m, n, w = self.cpu, len(self.problem.phis), self.problem.dwell_w
         like = [np.empty(n), np.empty(n + w + 1, np.int64), np.empty(n + w + 1, np.int64),
                 np.empty(n), *work(m.N_POINTS, m.N_GROUPS, m.N_TRIADS),

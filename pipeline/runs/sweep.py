@@ -25,19 +25,19 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from .base.files import RunLock, fault_point, replacing
-from .kernels import config as kc
-from .kernels import sweep as ks
-from .base.limits import CHUNK_WHY, MAX_CHUNK
-from .results.storage import FORMAT, ResultsError, hdf5_writing, room_for
-from .study.sampling import draw_checked
-from .study.sweep_spec import SweepSpec, parameter_rows
+from ..base.files import RunLock, fault_point, replacing
+from ..kernels import config as kc
+from ..kernels import sweep as ks
+from ..base.limits import CHUNK_WHY, MAX_CHUNK
+from ..results.storage import FORMAT, ResultsError, hdf5_writing, room_for
+from ..study.sampling import draw_checked
+from ..study.sweep_spec import SweepSpec, parameter_rows
 # the journal, the objectives and the results file have modules of their own; their
 # names stay importable from here (search, browse, report and the tests use them)
-from .results.journal import JOURNAL_VERSION, MANIFEST_DEFAULTS, Journal, manifest_for  # noqa: F401
-from .study.objectives import (COLUMN, DERIVED, bounded_finite, constraint_names,  # noqa: F401
-                               constraint_units, constraints, metric_values)
-from .results.sweep_file import COUNTED, SweepFile, status_counts, summarize  # noqa: F401
+from ..results.journal import JOURNAL_VERSION, MANIFEST_DEFAULTS, Journal, manifest_for  # noqa: F401
+from ..study.objectives import (COLUMN, DERIVED, bounded_finite, constraint_names,  # noqa: F401
+                                constraint_units, constraints, metric_values)
+from ..results.sweep_file import COUNTED, SweepFile, status_counts, summarize  # noqa: F401
 
 log = logging.getLogger("pipeline")
 
@@ -64,7 +64,7 @@ class SweepProblem:
     @property
     def kernels(self):
         """The mechanism's generated kernels (compiled on first use, then cached)."""
-        from .compiler import kernels_for
+        from ..compiler import kernels_for
         return kernels_for(self.plan, self.rocker)
 
     def settings(self):
@@ -104,7 +104,7 @@ class SweepProblem:
         task)."""
         if self.device == "gpu":
             return self.gpu().evaluate_rows(pars)
-        from .compiler.parallel import run_rows
+        from ..compiler.parallel import run_rows
         n = pars.shape[0]
         status = np.zeros(n, np.int8)
         metrics = np.full((n, ks.N_METRICS), np.nan)
@@ -143,8 +143,8 @@ def _device(spec: SweepSpec, distributed) -> str:
 
 
 def build_problem(study, spec: SweepSpec, tols=None, device="cpu") -> SweepProblem:
-    from .solve.reactions import sample_loads
-    from .solve.scene import revolution_angles
+    from ..solve.reactions import sample_loads
+    from ..solve.scene import revolution_angles
     mech = study.mechanism
     plan = mech.compile()
     crank = mech.crank
@@ -238,7 +238,7 @@ def run_sweep(study, out, *, candidates=None, resume=False, overwrite=False, sch
     file.  ``device`` (cpu | gpu | auto) and ``store`` (all | feasible)
     override the study's [sweep] device and store."""
     from dataclasses import replace
-    from .study.sweep_spec import DEVICES, STORES
+    from ..study.sweep_spec import DEVICES, STORES
     spec: SweepSpec = study.sweep
     for name, value, allowed in (("device", device, DEVICES), ("store", store, STORES)):
         if value is not None and value not in allowed:

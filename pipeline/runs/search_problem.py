@@ -32,12 +32,12 @@ import numpy as np
 from pymoo.core.problem import Problem
 from pymoo.core.repair import Repair
 
-from .kernels import config as kc
-from .study.objectives import bounded_finite, constraint_names, constraints, metric_values
-from .kernels.pareto import nondominated_rank
-from .study.search_spec import HV_REFERENCE, NORMALISATION  # noqa: F401 (NORMALISATION: the search's)
+from ..kernels import config as kc
+from ..study.objectives import bounded_finite, constraint_names, constraints, metric_values
+from ..kernels.pareto import nondominated_rank
+from ..study.search_spec import HV_REFERENCE, NORMALISATION  # noqa: F401 (NORMALISATION: the search's)
 from .sweep import SweepProblem
-from .study.sweep_spec import SweepSpec, parameter_rows
+from ..study.sweep_spec import SweepSpec, parameter_rows
 
 FAILED_VIOLATION = 1e12   # the `evaluable` constraint of a failed candidate: above any real one
 FAILED_OBJECTIVE = 1e12   # pymoo's stand-in for an objective that is NaN (infeasible rows only)
