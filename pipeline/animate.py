@@ -77,7 +77,7 @@ def _solved(status) -> int:
 def motion_from_scene_file(path) -> Motion:
     """The Motion stored in a scene's results file (its dense positions), drawn
     with the links of the study stored in the file."""
-    from .candidate import load_study_from_results
+    from .analysis.candidate import load_study_from_results
     from .plots import _links_to_draw, joint_labels, point_label
     from .results.storage import ResultsError, attr_text, open_results
     with open_results(path, "scene") as f:
@@ -338,7 +338,7 @@ def animate(path, candidate=None, out=None, frames=MAX_FRAMES) -> dict:
         if candidate is None:
             raise ValueError(f"{path} is a sweep: say which design to animate with --candidate "
                              "ID (an index, 'knee' or 'reference')")
-        from .candidate import rerun_candidate
+        from .analysis.candidate import rerun_candidate
         from .kernels import config as kc
         run = rerun_candidate(path, candidate, forces=False)
         note = "" if run.status == kc.OK else (

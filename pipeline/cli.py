@@ -89,7 +89,7 @@ def cmd_bench(a):
 
 
 def cmd_analyze(a):
-    from .analysis import analyze
+    from .analysis.fronts import analyze
     info = analyze(a.results, n_representatives=a.representatives, max_samples=a.max_samples,
                    n_jobs=a.jobs)
     if not a.quiet:

@@ -55,6 +55,8 @@ MOVED = {
     "search": "runs.search",
     "search_problem": "runs.search_problem",
     "gpu": "runs.gpu",
+    "ranking": "analysis.ranking",
+    "candidate": "analysis.candidate",
 }
 
 

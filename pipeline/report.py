@@ -20,10 +20,10 @@ from pathlib import Path
 import numpy as np
 
 from .base.version import __version__
-from .analysis import analyze, has_analysis, read_analysis, read_sweep
-from .candidate import rerun_candidate
+from .analysis.fronts import analyze, has_analysis, read_analysis, read_sweep
+from .analysis.candidate import rerun_candidate
 from .base.files import write_text
-from .ranking import design_table, ranking
+from .analysis.ranking import design_table, ranking
 from .report_assets import CSS, SCRIPT
 from .report_figures import (_letters, _png, design_figure, importance_figure, pareto_figure,
                              search_figure)

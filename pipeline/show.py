@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .candidate import STATUS_HELP, CandidateRun, rerun_candidate
+from .analysis.candidate import STATUS_HELP, CandidateRun, rerun_candidate
 from .base.files import save_figure
 from .kernels import config as kc
 from .results.storage import open_results

@@ -40,8 +40,8 @@ def _frame(cols: dict, units: dict) -> pd.DataFrame:
 def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
     """The candidates of a sweep file: all, only the feasible ones, or those of
     Pareto fronts 1 .. ``front``.  The rows equal the HDF5 datasets."""
-    from .ranking import ranking
-    from .analysis import variable_units
+    from .analysis.ranking import ranking
+    from .analysis.fronts import variable_units
     with open_results(path, "sweep") as f:
         p = f["candidates/params"]
         names = [str(attr_text(x)) for x in p.attrs["names"]]

@@ -114,7 +114,7 @@ LAYERS = {
     "study": ["study"],
     "results": ["results"],
     "runs": ["runs"],
-    "analysis": ["analysis", "ranking", "candidate"],
+    "analysis": ["analysis"],
     "views": ["plots", "dynamics_plots", "animate", "show", "browse", "report", "report_assets",
               "report_figures", "export", "tables"],
     "face": ["api", "cli", "runner", "compile", "bench", "old_paths"],

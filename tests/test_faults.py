@@ -91,7 +91,7 @@ def test_analyze_on_a_full_disk_keeps_the_sweep(sweep_copy, monkeypatch, capsys)
 def test_analyze_failing_midway_in_hdf5_keeps_the_sweep(sweep_copy, monkeypatch, capsys, k):
     """The disk fills while HDF5 writes the analysis (inside h5py, at its k-th
     dataset, not at the flush)."""
-    import pipeline.analysis as an
+    import pipeline.analysis.fronts as an
     before = digest(sweep_copy)
     real = an.put
     count = {"n": 0}

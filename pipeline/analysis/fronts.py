@@ -33,13 +33,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .base.version import __version__
-from .base.files import RunLock, replacing
-from .kernels import config as kc
-from .kernels.pareto import crowding_distance, knee_point, nondominated_rank
-from .results.storage import (ResultsError, attr_text, candidate_ids, coordinate, hdf5_image, open_results, put,
-                              read_units, remove_group, variables)
-from .study.reader import stored_study
+from ..base.version import __version__
+from ..base.files import RunLock, replacing
+from ..kernels import config as kc
+from ..kernels.pareto import crowding_distance, knee_point, nondominated_rank
+from ..results.storage import (ResultsError, attr_text, candidate_ids, coordinate, hdf5_image, open_results, put,
+                               read_units, remove_group, variables)
+from ..study.reader import stored_study
 
 log = logging.getLogger("pipeline")
 

@@ -11,11 +11,11 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .analysis import variable_units
-from .kernels import config as kc
+from .fronts import variable_units
+from ..kernels import config as kc
 from .ranking import ranking
-from .results.storage import ResultsError, attr_text, candidate_ids, open_results, row_of
-from .study.reader import stored_study
+from ..results.storage import ResultsError, attr_text, candidate_ids, open_results, row_of
+from ..study.reader import stored_study
 
 STATUS_HELP = {
     kc.OK: "assembles over the whole revolution",
@@ -95,9 +95,9 @@ def rerun_candidate(path, cid, *, forces=True, n_table=12, positions=None) -> Ca
     """Re-run one candidate (index, 'knee' or 'reference') as a scene: the study
     rebuilt from the file, the design applied, curves at the study's positions
     and, if ``forces``, the reactions at the operating speed."""
-    from .kernels.metrics import dwell_error
-    from .solve.scene import revolution_angles, solve_curves
-    from .study.sweep_spec import apply_design
+    from ..kernels.metrics import dwell_error
+    from ..solve.scene import revolution_angles, solve_curves
+    from ..study.sweep_spec import apply_design
     with open_results(path, "sweep") as f:
         i = resolve_candidate(f, cid)
         study = load_study_from_results(f)
@@ -117,7 +117,7 @@ def rerun_candidate(path, cid, *, forces=True, n_table=12, positions=None) -> Ca
     dense = solve_curves(plan, revolution_angles(crank, n), kc.ACCELERATIONS, close_at=close)
     table = solve_curves(plan, revolution_angles(crank, n_table), kc.POSITIONS)
     if forces and dense.overall == kc.OK and mech.bodies:
-        from .solve.reactions import scene_forces
+        from ..solve.reactions import scene_forces
         dense.forces = scene_forces(mech, plan, dense)
     a, b = (plan.point(q) for q in study.output.rocker)
     v = dense.pos[:, b] - dense.pos[:, a]

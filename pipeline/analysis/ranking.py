@@ -10,9 +10,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .analysis import read_analysis, sweep_objectives, variable_units
-from .kernels.pareto import crowding_distance, knee_point, nondominated_rank
-from .results.storage import attr_text, candidate_ids
+from .fronts import read_analysis, sweep_objectives, variable_units
+from ..kernels.pareto import crowding_distance, knee_point, nondominated_rank
+from ..results.storage import attr_text, candidate_ids
 
 
 @dataclass
