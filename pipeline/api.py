@@ -14,7 +14,7 @@ Arrays and tables are in the units of the results file (mm, deg, N, m/s, ...);
 from __future__ import annotations
 
 from .study.reader import Study, load_study as _load_study
-from .tables import candidates, scene_tables, with_units
+from .views.tables import candidates, scene_tables, with_units
 
 __all__ = ["load_study", "run", "solve_scene", "open", "candidates", "scene_tables", "with_units"]
 

@@ -54,7 +54,7 @@ def _quote(path):
 
 
 def cmd_export(a):
-    from .export import export
+    from .views.export import export
     if (a.csv is None) == (a.parquet is None):
         raise ValueError("give the output folder with --csv DIR or --parquet DIR")
     files = export(a.results, a.csv or a.parquet, every=a.every, feasible=a.feasible,
@@ -98,13 +98,13 @@ def cmd_analyze(a):
 
 
 def cmd_browse(a):
-    from .browse import browse
+    from .views.browse import browse
     print(browse(a.results, top=a.top, candidate=a.candidate, fmt=a.format, wide=a.wide))
     return EXIT_OK
 
 
 def cmd_show(a):
-    from .animate import animate, results_kind
+    from .views.animate import animate, results_kind
     if a.animate:
         info = animate(a.results, a.candidate, a.output, frames=a.frames)
     elif results_kind(a.results) == "scene":
@@ -116,7 +116,7 @@ def cmd_show(a):
         raise ValueError(f"{a.results} is a sweep: say which design to show with --candidate "
                          "ID (an index, 'knee' or 'reference')")
     else:
-        from .show import show
+        from .views.show import show
         info = show(a.results, a.candidate, a.output)
     if not a.quiet:
         _print(info, a.format)
@@ -135,7 +135,7 @@ def cmd_doctor(a):
 
 
 def cmd_report(a):
-    from .report import write_report
+    from .views.report import write_report
     info = write_report(a.results, a.output, top=a.top)
     if not a.quiet:
         _print(info, a.format)
@@ -225,7 +225,7 @@ def build_parser():
                    help="full-width tables and the file's datasets (default: 100 columns)")
     b.set_defaults(func=cmd_browse)
 
-    from .animate import FPS, MAX_FRAMES
+    from .views.animate import FPS, MAX_FRAMES
     s = sub.add_parser("show", parents=[common], help=(
         "re-run one candidate of a sweep as a scene and draw it: mechanism, output motion "
         "over the OV-7 cyclogram, joint reactions; or, with --animate, animate it (or a "

@@ -57,6 +57,16 @@ MOVED = {
     "gpu": "runs.gpu",
     "ranking": "analysis.ranking",
     "candidate": "analysis.candidate",
+    "plots": "views.plots",
+    "dynamics_plots": "views.dynamics_plots",
+    "animate": "views.animate",
+    "show": "views.show",
+    "browse": "views.browse",
+    "report": "views.report",
+    "report_assets": "views.report_assets",
+    "report_figures": "views.report_figures",
+    "export": "views.export",
+    "tables": "views.tables",
 }
 
 

@@ -150,7 +150,7 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
     if pictures:
         import matplotlib.pyplot as plt
 
-        from . import plots
+        from .views import plots
         from .solve.crank_motion import dynamics_figure
         # made and saved one at a time: a figure is closed before the next is drawn
         figures = [(lambda: plots.scene_figure(res), out.with_suffix(".png")),

@@ -15,7 +15,7 @@ def eps1_figure(case):
     (colour key), the fine record of the last seconds (every step) on top.
     A rotating crank is shown over one revolution (phi1 mod 360 deg).
     Returns the Figure."""
-    from .solve.crank_motion import TAIL_SECONDS
+    from ..solve.crank_motion import TAIL_SECONDS
     c = case.case
     s = case.steady()
     rotating = s is not None or np.ptp(case.phi1) >= 2.0 * math.pi

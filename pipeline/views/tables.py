@@ -18,9 +18,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .kernels import config as kc
-from .results.storage import (ResultsError, attr_text, candidate_ids, open_results, read_units,
-                              variables)
+from ..kernels import config as kc
+from ..results.storage import (ResultsError, attr_text, candidate_ids, open_results, read_units,
+                               variables)
 
 
 def with_units(df: pd.DataFrame) -> pd.DataFrame:
@@ -40,8 +40,8 @@ def _frame(cols: dict, units: dict) -> pd.DataFrame:
 def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
     """The candidates of a sweep file: all, only the feasible ones, or those of
     Pareto fronts 1 .. ``front``.  The rows equal the HDF5 datasets."""
-    from .analysis.ranking import ranking
-    from .analysis.fronts import variable_units
+    from ..analysis.ranking import ranking
+    from ..analysis.fronts import variable_units
     with open_results(path, "sweep") as f:
         p = f["candidates/params"]
         names = [str(attr_text(x)) for x in p.attrs["names"]]
@@ -95,7 +95,7 @@ def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
 def _peaks_table(f) -> pd.DataFrame:
     """Every stored peak: quantity, item, value, unit, crank angle, the largest
     grid sample it was refined from, and for a joint the pin diameter."""
-    from .solve.reactions import pin_diameter
+    from ..solve.reactions import pin_diameter
     g = f["peaks"]
     rows = []
     for q in variables(g):
@@ -181,7 +181,7 @@ def scene_tables(path, every=1) -> dict:
                         units[f"{comp}[{name}]"] = unit
             out["bodies"] = _frame(cols, units)
         if "reactions" in d:
-            from .solve.reactions import joint_peaks
+            from ..solve.reactions import joint_peaks
             R = d["reactions"][()]
             joints = [str(attr_text(x)) for x in d["reactions"].attrs["joints"]]
             cols, units = {"phi1": phi}, {"phi1": "deg"}
@@ -192,7 +192,7 @@ def scene_tables(path, every=1) -> dict:
                 cols[name] = mag[rows, j]
                 units.update({f"{name}_x": "N", f"{name}_y": "N", name: "N"})
             if "slide_reactions" in d:     # prismatic pairs: N, C and where N acts
-                from .solve.reactions import slide_action, slide_label
+                from ..solve.reactions import slide_action, slide_label
                 S = d["slide_reactions"][rows]
                 E = slide_action(S)
                 for k, name in enumerate(d["slide_reactions"].attrs["slides"]):
@@ -201,7 +201,7 @@ def scene_tables(path, every=1) -> dict:
                     cols[f"e[{lab}]"] = E[:, k]
                     units.update({f"N[{lab}]": "N", f"C[{lab}]": "N*m", f"e[{lab}]": "mm"})
             if "input_drive" in d:        # inputs besides the crank: drive and share
-                from .results.storage import read_units
+                from ..results.storage import read_units
                 D = d["input_drive"][rows]
                 H = d["input_share"][rows]
                 names = [str(attr_text(x)) for x in d["input_drive"].attrs["inputs"]]
@@ -220,7 +220,7 @@ def scene_tables(path, every=1) -> dict:
         if "peaks" in f:
             out["peaks"] = _peaks_table(f)
         if "dynamics" in f:
-            from .solve.crank_motion import motion_tables
+            from ..solve.crank_motion import motion_tables
             out.update(motion_tables(f["dynamics"]))
         if "reduced_dynamics" in f:
             g = f["reduced_dynamics"]

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from .results.storage import attr_text
+from ..results.storage import attr_text
 
 MAX_GREY = 60_000       # infeasible points drawn in the Pareto plot (seeded subsample)
 MAX_FRONT_POINTS = 200_000

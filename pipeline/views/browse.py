@@ -16,16 +16,16 @@ import h5py
 import numpy as np
 import pandas as pd
 
-from .analysis.fronts import read_analysis, sweep_objectives, variable_units
-from .kernels import config as kc
-from .results.storage import attr_text, candidate_ids, open_results, read_units
-from .study.reader import stored_study
-from .results.sweep_file import status_counts
+from ..analysis.fronts import read_analysis, sweep_objectives, variable_units
+from ..kernels import config as kc
+from ..results.storage import attr_text, candidate_ids, open_results, read_units
+from ..study.reader import stored_study
+from ..results.sweep_file import status_counts
 # the fronts, one design and its picture have modules of their own (ranking,
 # candidate, show); their names stay importable from here for one release
-from .analysis.candidate import (STATUS_HELP, CandidateRun, load_study_from_results,  # noqa: F401
-                                 rerun_candidate, resolve_candidate)
-from .analysis.ranking import Ranking, best_designs, design_table, ranking  # noqa: F401
+from ..analysis.candidate import (STATUS_HELP, CandidateRun, load_study_from_results,  # noqa: F401
+                                  rerun_candidate, resolve_candidate)
+from ..analysis.ranking import Ranking, best_designs, design_table, ranking  # noqa: F401
 from .show import (OV7_DWELL_START, OV7_PHASES, candidate_figure,  # noqa: F401
                    default_show_output, show)
 
@@ -185,7 +185,7 @@ def candidate_details(path, cid) -> dict:
 
 def _geometry_problems(f, x) -> list:
     """Which length or triangle inequality a BAD_GEOMETRY candidate breaks."""
-    from .study.sweep_spec import geometry_problems, parameter_rows
+    from ..study.sweep_spec import geometry_problems, parameter_rows
     study = stored_study(f.attrs, f.filename)
     if study is None:
         return []

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .base.files import replacing
+from ..base.files import replacing
 
 MAX_FRAMES = 120        # frames per revolution, at most
 FPS = 20                # frames per second: 120 frames = one revolution in 6 s
@@ -77,9 +77,9 @@ def _solved(status) -> int:
 def motion_from_scene_file(path) -> Motion:
     """The Motion stored in a scene's results file (its dense positions), drawn
     with the links of the study stored in the file."""
-    from .analysis.candidate import load_study_from_results
+    from ..analysis.candidate import load_study_from_results
     from .plots import _links_to_draw, joint_labels, point_label
-    from .results.storage import ResultsError, attr_text, open_results
+    from ..results.storage import ResultsError, attr_text, open_results
     with open_results(path, "scene") as f:
         study = load_study_from_results(f)
         names = [str(attr_text(x)) for x in f["mechanism"].attrs["point_names"]]
@@ -309,7 +309,7 @@ def gif_bytes(motion: Motion, frames=60, dpi=60) -> bytes:
 def results_kind(path) -> str:
     """'scene' or 'sweep': the kind of a results file (its errors are the
     usual ResultsError)."""
-    from .results.storage import attr_text, open_results
+    from ..results.storage import attr_text, open_results
     with open_results(path) as f:
         return str(attr_text(f.attrs.get("kind", "?")))
 
@@ -338,8 +338,8 @@ def animate(path, candidate=None, out=None, frames=MAX_FRAMES) -> dict:
         if candidate is None:
             raise ValueError(f"{path} is a sweep: say which design to animate with --candidate "
                              "ID (an index, 'knee' or 'reference')")
-        from .analysis.candidate import rerun_candidate
-        from .kernels import config as kc
+        from ..analysis.candidate import rerun_candidate
+        from ..kernels import config as kc
         run = rerun_candidate(path, candidate, forces=False)
         note = "" if run.status == kc.OK else (
             f"{kc.STATUS_NAMES.get(run.status, run.status)}: drawn up to where it fails")

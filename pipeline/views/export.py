@@ -12,8 +12,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .base.files import replacing
-from .results.storage import attr_text, open_results
+from ..base.files import replacing
+from ..results.storage import attr_text, open_results
 from .tables import candidates, scene_tables, with_units
 
 

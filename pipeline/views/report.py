@@ -19,16 +19,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .base.version import __version__
-from .analysis.fronts import analyze, has_analysis, read_analysis, read_sweep
-from .analysis.candidate import rerun_candidate
-from .base.files import write_text
-from .analysis.ranking import design_table, ranking
+from ..base.version import __version__
+from ..analysis.fronts import analyze, has_analysis, read_analysis, read_sweep
+from ..analysis.candidate import rerun_candidate
+from ..base.files import write_text
+from ..analysis.ranking import design_table, ranking
 from .report_assets import CSS, SCRIPT
 from .report_figures import (_letters, _png, design_figure, importance_figure, pareto_figure,
                              search_figure)
-from .results.storage import attr_text, open_results
-from .results.sweep_file import status_counts
+from ..results.storage import attr_text, open_results
+from ..results.sweep_file import status_counts
 # the page's assets and pictures have modules of their own (report_assets,
 # report_figures); their names stay importable from here for one release
 from .report_figures import MAX_FRONT_POINTS, MAX_GREY  # noqa: F401

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .analysis.candidate import STATUS_HELP, CandidateRun, rerun_candidate
-from .base.files import save_figure
-from .kernels import config as kc
-from .results.storage import open_results
+from ..analysis.candidate import STATUS_HELP, CandidateRun, rerun_candidate
+from ..base.files import save_figure
+from ..kernels import config as kc
+from ..results.storage import open_results
 
 # OV-7 cyclogram of the eyelets, main-shaft angle in deg (DOMAIN.md section 9)
 OV7_DWELL_START = 240.0

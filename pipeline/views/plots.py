@@ -16,7 +16,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from .dynamics_plots import eps1_figure  # noqa: F401 (a picture of plots, drawn there)
-from .solve.scene import real_motion
+from ..solve.scene import real_motion
 
 POSITION_CMAP = "viridis"
 MAX_KEY_TICKS = 12          # labelled crank angles on the colour key
@@ -257,7 +257,7 @@ def forces_figure(res):
     if mech.loads:
         # the loads as the study gives them (formulas of phi and t), against phi1
         ax3 = fig.add_subplot(gs[2, 0], sharex=ax)
-        from .solve.reactions import sample_loads
+        from ..solve.reactions import sample_loads
         loads = sample_loads(mech, res.dense.phi)
         for k, ld in enumerate(mech.loads):
             for c, (e, what, unit) in enumerate(((ld.fx, "fx", "N"), (ld.fy, "fy", "N"),
@@ -430,7 +430,7 @@ def output_motion(res) -> dict | None:
 
     Returns {y, what, unit, start (index of the window's first position),
     w (intervals in the window), error, dwell_deg}."""
-    from .kernels.metrics import dwell_error, relative_angle
+    from ..kernels.metrics import dwell_error, relative_angle
     plan, d, out = res.plan, res.dense, res.study.output
     if d.overall != 0 or not np.isfinite(d.pos[:, :plan.n_visible]).all():
         return None
