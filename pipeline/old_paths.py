@@ -22,6 +22,9 @@ import importlib.abc
 import importlib.util
 import sys
 
+# packages that took an old module's name: their __init__ re-exports its names
+REEXPORTED = ("model", "study", "analysis")
+
 # old module, under pipeline. -> where it is now; an old package's name covers
 # its modules too (pipeline.groups.ppr -> pipeline.model.groups.ppr)
 MOVED = {
