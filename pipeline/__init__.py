@@ -3,7 +3,7 @@
 The Python API (``pipeline.api``; see docs/api.md): ``load_study``, ``run``,
 ``solve_scene`` (a scene solved in memory), ``open`` (a results file as pandas
 DataFrames), ``candidates``, ``scene_tables``, ``with_units``; pictures from
-``pipeline.plots`` as matplotlib Figures.  Importing the package loads no kernels and
+``pipeline.views.plots`` as matplotlib Figures.  Importing the package loads no kernels and
 leaves matplotlib's backend alone.
 """
 

@@ -40,8 +40,8 @@ def solve_scene(study):
     """Solve a scene study in memory, writing nothing: its table and dense
     curves (positions, analogs, forces), refined peaks, dwell and stroke, and
     its dynamics cases with the reduced dynamics.  Draw it with
-    ``pipeline.plots.scene_figure(result)``, ``forces_figure``, and
-    ``pipeline.dynamics.dynamics_figure(case)``."""
+    ``pipeline.views.plots.scene_figure(result)``, ``forces_figure``, and
+    ``pipeline.solve.crank_motion.dynamics_figure(case)``."""
     from .runner import solve_scene as solve
     if not isinstance(study, Study):
         study = _load_study(study)

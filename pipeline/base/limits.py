@@ -61,8 +61,8 @@ TABLE_POINTS_WHY = ("the spline is written into the generated kernel module: 10,
 class Range:
     """The plausible values of one kind of number in a study: [low, high] in
     the study file's units (``low_open``: low itself excluded), with the
-    reason.  Checked where the number is read (``pipeline.study.Section``)
-    and against a sweep variable's bounds (``pipeline.sweep_spec``)."""
+    reason.  Checked where the number is read (``pipeline.study.section.Section``)
+    and against a sweep variable's bounds (``pipeline.study.sweep_spec``)."""
 
     def __init__(self, what, low, high, unit, why, low_open=False):
         self.what, self.low, self.high, self.unit = what, low, high, unit
@@ -153,7 +153,7 @@ DYNAMICS_SAMPLES_WHY = "every sample is a row of the results file and of its pic
 # revolution, a sweep's positions): a rise or return (harmonic, cycloidal) spans at least
 # this many position steps, a geared crank (linear law) makes at most one turn per this
 # many steps; the largest sample of the law's acceleration is then within an eighth of
-# its swing of the peak, which the refinement between positions (pipeline.peaks) brackets.
+# its swing of the peak, which the refinement between positions (pipeline.solve.peaks) brackets.
 # A table law's spline pieces each span at least TABLE_LAW_MIN_POSITIONS steps (its
 # acceleration is linear on a piece: every piece is sampled)
 LAW_MIN_POSITIONS = 8

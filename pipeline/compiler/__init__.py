@@ -103,7 +103,7 @@ def kernels_for(plan, rocker=None, watch=True):
 
 
 def gpu_kernels_for(plan, rocker=None):
-    """The CUDA kernel module of ``plan``'s sweep (``pipeline.compiler.gpu``):
+    """The CUDA kernel module of ``plan``'s sweep (``pipeline.compiler.cuda_source``):
     it imports the CPU module (``kernels_for``) and calls its functions."""
     from .cuda_source import gpu_source
     cpu = kernels_for(plan, rocker)

@@ -9,13 +9,13 @@ the CPU module's source; there is no second copy of the mechanism to keep in
 step.  Why the careful path and not the lock-step lanes: on a GPU the lanes
 are the threads of a warp, and a thread that meets a near-singular position
 simply takes longer (the CPU's lanes hand such a lane to the careful path
-anyway); see ``pipeline.gpu`` for what that means for the numbers.
+anyway); see ``pipeline.runs.gpu`` for what that means for the numbers.
 """
 
 from __future__ import annotations
 
 # the per-thread work arrays of ``settle``, in its argument order, by name: the
-# host (``pipeline.gpu``) takes their shapes and dtypes from the CPU's own
+# host (``pipeline.runs.gpu``) takes their shapes and dtypes from the CPU's own
 # allocators, so the two paths cannot disagree on a work array
 WORK = ("col", "qmax", "qmin", "corr")      # as ``evaluate`` allocates them
 WALK = ("pos", "d1", "d2", "margins", "state", "start_state")          # continuation.work

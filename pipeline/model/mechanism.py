@@ -38,7 +38,7 @@ class Crank:
         return (self.tip,)
 
 
-# the group types after the crank: one module each in pipeline.groups (their
+# the group types after the crank: one module each in pipeline.model.groups (their
 # fields, study parsing, plan row, emitter, transmission angles, drawing, guides)
 Group = Crank | GroupType
 
@@ -83,7 +83,7 @@ class Slide:
 @dataclass(frozen=True)
 class Load:
     """External force (fx, fy at ``point``) and moment on a body; each component
-    is an ``Expression`` of phi and t (see pipeline.expressions)."""
+    is an ``Expression`` of phi and t (see pipeline.base.expressions)."""
     body: str
     point: str | None
     fx: object

@@ -132,7 +132,7 @@ class MotionLaw:
 
 
 def parse_motion_law(sec) -> MotionLaw:
-    """[output.motion_law] (``sec``: a ``pipeline.study.Section``)."""
+    """[output.motion_law] (``sec``: a ``pipeline.study.section.Section``)."""
     align = sec.string("align", "best", choices=ALIGN)
     phase = sec.number("phase", 0.0, within=ANGLE)
     has_phases, has_table = sec.has("phases"), sec.has("angles") or sec.has("values")

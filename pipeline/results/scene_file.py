@@ -1,8 +1,8 @@
 """A scene's results file: its layout in HDF5 (the mechanism, the table and
 dense curves, the forces and the dynamics cases), written through the plain
-array-and-attribute layer of ``pipeline.storage``.  The computing modules
-(``forces``, ``dynamics``) hand over their results; only this module writes
-them."""
+array-and-attribute layer of ``pipeline.results.storage``.  The computing
+modules (``solve.reactions``, ``solve.crank_motion``) hand over their results;
+only this module writes them."""
 
 from __future__ import annotations
 
@@ -56,7 +56,7 @@ def _curves(g, res, curves, study):
 
 
 def _reactions(g, r):
-    """The reactions of a scene (``forces.Reactions``) at the positions of group ``g``."""
+    """The reactions of a scene (``solve.reactions.Reactions``) at the positions of group ``g``."""
     put(g, "reactions", r.R, "N", "joint reaction (force of the first body on the second)",
         dims=("phi1", "joint", "axis"), joints=list(r.joint_names))
     put(g, "M_bal", r.M_bal, "N*m", "balancing moment the main shaft delivers (on the crank; "
@@ -84,7 +84,7 @@ def _reactions(g, r):
 
 
 def _dynamics_case(group, res):
-    """Datasets of one dynamics case (``dynamics.CaseResult``) under group/<case
+    """Datasets of one dynamics case (``solve.crank_motion.CaseResult``) under group/<case
     name> (and the fine tail under .../tail)."""
     g = group.create_group(res.name)
     c = res.case
@@ -113,7 +113,7 @@ def _dynamics_case(group, res):
 
 
 def _reduced(group, red):
-    """The crank's reduced dynamics (``dynamics.Reduced``) in ``group``."""
+    """The crank's reduced dynamics (``solve.crank_motion.Reduced``) in ``group``."""
     group.attrs["long_name"] = ("reduced dynamics of the crank: J(phi) phi'' + (1/2) "
                                 "J'(phi) phi'^2 = Q(phi) + M1, loads at t = 0")
     group.attrs["equilibria_deg"] = [p for p, _ in red.equilibria] or [np.nan]

@@ -55,7 +55,8 @@ def generation_layout(spec: SweepSpec, search: SearchSpec, sizes) -> GenerationL
 class SearchFile:
     """A search's results file: the sweep layout (``SweepFile``) with
     candidates/generation and the per-generation history in /search.
-    ``problem``: the sweep's problem (``sweep.SweepProblem``), as ``SweepFile`` takes it."""
+    ``problem``: the sweep's problem (``pipeline.runs.sweep.SweepProblem``), as
+    ``SweepFile`` takes it."""
 
     def __init__(self, path: Path, study, problem, search: SearchSpec, sizes, attrs: dict):
         self.sf = SweepFile(path, study, problem)

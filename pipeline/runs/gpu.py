@@ -1,5 +1,5 @@
 """Sweeps on an NVIDIA GPU: the mechanism's generated kernels compiled by
-numba.cuda (``pipeline.compiler.gpu``), fed in batches from the host.
+numba.cuda (``pipeline.compiler.cuda_source``), fed in batches from the host.
 
 * ``probe()`` says what this machine has: the package (numba-cuda, from the
   ``[gpu]`` extra), the driver, the toolkit (NVVM) and the devices;
@@ -177,7 +177,7 @@ def choose(device: str) -> str:
 
 # ----------------------------------------------------------------- the sweep on a GPU
 class GpuSweep:
-    """The stages of a sweep problem (``pipeline.sweep.SweepProblem``) on the GPU."""
+    """The stages of a sweep problem (``pipeline.runs.sweep.SweepProblem``) on the GPU."""
 
     def __init__(self, problem, batch=BATCH):
         from ..compiler import gpu_kernels_for

@@ -77,7 +77,7 @@ class SweepProblem:
 
     @property
     def device_name(self):
-        """'cpu', or the GPU the kernels run on (pipeline.gpu.describe)."""
+        """'cpu', or the GPU the kernels run on (pipeline.runs.gpu.describe)."""
         if self.device == "cpu":
             return "cpu"
         from .gpu import describe

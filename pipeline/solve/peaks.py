@@ -117,10 +117,10 @@ def transmission_items(mech):
       design quantity (90 deg for the classic yoke).
 
     Each group type gives its own items (its ``transmission`` hook,
-    ``pipeline.groups``)."""
+    ``pipeline.model.groups``)."""
     out = []
     for g in mech.groups:
-        out += g.transmission()     # the group type's items (pipeline.groups)
+        out += g.transmission()     # the group type's items (pipeline.model.groups)
     return out
 
 
@@ -147,7 +147,7 @@ def _meet(a, b, c, d):
 
 
 def scene_peaks(res) -> list[Peak]:
-    """Every peak of the scene ``res`` (pipeline.scene.SceneResult), refined."""
+    """Every peak of the scene ``res`` (pipeline.solve.scene.SceneResult), refined."""
     from scipy.optimize import minimize_scalar
 
     from .reactions import scene_forces
@@ -206,7 +206,7 @@ def scene_peaks(res) -> list[Peak]:
 def scene_motion(res) -> dict:
     """Dwell error and stroke of a scene with an output rocker (DOMAIN.md
     section 9, as the sweep computes them), and with [output.motion_law] the
-    law error (``pipeline.motion_law``): {} without a rocker."""
+    law error (``pipeline.model.motion_law``): {} without a rocker."""
     from ..kernels.metrics import dwell_error, relative_angle
     out_spec = res.study.output
     if out_spec.rocker is None or res.dense.overall != 0:

@@ -1,6 +1,6 @@
 """A scene: one mechanism analysed over a revolution (tables and dense curves).
 
-Pure computation over the compiled plan; writing files is ``pipeline.storage``.
+Pure computation over the compiled plan; writing files is ``pipeline.results.storage``.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ class Curves:
     overall: int
     fail_phi: float = math.nan   # rad: where the walk first failed, located between positions
     fail_group: int = -1         # the group that failed there (-1: none, or the closure)
-    forces: object = None    # pipeline.forces.Reactions when computed
+    forces: object = None    # pipeline.solve.reactions.Reactions when computed
     extra: dict = field(default_factory=dict)
 
 
@@ -72,10 +72,10 @@ class SceneResult:
     table: Curves
     dense: Curves
     tolerances: np.ndarray
-    dynamics: list | None = None     # pipeline.dynamics.CaseResult per case, if the study asks
-    peaks: list | None = None        # pipeline.peaks.Peak, refined between grid positions
+    dynamics: list | None = None     # solve.crank_motion.CaseResult per case, if the study asks
+    peaks: list | None = None        # pipeline.solve.peaks.Peak, refined between grid positions
     motion: dict | None = None       # dwell error and stroke of the output rocker
-    reduced: object = None           # pipeline.dynamics.Reduced for a study with dynamics
+    reduced: object = None           # solve.crank_motion.Reduced for a study with dynamics
 
     @property
     def status(self):

@@ -2,7 +2,7 @@
 the field and the reason.
 
 A study is a "scene" (one mechanism: tables, curves, pictures) or a "sweep"
-(a Monte-Carlo search over a mechanism's dimensions, see ``pipeline.sweep``).
+(a Monte-Carlo search over a mechanism's dimensions, see ``pipeline.runs.sweep``).
 Both declare the mechanism in ``[mechanism]``; angles are in degrees in the
 file and radians in the model.
 """
@@ -40,7 +40,7 @@ class OutputSpec:
     pin_length: float = 10.0     # mm: pins in bending (DOMAIN.md section 5, the thesis's)
     pin_sigma: float = 200.0     # MPa: allowable bending stress
     pin_overrides: tuple = ()    # (joint, length mm, sigma MPa) per joint that differs
-    motion_law: object = None    # pipeline.motion_law.MotionLaw: [output.motion_law]
+    motion_law: object = None    # pipeline.model.motion_law.MotionLaw: [output.motion_law]
 
     def pins(self, joint_names):
         """(length mm, allowable stress MPa) of every joint's pin."""
@@ -76,8 +76,8 @@ class Study:
     mechanism: Mechanism
     output: OutputSpec
     dynamics: DynamicsSpec | None = None
-    sweep: object = None     # pipeline.sweep.SweepSpec for kind = "sweep"
-    search: object = None    # pipeline.search_spec.SearchSpec: a sweep study's [search]
+    sweep: object = None     # pipeline.study.sweep_spec.SweepSpec for kind = "sweep"
+    search: object = None    # pipeline.study.search_spec.SearchSpec: a sweep study's [search]
     extra: dict = field(default_factory=dict)
 
 
@@ -140,7 +140,7 @@ def parse_study(text: str, path="<study>") -> Study:
 
 
 # ----------------------------------------------------------------- mechanism
-GROUP_TYPES = tuple(_GROUP_CLASSES)      # the study's group `type`s (pipeline.groups)
+GROUP_TYPES = tuple(_GROUP_CLASSES)      # the study's group `type`s (pipeline.model.groups)
 
 
 class Fields:

@@ -1,7 +1,7 @@
 """A declared slide (``[[mechanism.slides]]``) against the guide of the group
 whose sliding pair it is (``check_slide``): the groups' sliding pairs and the
 directions their geometry makes equal come from each group type's hooks
-(``guides``, ``same_directions``, ``carried``: ``pipeline.groups``)."""
+(``guides``, ``same_directions``, ``carried``: ``pipeline.model.groups``)."""
 
 from __future__ import annotations
 

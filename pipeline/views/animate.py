@@ -49,7 +49,7 @@ class Motion:
 
 
 def motion_of(res, title=None, note="") -> Motion:
-    """The Motion of a computed revolution: a scene (pipeline.scene.SceneResult)
+    """The Motion of a computed revolution: a scene (pipeline.solve.scene.SceneResult)
     or anything with ``plan``, ``study`` and ``dense`` (a sweep candidate's
     ``CandidateRun.scene``)."""
     from .plots import _links_to_draw, joint_labels, point_label

@@ -1,5 +1,5 @@
 """The crank's own picture of a dynamics case (``eps1_figure``, shown as
-``pipeline.plots.eps1_figure``): eps1 against phi1."""
+``pipeline.views.plots.eps1_figure``): eps1 against phi1."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import numpy as np
 
 def eps1_figure(case):
     """The crank's angular acceleration eps1 against its angle phi1 for one
-    dynamics case (pipeline.dynamics.CaseResult): the samples coloured by time
+    dynamics case (pipeline.solve.crank_motion.CaseResult): the samples coloured by time
     (colour key), the fine record of the last seconds (every step) on top.
     A rotating crank is shown over one revolution (phi1 mod 360 deg).
     Returns the Figure."""

@@ -5,7 +5,7 @@
   constraint violation, Pareto front, metrics, constraints);
 * a scene: its points, links, reactions (the joints' Rx, Ry, |R|; each
   slide's normal force N, couple C and the point of action e = C/N of
-  ``forces.slide_action``; M_bal), peaks and dynamics motion tables, at every
+  ``reactions.slide_action``; M_bal), peaks and dynamics motion tables, at every
   computed position.
 
 Column names are plain (``L12``, ``P8_x``); the units of every column are in

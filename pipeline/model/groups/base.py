@@ -1,6 +1,6 @@
 """The base of a group type: the hooks every type of ``[[mechanism.groups]]``
 answers (pymoo-style: one base class, one small module per type, one
-name-to-class table in ``pipeline.groups``).
+name-to-class table in ``pipeline.model.groups``).
 
 A group type is the frozen dataclass of the declared group (its fields are the
 model's, angles in rad) and, as class attributes and methods, everything the
@@ -15,8 +15,8 @@ package needs to know about that type:
   parameters) and ``EMITTER``, the name of its class in
   ``pipeline.compiler.emit`` (chosen there by the row's code);
 * ``input_row``: for an input besides the crank, its entry of the plan's inputs;
-* ``transmission``: its transmission angle items (``pipeline.peaks``);
-* ``segments``: the links drawn for it (``pipeline.plots``);
+* ``transmission``: its transmission angle items (``pipeline.solve.peaks``);
+* ``segments``: the links drawn for it (``pipeline.views.plots``);
 * ``guides``, ``same_directions``, ``carried``: its sliding pairs and the
   geometry the study's slide check reduces directions through.
 
@@ -66,7 +66,7 @@ class GroupType:
 
     @classmethod
     def parse(cls, g, f, name):
-        """The group from its study table ``g`` (a ``pipeline.study.Section``),
+        """The group from its study table ``g`` (a ``pipeline.study.section.Section``),
         ``f`` the parser's ``Fields``, ``name`` the group's name ("" if none)."""
         raise NotImplementedError
 
@@ -90,7 +90,7 @@ class GroupType:
         return -1
 
     def transmission(self):
-        """(label, kind, data) items of ``pipeline.peaks.transmission_items``."""
+        """(label, kind, data) items of ``pipeline.solve.peaks.transmission_items``."""
         return []
 
     def segments(self):

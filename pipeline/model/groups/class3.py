@@ -7,7 +7,7 @@ Study fields: ``input`` (known P2), ``pivot_4``, ``pivot_5`` (known),
 ``L46``, ``L57`` (mm; 3-4-5 a triangle), ``start`` ([a, b] deg: the start
 guess at ``phi_start``), ``phi_start`` (deg), ``orientation`` (+-1).  With a
 ``slider`` table in place of ``pivot_5`` and ``L57`` it is a
-``ClassIIISlider`` (``pipeline.groups.class3_slider``)."""
+``ClassIIISlider`` (``pipeline.model.groups.class3_slider``)."""
 
 from __future__ import annotations
 

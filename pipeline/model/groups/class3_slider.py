@@ -1,7 +1,7 @@
 """``class3`` with ``slider``: the triad with a block at vertex 5 sliding on a
 guide in place of lead 5-7.
 
-Study fields: as ``class3`` (``pipeline.groups.class3``) without ``pivot_5``
+Study fields: as ``class3`` (``pipeline.model.groups.class3``) without ``pivot_5``
 and ``L57``, and ``slider = { point, angle, offset, link }``: the guide runs
 through the known ``point`` at ``angle`` (deg: absolute, or relative to
 ``link = [a, b]``), vertex 5 at ``offset`` (mm) from it on the side of the

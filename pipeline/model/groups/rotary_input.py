@@ -2,7 +2,7 @@
 angle: an oscillating rocker on a cam, or a second crank geared to the first.
 
 Study fields: ``pivot`` (fixed), ``tip`` (solved: pivot + ``length`` (mm) at
-the law's absolute angle), ``length``, ``law`` (``pipeline.groups.law``)."""
+the law's absolute angle), ``length``, ``law`` (``pipeline.model.groups.law``)."""
 
 from __future__ import annotations
 

@@ -3,7 +3,7 @@ angle: a linear actuator.
 
 Study fields: ``guide_point`` (fixed), ``guide_angle`` (deg, absolute),
 ``block`` (solved: guide_point + the law's stroke along the guide), ``law``
-(``pipeline.groups.law``)."""
+(``pipeline.model.groups.law``)."""
 
 from __future__ import annotations
 
