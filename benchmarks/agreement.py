@@ -59,7 +59,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit, prange
 
-from pipeline.files import write_text
+from pipeline.base.files import write_text
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -235,7 +235,7 @@ def sweep_case(name, pb, pars, context=None):
     from interpreter import sweep as isw
     from pipeline.kernels import config as kc
     from pipeline.kernels import sweep as ks
-    from pipeline.sweep import COLUMN
+    from pipeline.runs.sweep import COLUMN
 
     plan, s = pb.plan, pb.spec
     n = pars.shape[0]
@@ -333,7 +333,7 @@ def careful_note(case, pb, pars, sr, mr, diffs):
 
     from pipeline.kernels import config as kc
     from pipeline.kernels import sweep as ks
-    from pipeline.sweep import COLUMN
+    from pipeline.runs.sweep import COLUMN
     if not hasattr(ks, "SET_MARGIN_SAFE"):
         return
     over = np.unique(np.concatenate(
@@ -422,7 +422,7 @@ def _diff_notes(case, m, d, context, mr=None):
 
 
 def stress_case(synthesis, n=STRESS_N):
-    from pipeline.sweep import build_problem
+    from pipeline.runs.sweep import build_problem
     from support.stress_cases import near_singular_triads
     spec = dataclasses.replace(synthesis.sweep, positions=STRESS_POSITIONS,
                                stroke_bounds=(-np.inf, np.inf), margin_min=-np.inf)
@@ -435,8 +435,8 @@ def stress_case(synthesis, n=STRESS_N):
 
 
 def montecarlo_case(synthesis, n):
-    from pipeline.sweep import build_problem
-    from pipeline.sweep_spec import draw_candidates, parameter_rows
+    from pipeline.runs.sweep import build_problem
+    from pipeline.study.sweep_spec import draw_candidates, parameter_rows
     spec = synthesis.sweep.with_candidates(n)
     pb = build_problem(synthesis, spec)
     x = np.concatenate([draw_candidates(spec, c) for c in range(spec.n_chunks)])[:n]
@@ -463,11 +463,11 @@ def length_like(plan):
 def scene_cases(study_name, n, positions):
     import interpreter.assembly as ia
     from interpreter.batch import revolutions_batch
-    from pipeline.forces import sample_loads
+    from pipeline.solve.reactions import sample_loads
     from pipeline.kernels import config as kc
     from pipeline.compiler import kernels_for
-    from pipeline.scene import batch_revolutions, revolution_angles
-    from pipeline.study import load_study
+    from pipeline.solve.scene import batch_revolutions, revolution_angles
+    from pipeline.study.reader import load_study
 
     study = load_study(STUDIES / f"{study_name}.toml")
     mech = study.mechanism
@@ -647,7 +647,7 @@ def main(argv=None):
     import numba
 
     from pipeline.kernels.config import FASTMATH
-    from pipeline.study import load_study
+    from pipeline.study.reader import load_study
 
     t0 = time.perf_counter()
     synthesis = load_study(STUDIES / "ov7_synthesis.toml")

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from pipeline.files import save_figure
+from pipeline.base.files import save_figure
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import ROOT, STUDIES, best_of, hardware  # noqa: E402
@@ -42,14 +42,14 @@ REPEAT_ROWS = 64          # identical candidates per timing call (amortises call
 
 
 def _synthesis():
-    from pipeline.study import load_study
+    from pipeline.study.reader import load_study
     return load_study(STUDIES / "ov7_synthesis.toml")
 
 
 def _class3_scene(positions):
     """Mechanism B's scene study, its compiled plan and one revolution's crank angles."""
-    from pipeline.scene import revolution_angles
-    from pipeline.study import load_study
+    from pipeline.solve.scene import revolution_angles
+    from pipeline.study.reader import load_study
     study = load_study(STUDIES / "ov7_class3.toml")
     return study, study.mechanism.compile(), revolution_angles(study.mechanism.crank, positions)
 
@@ -81,7 +81,7 @@ def _plot(df, x, ys, title, path, xlabel="time per candidate [s]"):
 # ----------------------------------------------------------------- (a) positions
 def positions_study(quick, out=DEFAULT_OUT):
     from pipeline.kernels.sweep import M_DWELL, M_PEAK_R
-    from pipeline.sweep import build_problem
+    from pipeline.runs.sweep import build_problem
     study = _synthesis()
     ns = [12, 24, 36, 72, 120, 180, 360, 720] + ([] if quick else [1440, 3600])
     n_ref = 7200 if quick else 36000
@@ -111,7 +111,7 @@ def positions_study(quick, out=DEFAULT_OUT):
 # ----------------------------------------------------------------- (b) Newton
 def newton_study(quick, out=DEFAULT_OUT):
     from pipeline.kernels import config as kc
-    from pipeline.scene import batch_revolutions, solve_curves
+    from pipeline.solve.scene import batch_revolutions, solve_curves
     study, plan, phis = _class3_scene(360)
     tight = kc.default_tolerances(newton_tol=1e-15, newton_maxiter=100)
     ref = solve_curves(plan, phis, kc.POSITIONS, tight).pos[:, :plan.n_visible]
@@ -139,7 +139,7 @@ def newton_study(quick, out=DEFAULT_OUT):
 # ----------------------------------------------------------------- (c) analogs
 def analogs_study(quick, out=DEFAULT_OUT):
     from pipeline.kernels import config as kc
-    from pipeline.scene import batch_revolutions, solve_curves
+    from pipeline.solve.scene import batch_revolutions, solve_curves
     study, plan, phis = _class3_scene(360)
     exact = solve_curves(plan, phis, kc.ACCELERATIONS)
     i8 = plan.point("P8")
@@ -174,8 +174,8 @@ def analogs_study(quick, out=DEFAULT_OUT):
 
 # ----------------------------------------------------------------- (d) RK4
 def rk4_study(quick, out=DEFAULT_OUT):
-    from pipeline import dynamics as dy
-    from pipeline.study import load_study
+    from pipeline.solve import crank_motion as dy
+    from pipeline.study.reader import load_study
     study = load_study(STUDIES / "takeup_dynamics.toml")
     plan = study.mechanism.compile()
     mech = study.mechanism
@@ -209,10 +209,10 @@ import json, sys, time, dataclasses
 import numpy as np
 sys.path.insert(0, {bench!r})
 from common import best_of
-from pipeline.study import load_study
-from pipeline.sweep import build_problem
-from pipeline.sweep_spec import parameter_rows
-from pipeline.sampling import draw_candidates
+from pipeline.study.reader import load_study
+from pipeline.runs.sweep import build_problem
+from pipeline.study.sweep_spec import parameter_rows
+from pipeline.study.sampling import draw_candidates
 s = load_study({study!r})
 spec = dataclasses.replace(s.sweep, candidates={n}, chunk_size={n})
 pb = build_problem(s, spec)

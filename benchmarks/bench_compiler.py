@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.files import write_text
+from pipeline.base.files import write_text
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -84,8 +84,8 @@ class Stage:
         from pipeline.compiler import kernels_for
         from pipeline.kernels import config as kc
         from pipeline.kernels import sweep as ks
-        from pipeline.scene import revolution_angles
-        from pipeline.study import load_study
+        from pipeline.solve.scene import revolution_angles
+        from pipeline.study.reader import load_study
         self.study = load_study(study_file)
         mech = self.study.mechanism
         self.plan = mech.compile()
@@ -142,8 +142,8 @@ def measure(quick=False):
     import numba
 
     from pipeline.compiler.parallel import default_jobs
-    from pipeline.sweep import build_problem
-    from pipeline.sweep_spec import draw_candidates, draw_unit, parameter_rows
+    from pipeline.runs.sweep import build_problem
+    from pipeline.study.sweep_spec import draw_candidates, draw_unit, parameter_rows
     cores = default_jobs()
     numba.set_num_threads(cores)
     n = 4096 if quick else 32768
@@ -156,7 +156,7 @@ def measure(quick=False):
 
     # ---- mechanism B positions stage: the default study's candidates
     syn_file = STUDIES / "ov7_synthesis.toml"
-    from pipeline.study import load_study
+    from pipeline.study.reader import load_study
     syn = load_study(syn_file)
     spec = dataclasses.replace(syn.sweep, metrics=("dwell_error", "stroke",
                                                     "singularity_margin"),
@@ -195,7 +195,7 @@ def measure(quick=False):
     ra = _rate(lambda: stage_a.run(pars_a, cores), n, 360, rep)
     ri = _rate(lambda: stage_a.interpreter(pars_a, False), n, 360, rep)
     row("A positions stage", "ov7_pos", r1, ra, ri)
-    from pipeline.scene import batch_revolutions
+    from pipeline.solve.scene import batch_revolutions
     nk = n // 4
     r1 = _rate(lambda: batch_revolutions(base, pars_a[:nk], 360, 2, False, n_jobs=1), nk, 360,
                rep)

@@ -39,8 +39,8 @@ def main(argv=None):
     ap.add_argument("--study", default=str(ROOT / "studies" / "takeup_dynamics.toml"))
     a = ap.parse_args(argv)
 
-    from pipeline import dynamics as dy
-    from pipeline.study import load_study
+    from pipeline.solve import crank_motion as dy
+    from pipeline.study.reader import load_study
 
     study = load_study(a.study)
     plan = study.mechanism.compile()

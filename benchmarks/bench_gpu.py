@@ -30,8 +30,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks.common import STUDIES, hardware  # noqa: E402
-from pipeline.study import load_study  # noqa: E402
-from pipeline.sweep import build_problem, draw_checked, parameter_rows, run_sweep  # noqa: E402
+from pipeline.study.reader import load_study  # noqa: E402
+from pipeline.runs.sweep import build_problem, draw_checked, parameter_rows, run_sweep  # noqa: E402
 
 
 def main(argv=None):
@@ -42,7 +42,7 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--chunk-size", type=int, default=1_000_000)
     a = ap.parse_args(argv)
-    from pipeline import gpu
+    from pipeline.runs import gpu
     p = gpu.probe()
     if p["missing"]:
         print(f"no usable GPU: missing {p['missing']}")

@@ -30,12 +30,12 @@ def compile_times():
     the mechanism's module generated and compiled) and with the caches that run
     filled (warm)."""
     code = ("import time; t=time.perf_counter();"
-            "from pipeline.study import load_study; from pipeline.scene import run_scene;"
+            "from pipeline.study.reader import load_study; from pipeline.solve.scene import run_scene;"
             f"run_scene(load_study({str(STUDIES / 'ov7_class3.toml')!r}));"
             "import benchmarks_probe" if False else
             "import time, sys; t=time.perf_counter();"
             "sys.path.insert(0, %r);" % os.path.dirname(__file__) +
-            "from common import *; from pipeline.study import load_study;"
+            "from common import *; from pipeline.study.reader import load_study;"
             f"s=load_study({str(STUDIES / 'ov7_class3.toml')!r}); p=s.mechanism.compile();"
             "r=batch_runner(s, perturbed_rows(p, (), 4), 36, 2, True); r();"
             "print(time.perf_counter()-t)")
@@ -58,7 +58,7 @@ def main(argv=None):
     ap.add_argument("--positions", type=int, default=360)
     ap.add_argument("--no-compile", action="store_true", help="skip the cold/warm compile timing")
     a = ap.parse_args(argv)
-    from pipeline.study import load_study
+    from pipeline.study.reader import load_study
     print(f"hardware: {hardware()}")
     print(f"{a.candidates:,} candidates x {a.positions} positions per revolution\n")
     rows = []

@@ -44,7 +44,7 @@ SWEEP_GRID = (1000, 2000, 5000, 10_000, 20_000, 50_000, 100_000, 200_000)
 def study_with(path: Path, folder: Path, name: str, **changes):
     """A copy of the study at ``path`` with top-level keys of its sections
     changed (``"sweep.seed": 1``), written into ``folder`` and loaded."""
-    from pipeline.study import load_study
+    from pipeline.study.reader import load_study
     text = path.read_text()
     for key, value in changes.items():
         section, field = key.split(".")
@@ -63,7 +63,7 @@ def study_with(path: Path, folder: Path, name: str, **changes):
 
 def front_numbers(path, n, scale):
     """(hypervolume, least feasible peak reaction) of the first n candidates."""
-    from pipeline.search import hypervolume
+    from pipeline.runs.search import hypervolume
     with h5py.File(path, "r") as f:
         F = np.stack([f[f"metrics/{o}"][:n] for o in f.attrs["objectives"]], axis=1)
         feas = f["candidates/feasible"][:n]
@@ -73,7 +73,7 @@ def front_numbers(path, n, scale):
 
 def run_sweep_timed(study, out, n):
     """The sweep through `run_sweep`, with the time each chunk was written."""
-    import pipeline.sweep as sw
+    import pipeline.runs.sweep as sw
     real = sw.SweepFile.write_chunk
     stamps = []
 
@@ -92,7 +92,7 @@ def run_sweep_timed(study, out, n):
 
 
 def run_search_timed(study, out):
-    from pipeline.search import run_search
+    from pipeline.runs.search import run_search
     rows = []
     t0 = time.perf_counter()
     run_search(study, out, progress=False,
@@ -111,9 +111,9 @@ def main(argv=None):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from pipeline.files import save_figure, write_text
-    from pipeline.search import NORMALISATION, hv_scale
-    from pipeline.sweep import build_problem
+    from pipeline.base.files import save_figure, write_text
+    from pipeline.runs.search import NORMALISATION, hv_scale
+    from pipeline.runs.sweep import build_problem
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)

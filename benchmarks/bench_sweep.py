@@ -20,9 +20,9 @@ from common import STUDIES, best_of, first_call, hardware
 
 
 def problem(study, full, n, staged=True):
-    from pipeline.sweep import build_problem
-    from pipeline.sweep_spec import parameter_rows
-    from pipeline.sampling import draw_candidates
+    from pipeline.runs.sweep import build_problem
+    from pipeline.study.sweep_spec import parameter_rows
+    from pipeline.study.sampling import draw_candidates
     spec = study.sweep
     if not staged:  # constraints that never fail: forces for every assembled candidate
         spec = dataclasses.replace(spec, stroke_bounds=(-np.inf, np.inf), margin_min=-np.inf)
@@ -38,7 +38,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--candidates", type=int, default=20_000)
     a = ap.parse_args(argv)
-    from pipeline.study import load_study
+    from pipeline.study.reader import load_study
     study = load_study(STUDIES / "ov7_synthesis.toml")
     print(f"hardware: {hardware()}")
     print(f"default study, {a.candidates:,} candidates x {study.sweep.positions} positions\n")

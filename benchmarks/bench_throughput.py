@@ -150,8 +150,8 @@ def _relative(x, ref, axis):
 # ----------------------------------------------------------------- case 1: four-bar
 def four_bar_case(sizes, repeat, rows):
     from pipeline.compiler import kernels_for
-    from pipeline.scene import batch_revolutions, revolution_angles, solve_curves
-    from pipeline.study import load_study
+    from pipeline.solve.scene import batch_revolutions, revolution_angles, solve_curves
+    from pipeline.study.reader import load_study
     n_proj, n_np, n_py = sizes
     study = _kinematic_study(load_study(STUDIES / "warp_feed_fourbar.toml"))
     plan = study.mechanism.compile()
@@ -199,9 +199,9 @@ def four_bar_case(sizes, repeat, rows):
 # ----------------------------------------------------------------- case 2: class III kinematics
 def _draw(study, n, seed_chunk=0):
     """n candidates of the sweep's own sampler: (problem, parameter rows)."""
-    from pipeline.sweep import build_problem
-    from pipeline.sweep_spec import parameter_rows
-    from pipeline.sampling import draw_candidates
+    from pipeline.runs.sweep import build_problem
+    from pipeline.study.sweep_spec import parameter_rows
+    from pipeline.study.sampling import draw_candidates
     spec = dataclasses.replace(study.sweep, candidates=n, chunk_size=n)
     pb = build_problem(study, spec)
     return pb, parameter_rows(pb.plan, spec, draw_candidates(spec, seed_chunk))
@@ -209,8 +209,8 @@ def _draw(study, n, seed_chunk=0):
 
 def kinematics_case(sizes, repeat, rows):
     from pipeline.compiler import kernels_for
-    from pipeline.scene import batch_revolutions, revolution_angles, solve_curves
-    from pipeline.study import load_study
+    from pipeline.solve.scene import batch_revolutions, revolution_angles, solve_curves
+    from pipeline.study.reader import load_study
     n_proj, n_np, n_py = sizes
     full = load_study(STUDIES / "ov7_synthesis.toml")
     study = _kinematic_study(full)
@@ -273,7 +273,7 @@ def kinematics_case(sizes, repeat, rows):
 # ----------------------------------------------------------------- case 3: the sweep
 def sweep_case(sizes, repeat, rows):
     from pipeline.kernels import sweep as ks
-    from pipeline.study import load_study
+    from pipeline.study.reader import load_study
     n_proj, n_np, n_py = sizes
     study = load_study(STUDIES / "ov7_synthesis.toml")
     if study.mechanism.loads:
@@ -347,8 +347,8 @@ def _cold_probe():
     study's generated ``evaluate``) on tiny inputs, each with the generation
     of its module; prints them as JSON."""
     from pipeline.compiler import kernels_for
-    from pipeline.scene import batch_revolutions
-    from pipeline.study import load_study
+    from pipeline.solve.scene import batch_revolutions
+    from pipeline.study.reader import load_study
     study = _kinematic_study(load_study(STUDIES / "warp_feed_fourbar.toml"))
     plan = study.mechanism.compile()
     pars = perturbed_rows(plan, (), 2)

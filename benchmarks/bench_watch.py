@@ -28,9 +28,9 @@ from pipeline.compiler import kernels_for  # noqa: E402
 from pipeline.compiler.parallel import run_rows  # noqa: E402
 from pipeline.kernels import config as kc  # noqa: E402
 from pipeline.kernels import sweep as ks  # noqa: E402
-from pipeline.study import load_study  # noqa: E402
-from pipeline.sweep import build_problem  # noqa: E402
-from pipeline.sweep_spec import draw_checked, parameter_rows  # noqa: E402
+from pipeline.study.reader import load_study  # noqa: E402
+from pipeline.runs.sweep import build_problem  # noqa: E402
+from pipeline.study.sweep_spec import draw_checked, parameter_rows  # noqa: E402
 
 
 def candidates(pb, n):

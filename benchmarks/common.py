@@ -58,7 +58,7 @@ def perturbed_rows(plan, names, n, spread=0.05, seed=0):
 
 def batch_runner(study, pars, positions, order, with_forces):
     """A zero-argument function running one revolution of every row of ``pars``."""
-    from pipeline.scene import batch_revolutions
+    from pipeline.solve.scene import batch_revolutions
 
     def run():
         return batch_revolutions(study, pars, positions, order, with_forces)

@@ -9,7 +9,7 @@ command line).  --quick shrinks every study so the whole run fits in CI
 
 from __future__ import annotations
 
-from pipeline.files import write_text
+from pipeline.base.files import write_text
 
 import sys
 import time

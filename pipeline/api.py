@@ -13,8 +13,8 @@ Arrays and tables are in the units of the results file (mm, deg, N, m/s, ...);
 
 from __future__ import annotations
 
-from .study import Study, load_study as _load_study
-from .tables import candidates, scene_tables, with_units
+from .study.reader import Study, load_study as _load_study
+from .views.tables import candidates, scene_tables, with_units
 
 __all__ = ["load_study", "run", "solve_scene", "open", "candidates", "scene_tables", "with_units"]
 
@@ -40,8 +40,8 @@ def solve_scene(study):
     """Solve a scene study in memory, writing nothing: its table and dense
     curves (positions, analogs, forces), refined peaks, dwell and stroke, and
     its dynamics cases with the reduced dynamics.  Draw it with
-    ``pipeline.plots.scene_figure(result)``, ``forces_figure``, and
-    ``pipeline.dynamics.dynamics_figure(case)``."""
+    ``pipeline.views.plots.scene_figure(result)``, ``forces_figure``, and
+    ``pipeline.solve.crank_motion.dynamics_figure(case)``."""
     from .runner import solve_scene as solve
     if not isinstance(study, Study):
         study = _load_study(study)
@@ -54,7 +54,7 @@ def solve_scene(study):
 def open(path):  # noqa: A001 - pipeline.open, as the users asked for it
     """A results file as tables: a sweep's candidates as one DataFrame
     (``candidates``), a scene's tables as {name: DataFrame} (``scene_tables``)."""
-    from .storage import ResultsError, attr_text, open_results
+    from .results.storage import ResultsError, attr_text, open_results
     with open_results(path) as f:
         kind = attr_text(f.attrs["kind"])
     try:

@@ -13,9 +13,9 @@ EXIT_USER_ERROR = 2
 
 
 def _user_errors():
-    from .expressions import ExpressionError
-    from .storage import ResultsError
-    from .study import StudyError
+    from .base.expressions import ExpressionError
+    from .results.storage import ResultsError
+    from .study.reader import StudyError
     return (StudyError, ResultsError, ExpressionError, FileNotFoundError, ValueError)
 
 
@@ -54,7 +54,7 @@ def _quote(path):
 
 
 def cmd_export(a):
-    from .export import export
+    from .views.export import export
     if (a.csv is None) == (a.parquet is None):
         raise ValueError("give the output folder with --csv DIR or --parquet DIR")
     files = export(a.results, a.csv or a.parquet, every=a.every, feasible=a.feasible,
@@ -68,7 +68,7 @@ def cmd_export(a):
 def cmd_compile(a):
     from .compile import compile_all, source, study_files
     if a.show:
-        from .study import load_study
+        from .study.reader import load_study
         for p in study_files(a.studies):
             print(source(load_study(p)))
         return EXIT_OK
@@ -89,7 +89,7 @@ def cmd_bench(a):
 
 
 def cmd_analyze(a):
-    from .analysis import analyze
+    from .analysis.fronts import analyze
     info = analyze(a.results, n_representatives=a.representatives, max_samples=a.max_samples,
                    n_jobs=a.jobs)
     if not a.quiet:
@@ -98,17 +98,17 @@ def cmd_analyze(a):
 
 
 def cmd_browse(a):
-    from .browse import browse
+    from .views.browse import browse
     print(browse(a.results, top=a.top, candidate=a.candidate, fmt=a.format, wide=a.wide))
     return EXIT_OK
 
 
 def cmd_show(a):
-    from .animate import animate, results_kind
+    from .views.animate import animate, results_kind
     if a.animate:
         info = animate(a.results, a.candidate, a.output, frames=a.frames)
     elif results_kind(a.results) == "scene":
-        from .storage import ResultsError
+        from .results.storage import ResultsError
         raise ResultsError(a.results, "is a scene result, this command needs a sweep result "
                                       "(`pipeline run` wrote the scene's pictures; `pipeline "
                                       f"show {a.results} --animate` animates it)")
@@ -116,7 +116,7 @@ def cmd_show(a):
         raise ValueError(f"{a.results} is a sweep: say which design to show with --candidate "
                          "ID (an index, 'knee' or 'reference')")
     else:
-        from .show import show
+        from .views.show import show
         info = show(a.results, a.candidate, a.output)
     if not a.quiet:
         _print(info, a.format)
@@ -125,7 +125,7 @@ def cmd_show(a):
 
 def cmd_doctor(a):
     try:
-        from .gpu import doctor
+        from .runs.gpu import doctor
     except Exception as e:   # numba.cuda itself does not import
         print(f"numba.cuda does not import: {e}\n--device gpu: not available; "
               "pip install -e '.[gpu]' brings numba-cuda")
@@ -135,7 +135,7 @@ def cmd_doctor(a):
 
 
 def cmd_report(a):
-    from .report import write_report
+    from .views.report import write_report
     info = write_report(a.results, a.output, top=a.top)
     if not a.quiet:
         _print(info, a.format)
@@ -226,7 +226,7 @@ def build_parser():
                    help="full-width tables and the file's datasets (default: 100 columns)")
     b.set_defaults(func=cmd_browse)
 
-    from .animate import FPS, MAX_FRAMES
+    from .views.animate import FPS, MAX_FRAMES
     s = sub.add_parser("show", parents=[common], help=(
         "re-run one candidate of a sweep as a scene and draw it: mechanism, output motion "
         "over the OV-7 cyclogram, joint reactions; or, with --animate, animate it (or a "
@@ -298,7 +298,7 @@ def main(argv=None) -> int:
     except OSError as e:
         # the operating system's word (no space left, read-only, locked): one line
         # naming the file; every write is atomic, so earlier results are intact
-        from .files import os_error_text
+        from .base.files import os_error_text
         text = os_error_text(e)
         named = _file_of(args)
         if named and not e.filename and str(named) not in text:

@@ -42,9 +42,9 @@ def compile_study(study) -> Compiled:
     import numpy as np
 
     from .compiler import kernels_for
-    from .dynamics import integrate, with_changes
-    from .scene import run_scene
-    from .sweep import build_problem
+    from .solve.crank_motion import integrate, with_changes
+    from .solve.scene import run_scene
+    from .runs.sweep import build_problem
     t = time.perf_counter()     # the kernels' generation, import and compilation (or load)
     mech = study.mechanism
     plan = mech.compile()
@@ -71,5 +71,5 @@ def source(study) -> str:
 
 
 def compile_all(paths=()) -> list[Compiled]:
-    from .study import load_study
+    from .study.reader import load_study
     return [compile_study(load_study(p)) for p in study_files(paths)]

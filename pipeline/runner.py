@@ -6,9 +6,9 @@ import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .errors import ResultsError
-from .files import RunLock, safe_name, save_figure
-from .study import load_study
+from .base.errors import ResultsError
+from .base.files import RunLock, safe_name, save_figure
+from .study.reader import load_study
 
 log = logging.getLogger("pipeline")
 
@@ -35,7 +35,7 @@ def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
     results file (and pictures).  A sweep study with a [search] section runs
     its adaptive search, seeded with the front of the results file
     ``seed_from`` if given."""
-    from .study import Study
+    from .study.reader import Study
     study = path if isinstance(path, Study) else load_study(path)
     path = study.path
     out = Path(out) if out else default_output(study)
@@ -53,13 +53,13 @@ def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
             raise ValueError(f"{path}: an adaptive search runs on the CPU and keeps every "
                              "design it evaluates: [sweep] device and store (--device, "
                              "--store) apply to Monte-Carlo sweeps")
-        from .search import run_search
+        from .runs.search import run_search
         return run_search(study, out, seed_from=seed_from, resume=resume, overwrite=overwrite,
                           scheduler=scheduler, n_jobs=n_jobs, progress=progress)
     if seed_from is not None:
         raise ValueError(f"{path}: --from seeds an adaptive search, and this study has no "
                          "[search] section (studies/ov7_search.toml has one)")
-    from .sweep import run_sweep
+    from .runs.sweep import run_sweep
     return run_sweep(study, out, candidates=candidates, resume=resume, overwrite=overwrite,
                      scheduler=scheduler, n_jobs=n_jobs, chunk_size=chunk_size,
                      progress=progress, device=device, store=store)
@@ -86,7 +86,7 @@ def peak_summary(res) -> dict:
     out = dict(point)
     if reactions:
         p = max(reactions, key=lambda q: q.value)
-        from .forces import pin_diameter
+        from .solve.reactions import pin_diameter
         (length, sigma), = res.study.output.pins([p.item])
         out["peak_reaction"] = (f"{p.value:.1f} N at {p.item}, phi1 = {p.phi1:.4f} deg; pin "
                                 f"d_min {float(pin_diameter(p.value, length, sigma)):.2f} mm "
@@ -112,13 +112,13 @@ def peak_summary(res) -> dict:
 def solve_scene(study):
     """Everything a scene study asks for, in memory: its curves (and forces),
     refined peaks, dwell and stroke, dynamics cases and reduced dynamics."""
-    from .peaks import scene_motion, scene_peaks
-    from .scene import run_scene
+    from .solve.peaks import scene_motion, scene_peaks
+    from .solve.scene import run_scene
     res = run_scene(study)
     res.peaks = scene_peaks(res)
     res.motion = scene_motion(res)
     if study.dynamics is not None:
-        from .dynamics import reduced_dynamics, run_dynamics
+        from .solve.crank_motion import reduced_dynamics, run_dynamics
         res.dynamics = run_dynamics(study, res.plan)
         res.reduced = reduced_dynamics(study, res.plan)
     return res
@@ -130,7 +130,7 @@ def run_scene_study(study, out, pictures=True, overwrite=False) -> RunOutcome:
     ``overwrite`` (and never an unfinished run's)."""
     out = Path(out)
     with RunLock(out):
-        from .journal import Journal
+        from .results.journal import Journal
         if Journal(out).exists():
             raise ResultsError(out, "is being written by an unfinished sweep or search (its "
                                     f"journal {out.name}.parts is beside it); write the scene "
@@ -143,15 +143,15 @@ def run_scene_study(study, out, pictures=True, overwrite=False) -> RunOutcome:
 
 def _write_scene_study(study, out, pictures) -> RunOutcome:
     from .kernels import config as kc
-    from .scene_file import write_scene
+    from .results.scene_file import write_scene
     res = solve_scene(study)
     write_scene(res, out)
     pics = []
     if pictures:
         import matplotlib.pyplot as plt
 
-        from . import plots
-        from .dynamics import dynamics_figure
+        from .views import plots
+        from .solve.crank_motion import dynamics_figure
         # made and saved one at a time: a figure is closed before the next is drawn
         figures = [(lambda: plots.scene_figure(res), out.with_suffix(".png")),
                    (lambda: plots.kinematics_figure(res), out.with_name(
@@ -169,7 +169,7 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
             figures.append((lambda case=case: plots.eps1_figure(case),
                             out.with_name(f"{out.stem}_{name}_eps1.png")))
         if res.reduced is not None:
-            from .dynamics import reduced_figure
+            from .solve.crank_motion import reduced_figure
             figures.append((lambda: reduced_figure(res.reduced),
                             out.with_name(f"{out.stem}_reduced.png")))
         for make, path in figures:
@@ -187,7 +187,7 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
     summary["table_positions"] = int(res.table.phi.shape[0])
     summary["dense_positions"] = int(res.dense.phi.shape[0])
     if res.status == kc.BAD_GEOMETRY:
-        from .sweep_spec import geometry_problems
+        from .study.sweep_spec import geometry_problems
         summary["reason"] = "; ".join(geometry_problems(res.plan, res.plan.par))
     summary.update(peak_summary(res))
     for case in res.dynamics or ():

@@ -100,8 +100,8 @@ def synthesis_sweep(tmp_path_factory):
 
     import h5py
 
-    from pipeline.study import load_study
-    from pipeline.sweep import run_sweep
+    from pipeline.study.reader import load_study
+    from pipeline.runs.sweep import run_sweep
     from support.sweep_helpers import SYNTHESIS_CHUNK, SYNTHESIS_N
     common = session_folder(tmp_path_factory) / "synthesis_sweep"
     common.mkdir(exist_ok=True)

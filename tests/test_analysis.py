@@ -17,8 +17,8 @@ import pandas as pd
 import pytest
 
 from support.naive_pareto import brute_force_rank, dominates_ref
-from pipeline.analysis import analyze
-from pipeline.browse import rerun_candidate
+from pipeline.analysis.fronts import analyze
+from pipeline.views.browse import rerun_candidate
 from pipeline.cli import main
 from support.sweep_helpers import SYNTHESIS_N as N
 from support.sweep_helpers import copy_of

@@ -1,6 +1,7 @@
 """The shape of the package: no import cycles between modules of pipeline/
-(imports inside functions count too), and kernels that import nothing but
-numpy, numba, math and each other."""
+(imports inside functions count too), kernels that import nothing but numpy,
+numba, math and each other, a package per layer importing only from the layers
+below, and no import inside the package of a path kept for one release."""
 
 import ast
 from pathlib import Path
@@ -81,7 +82,7 @@ def test_kernels_import_only_numpy_numba_math():
         for t in _imports(mods, m):
             top = t.split(".")[0]
             assert top in allowed or t.startswith("pipeline.kernels") or top in (
-                "hashlib", "os", "pathlib"), f"{m} imports {t}"
+                "hashlib", "os", "pathlib", "__future__"), f"{m} imports {t}"
 
 
 def test_importing_the_package_keeps_the_callers_matplotlib_backend():
@@ -102,39 +103,23 @@ def test_importing_the_package_keeps_the_callers_matplotlib_backend():
 
 
 # ---------------------------------------------------------------- layers
-# Every module of pipeline/ in its layer, lowest first; a module imports only from
-# its own layer and the layers below.  (docs/architecture.md draws them; the flat
-# modules move into a subpackage per layer as issue 26 goes on.)
-LAYERS = {
-    "base": ["errors", "limits", "version", "files", "expressions"],
-    "kernels": ["kernels"],
-    "model": ["model", "groups", "motion_law", "metrics"],
-    "compute": ["compiler", "pareto", "gpu"],
-    "one design": ["scene", "forces", "peaks", "dynamics"],
-    "study": ["study", "study_section", "slide_check", "sweep_spec", "search_spec", "sampling",
-              "objectives"],
-    "results": ["storage", "scene_file", "sweep_file", "search_file", "journal"],
-    "runs": ["sweep", "search", "search_problem"],
-    "analysis": ["analysis", "ranking", "candidate"],
-    "views": ["plots", "dynamics_plots", "animate", "show", "browse", "report", "report_assets",
-              "report_figures", "export", "tables"],
-    "face": ["api", "cli", "runner", "compile", "bench"],
-}
-# imports that still go upward: each is work left (issue 26), and the list only
-# shrinks (a test below fails when one of them is gone, so it is struck off)
-KNOWN_UPWARD = {
-    ("pipeline.forces", "pipeline.storage"),          # Reactions.write writes HDF5 itself
-    ("pipeline.dynamics", "pipeline.storage"),        # a dynamics case writes HDF5 itself
-    ("pipeline.search_file", "pipeline.search_problem"),   # the hypervolume's normalisation
-    ("pipeline.search_file", "pipeline.sweep"),       # SweepProblem, for a type
-}
+# The layers of pipeline/, lowest first: a module's layer is its subpackage
+# (docs/architecture.md draws them), and the face is the modules at the top.  A
+# module imports only from its own layer and the layers below.
+LAYERS = ("base", "kernels", "model", "compiler", "solve", "study", "results", "runs",
+          "analysis", "views")
+FACE = ("api", "cli", "runner", "compile", "bench", "old_paths")
 
 
 def _layer_of(module):
-    rest = module.split(".")[1] if "." in module else ""
-    for rank, (_, members) in enumerate(LAYERS.items()):
-        if rest in members:
-            return rank
+    """The rank of ``module``'s layer (the face's is the highest), None if it has none."""
+    parts = module.split(".")
+    if len(parts) < 2:
+        return None
+    if parts[1] in LAYERS:
+        return LAYERS.index(parts[1])
+    if len(parts) == 2 and parts[1] in FACE:
+        return len(LAYERS)
     return None
 
 
@@ -151,24 +136,81 @@ def _upward(mods):
 
 def test_every_module_has_a_layer():
     missing = [m for m in _modules() if m != "pipeline" and _layer_of(m) is None]
-    assert not missing, f"modules in no layer of LAYERS: {missing}"
+    assert not missing, f"modules in no layer package and not in FACE: {missing}"
 
 
 def test_layers_import_only_downward():
-    up = _upward(_modules())
-    new = sorted(up - KNOWN_UPWARD)
-    assert not new, f"upward imports (a lower layer importing a higher one): {new}"
-    gone = sorted(KNOWN_UPWARD - up)
-    assert not gone, f"fixed: strike these off KNOWN_UPWARD: {gone}"
+    up = sorted(_upward(_modules()))
+    assert not up, f"upward imports (a lower layer importing a higher one): {up}"
 
 
 def test_the_layer_check_finds_an_upward_import(tmp_path, monkeypatch):
-    """The check can fail: a planted import of the command line from a kernel."""
+    """The check can fail: a planted import of the command line from one design's scene."""
     import shutil
     pkg = tmp_path / "pipeline"
     shutil.copytree(PKG, pkg, ignore=shutil.ignore_patterns("__pycache__"))
-    f = pkg / "scene.py"
-    f.write_text(f.read_text() + "\n\ndef _planted():\n    from .cli import main\n")
+    f = pkg / "solve" / "scene.py"
+    f.write_text(f.read_text() + "\n\ndef _planted():\n    from ..cli import main\n")
     monkeypatch.setattr(__import__(__name__), "PKG", pkg)
-    up = _upward(_modules())
-    assert ("pipeline.scene", "pipeline.cli") in up - KNOWN_UPWARD
+    assert ("pipeline.solve.scene", "pipeline.cli") in _upward(_modules())
+
+
+# ---------------------------------------------------------------- old paths
+def _old_path_imports(mods):
+    """(module, import) for every import inside pipeline/ of a path kept for one
+    release: a moved module's old name (pipeline.old_paths.MOVED), or the
+    re-exports of a package that took an old module's name (``from ..study import
+    load_study`` instead of ``from ..study.reader import load_study``)."""
+    from pipeline.old_paths import REEXPORTED, new_name
+    kept = {f"pipeline.{p}" for p in REEXPORTED}
+    out = set()
+    for m in mods:
+        for t in _imports(mods, m):
+            if new_name(t) is not None or (t in kept and m != t and m != "pipeline"):
+                out.add((m, t))
+    return out
+
+
+def test_no_module_imports_an_old_path():
+    """The old paths are for code outside the package; inside it every import
+    names a module where it is now."""
+    old = sorted(_old_path_imports(_modules()))
+    assert not old, f"imports of a path kept for one release (use the new one): {old}"
+
+
+def test_the_old_path_check_finds_one(tmp_path, monkeypatch):
+    """The check can fail: planted imports of an old path and of a re-export."""
+    import shutil
+    pkg = tmp_path / "pipeline"
+    shutil.copytree(PKG, pkg, ignore=shutil.ignore_patterns("__pycache__"))
+    f = pkg / "views" / "tables.py"
+    f.write_text(f.read_text() + "\n\ndef _planted():\n    from ..storage import put\n"
+                 "    from ..study import load_study\n")
+    monkeypatch.setattr(__import__(__name__), "PKG", pkg)
+    found = _old_path_imports(_modules())
+    assert ("pipeline.views.tables", "pipeline.storage") in found
+    assert ("pipeline.views.tables", "pipeline.study") in found
+
+
+def test_an_old_path_is_the_module_itself():
+    """``import pipeline.sweep`` gives the module pipeline.runs.sweep itself (a
+    monkeypatch through the old name acts on the real module), with its own name
+    and spec; a moved package's modules too.  (In a fresh interpreter: every
+    module is imported.)"""
+    import subprocess
+    import sys
+    code = ("import importlib\n"
+            "from pipeline.old_paths import MOVED\n"
+            "for old, new in MOVED.items():\n"
+            "    was = importlib.import_module(f'pipeline.{old}')\n"
+            "    now = importlib.import_module(f'pipeline.{new}')\n"
+            "    assert was is now, old\n"
+            "    assert now.__name__ == now.__spec__.name == f'pipeline.{new}', old\n"
+            "import pipeline.groups.ppr, pipeline.model.groups.ppr\n"
+            "assert pipeline.groups.ppr is pipeline.model.groups.ppr\n"
+            "from pipeline import sweep\n"
+            "import pipeline.runs.sweep\n"
+            "assert sweep is pipeline.runs.sweep\n"
+            "print(len(MOVED))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr

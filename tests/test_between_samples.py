@@ -26,9 +26,9 @@ import pytest
 from support import lock_cases as lc
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
-from pipeline.scene import run_scene, solve_curves
-from pipeline.study import load_study, parse_study
-from pipeline.sweep import build_problem
+from pipeline.solve.scene import run_scene, solve_curves
+from pipeline.study.reader import load_study, parse_study
+from pipeline.runs.sweep import build_problem
 from support.stress_cases import near_singular_triads
 from support.tolerances import FAIL_ANGLE_RAD, FAIL_ANGLE_TRIAD_RAD
 

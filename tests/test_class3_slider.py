@@ -15,12 +15,12 @@ import pytest
 from support import naive
 from pipeline.compiler import kernels_for
 from pipeline.compiler.emit import EMITTERS
-from pipeline.forces import scene_forces
+from pipeline.solve.reactions import scene_forces
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
-from pipeline.model import ClassIIISlider
-from pipeline.scene import revolution_angles, run_scene, solve_curves
-from pipeline.study import StudyError, load_study, parse_study
+from pipeline.model.mechanism import ClassIIISlider
+from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
+from pipeline.study.reader import StudyError, load_study, parse_study
 from support.power import virtual_power
 from support.tolerances import FAIL_ANGLE_RAD, MP_REFERENCE_REL, REACTION_MP_REL, SELF_FD_REL, VIRTUAL_POWER_REL
 
@@ -350,7 +350,7 @@ def test_the_sweep_reports_the_fold_too(studies):
     """The same rows in a sweep of 360 positions (the careful path, watched):
     the locked guide SINGULAR at its first fold (M_FAIL_PHI, 1e-10 rad) in the
     class III group (M_FAIL_GROUP), the near miss and the reference design OK."""
-    from pipeline.sweep import build_problem
+    from pipeline.runs.sweep import build_problem
     study = load_study(studies / f"{SWEEP}.toml")
     pb = build_problem(study, study.sweep)
     assert min(_deg_err(p, -278.42 * DEG) for p in pb.phis) > 0.3
@@ -390,7 +390,7 @@ def test_sweep_matches_the_scene_path(slider_sweep):
     file, rad in the plan) are design variables: each candidate's metrics are
     those of its own scene, and the margin constraint applies."""
     import h5py
-    from pipeline.sweep_spec import apply_design
+    from pipeline.study.sweep_spec import apply_design
     from support.tolerances import SWEEP_VS_SCENE_REL
     study, path = slider_sweep
     with h5py.File(path, "r") as f:

@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 
 from pipeline.cli import main
-from pipeline.storage import FORMAT, ResultsError, open_results, read_units
+from pipeline.results.storage import FORMAT, ResultsError, open_results, read_units
 
 
 @pytest.fixture(scope="module")

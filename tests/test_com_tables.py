@@ -8,7 +8,7 @@ import pandas as pd
 
 import pipeline
 from pipeline.cli import main
-from pipeline.scene import solve_curves
+from pipeline.solve.scene import solve_curves
 
 
 def test_com_analogs_are_finite_differences_of_positions(studies):

@@ -19,10 +19,10 @@ from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
 from pipeline.kernels.forces import force_work, kinetostatics
 from pipeline.kernels.metrics import dwell_error, dwell_lanes
-from pipeline.scene import revolution_angles, solve_curves
-from pipeline.study import load_study
-from pipeline.sweep import build_problem
-from pipeline.sweep_spec import draw_candidates, parameter_rows
+from pipeline.solve.scene import revolution_angles, solve_curves
+from pipeline.study.reader import load_study
+from pipeline.runs.sweep import build_problem
+from pipeline.study.sweep_spec import draw_candidates, parameter_rows
 from support.tolerances import LANE_AGREEMENT_REL, LANE_MARGIN_REL
 
 STUDIES = Path(__file__).resolve().parent.parent / "studies"
@@ -162,7 +162,7 @@ def test_force_equations_equal_the_dense_solve(name):
     crank = mech.crank
     phis = revolution_angles(crank, 48)
     cur = solve_curves(plan, phis, kc.ACCELERATIONS)
-    from pipeline.forces import sample_loads
+    from pipeline.solve.reactions import sample_loads
     loads = sample_loads(mech, phis) if mech.loads else np.zeros((48, 0, 3))
     k = kernels_for(plan)
     nb, nj, ns = len(plan.body_names), len(plan.joint_names), len(plan.slide_names)

@@ -11,11 +11,11 @@ import pytest
 from scipy.optimize import brentq
 
 from support.naive import naive_c_lagrange_terms
-from pipeline import dynamics as dy
+from pipeline.solve import crank_motion as dy
 from pipeline.cli import main
 from pipeline.kernels import config as kc
-from pipeline.study import DynamicsCase, StudyError, load_study, parse_study
-from pipeline.expressions import parse_expression
+from pipeline.study.reader import DynamicsCase, StudyError, load_study, parse_study
+from pipeline.base.expressions import parse_expression
 from support.tolerances import (ANALOG_REL, ENERGY_DRIFT_REL, RK4_DT_S,
                                 RK4_VS_DOP853_RAD)
 

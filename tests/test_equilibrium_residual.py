@@ -1,4 +1,4 @@
-"""The sweep metric ``equilibrium_residual`` (pipeline.metrics): the worst
+"""The sweep metric ``equilibrium_residual`` (pipeline.model.metrics): the worst
 relative virtual-power residual of the force stage over the revolution.
 
 Asked for by name in a copy of a shipped sweep study, it is stored with the
@@ -21,12 +21,12 @@ import pytest
 from support import naive
 from support.power import virtual_power
 from support.tolerances import EQUILIBRIUM_REL, EQUILIBRIUM_VS_NAIVE_REL, VIRTUAL_POWER_REL
-from pipeline.candidate import rerun_candidate
+from pipeline.analysis.candidate import rerun_candidate
 from pipeline.kernels import config as kc
 from pipeline.kernels.forces import equilibrium_residual
-from pipeline.metrics import BY_NAME, DEFAULT_METRICS
-from pipeline.study import load_study
-from pipeline.sweep import run_sweep
+from pipeline.model.metrics import BY_NAME, DEFAULT_METRICS
+from pipeline.study.reader import load_study
+from pipeline.runs.sweep import run_sweep
 
 NAME = "equilibrium_residual"
 # study -> candidates drawn: enough for dozens whose force stage runs (the

@@ -25,15 +25,15 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from pipeline import expressions
-from pipeline.expressions import (
-    MAX_DEPTH,
-    MAX_TERMS,
-    MAX_LENGTH,
-    Expression,
-    ExpressionError,
-    parse_expression,
-)
+from pipeline.base import expressions
+from pipeline.base.expressions import (
+         MAX_DEPTH,
+         MAX_TERMS,
+         MAX_LENGTH,
+         Expression,
+         ExpressionError,
+         parse_expression,
+     )
 
 FIELD = "studies/foo.toml: loads[0].fy"
 RTOL = 1e-12

@@ -20,14 +20,14 @@ import numpy as np
 import pytest
 
 import pipeline
-import pipeline.files as files
-import pipeline.sweep as sw
+import pipeline.base.files as files
+import pipeline.runs.sweep as sw
 from pipeline.cli import main
 from support.faults import digest, one_line_error
-from pipeline.errors import ResultsError
-from pipeline.files import RunLock
-from pipeline.study import load_study
-from pipeline.sweep import SweepFile, build_problem, run_sweep
+from pipeline.base.errors import ResultsError
+from pipeline.base.files import RunLock
+from pipeline.study.reader import load_study
+from pipeline.runs.sweep import SweepFile, build_problem, run_sweep
 
 ROOT = Path(__file__).resolve().parent.parent
 N = 600

@@ -13,12 +13,12 @@ from pathlib import Path
 import h5py
 import pytest
 
-import pipeline.files as files
+import pipeline.base.files as files
 from pipeline.cli import main
 from support.faults import digest, one_line_error
-from pipeline.study import load_study
-from pipeline.files import RunLock
-from pipeline.sweep import run_sweep
+from pipeline.study.reader import load_study
+from pipeline.base.files import RunLock
+from pipeline.runs.sweep import run_sweep
 
 ROOT = Path(__file__).resolve().parent.parent
 N = 2000
@@ -54,7 +54,7 @@ def study_variant(studies, tmp_path, name, edits, file_name=None):
 def nothing_compiled(monkeypatch):
     """The block refuses before any kernel is built ("at once": no compile,
     no evaluation, whatever the machine's speed)."""
-    import pipeline.sweep as sw
+    import pipeline.runs.sweep as sw
 
     def built(*a, **k):
         raise AssertionError("a kernel was built before the refusal")
@@ -91,7 +91,7 @@ def test_analyze_on_a_full_disk_keeps_the_sweep(sweep_copy, monkeypatch, capsys)
 def test_analyze_failing_midway_in_hdf5_keeps_the_sweep(sweep_copy, monkeypatch, capsys, k):
     """The disk fills while HDF5 writes the analysis (inside h5py, at its k-th
     dataset, not at the flush)."""
-    import pipeline.analysis as an
+    import pipeline.analysis.fronts as an
     before = digest(sweep_copy)
     real = an.put
     count = {"n": 0}
@@ -168,7 +168,7 @@ def test_second_run_on_the_same_file_is_refused_at_once(studies, tmp_path, capsy
 
 
 def test_unreachable_scheduler_leaves_nothing(studies, tmp_path, monkeypatch, capsys):
-    import pipeline.sweep as sw
+    import pipeline.runs.sweep as sw
     monkeypatch.setattr(sw, "CONNECT_TIMEOUT", "1s")
     out = tmp_path / "s.h5"
     assert main(["run", str(studies / "ov7_synthesis.toml"), "-o", str(out), "--candidates",
@@ -306,7 +306,7 @@ def test_scene_positions_limit(studies, tmp_path, capsys):
 # ------------------------------------------------------------ found in review
 def test_overwrite_that_fails_before_its_first_chunk_keeps_the_old_file(studies, tmp_path,
                                                                          monkeypatch):
-    import pipeline.sweep as sw
+    import pipeline.runs.sweep as sw
     study = load_study(studies / "ov7_synthesis.toml")
     out = tmp_path / "s.h5"
     run_sweep(study, out, candidates=300, progress=False)

@@ -80,7 +80,7 @@ def test_report_and_browse_name_the_sweep_numbers(files, tmp_path, capsys, monke
     and by browse, with the full file's numbers."""
     import json
 
-    from pipeline import report
+    from pipeline.views import report
     monkeypatch.setattr(report, "EXPLORER_DRAWINGS", 1)      # the test's time, not the page's
     full, feas, keep = files
     with h5py.File(full, "r") as a:

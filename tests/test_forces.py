@@ -9,10 +9,10 @@ import pytest
 
 from support import naive
 from support.power import virtual_power
-from pipeline.forces import pin_diameter, scene_forces
+from pipeline.solve.reactions import pin_diameter, scene_forces
 from pipeline.kernels import config as kc
-from pipeline.scene import revolution_angles, run_scene, solve_curves
-from pipeline.study import load_study
+from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
+from pipeline.study.reader import load_study
 from support.tolerances import REACTION_FD_REL, VIRTUAL_POWER_REL
 
 

@@ -14,7 +14,7 @@ import pytest
 
 import pipeline
 from pipeline.kernels import config as kc
-from pipeline.storage import read_units
+from pipeline.results.storage import read_units
 
 
 @pytest.fixture(scope="module")
@@ -22,7 +22,7 @@ def files(tmp_path_factory, studies, synthesis_sweep):
     from support.sweep_helpers import copy_of
     d = tmp_path_factory.mktemp("formats")
     sweep = copy_of(synthesis_sweep, d, "sweep.h5")
-    from pipeline.analysis import analyze
+    from pipeline.analysis.fronts import analyze
     analyze(sweep)
     scenes = [pipeline.run(studies / f"{s}.toml", d / f"{s}.h5", pictures=False).results
               for s in ("ov7_class3", "takeup_dynamics", "cam_rocker_input")]

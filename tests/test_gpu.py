@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 
 from pipeline.kernels import sweep as ks
-from pipeline.study import load_study
-from pipeline.sweep import run_sweep
+from pipeline.study.reader import load_study
+from pipeline.runs.sweep import run_sweep
 from support.tolerances import GPU_AGREEMENT_REL
 
 HERE = Path(__file__).resolve().parent
@@ -87,8 +87,8 @@ def test_generated_cuda_module_is_imported_not_executed():
     """The kernel module is a file in the cache folder that calls the CPU
     module's own ``settle``: one source of the mechanism's numbers."""
     out = _run(
-        "from pipeline.study import load_study\n"
-        "from pipeline.sweep import build_problem\n"
+        "from pipeline.study.reader import load_study\n"
+        "from pipeline.runs.sweep import build_problem\n"
         "from pipeline.compiler import gpu_kernels_for\n"
         "s = load_study('studies/ov7_synthesis.toml'); pb = build_problem(s, s.sweep)\n"
         "m = gpu_kernels_for(pb.plan, pb.rocker)\n"
@@ -128,7 +128,7 @@ def test_sweep_on_the_simulated_gpu_writes_the_cpu_file(tmp_path):
 def test_gpu_asked_for_without_one_names_what_is_missing(tmp_path):
     study = load_study(STUDIES / "ov7_synthesis.toml")
     out = tmp_path / "x.h5"
-    code = ("from pipeline.gpu import probe; import json; print(json.dumps(probe()['missing']))")
+    code = ("from pipeline.runs.gpu import probe; import json; print(json.dumps(probe()['missing']))")
     missing = json.loads(_run(code, env={k: v for k, v in os.environ.items()
                                          if k != "NUMBA_ENABLE_CUDASIM"}))
     if missing is None:
@@ -164,8 +164,8 @@ def test_store_feasible_keeps_the_feasible_rows_and_every_count(tmp_path):
                                       b["progress/status_counts"][()])
         counts = a["progress/status_counts"][()].sum(axis=0)
         assert counts[:-1].sum() == 900 and counts[-1] == feas.sum()
-    from pipeline.browse import browse
-    from pipeline.sweep import summarize
+    from pipeline.views.browse import browse
+    from pipeline.runs.sweep import summarize
     sa, sb = summarize(full), summarize(kept)
     assert sa["candidates"] == sb["candidates"] == 900
     assert sa["feasible"] == sb["feasible"] and sa["status OK"] == sb["status OK"]
@@ -177,7 +177,7 @@ def test_store_feasible_keeps_the_feasible_rows_and_every_count(tmp_path):
 
 
 def test_store_feasible_resumes_to_the_same_file(tmp_path):
-    from pipeline.sweep import SweepInterrupted
+    from pipeline.runs.sweep import SweepInterrupted
     from support.sweep_helpers import assert_same_results
     study = load_study(STUDIES / "ov7_synthesis.toml")
     once, twice = tmp_path / "once.h5", tmp_path / "twice.h5"
@@ -194,7 +194,7 @@ def test_store_feasible_resumes_to_the_same_file(tmp_path):
 # ----------------------------------------------------------------- a real GPU
 def _real_gpu_missing():
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
-    r = subprocess.run([sys.executable, "-c", "from pipeline.gpu import probe; import json; "
+    r = subprocess.run([sys.executable, "-c", "from pipeline.runs.gpu import probe; import json; "
                         "print(json.dumps(probe()['missing']))"], env=env,
                        capture_output=True, text=True, timeout=120)
     if r.returncode != 0:

@@ -33,8 +33,8 @@ import pytest
 
 from pipeline.cli import main
 from pipeline.compile import source
-from pipeline.limits import MAX_NAME_LENGTH
-from pipeline.study import StudyError, load_study, parse_study
+from pipeline.base.limits import MAX_NAME_LENGTH
+from pipeline.study.reader import StudyError, load_study, parse_study
 
 STUDIES = Path(__file__).resolve().parent.parent / "studies"
 CAM = (STUDIES / "cam_rocker_input.toml").read_text()
@@ -234,7 +234,7 @@ def test_a_payload_in_legal_names_never_runs(tmp_path, monkeypatch):
 
 @pytest.fixture(scope="module")
 def sweep_file(tmp_path_factory):
-    from pipeline.sweep import run_sweep
+    from pipeline.runs.sweep import run_sweep
     out = tmp_path_factory.mktemp("stored") / "sweep.h5"
     run_sweep(load_study(STUDIES / "ov7_synthesis.toml"), out, candidates=40, chunk_size=40,
               progress=False)

@@ -16,9 +16,9 @@ import pytest
 from support import naive
 from pipeline.kernels import config as kc
 from pipeline.kernels.inputs import linear_law, rise_return, table_law
-from pipeline.model import Law, RotaryInput, SliderInput
-from pipeline.scene import revolution_angles, run_scene, solve_curves
-from pipeline.study import StudyError, load_study
+from pipeline.model.mechanism import Law, RotaryInput, SliderInput
+from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
+from pipeline.study.reader import StudyError, load_study
 from support.power import virtual_power
 from support.tolerances import FAIL_ANGLE_RAD, MP_REFERENCE_REL, REACTION_MP_REL, VIRTUAL_POWER_REL
 
@@ -317,7 +317,7 @@ def test_m_bal_is_the_lagrange_moment_of_the_whole_machine(studies, name):
     on phi1, J eps1 + (1/2) J' omega1^2 - Q: the inputs' inertia enters the
     reduced moment of inertia through their analogs, and their drives reach
     the shaft through q' (two independent routes to the same number)."""
-    from pipeline import dynamics as dy
+    from pipeline.solve import crank_motion as dy
     study = _with_eps(load_study(studies / f"{name}.toml"), 75.0)
     crank = study.mechanism.crank
     res = run_scene(study)
@@ -345,8 +345,8 @@ def test_sweep_over_the_cam_law_matches_the_scene_path(cam_sweep):
     plan) and the arms' lengths are design variables: each candidate's peaks
     are those of its own scene."""
     import h5py
-    from pipeline.forces import scene_forces
-    from pipeline.sweep_spec import apply_design
+    from pipeline.solve.reactions import scene_forces
+    from pipeline.study.sweep_spec import apply_design
     from support.tolerances import SWEEP_VS_SCENE_REL
     study, path = cam_sweep
     with h5py.File(path, "r") as f:
@@ -498,7 +498,7 @@ STEEP = [
 @pytest.mark.parametrize("name,change,field,reason", STEEP,
                          ids=[f"{e[0]}-{e[2]}-{i}" for i, e in enumerate(STEEP)])
 def test_a_law_steeper_than_its_positions_is_refused(studies, name, change, field, reason):
-    from pipeline.study import parse_study
+    from pipeline.study.reader import parse_study
     with pytest.raises(StudyError) as e:
         parse_study(_broken(studies, name, *change), "steep.toml")
     msg = str(e.value)
@@ -506,7 +506,7 @@ def test_a_law_steeper_than_its_positions_is_refused(studies, name, change, fiel
 
 
 def test_laws_the_positions_resolve_load(studies):
-    from pipeline.study import parse_study
+    from pipeline.study.reader import parse_study
     for name, old, new in [
             ("cam_rocker_input", "rise = 150.0", "rise = 8"),
             ("cam_rocker_input", "rise = 150.0", "rise = 352"),
@@ -537,8 +537,8 @@ def _cycloid_peak_acceleration(rise, travel, phase, length, omega):
 def test_the_steepest_law_allowed_has_its_exact_peak(studies):
     """The cam's rise over 8 positions (8 deg of 360), not aligned with them: the
     scene's refined peak acceleration of the rocker's tip is the law's own."""
-    from pipeline.peaks import scene_peaks
-    from pipeline.study import parse_study
+    from pipeline.solve.peaks import scene_peaks
+    from pipeline.study.reader import parse_study
     text = _broken(studies, "cam_rocker_input", CYCLOIDAL,
                    CYCLOIDAL.replace("rise = 150.0", "rise = 8").replace("phase = 0.0",
                                                                          "phase = 0.37"))

@@ -30,8 +30,8 @@ from hypothesis import strategies as st
 from pipeline.kernels import config as kc
 from pipeline.kernels.groups import attach, crank, rpr, rrp, rrr
 from pipeline.kernels.triad import class3, ternary_angle
-from pipeline.model import ClassIII, Crank, Mechanism, RRR
-from pipeline.scene import solve_curves
+from pipeline.model.mechanism import ClassIII, Crank, Mechanism, RRR
+from pipeline.solve.scene import solve_curves
 from support.tolerances import CLOSURE_MM, KERNEL_EXACT_REL, LENGTH_REL, SELF_FD_REL, WELL_INSIDE_REL
 
 TOLS = kc.default_tolerances()

@@ -9,8 +9,8 @@ import pytest
 
 from support import naive
 from pipeline.kernels import config as kc
-from pipeline.scene import revolution_angles, run_scene, solve_curves
-from pipeline.study import load_study
+from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
+from pipeline.study.reader import load_study
 from support.tolerances import (ANALOG_REL, CLOSURE_MM, NAIVE_POSITION_MM, NEWTON_ITERATIONS,
                                 NEWTON_TOL,
                                 REFERENCE_MM, SELF_FD_REL)
@@ -80,7 +80,7 @@ def test_link_angle_analogs_match_independent_solver(scene):
 
 
 def _link_lengths(study):
-    from pipeline.model import RRR, ClassIII, Attach
+    from pipeline.model.mechanism import RRR, ClassIII, Attach
     out = [(study.mechanism.crank.pivot, study.mechanism.crank.tip, study.mechanism.crank.length)]
     for g in study.mechanism.groups:
         if isinstance(g, RRR):

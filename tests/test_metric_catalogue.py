@@ -1,4 +1,4 @@
-"""The catalogue of metrics (pipeline.metrics) is the one place a metric is
+"""The catalogue of metrics (pipeline.model.metrics) is the one place a metric is
 described: the study format, the stored columns, the results file's attributes
 and docs/metrics.md all read it."""
 
@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-import pipeline.metrics as mc
-from pipeline import objectives, sweep_spec
+import pipeline.model.metrics as mc
+from pipeline.study import objectives, sweep_spec
 from pipeline.kernels import sweep as ks
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -52,9 +52,9 @@ def test_a_journal_of_another_metric_row_is_not_mixed_in(studies, tmp_path):
 
     import pytest
 
-    from pipeline.errors import ResultsError
-    from pipeline.study import load_study
-    from pipeline.sweep import run_sweep
+    from pipeline.base.errors import ResultsError
+    from pipeline.study.reader import load_study
+    from pipeline.runs.sweep import run_sweep
     study = load_study(studies / "ov7_synthesis.toml")
     out = tmp_path / "s.h5"
     with pytest.raises(KeyboardInterrupt):

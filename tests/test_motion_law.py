@@ -17,11 +17,11 @@ from pipeline.cli import main
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
 from pipeline.kernels.metrics import law_error, relative_angle
-from pipeline.peaks import _magnitudes, scene_peaks
-from pipeline.scene import real_motion, revolution_angles, run_scene, solve_curves
-from pipeline.study import StudyError, load_study, parse_study
-from pipeline.sweep import build_problem, metric_values, run_sweep
-from pipeline.sweep_spec import apply_design, draw_checked, parameter_rows
+from pipeline.solve.peaks import _magnitudes, scene_peaks
+from pipeline.solve.scene import real_motion, revolution_angles, run_scene, solve_curves
+from pipeline.study.reader import StudyError, load_study, parse_study
+from pipeline.runs.sweep import build_problem, metric_values, run_sweep
+from pipeline.study.sweep_spec import apply_design, draw_checked, parameter_rows
 from support import naive
 from support.tolerances import LAW_VS_NAIVE_REL, SWEEP_VS_SCENE_REL
 

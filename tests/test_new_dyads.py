@@ -14,11 +14,11 @@ import pytest
 from support import naive
 from pipeline.compiler import kernels_for
 from pipeline.compiler.emit import EMITTERS
-from pipeline.forces import scene_forces
+from pipeline.solve.reactions import scene_forces
 from pipeline.kernels import config as kc
-from pipeline.model import PRP, RPP
-from pipeline.scene import revolution_angles, run_scene, solve_curves
-from pipeline.study import StudyError, load_study, parse_study
+from pipeline.model.mechanism import PRP, RPP
+from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
+from pipeline.study.reader import StudyError, load_study, parse_study
 from support.power import virtual_power
 from support.tolerances import FAIL_ANGLE_RAD, MP_REFERENCE_REL, REACTION_MP_REL, SELF_FD_REL, VIRTUAL_POWER_REL
 
@@ -399,7 +399,7 @@ def test_sweep_over_the_prp_guide_matches_the_scene_path(prp_sweep):
     height and the pin's offset are design variables: each candidate's peaks
     are those of its own scene."""
     import h5py
-    from pipeline.sweep_spec import apply_design
+    from pipeline.study.sweep_spec import apply_design
     from support.tolerances import SWEEP_VS_SCENE_REL
     study, path = prp_sweep
     with h5py.File(path, "r") as f:

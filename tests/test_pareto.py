@@ -9,13 +9,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from pipeline.pareto import (
-    _rank_valid,
-    crowding_distance,
-    dominates,
-    knee_point,
-    nondominated_rank,
-)
+from pipeline.kernels.pareto import (
+            _rank_valid,
+            crowding_distance,
+            dominates,
+            knee_point,
+            nondominated_rank,
+        )
 
 from support.naive_pareto import brute_force_rank, crowding_ref, dominates_ref
 

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 import pipeline
-from pipeline.forces import scene_forces
-from pipeline.peaks import _magnitudes, scene_peaks
-from pipeline.scene import revolution_angles, solve_curves
+from pipeline.solve.reactions import scene_forces
+from pipeline.solve.peaks import _magnitudes, scene_peaks
+from pipeline.solve.scene import revolution_angles, solve_curves
 from support import naive
 from support.tolerances import DWELL_VS_NAIVE_REL
 
@@ -77,7 +77,7 @@ def test_scene_dwell_and_stroke_equal_the_sweeps_reference_design(studies, synth
     design: the same dwell error and stroke, by two paths."""
     import h5py
 
-    from pipeline.peaks import scene_motion
+    from pipeline.solve.peaks import scene_motion
     res = pipeline.solve_scene(studies / "ov7_class3.toml")
     m = scene_motion(res)
     with h5py.File(synthesis_sweep, "r") as f:

@@ -22,12 +22,12 @@ import pytest  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from PIL import Image  # noqa: E402
 
-from pipeline import plots  # noqa: E402
-from pipeline.animate import MAX_FRAMES, frame_indices, motion_of, write_animation  # noqa: E402
-from pipeline.browse import OV7_PHASES  # noqa: E402
+from pipeline.views import plots  # noqa: E402
+from pipeline.views.animate import MAX_FRAMES, frame_indices, motion_of, write_animation  # noqa: E402
+from pipeline.views.browse import OV7_PHASES  # noqa: E402
 from pipeline.cli import main  # noqa: E402
 from pipeline.runner import solve_scene  # noqa: E402
-from pipeline.study import load_study  # noqa: E402
+from pipeline.study.reader import load_study  # noqa: E402
 from support import naive  # noqa: E402
 
 SCENES = ("ov7_base", "warp_feed_fourbar", "takeup_dynamics")
@@ -203,7 +203,7 @@ def test_forces_legend_says_what_each_joint_joins(scenes):
 def test_forces_figure_draws_the_loads_and_marks_the_polar_diagram(scenes):
     """The loads as the study gives them (formulas of phi and t) against phi1,
     and crank-angle marks on the polar diagram beside its arrows."""
-    from pipeline.forces import sample_loads
+    from pipeline.solve.reactions import sample_loads
     res = scenes["warp_feed_fourbar"]
     fig = plots.forces_figure(res)
     ax = next(a for a in fig.axes if a.get_title().startswith("External loads"))
@@ -268,7 +268,7 @@ def test_animation_writes_a_gif_with_the_frames_asked(scenes, tmp_path):
                             str(tmp_path / "a.mp4")], capture_output=True, text=True, check=True)
     assert probe.stdout.strip() == "4"
     # and without ffmpeg, a clear error
-    import pipeline.animate as an
+    import pipeline.views.animate as an
     real_which = an.shutil.which
     try:
         an.shutil.which = lambda name, *a, **k: None if name == "ffmpeg" else real_which(name)
@@ -346,7 +346,7 @@ def test_show_animates_a_sweep_candidate(small_sweep, tmp_path, capsys):
 
 
 def test_report_embeds_the_animation_and_stays_offline(small_sweep, tmp_path, monkeypatch):
-    from pipeline import report
+    from pipeline.views import report
     monkeypatch.setattr(report, "EXPLORER_DRAWINGS", 1)      # the test's time, not the page's
     p = tmp_path / "s.h5"
     shutil.copy(small_sweep, p)

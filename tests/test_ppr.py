@@ -13,9 +13,9 @@ import pytest
 
 from pipeline import compile as pc
 from pipeline.compiler.emit import EMITTERS
-from pipeline.groups import GROUP_TYPES, PPR, RPP
+from pipeline.model.groups import GROUP_TYPES, PPR, RPP
 from pipeline.runner import solve_scene
-from pipeline.study import StudyError, load_study, parse_study
+from pipeline.study.reader import StudyError, load_study, parse_study
 
 SCENE = "ppr_cross_slide"
 SWEEP = "ppr_cross_slide_sweep"
@@ -72,7 +72,7 @@ def test_the_unnamed_ppr_is_labelled_as_a_ppr(studies):
     text = (studies / f"{SCENE}.toml").read_text().replace('name = "carriage"\n', "", 1)
     m = parse_study(text, "x.toml").mechanism
     assert m.compile().group_names[3] == "PPR[3]"
-    from pipeline.peaks import transmission_items
+    from pipeline.solve.peaks import transmission_items
     assert transmission_items(m)[-1][0] == "PPR P7-P6"
 
 
@@ -123,7 +123,7 @@ def test_every_type_names_the_emitter_its_plan_code_picks(studies):
 
 
 def test_a_sweep_over_a_ppr_dimension_runs(studies, tmp_path):
-    from pipeline.sweep import run_sweep
+    from pipeline.runs.sweep import run_sweep
     study = load_study(studies / f"{SWEEP}.toml")
     assert [v.param for v in study.sweep.variables] == ["carriage.slot_angle",
                                                         "carriage.guide_offset"]

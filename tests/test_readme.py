@@ -46,7 +46,7 @@ def test_readme_commands_run_in_order(tmp_path, monkeypatch, capsys):
     import numpy as np
     import pandas as pd
 
-    import pipeline.sweep as sw
+    import pipeline.runs.sweep as sw
     from support import naive
     from support.sweep_helpers import assert_same_results
     shutil.copytree(ROOT / "studies", tmp_path / "studies")
@@ -143,7 +143,7 @@ def test_a_first_run_says_it_is_compiling(tmp_path, studies, monkeypatch, caplog
     import time
     import types
 
-    import pipeline.sweep as sw
+    import pipeline.runs.sweep as sw
     real = sw.SweepFile.create
     noticed = threading.Event()
     offset = [0.0]
@@ -178,5 +178,5 @@ def test_a_first_run_says_it_is_compiling(tmp_path, studies, monkeypatch, caplog
 
 
 def pipeline_load(studies):
-    from pipeline.study import load_study
+    from pipeline.study.reader import load_study
     return load_study(studies / "ov7_synthesis.toml")

@@ -11,12 +11,12 @@ import pytest
 
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
-from pipeline.search import (FAILED_VIOLATION, SweepBlackBox, hv_scale,
-                             pymoo_view, repair_triangles, buildable_centre, run_search)
-from pipeline.storage import ResultsError
-from pipeline.study import StudyError, load_study
-from pipeline.sweep import COLUMN, SweepInterrupted, build_problem, run_sweep
-from pipeline.sweep_spec import parameter_rows
+from pipeline.runs.search import (FAILED_VIOLATION, SweepBlackBox, hv_scale,
+                                  pymoo_view, repair_triangles, buildable_centre, run_search)
+from pipeline.results.storage import ResultsError
+from pipeline.study.reader import StudyError, load_study
+from pipeline.runs.sweep import COLUMN, SweepInterrupted, build_problem, run_sweep
+from pipeline.study.sweep_spec import parameter_rows
 from support.naive_pareto import hypervolume_2d_ref
 from support.sweep_helpers import assert_same_results, copy_of, kill_9_after_chunks
 
@@ -351,7 +351,7 @@ def test_large_generations(studies, tmp_path):
 def test_a_short_generation_gives_a_file_of_the_true_size(small, tmp_path, monkeypatch):
     """If pymoo proposes fewer designs than asked (too few new ones), the file
     holds exactly the evaluated candidates; resuming gives the same file."""
-    import pipeline.search as se
+    import pipeline.runs.search as se
     real = se.make_algorithm
 
     def short(*a, **k):
@@ -380,9 +380,9 @@ def test_a_short_generation_gives_a_file_of_the_true_size(small, tmp_path, monke
 
 # ---------------------------------------------------------------- explore, then refine
 def test_seeded_from_a_sweep_front(small, studies, tmp_path, capsys, synthesis_sweep):
-    from pipeline.analysis import read_sweep
+    from pipeline.analysis.fronts import read_sweep
     from pipeline.cli import main
-    from pipeline.pareto import nondominated_rank
+    from pipeline.kernels.pareto import nondominated_rank
     sweep = copy_of(synthesis_sweep, tmp_path, "sweep.h5")
     out = tmp_path / "refined.h5"
     assert main(["run", str(small.path), "-o", str(out), "--from", str(sweep), "-q"]) == 0

@@ -10,7 +10,7 @@ import pytest
 
 from pipeline.compiler import source_for
 from pipeline.compiler.skeleton import END, MARKER, part
-from pipeline.study import load_study
+from pipeline.study.reader import load_study
 
 SKELETON = Path(__file__).resolve().parent.parent / "pipeline" / "compiler" / "skeleton"
 STUDIES = Path(__file__).resolve().parent.parent / "studies"

@@ -13,17 +13,17 @@ import pandas as pd
 import pytest
 
 from pipeline.cli import main
-from pipeline.forces import slide_action
+from pipeline.solve.reactions import slide_action
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
-from pipeline.model import RPP
-from pipeline.peaks import _magnitudes, scene_peaks, transmission_items
+from pipeline.model.mechanism import RPP
+from pipeline.solve.peaks import _magnitudes, scene_peaks, transmission_items
 from pipeline.runner import peak_summary, solve_scene
-from pipeline.scene import run_scene, solve_curves
-from pipeline.storage import read_units
-from pipeline.study import load_study, parse_study
-from pipeline.sweep import build_problem, metric_values
-from pipeline.sweep_spec import apply_design, draw_checked, parameter_rows
+from pipeline.solve.scene import run_scene, solve_curves
+from pipeline.results.storage import read_units
+from pipeline.study.reader import load_study, parse_study
+from pipeline.runs.sweep import build_problem, metric_values
+from pipeline.study.sweep_spec import apply_design, draw_checked, parameter_rows
 from support.tolerances import SWEEP_VS_SCENE_REL
 
 CSV_REL = 1e-11          # CSV keeps 12 significant digits
@@ -235,9 +235,9 @@ def test_a_slide_turns_with_its_guide_when_a_sweep_turns_the_guide(studies):
     tilted candidate's forces are those of a study that declares the tilt in
     both places."""
     import dataclasses
-    from pipeline.forces import scene_forces
-    from pipeline.scene import revolution_angles, solve_curves
-    from pipeline.study import load_study, parse_study
+    from pipeline.solve.reactions import scene_forces
+    from pipeline.solve.scene import revolution_angles, solve_curves
+    from pipeline.study.reader import load_study, parse_study
     study = load_study(studies / "slotted_rocker_prp.toml")
     m = study.mechanism
     assert m.slides[1].follows == ("slider.guide2_angle",)

@@ -22,9 +22,9 @@ import pytest
 from pipeline.kernels import config as kc
 from pipeline.kernels.sweep import (M_DWELL, M_FAIL_GROUP, M_FAIL_PHI, M_FORCES_DONE, M_MARGIN,
                                     M_NEWTON_MEAN, M_PEAK_R, M_STROKE)
-from pipeline.scene import batch_revolutions, revolution_angles, solve_curves
-from pipeline.study import load_study
-from pipeline.sweep import build_problem
+from pipeline.solve.scene import batch_revolutions, revolution_angles, solve_curves
+from pipeline.study.reader import load_study
+from pipeline.runs.sweep import build_problem
 from support.stress_cases import fourbar_rows, near_singular_triads, scaled_rows
 
 pytestmark = pytest.mark.stress

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from pipeline.study import StudyError, load_study, parse_study
+from pipeline.study.reader import StudyError, load_study, parse_study
 
 BASE = (__import__("pathlib").Path(__file__).resolve().parent.parent / "studies"
         / "ov7_base.toml").read_text()
@@ -174,7 +174,7 @@ def test_slides_that_agree_or_cannot_be_judged_load(studies, name, changes):
         assert old in text
         text = text.replace(old, new, 1)
     from pipeline.kernels import config as kc
-    from pipeline.scene import solve_curves
+    from pipeline.solve.scene import solve_curves
     variant = parse_study(text, "ok.toml")
     shipped = load_study(studies / f"{name}.toml")
     assert len(variant.mechanism.slides) == len(shipped.mechanism.slides)

@@ -10,14 +10,14 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from support import naive
-from pipeline.forces import scene_forces
+from pipeline.solve.reactions import scene_forces
 from pipeline.kernels import config as kc
 from pipeline.kernels.metrics import dwell_error
-from pipeline.scene import revolution_angles, solve_curves
-from pipeline.storage import ResultsError
-from pipeline.study import StudyError, load_study
-from pipeline.sweep import SweepInterrupted, build_problem, run_sweep
-from pipeline.sweep_spec import apply_design, draw_candidates, parameter_rows
+from pipeline.solve.scene import revolution_angles, solve_curves
+from pipeline.results.storage import ResultsError
+from pipeline.study.reader import StudyError, load_study
+from pipeline.runs.sweep import SweepInterrupted, build_problem, run_sweep
+from pipeline.study.sweep_spec import apply_design, draw_candidates, parameter_rows
 from support.sweep_helpers import (SYNTHESIS_CHUNK, SYNTHESIS_N, assert_same_results, copy_of,
                                    kill_9_after_chunks)
 from support.tolerances import DWELL_VS_NAIVE_REL, SWEEP_VS_SCENE_REL
@@ -201,7 +201,7 @@ def test_kill_9_then_resume_equals_uninterrupted(baseline, synthesis, tmp_path):
 
 
 def test_cli_interrupt_says_how_to_resume(synthesis, tmp_path, capsys, monkeypatch):
-    import pipeline.sweep as sw
+    import pipeline.runs.sweep as sw
     from pipeline.cli import main
     real = sw.run_sweep
     monkeypatch.setattr(sw, "run_sweep", lambda *a, **k: real(*a, **k, stop_after_chunks=1))
@@ -298,7 +298,7 @@ def test_redrawn_designs_follow_rejection_sampling(synthesis):
     (two-sample Kolmogorov-Smirnov per variable, fixed seeds)."""
     from scipy.stats import ks_2samp
 
-    from pipeline.sweep_spec import draw_checked
+    from pipeline.study.sweep_spec import draw_checked
     spec = dataclasses.replace(synthesis.sweep, sampler="uniform", candidates=40000,
                                chunk_size=40000)
     x, rejected = draw_checked(spec, 0)
@@ -328,7 +328,7 @@ def test_narrow_bounds_that_cannot_build_the_triangle_are_refused(studies, tmp_p
 def test_bad_geometry_names_the_inequality(synthesis):
     """The words behind a BAD_GEOMETRY status (browse, scene summaries): which
     inequality, with the three lengths; a non-positive length by name."""
-    from pipeline.sweep_spec import geometry_problems
+    from pipeline.study.sweep_spec import geometry_problems
     plan = synthesis.mechanism.compile()
     assert geometry_problems(plan, plan.par) == []
     par = plan.par.copy()

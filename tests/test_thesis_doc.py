@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import pipeline
-from pipeline.scene import real_motion
+from pipeline.solve.scene import real_motion
 
 DOC = Path(__file__).resolve().parent.parent / "docs" / "thesis.md"
 

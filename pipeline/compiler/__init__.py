@@ -25,7 +25,7 @@ import sys
 import threading
 from pathlib import Path
 
-from ..files import write_text
+from ..base.files import write_text
 from ..kernels.config import LANE_WIDTH as LANES   # candidates per block of the lane path
 from .generate import generate
 
@@ -103,9 +103,9 @@ def kernels_for(plan, rocker=None, watch=True):
 
 
 def gpu_kernels_for(plan, rocker=None):
-    """The CUDA kernel module of ``plan``'s sweep (``pipeline.compiler.gpu``):
+    """The CUDA kernel module of ``plan``'s sweep (``pipeline.compiler.cuda_source``):
     it imports the CPU module (``kernels_for``) and calls its functions."""
-    from .gpu import gpu_source
+    from .cuda_source import gpu_source
     cpu = kernels_for(plan, rocker)
     src = gpu_source(cpu.__name__)
     return _imported(src, "pipeline_gpu_" + module_name(src)[len("pipeline_mech_"):])

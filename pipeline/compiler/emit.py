@@ -79,7 +79,7 @@ class Emitter:
 
     def transmission(self):
         """Lines that lower ``tr`` to the group's transmission angles at this
-        position (rad; ``pipeline.peaks.transmission_items``); none by default."""
+        position (rad; ``pipeline.solve.peaks.transmission_items``); none by default."""
         return []
 
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from .emit import _wrap_line, constants_of, emitters_for, literal
-from .forces import force_kernel
+from .force_equations import force_kernel
 from .lanes import lane_kernel, no_rocker_kernel
 from .names import Names, text
 from .skeleton import part

@@ -66,7 +66,7 @@ def force_work(nb, nj, ns):
     """Work arrays of ``kinetostatics`` for nb bodies, nj joints, ns slides:
     (work_a, work_b, loads_out, r_out, slide_out); allocate once per candidate.
     A generated ``forces_at`` takes ns = slides + inputs: an input's drive has
-    a row of slide_out after the slides' (``pipeline.compiler.forces``)."""
+    a row of slide_out after the slides' (``pipeline.compiler.force_equations``)."""
     return (np.empty((3 * nb, 3 * nb)), np.empty(3 * nb), np.empty((nb, 3)), np.empty((nj, 2)),
             np.empty((ns, 2)))
 

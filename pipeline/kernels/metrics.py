@@ -270,7 +270,7 @@ def fold_angle(ux, uy, wx, wy):
 @njit(**JIT)
 def dyad_transmission(pos, ia, ib, ic):
     """Transmission angle of an RRR dyad A-B-C at its middle joint B: the
-    angle between B->A and B->C, folded into [0, pi/2] (``pipeline.peaks``)."""
+    angle between B->A and B->C, folded into [0, pi/2] (``pipeline.solve.peaks``)."""
     return fold_angle(pos[ia, 0] - pos[ib, 0], pos[ia, 1] - pos[ib, 1],
                       pos[ic, 0] - pos[ib, 0], pos[ic, 1] - pos[ib, 1])
 
@@ -328,7 +328,7 @@ def lines_transmission(pos, ia, ib, alpha, ic, idd, beta):
     ia < 0) and line 2 (c->d turned by ``beta``), folded into [0, pi/2].  Each
     group's emitter picks the two lines so that this is 90 deg minus the
     angle between the line of the force the group transmits and the velocity
-    of the member it drives (``pipeline.peaks.transmission_items``)."""
+    of the member it drives (``pipeline.solve.peaks.transmission_items``)."""
     ux, uy = _line(pos, ia, ib, alpha)
     wx, wy = _line(pos, ic, idd, beta)
     return fold_angle(ux, uy, wx, wy)

@@ -11,7 +11,7 @@ Stages, cheapest first:
      peak |a| and the output rocker's peak |eps| (SET_WANT_PEAKS); the
      smallest transmission angle (SET_WANT_TRANSMISSION).  Each is a maximum
      (minimum) over the grid's positions, not refined between them
-     (``pipeline.peaks`` refines a scene's).
+     (``pipeline.solve.peaks`` refines a scene's).
 
 The law error (SET_WANT_LAW) is part of stage 1: the rocker angles the
 positions stage has, against the required motion law sampled at the grid
@@ -35,7 +35,7 @@ M_FORCES_DONE = 10
 M_FAIL_GROUP = 11   # index of the group that failed (NaN: none)
 M_PEAK_ACC = 12     # m/s^2: largest |a| of the working point over the positions
 M_PEAK_EPS = 13     # 1/s^2: largest |eps| of the output rocker over the positions
-M_MIN_TRANS = 14    # rad: smallest transmission angle (pipeline.peaks.transmission_items)
+M_MIN_TRANS = 14    # rad: smallest transmission angle (pipeline.solve.peaks.transmission_items)
 M_LAW_RMS = 15      # RMS deviation of the normalised rocker angle from the motion law
 M_LAW_MAX = 16      # largest |deviation| (the same alignment and orientation)
 M_LAW_SHIFT = 17    # rad: cycle-angle shift of the law that fits best (0: align fixed)

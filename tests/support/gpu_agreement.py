@@ -25,11 +25,11 @@ sys.path.insert(0, str(HERE.parent))     # tests/: the support package
 
 from support.stress_cases import near_singular_triads  # noqa: E402
 
-from pipeline.gpu import SIMULATOR, GpuSweep  # noqa: E402
+from pipeline.runs.gpu import SIMULATOR, GpuSweep  # noqa: E402
 from pipeline.kernels import sweep as ks  # noqa: E402
-from pipeline.metrics import CATALOGUE  # noqa: E402
-from pipeline.study import load_study  # noqa: E402
-from pipeline.sweep import build_problem, draw_checked, parameter_rows  # noqa: E402
+from pipeline.model.metrics import CATALOGUE  # noqa: E402
+from pipeline.study.reader import load_study  # noqa: E402
+from pipeline.runs.sweep import build_problem, draw_checked, parameter_rows  # noqa: E402
 
 STUDIES = ("ov7_synthesis.toml", "ov7_synthesis_law.toml", "ov7_search.toml",
            "slotted_rocker_prp_sweep.toml", "cam_rocker_input_sweep.toml",

@@ -50,7 +50,7 @@ def run_and_analyze(study_path, out, candidates):
     """`pipeline run` of a sweep study with ``candidates`` into ``out``, then
     `pipeline analyze`; returns the loaded study and ``out``."""
     from pipeline.cli import main
-    from pipeline.study import load_study
+    from pipeline.study.reader import load_study
     assert main(["run", str(study_path), "-o", str(out), "--candidates", str(candidates),
                  "-q"]) == 0
     assert main(["analyze", str(out), "-q"]) == 0
@@ -61,8 +61,8 @@ def assert_fronts_are_the_brute_force_rank(path, min_feasible=20):
     """The fronts of a sweep's stored analysis are those of a brute-force
     dominance test over its feasible candidates, and the knee is on front 1."""
     from support.naive_pareto import brute_force_rank
-    from pipeline.analysis import read_analysis, read_sweep
-    from pipeline.storage import open_results
+    from pipeline.analysis.fronts import read_analysis, read_sweep
+    from pipeline.results.storage import open_results
     data = read_sweep(path)
     with open_results(path, "sweep") as f:
         an = read_analysis(f)

@@ -1,0 +1,140 @@
+"""One design of a sweep results file: which stored row a user's candidate
+(a number, 'knee' or 'reference') is, what its status means, and the design
+re-run through the scene path (declared mechanism -> plan) with its curves and,
+if asked, its reactions.  Browse, show, report and animate all use it."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from types import SimpleNamespace
+
+import numpy as np
+
+from .fronts import variable_units
+from ..kernels import config as kc
+from .ranking import ranking
+from ..results.storage import ResultsError, attr_text, candidate_ids, open_results, row_of
+from ..study.reader import stored_study
+
+STATUS_HELP = {
+    kc.OK: "assembles over the whole revolution",
+    kc.NO_ASSEMBLY: "cannot be assembled (cosine-law argument outside [-1, 1])",
+    kc.NEWTON_MAXITER: "the class III Newton solver did not converge",
+    kc.SINGULAR: "passes a toggle (singular) position",
+    kc.BRANCH_JUMP: "jumps assembly branch, or the revolution does not close on its start",
+    kc.BAD_GEOMETRY: "impossible ternary triangle or non-positive length",
+    kc.NOT_EVALUATED: "not evaluated (unfinished sweep)",
+}
+
+
+def resolve_candidate(f, cid):
+    """The stored row of ``cid``, or the string 'reference': a text is what a
+    user types (a candidate number of the sweep, 'knee' or 'reference'); an
+    integer is a stored row (the package's own callers).  Rows and candidate
+    numbers are the same unless the sweep kept only its feasible candidates
+    (store = feasible: ``storage.row_of`` maps them)."""
+    n = f["candidates/status"].shape[0]
+    if isinstance(cid, (int, np.integer)) and not isinstance(cid, bool):
+        if not 0 <= cid < n:
+            raise ValueError(f"row {cid} does not exist: the file holds {n} rows")
+        return int(cid)
+    s = str(cid).strip().lower()
+    if s in ("reference", "ref"):
+        if "reference" not in f:
+            raise ResultsError(f.filename, "has no reference design")
+        return "reference"
+    if s == "knee":
+        k = ranking(f).knee
+        if k < 0:
+            raise ValueError("there is no knee: no feasible candidate")
+        return int(k)
+    try:
+        i = int(s)
+    except ValueError:
+        raise ValueError(f"--candidate expects a candidate number, 'knee' or 'reference', "
+                         f"got {cid!r}") from None
+    return row_of(f, i)
+
+
+# ----------------------------------------------------------------- re-running a design
+@dataclass
+class CandidateRun:
+    """One design re-run through the scene path (declared mechanism -> plan)."""
+    label: str
+    index: object               # int or "reference"
+    study: object               # the study with the candidate's mechanism
+    plan: object
+    x: np.ndarray
+    names: list
+    units: list
+    table: object               # Curves at ``n_table`` positions (drawing)
+    dense: object               # Curves at the study's positions (with forces if asked)
+    theta: np.ndarray           # rocker angle from its first position, rad
+    dwell_error: float
+    dwell_start: int            # index into dense of the best window's start
+    dwell_w: int                # intervals per window
+    status: int
+    fail_phi: float             # deg: first crank angle where the re-run failed (NaN: none)
+
+    @property
+    def scene(self):
+        """What ``plots.draw_positions`` reads."""
+        return SimpleNamespace(plan=self.plan, study=self.study, dense=self.dense)
+
+
+def load_study_from_results(f):
+    """The study rebuilt from the TOML stored verbatim in the results file."""
+    study = stored_study(f.attrs, f.filename)
+    if study is None:
+        raise ResultsError(f.filename, "has no stored study (attribute study_toml)")
+    return study
+
+
+def rerun_candidate(path, cid, *, forces=True, n_table=12, positions=None) -> CandidateRun:
+    """Re-run one candidate (index, 'knee' or 'reference') as a scene: the study
+    rebuilt from the file, the design applied, curves at the study's positions
+    and, if ``forces``, the reactions at the operating speed."""
+    from ..kernels.metrics import dwell_error
+    from ..solve.scene import revolution_angles, solve_curves
+    from ..study.sweep_spec import apply_design
+    with open_results(path, "sweep") as f:
+        i = resolve_candidate(f, cid)
+        study = load_study_from_results(f)
+        p = f["candidates/params"]
+        names = [str(attr_text(x)) for x in p.attrs["names"]]
+        units = variable_units(p)
+        x = f["reference/params"][()] if i == "reference" else p[i]
+        number = i if i == "reference" else int(candidate_ids(f)[i])
+    if not np.isfinite(x).all():
+        raise ValueError(f"candidate {i} was never evaluated (unfinished sweep)")
+    spec = study.sweep
+    mech = apply_design(study.mechanism, spec, x)
+    plan = mech.compile()
+    crank = mech.crank
+    n = positions or spec.positions
+    close = crank.phi0 + crank.rot * 2.0 * math.pi
+    dense = solve_curves(plan, revolution_angles(crank, n), kc.ACCELERATIONS, close_at=close)
+    table = solve_curves(plan, revolution_angles(crank, n_table), kc.POSITIONS)
+    if forces and dense.overall == kc.OK and mech.bodies:
+        from ..solve.reactions import scene_forces
+        dense.forces = scene_forces(mech, plan, dense)
+    a, b = (plan.point(q) for q in study.output.rocker)
+    v = dense.pos[:, b] - dense.pos[:, a]
+    ang = np.arctan2(v[:, 1], v[:, 0])
+    theta = np.full(n, np.nan)
+    bad = np.flatnonzero((dense.status != kc.OK) | ~np.isfinite(ang))
+    k = int(bad[0]) if bad.size else n          # solved positions before the failure
+    if k:
+        theta[:k] = np.unwrap(ang[:k]) - ang[0]
+    fail_phi = float(np.rad2deg(dense.fail_phi)) if dense.overall != kc.OK else math.nan
+    if k < n:   # draw no table position beyond the failure of the revolution
+        past = crank.rot * (table.phi - dense.phi[k]) >= 0
+        table.pos[past] = np.nan
+    w = int(round(study.output.dwell_deg * n / 360))
+    q = np.empty(n + w + 1, np.int64)
+    err, start, _ = dwell_error(np.ascontiguousarray(theta), w, q, q.copy())
+    label = "reference design" if i == "reference" else f"candidate #{number}"
+    return CandidateRun(label, i, replace(study, mechanism=mech), plan, np.asarray(x, float),
+                        names, units, table, dense, theta, float(err), int(start), w,
+                        int(dense.overall), fail_phi)

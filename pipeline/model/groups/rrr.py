@@ -1,0 +1,51 @@
+"""RRR: B joined to known A and C by links A-B and C-B (circle intersection).
+
+Study fields: ``A``, ``C`` (known), ``B`` (solved), ``L_AB``, ``L_CB`` (mm),
+``W`` (assembly mode, DOMAIN.md section 2)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ...base import limits as lim
+from ...kernels import config as kc
+from .base import GroupType
+
+
+@dataclass(frozen=True)
+class RRR(GroupType):
+    """B joined to known A by link A-B and to known C by link C-B; mode W."""
+    A: str
+    C: str
+    B: str
+    L_AB: float
+    L_CB: float
+    W: int
+    name: str = ""
+
+    TYPE = "RRR"
+    EMITTER = "RRREmitter"
+    SOLVES = ("B",)
+
+    @classmethod
+    def parse(cls, g, f, name):
+        a, c = f.point(g, "A"), f.point(g, "C")
+        b = f.define(g, "B")
+        return cls(a, c, b, g.number("L_AB", positive=True, within=lim.LENGTH),
+                   g.number("L_CB", positive=True, within=lim.LENGTH), f.mode(g), name)
+
+    def reads(self):
+        return (self.A, self.C)
+
+    def writes(self):
+        return (self.B,)
+
+    def plan_row(self, pt):
+        return (kc.G_RRR, [pt(self.A), pt(self.C), pt(self.B)],
+                [("L_AB", self.L_AB), ("L_CB", self.L_CB), ("W", self.W)])
+
+    def transmission(self):
+        return [(self.name or f"{self.A}-{self.B}-{self.C}", "dyad", (self.A, self.B, self.C))]
+
+    def segments(self):
+        return [(self.A, self.B), (self.C, self.B)]

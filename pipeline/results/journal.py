@@ -1,0 +1,108 @@
+"""The journal of a run (sweep or search): every finished chunk saved atomically
+in a folder ``OUT.h5.parts`` beside the results file, the source of truth until
+the run completes (``--resume`` rebuilds the results file from it)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from ..base.errors import ResultsError
+from ..base.files import refuse_link, replacing
+from ..kernels import sweep as ks
+from ..study.sweep_spec import SweepSpec
+
+JOURNAL_VERSION = 3        # 2: chunks carry the draws rejected before solving; 3: 18 metric columns
+
+
+class Journal:
+    """Finished chunks saved atomically next to the results file.
+
+    A run that replaces an earlier file (``--overwrite``) writes its new HDF5
+    file inside the journal folder (``working_file``), so that the earlier file
+    keeps its own name, untouched, until the new one is complete and renamed
+    over it (``finish_run``); a run into a new name writes the results file
+    itself as it goes (it can be analysed while unfinished)."""
+
+    def __init__(self, out: Path):
+        self.dir = out.with_name(out.name + ".parts")
+        refuse_link(self.dir, "a run's journal folder")
+
+    def exists(self):
+        return (self.dir / "manifest.json").exists()
+
+    def start(self, manifest):
+        self.dir.mkdir(parents=True, exist_ok=True)
+        self._atomic(self.dir / "manifest.json", json.dumps(manifest, indent=1).encode())
+
+    def manifest(self):
+        p = self.dir / "manifest.json"
+        try:
+            man = json.loads(p.read_text(encoding="utf-8"))
+        except (UnicodeDecodeError, ValueError) as e:
+            raise ResultsError(p, f"damaged journal manifest ({type(e).__name__}: "
+                                  f"{str(e).splitlines()[0][:80]}); the run cannot be resumed: "
+                                  "delete the folder and run again") from None
+        if not isinstance(man, dict):
+            raise ResultsError(p, "damaged journal manifest (not a JSON object); the run "
+                                  "cannot be resumed: delete the folder and run again")
+        return man
+
+    def working_file(self, out: Path) -> Path:
+        """Where this run writes its HDF5 file: ``out``, or, for a run that
+        replaces an earlier file, a file in the journal folder."""
+        if self.exists() and self.manifest().get("replaces", False):
+            return self.dir / "replacement.h5"
+        return out
+
+    def _atomic(self, path, data: bytes):
+        with replacing(path) as tmp:    # the one atomic writer (files.replacing)
+            tmp.write_bytes(data)
+
+    def save(self, chunk, x, status, metrics, rejected, index=None, counts=None):
+        """One chunk's rows; with store = feasible only the rows kept, their
+        candidate ``index`` and the chunk's ``counts`` (SweepFile.kept)."""
+        import io
+        buf = io.BytesIO()
+        extra = {} if index is None else {"index": index, "counts": counts}
+        np.savez(buf, x=x, status=status, metrics=metrics, rejected=rejected, **extra)
+        self._atomic(self.dir / f"chunk_{chunk:07d}.npz", buf.getvalue())
+
+    def done(self):
+        out = []
+        for p in self.dir.glob("chunk_*.npz"):
+            out.append(int(p.stem.split("_")[1]))
+        return sorted(out)
+
+    def load(self, chunk):
+        p = self.dir / f"chunk_{chunk:07d}.npz"
+        try:
+            with np.load(p) as z:
+                rows = z["x"], z["status"], z["metrics"], z["rejected"]
+                if "index" in z:
+                    rows += (z["index"], z["counts"])
+                return rows
+        except (OSError, ValueError, KeyError, zipfile.BadZipFile) as e:
+            raise ResultsError(p, f"damaged journal chunk ({e}); delete it and run again with "
+                                  "--resume: only that chunk is computed again") from None
+
+    def remove(self):
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+
+def manifest_for(study, spec: SweepSpec):
+    return {"journal_version": JOURNAL_VERSION, "study_sha256":
+            hashlib.sha256(study.text.encode()).hexdigest(), "study_file": str(study.path),
+            "candidates": spec.candidates, "chunk_size": spec.chunk_size, "seed": spec.seed,
+            "sampler": spec.sampler, "positions": spec.positions, "store": spec.store,
+            "metric_columns": ks.N_METRICS}
+
+
+# what a journal written before a manifest key existed meant by it (18 metric
+# columns: journal version 3's)
+MANIFEST_DEFAULTS = {"store": "all", "metric_columns": 18}

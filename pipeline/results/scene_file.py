@@ -1,0 +1,250 @@
+"""A scene's results file: its layout in HDF5 (the mechanism, the table and
+dense curves, the forces and the dynamics cases), written through the plain
+array-and-attribute layer of ``pipeline.results.storage``.  The computing
+modules (``solve.reactions``, ``solve.crank_motion``) hand over their results;
+only this module writes them."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..kernels import config as kc
+from ..base.files import replacing
+from ..solve.reactions import slide_action
+from ..solve.scene import real_motion
+from .storage import STATUS_ENUM, coordinate, hdf5_image, put, status_table, write_root_attrs
+
+
+def _curves(g, res, curves, study):
+    plan = res.plan
+    crank = study.mechanism.crank
+    v, a, om, ep = real_motion(curves, crank.omega1, crank.eps1)
+    nv = plan.n_visible
+    put(g, "phi1", np.rad2deg(curves.phi), "deg", "crank angle phi1", dims=("phi1",))
+    put(g, "status", curves.status.astype(STATUS_ENUM), "1", "position status",
+        dims=("phi1",), codes=status_table())
+    xy = ("phi1", "point", "axis")
+    put(g, "position", curves.pos[:, :nv], "mm", "point position", dims=xy)
+    put(g, "position_analog", curves.d1[:, :nv], "mm/rad", "velocity analog dr/dphi1", dims=xy)
+    put(g, "acceleration_analog", curves.d2[:, :nv], "mm/rad^2",
+        "acceleration analog d2r/dphi1^2", dims=xy)
+    put(g, "velocity", v[:, :nv], "m/s", "point velocity", dims=xy)
+    put(g, "acceleration", a[:, :nv], "m/s^2", "point acceleration", dims=xy)
+    put(g, "link_angle", np.rad2deg(curves.links[:, :, 0]), "deg", "link angle",
+        dims=("phi1", "link"))
+    put(g, "link_omega", om, "1/s", "link angular velocity", dims=("phi1", "link"))
+    put(g, "link_eps", ep, "1/s^2", "link angular acceleration", dims=("phi1", "link"))
+    put(g, "margin", curves.margin, "1", "distance from a toggle position per group",
+        dims=("phi1", "group"))
+    put(g, "newton_iterations", curves.iterations, "1", "Newton iterations (class III groups)",
+        dims=("phi1",))
+    com = np.asarray(plan.body_com, np.int64)
+    if com.size:   # the centres of mass (the thesis's PS, VS, AS tables)
+        sb = ("phi1", "body", "axis")
+        put(g, "com_position", curves.pos[:, com], "mm", "centre-of-mass position", dims=sb)
+        put(g, "com_position_analog", curves.d1[:, com], "mm/rad",
+            "centre-of-mass velocity analog dS/dphi1", dims=sb)
+        put(g, "com_acceleration_analog", curves.d2[:, com], "mm/rad^2",
+            "centre-of-mass acceleration analog d2S/dphi1^2", dims=sb)
+        put(g, "com_velocity", v[:, com], "m/s", "centre-of-mass velocity", dims=sb)
+        put(g, "com_acceleration", a[:, com], "m/s^2", "centre-of-mass acceleration", dims=sb)
+    if curves.forces is not None:
+        _reactions(g, curves.forces)
+
+
+def _reactions(g, r):
+    """The reactions of a scene (``solve.reactions.Reactions``) at the positions of group ``g``."""
+    put(g, "reactions", r.R, "N", "joint reaction (force of the first body on the second)",
+        dims=("phi1", "joint", "axis"), joints=list(r.joint_names))
+    put(g, "M_bal", r.M_bal, "N*m", "balancing moment the main shaft delivers (on the crank; "
+        "with inputs besides the crank, plus their shares)", dims=("phi1",))
+    if r.slide.shape[1]:
+        put(g, "slide_reactions", r.slide, ["N", "N*m"],
+            "prismatic pair: normal force N of the guide on the slider (along the slide's "
+            "direction turned +90 deg) and couple C, at the slider's centre of mass",
+            dims=("phi1", "slide", "slide_component"), slides=list(r.slide_names))
+        put(g, "slide_action", slide_action(r.slide), "mm",
+            "where the normal force acts: e = C/N, its distance from the slider's centre "
+            "of mass along the slide's direction (NaN where N = 0)",
+            dims=("phi1", "slide"), slides=list(r.slide_names))
+    if r.input_names:
+        put(g, "input_drive", r.drive[:, :, 0], list(r.drive_units),
+            "drive of each input besides the crank: a moment on a rotary input, a force "
+            "along the guide of a slider input", dims=("phi1", "input"),
+            inputs=list(r.input_names))
+        put(g, "input_share", r.drive[:, :, 1], "N*m",
+            "each input's share of M_bal: its drive times dq/dphi1", dims=("phi1", "input"),
+            inputs=list(r.input_names))
+    put(g, "body_loads", r.body_loads, ["N", "N", "N*m"],
+        "applied and inertia loads reduced to the centre of mass",
+        dims=("phi1", "body", "load_component"), bodies=list(r.body_names))
+
+
+def _dynamics_case(group, res):
+    """Datasets of one dynamics case (``solve.crank_motion.CaseResult``) under group/<case
+    name> (and the fine tail under .../tail)."""
+    g = group.create_group(res.name)
+    c = res.case
+    g.attrs["method"] = res.method
+    g.attrs["status"] = kc.STATUS_NAMES[res.status]
+    g.attrs["M1"] = c.M1.text
+    g.attrs["damping"] = c.damping
+    g.attrs["phi_start_deg"] = math.degrees(c.phi_start)
+    g.attrs["omega_start"] = c.omega_start
+    g.attrs["t_end"] = c.t_end
+    g.attrs["dt"] = c.dt
+    g.attrs["sample_dt"] = c.sample_dt
+    g.attrs["equation"] = "J(phi) phi'' + (1/2) J'(phi) phi'^2 + b phi' = Q(phi) + M1"
+    for k, v in res.summary().items():
+        if v is not None:
+            g.attrs[f"summary_{k}"] = v
+    for grp, (t, p, w, e) in ((g, (res.t, res.phi1, res.omega1, res.eps1)),
+                              (g.create_group("tail"), (res.tail_t, res.tail_phi1,
+                                                        res.tail_omega1, res.tail_eps1))):
+        put(grp, "t", t, "s", "time", dims=("t",))
+        put(grp, "phi1", np.rad2deg(p), "deg", "crank angle phi1", dims=("t",))
+        put(grp, "omega1", w, "rad/s", "crank angular velocity omega1", dims=("t",))
+        put(grp, "eps1", e, "rad/s^2", "crank angular acceleration eps1", dims=("t",))
+    g["tail"].attrs["description"] = "every integration step of the last seconds"
+    return g
+
+
+def _reduced(group, red):
+    """The crank's reduced dynamics (``solve.crank_motion.Reduced``) in ``group``."""
+    group.attrs["long_name"] = ("reduced dynamics of the crank: J(phi) phi'' + (1/2) "
+                                "J'(phi) phi'^2 = Q(phi) + M1, loads at t = 0")
+    group.attrs["equilibria_deg"] = [p for p, _ in red.equilibria] or [np.nan]
+    group.attrs["equilibria_stable"] = [bool(st) for _, st in red.equilibria] or [False]
+    put(group, "phi1", np.degrees(red.phi), "deg", "crank angle phi1", dims=("phi1",))
+    put(group, "J", red.J, "kg*m^2", "reduced moment of inertia J(phi)", dims=("phi1",))
+    put(group, "half_dJ", red.half_dJ, "kg*m^2", "(1/2) dJ/dphi", dims=("phi1",))
+    put(group, "Q", red.Q, "N*m", "generalised force without M1", dims=("phi1",))
+
+
+# the tolerance vector's entries (kernels.config T_*), named, with their units
+TOLERANCES = (("newton_tol", "1"), ("newton_maxiter", "1"), ("newton_step", "rad"),
+              ("singular", "1"), ("jump", "rad"), ("substep", "rad"), ("close", "rad"),
+              ("assembly_slack", "1"), ("step_change", "rad"), ("min_step", "1"),
+              ("first_step", "1"), ("watch", "1"), ("touch", "1"), ("locate", "rad"))
+
+
+def parameter_units(name) -> str:
+    """The unit of a compiled mechanism parameter (angles in the plan are rad)."""
+    key = name.rsplit(".", 1)[-1]
+    if key in ("x", "y", "length", "offset", "guide_length") or (
+            key.startswith("L") and key[1:2] in "0123456789_"):
+        return "mm"
+    if key in ("angle", "phiM0", "a0", "b0", "phi_start") or key.endswith("angle"):
+        return "rad"
+    if key in ("start", "stroke"):            # a slider input's law
+        return "mm"
+    return {"mass": "kg", "J_S": "kg*m^2"}.get(key, "1")
+
+
+def _coordinates(f, plan, study):
+    """The file's named dimensions (dimension scales at the root)."""
+    coordinate(f, "point", list(plan.point_names[:plan.n_visible]), "1", "point")
+    coordinate(f, "axis", ["x", "y"], "1", "component")
+    coordinate(f, "link", list(study.output.link_labels), "1", "link")
+    coordinate(f, "group", list(plan.group_names), "1", "structural group")
+    coordinate(f, "joint", list(plan.joint_names), "1", "joint")
+    coordinate(f, "slide", list(plan.slide_names), "1", "prismatic pair")
+    coordinate(f, "input", list(plan.input_names), "1", "input besides the crank")
+    coordinate(f, "body", list(plan.body_names), "1", "body")
+    coordinate(f, "load_component", ["Fx", "Fy", "M"], "1", "force x, force y, moment")
+    coordinate(f, "slide_component", ["N", "C"], "1", "normal force, couple")
+    coordinate(f, "parameter", list(plan.par_names), "1", "compiled mechanism parameter")
+    coordinate(f, "tolerance", [n for n, _ in TOLERANCES], "1", "solver tolerance")
+    from ..solve.peaks import transmission_items
+    coordinate(f, "dyad", [label for label, _, _ in transmission_items(study.mechanism)], "1",
+               "transmission angle: RRR dyad (A-B-C, at the middle joint B), class III lead "
+               "(J-P: the lead against the line to the meet of the other two leads), or a dyad "
+               "with a sliding pair (RRP, RPR, PRP, RPP: pipeline.peaks.transmission_items)")
+
+
+PEAK_DIMS = {"velocity": "point", "acceleration": "point", "omega": "link", "eps": "link",
+             "reaction": "joint", "slide_normal": "slide", "slide_couple": "slide",
+             "min_transmission_angle": "dyad"}
+
+
+PEAK_WHAT = {"slide_normal": "peak |N| (a slide's normal force)",
+             "slide_couple": "peak |C| (a slide's couple)"}
+
+
+def _peaks(g, peaks, output=None):
+    """Per quantity: the peak of every point, link or joint, its crank angle
+    and the largest grid sample it was refined from."""
+    g.attrs["long_name"] = ("peaks over the revolution, refined between the dense positions "
+                            "by a bounded 1-D maximiser on the exact kinematics")
+    by = {}
+    for p in peaks:
+        by.setdefault(p.quantity, []).append(p)
+    for q, ps in by.items():
+        dims = (PEAK_DIMS[q],) if q in PEAK_DIMS else None
+        val = np.array([p.value for p in ps]) if dims else np.float64(ps[0].value)
+        phi = np.array([p.phi1 for p in ps]) if dims else np.float64(ps[0].phi1)
+        grid = np.array([p.grid_value for p in ps]) if dims else np.float64(ps[0].grid_value)
+        what = q.replace("_", " ") if q.startswith("min_") else PEAK_WHAT.get(q, f"peak |{q}|")
+        put(g, q, val, ps[0].unit, what, dims=dims)
+        put(g, f"{q}_phi1", phi, "deg", f"crank angle phi1 of the {what}", dims=dims)
+        put(g, f"{q}_grid", grid, ps[0].unit, f"{what} among the dense positions only",
+            dims=dims)
+        if q == "reaction" and output is not None:   # pin sizing from the peak reactions
+            from ..solve.reactions import pin_diameter
+            pins = output.pins([p.item for p in ps])
+            put(g, "pin_length", [ln for ln, _ in pins], "mm", "pin length (in bending)",
+                dims=dims)
+            put(g, "pin_sigma", [sg for _, sg in pins], "MPa", "allowable bending stress",
+                dims=dims)
+            put(g, "pin_d_min", [float(pin_diameter(p.value, ln, sg))
+                                 for p, (ln, sg) in zip(ps, pins)], "mm",
+                "smallest pin diameter: (32 R l / (pi sigma))^(1/3)", dims=dims)
+
+
+def write_scene(res, path):
+    """Write a scene result; returns the path."""
+    study = res.study
+    path = Path(path)
+    plan = res.plan
+    with replacing(path) as tmp, hdf5_image(tmp) as f:
+        write_root_attrs(f, "scene", study, status=kc.STATUS_NAMES[res.status])
+        m = f.create_group("mechanism")
+        m.attrs["point_names"] = list(plan.point_names[:plan.n_visible])
+        m.attrs["link_labels"] = list(study.output.link_labels)
+        m.attrs["working_point"] = study.output.working_point
+        m.attrs["omega1"] = study.mechanism.crank.omega1
+        m.attrs["eps1"] = study.mechanism.crank.eps1
+        _coordinates(f, plan, study)
+        put(m, "parameters", plan.par, [parameter_units(n) for n in plan.par_names],
+            "compiled parameter vector", dims=("parameter",), names=list(plan.par_names))
+        put(m, "tolerances", res.tolerances, [u for _, u in TOLERANCES], "solver tolerances",
+            dims=("tolerance",))
+        for name, curves in (("table", res.table), ("dense", res.dense)):
+            _curves(f.create_group(name), res, curves, study)
+        if res.dynamics:
+            for case in res.dynamics:
+                _dynamics_case(f.require_group("dynamics"), case)
+        if res.peaks:
+            _peaks(f.create_group("peaks"), res.peaks, study.output)
+        if res.reduced is not None:
+            _reduced(f.create_group("reduced_dynamics"), res.reduced)
+        if res.motion:
+            g = f.create_group("motion")
+            g.attrs["long_name"] = ("the output rocker's dwell and stroke (DOMAIN.md section "
+                                    "9), and its law error with [output.motion_law]")
+            g.attrs["dwell_deg"] = res.motion["dwell_deg"]
+            put(g, "dwell_error", np.float64(res.motion["dwell_error"]), "1",
+                "dwell error: best window range / revolution range")
+            put(g, "dwell_start", np.float64(res.motion["dwell_start"]), "deg",
+                "crank angle phi1 where the best dwell window starts")
+            put(g, "stroke", np.float64(res.motion["stroke"]), "mm",
+                "stroke of the working point: radius x rocker swing")
+            if "law_error" in res.motion:      # [output.motion_law]
+                from ..study.sweep_spec import METRICS
+                g.attrs["law_align"] = res.motion["law_align"]
+                for key in ("law_error", "law_error_max", "law_shift"):
+                    put(g, key, np.float64(res.motion[key]), METRICS[key][0], METRICS[key][1])
+    return path

@@ -1,0 +1,347 @@
+"""Self-describing HDF5 files: root attributes name the format and its
+version, the software and its version, the date and the study verbatim;
+every dataset carries ``units`` and ``long_name``."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import os
+from contextlib import contextmanager
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from ..base.version import __version__
+from ..base.errors import ResultsError  # noqa: F401  (raised by every reader of results)
+from ..kernels import config as kc
+
+FORMAT = "pipeline-results"
+FORMAT_VERSION = "1.2"     # 1.1: status enums, units per column, dimension scales;
+                           # 1.2: sweeps store the failing group (candidates/fail_group)
+
+
+def attr_text(v):
+    """An HDF5 string attribute as str (h5py may hand back bytes)."""
+    return v.decode() if isinstance(v, bytes) else v
+
+
+def status_table():
+    return "; ".join(f"{k}={v}" for k, v in kc.STATUS_NAMES.items())
+
+
+def write_root_attrs(f, kind, study, **extra):
+    f.attrs["format"] = FORMAT
+    f.attrs["format_version"] = FORMAT_VERSION
+    f.attrs["kind"] = kind
+    f.attrs["software"] = "pipeline"
+    f.attrs["software_version"] = __version__
+    f.attrs["created"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    f.attrs["study_name"] = study.name
+    f.attrs["study_title"] = study.title
+    f.attrs["study_file"] = str(study.path)
+    f.attrs["study_toml"] = study.text
+    for k, v in extra.items():
+        f.attrs[k] = v
+
+
+# Compression of every chunked dataset: byte shuffle + gzip (deflate) at a low
+# level, which every HDF5 reader has (h5dump, HDFView, MATLAB, netCDF-C); LZF is
+# readable from h5py alone.
+COMPRESSION = dict(compression="gzip", compression_opts=1, shuffle=True)
+
+
+# The status of a candidate or a position as an HDF5 enumeration: h5dump,
+# HDFView and netCDF readers show the names; h5py and NumPy read int8 codes.
+STATUS_ENUM = h5py.enum_dtype({name: code for code, name in kc.STATUS_NAMES.items()},
+                              basetype="i1")
+
+
+def units_attr(units):
+    """One form for units: a UDUNITS string, or one per column (a list)."""
+    if isinstance(units, (list, tuple)):
+        units = [str(u) for u in units]
+        return units[0] if len(set(units)) == 1 else np.array(units, dtype=h5py.string_dtype())
+    return str(units)
+
+
+def read_units(d, n=None) -> list:
+    """The units of each column of dataset ``d`` (``n`` columns): a string
+    attribute for all, a list per column; format 1.0 wrote JSON lists or
+    comma-separated text, which are read too."""
+    import json
+    u = d.attrs.get("units", "")
+    if isinstance(u, np.ndarray):
+        out = [attr_text(x) for x in u]
+    else:
+        u = attr_text(u)
+        try:
+            out = json.loads(u) if u.startswith("[") else None
+        except ValueError:
+            out = None
+        if out is None:
+            out = [x.strip() for x in u.split(",")] if "," in u else [u]
+    n = n if n is not None else (d.shape[1] if d.ndim > 1 else 1)
+    if len(out) == 1 and n > 1:
+        out = out * n
+    return [str(x) for x in out] if len(out) == n else ["?"] * n
+
+
+def coordinate(group, name, values, units, long_name):
+    """A dimension scale ``name`` in ``group`` (names or numbers along a
+    dimension): netCDF readers (xarray) see a named dimension with these
+    coordinates, h5dump a DIMENSION_LIST."""
+    values = list(values)
+    if values and isinstance(values[0], str):
+        data = np.array(values, dtype=h5py.string_dtype())
+    else:
+        data = np.asarray(values)
+    d = group.create_dataset(name, data=data)
+    d.attrs["units"] = units
+    d.attrs["long_name"] = long_name
+    d.make_scale(name)
+    return d
+
+
+def candidate_ids(f) -> np.ndarray:
+    """The sweep's candidate index of every stored row: every candidate (the
+    default), or the feasible ones of a sweep run with store = feasible."""
+    if "candidate" in f:
+        return f["candidate"][()]
+    return np.arange(f["candidates/status"].shape[0])
+
+
+def row_of(f, cid: int) -> int:
+    """The stored row of candidate ``cid`` (ValueError if it has none)."""
+    ids = candidate_ids(f)
+    n = int(f.attrs.get("n_candidates", len(ids)))
+    if not 0 <= cid < n:
+        raise ValueError(f"candidate {cid} does not exist: the sweep drew {n} candidates "
+                         f"(0..{n - 1})")
+    j = int(np.searchsorted(ids, cid))
+    if j == len(ids) or ids[j] != cid:
+        raise ValueError(f"candidate {cid} is not in the file: the sweep kept only its "
+                         f"feasible candidates (store = feasible), {len(ids)} of {n}")
+    return j
+
+
+def attach(d, dims):
+    """Name the dimensions of dataset ``d``: each entry the name of a dimension
+    scale in its group or a group above it (or a dataset of its group, which
+    becomes the scale: phi1 of a curves group, t of a dynamics case)."""
+    for i, name in enumerate(dims):
+        if name is None:
+            continue
+        g = d.parent
+        while True:
+            if name in g and isinstance(g[name], h5py.Dataset):
+                s = g[name]
+                if not h5py.h5ds.is_scale(s.id):
+                    s.make_scale(name)
+                break
+            if g.name == "/":
+                raise KeyError(f"no dimension scale {name!r} above {d.name}")
+            g = g.parent
+        if s.id != d.id:
+            d.dims[i].attach_scale(s)
+
+
+def variables(group) -> list:
+    """Names of the group's datasets that hold data (its dimension scales,
+    the coordinates, left out)."""
+    return [k for k, v in group.items()
+            if isinstance(v, h5py.Dataset) and not (h5py.h5ds.is_scale(v.id)
+                                                    and k not in ("phi1", "t"))]
+
+
+def remove_group(f, name):
+    """Delete group ``name`` of ``f`` after detaching its datasets from the
+    dimension scales they use (a deleted dataset must not stay listed by a
+    scale that outlives it)."""
+    if name not in f:
+        return
+
+    def detach(_, obj):
+        if isinstance(obj, h5py.Dataset) and not h5py.h5ds.is_scale(obj.id):
+            for i, dim in enumerate(obj.dims):
+                for s in list(dim.values()):
+                    obj.dims[i].detach_scale(s)
+    f[name].visititems(detach)
+    del f[name]
+
+
+def put(group, name, data, units, long_name, dims=None, **attrs):
+    """Write one dataset with its units (``units_attr``), long name and named
+    dimensions (``attach``)."""
+    data = np.asarray(data)
+    kw = {}
+    if data.ndim >= 1 and data.size > 4096:
+        kw = dict(COMPRESSION, chunks=True)
+    d = group.create_dataset(name, data=data, **kw)
+    d.attrs["units"] = units_attr(units)
+    d.attrs["long_name"] = long_name
+    for k, v in attrs.items():
+        d.attrs[k] = v
+    if dims:
+        attach(d, dims)
+    return d
+
+
+@contextmanager
+def hdf5_writing(path, mode="r+", expendable=True):
+    """``h5py.File(path, mode)`` for a file this run can rebuild or throw away,
+    closed in a defined order whatever happens.
+
+    When a write fails (a full disk), HDF5 keeps dirty pages it cannot flush: a
+    plain close then fails again and leaves objects that crash the interpreter
+    when it exits.  So on an error the file's bytes are given up first
+    (truncated: the space comes back, and HDF5 can then close it cleanly), and
+    the error goes on to the caller.  ``expendable``: a temporary file (given up
+    on any error); otherwise (a sweep's own file, rebuilt from its journal by
+    --resume) only an input/output error gives it up, and an interruption
+    leaves it flushed and readable."""
+    from ..base.files import errno_of, naming
+    import sys
+    # an HDF5 object closed while the block runs (a dataset let go) writes its
+    # pages then; if that fails, h5py can only report it as "Exception ignored":
+    # such errors are collected here and fail the block instead
+    lost, hook = [], sys.unraisablehook
+
+    def collect(u):
+        if isinstance(u.exc_value, (OSError, RuntimeError)) and not lost:
+            lost.append(u.exc_value)
+        elif not isinstance(u.exc_value, (OSError, RuntimeError)):
+            hook(u)
+    sys.unraisablehook = collect
+    f = h5py.File(path, mode)
+    try:
+        yield f
+        if lost:
+            raise lost[0]
+        f.flush()
+        if lost:
+            raise lost[0]
+    except BaseException as e:
+        io_error = isinstance(e, (OSError, RuntimeError))
+        give_up = expendable or io_error
+        if not give_up:
+            try:
+                f.flush()
+            except Exception:
+                give_up = True
+        if give_up:
+            try:
+                os.truncate(path, 0)
+            except OSError:
+                pass
+        try:
+            f.close()
+        except Exception:
+            pass
+        sys.unraisablehook = hook
+        if isinstance(e, RuntimeError) and errno_of(e):
+            raise naming(e, path) from None     # the system's error, as an OSError
+        raise
+    try:
+        f.close()
+    finally:
+        sys.unraisablehook = hook
+
+
+# free space kept beside a results file that HDF5 writes in place: HDF5 cannot
+# recover from a write that fails (its objects are left half-closed and crash the
+# interpreter later), so a write that could fill the disk is refused before it starts
+HDF5_HEADROOM = 4 << 20
+
+
+def room_for(path, nbytes: int):
+    """Refuse (OSError ENOSPC naming ``path``) an HDF5 write of about ``nbytes``
+    into ``path`` where the disk has less than that plus HDF5_HEADROOM free."""
+    import errno
+    import shutil
+    free = shutil.disk_usage(Path(path).parent).free
+    if free < nbytes + HDF5_HEADROOM:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+
+
+# the largest file an update is made on in memory (hdf5_image); a larger one is
+# updated on disk, in a copy (hdf5_writing)
+IMAGE_LIMIT = 2 << 30
+
+
+@contextmanager
+def hdf5_image(target, start=None):
+    """An HDF5 file built in memory, its bytes written to ``target`` (a
+    temporary file of ``files.replacing``) when the block completes: HDF5 never
+    writes to the disk itself, so a full disk is one OSError from that last
+    write, and a failure anywhere leaves nothing to clean up.  ``start``: a
+    file to begin from (an update of it); one over IMAGE_LIMIT is updated on
+    disk in a copy instead."""
+    import io
+    import shutil
+    if start is not None and os.path.getsize(start) > IMAGE_LIMIT:
+        shutil.copyfile(start, target)
+        with hdf5_writing(target) as f:
+            yield f
+        return
+    buf = io.BytesIO(b"" if start is None else Path(start).read_bytes())
+    f = h5py.File(buf, "r+" if start is not None else "w")
+    try:
+        yield f
+    finally:
+        f.close()
+    with open(target, "wb") as out:
+        out.write(buf.getbuffer())
+
+
+def open_results(path, kind=None):
+    """Open a results file read-only, checking that it is ours (and of ``kind``)."""
+    path = Path(path)
+    if not path.exists():
+        raise ResultsError(path, "file not found")
+    if path.is_dir():
+        raise ResultsError(path, "is a folder, not a results file")
+    try:
+        f = h5py.File(path, "r")
+    except OSError as e:
+        if "unable to lock file" in str(e) or isinstance(e, BlockingIOError):
+            raise ResultsError(path, "another run or program has this file open for writing; "
+                                     "wait for it to finish") from None
+        raise ResultsError(path, "not a readable HDF5 file (" + " ".join(str(e).split())
+                           + ")") from None
+    try:
+        return _checked(f, path, kind)
+    except (RuntimeError, OSError, KeyError) as e:     # damaged bytes inside the file
+        f.close()
+        raise ResultsError(path, "damaged results file (" + " ".join(str(e).split())
+                           + ")") from None
+
+
+def _checked(f, path, kind):
+    if f.attrs.get("format") != FORMAT:
+        f.close()
+        raise ResultsError(path, "not a pipeline results file (no format attribute "
+                                 f"{FORMAT!r}); was it written by `pipeline run`?")
+    if kind is not None and f.attrs.get("kind") != kind:
+        got = f.attrs.get("kind")
+        f.close()
+        raise ResultsError(path, f"is a {got} result, this command needs a {kind} result")
+    missing = [n for n in REQUIRED.get(attr_text(f.attrs.get("kind")), ()) if n not in f]
+    if attr_text(f.attrs.get("store", "all")) == "feasible" and "candidate" not in f:
+        missing.append("candidate (the sweep index of each kept row)")
+    n = {f[k].shape[0] for k in ("candidates/status", "candidates/params", "candidates/feasible")
+         if k in f} if attr_text(f.attrs.get("kind")) == "sweep" else set()
+    if missing or len(n) > 1:
+        f.close()
+        what = f"missing {', '.join(missing)}" if missing else "datasets of different lengths"
+        raise ResultsError(path, f"damaged or incomplete results file ({what})")
+    return f
+
+
+# what every reader of a kind of results file relies on
+REQUIRED = {
+    "sweep": ("candidates/status", "candidates/params", "candidates/feasible", "metrics",
+              "reference", "progress/chunk_done"),
+    "scene": ("mechanism/parameters", "table/phi1", "table/position", "dense/phi1",
+              "dense/position"),
+}

@@ -1,0 +1,314 @@
+"""The results file of a sweep, written chunk by chunk (``SweepFile``), and its
+summary read back (``status_counts``, ``summarize``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from ..base.files import replacing
+from ..kernels import config as kc
+from ..kernels import sweep as ks
+from ..study.objectives import (bounded_finite, constraint_names, constraint_units, constraints,
+                                metric_values)
+from .storage import (COMPRESSION, STATUS_ENUM, ResultsError, attach, attr_text, coordinate,
+                      hdf5_image, put, room_for, status_table, units_attr,
+                      write_root_attrs)
+from ..study.sweep_spec import METRICS
+
+
+# the columns of progress/status_counts: every status, then the feasible candidates
+COUNTED = tuple(kc.STATUS_NAMES.values()) + ("feasible",)
+
+
+def _counts(status, feasible):
+    """Candidates per status code, then the feasible ones (COUNTED)."""
+    return np.append(np.bincount(status.astype(np.int64), minlength=len(kc.STATUS_NAMES))
+                     [:len(kc.STATUS_NAMES)], int(feasible.sum()))
+
+
+class SweepFile:
+    """The results file of a sweep, written chunk by chunk."""
+
+    def __init__(self, path: Path, study, problem):
+        self.path = path
+        self.study = study
+        self.problem = problem
+        self.spec = problem.spec
+
+    @property
+    def feasible_only(self):
+        """store = feasible: the file keeps the feasible candidates' rows only (their
+        sweep indices in the ``candidate`` coordinate) and every chunk's counts."""
+        return self.spec.store == "feasible"
+
+    def create(self):
+        spec, plan = self.spec, self.problem.plan
+        n, nv = spec.candidates, len(spec.variables)
+        ch = min(spec.chunk_size, n)
+        with replacing(self.path) as tmp, hdf5_image(tmp) as f:
+            write_root_attrs(f, "sweep", self.study, seed=spec.seed, sampler=spec.sampler,
+                             n_candidates=n, chunk_size=spec.chunk_size,
+                             positions_per_revolution=spec.positions,
+                             objectives=list(spec.objectives), complete=False,
+                             store=spec.store)
+            # the dimensions, named (netCDF readers: xarray, h5dump's DIMENSION_LIST);
+            # with store = feasible the rows grow chunk by chunk
+            if self.feasible_only:
+                n = 0
+                k = f.create_dataset("candidate", (0,), "i8", maxshape=(None,), chunks=(ch,),
+                                     **COMPRESSION)
+            else:
+                k = f.create_dataset("candidate", (n,), "i8", chunks=(ch,), **COMPRESSION)
+                step = ch * max(1, (1 << 20) // ch)     # a million at a time, not n at once
+                for lo in range(0, n, step):
+                    k[lo:min(lo + step, n)] = np.arange(lo, min(lo + step, n))
+            k.attrs.update(units="1", long_name="candidate index (its row of the sweep's draws)")
+            k.make_scale("candidate")
+            gnames = constraint_names(self.has_margin, spec)
+            coordinate(f, "variable", [v.name for v in spec.variables], "1", "design variable")
+            coordinate(f, "constraint", gnames, "1", "constraint g <= 0")
+            coordinate(f, "chunk", np.arange(spec.n_chunks), "1", "chunk of candidates")
+            coordinate(f, "triangle", [t.label for t in spec.triangles], "1",
+                       "triangle inequality checked before solving")
+            c = f.create_group("candidates")
+            grow = {"maxshape": (None,)} if self.feasible_only else {}
+            grow2 = {"maxshape": (None, None)} if self.feasible_only else {}
+            d = c.create_dataset("params", (n, nv), "f8", chunks=(ch, nv), **COMPRESSION,
+                                 fillvalue=np.nan, **grow2)
+            attach(d, ("candidate", "variable"))
+            d.attrs.update(units=units_attr([v.units for v in spec.variables]),
+                           long_name="design variables", names=[v.name for v in spec.variables],
+                           params=[v.param for v in spec.variables],
+                           low=[v.low for v in spec.variables],
+                           high=[v.high for v in spec.variables])
+            d = c.create_dataset("status", (n,), STATUS_ENUM, chunks=(ch,), **COMPRESSION,
+                                 fillvalue=kc.NOT_EVALUATED, **grow)
+            d.attrs.update(units="1", long_name="candidate status", codes=status_table())
+            attach(d, ("candidate",))
+            for name, units, long in (
+                    ("fail_phi", "deg", "crank angle phi1 where the candidate failed"),
+                    ("cv", "1", "summed constraint violation (0 = feasible, NaN = failed)")):
+                d = c.create_dataset(name, (n,), "f8", chunks=(ch,), **COMPRESSION,
+                                     fillvalue=np.nan, **grow)
+                d.attrs.update(units=units, long_name=long)
+                attach(d, ("candidate",))
+            d = c.create_dataset("fail_group", (n,), "i2", chunks=(ch,), **COMPRESSION,
+                                 fillvalue=-1, **grow)
+            d.attrs.update(units="1", long_name="index of the group that failed first (-1: none, "
+                           "or the revolution does not close)", groups=list(plan.group_names))
+            attach(d, ("candidate",))
+            d = c.create_dataset("feasible", (n,), "?", chunks=(ch,), **COMPRESSION, **grow)
+            d.attrs.update(units="1", long_name="status OK, constraints met, objectives and "
+                                                "bounded metrics finite")
+            attach(d, ("candidate",))
+            d = c.create_dataset("forces_evaluated", (n,), "?", chunks=(ch,), **COMPRESSION,
+                                 **grow)
+            d.attrs.update(units="1", long_name="force stage run: forces, peaks or transmission "
+                                                "angles, as asked (skipped for candidates "
+                                                "already infeasible)")
+            attach(d, ("candidate",))
+            d = c.create_dataset("constraints", (n, len(gnames)), "f8",
+                                 chunks=(ch, len(gnames)), **COMPRESSION, fillvalue=np.nan,
+                                 **grow2)
+            d.attrs.update(units=units_attr(constraint_units(self.has_margin, spec)),
+                           long_name="constraints g <= 0", names=gnames)
+            attach(d, ("candidate", "constraint"))
+            m = f.create_group("metrics")
+            for name in spec.metrics:
+                units, long = METRICS[name][:2]
+                d = m.create_dataset(name, (n,), "f8", chunks=(ch,), **COMPRESSION,
+                                     fillvalue=np.nan, **grow)
+                d.attrs.update(units=units, long_name=long)
+                attach(d, ("candidate",))
+            joints = list(plan.joint_names)
+            m.attrs["joint_names"] = joints
+            p = f.create_group("progress")
+            d = p.create_dataset("chunk_done", (spec.n_chunks,), "?")
+            d.attrs.update(units="1", long_name="chunk written")
+            attach(d, ("chunk",))
+            coordinate(f, "counted", list(COUNTED), "1", "a status, or the feasible candidates")
+            d = p.create_dataset("status_counts", (spec.n_chunks, len(COUNTED)), "i8")
+            d.attrs.update(units="1", long_name="candidates of each status, and the feasible "
+                                                "ones, per chunk", columns=list(COUNTED))
+            attach(d, ("chunk", "counted"))
+            d = p.create_dataset("rejected", (spec.n_chunks, len(spec.triangles)), "i8")
+            d.attrs.update(units="1", long_name="draws redrawn because they broke a triangle "
+                                                "inequality (known before solving), per chunk",
+                           triangles=[t.label for t in spec.triangles] or [""])
+            if spec.triangles:
+                attach(d, ("chunk", "triangle"))
+            else:
+                attach(d, ("chunk",))
+            self._reference(f)
+
+    @property
+    def has_margin(self):
+        return bool(np.isin(self.problem.plan.codes, kc.CLASS3_GROUPS).any())
+
+    def _reference(self, f):
+        """The study's own design (the reference mechanism), evaluated the same way."""
+        spec, plan = self.spec, self.problem.plan
+        x = np.array([[plan.par[plan.param(v.param)] / v.factor for v in spec.variables]])
+        st, met = self.problem.evaluate_rows(np.ascontiguousarray(plan.par[None, :]), False)
+        g = f.create_group("reference")
+        g.attrs["long_name"] = "the study's reference design, evaluated like every candidate"
+        coordinate(g, "design", ["reference"], "1", "the reference design")
+        put(g, "params", x[0], [v.units for v in spec.variables], "design variables",
+            dims=("variable",), names=[v.name for v in spec.variables])
+        put(g, "status", st.astype(STATUS_ENUM), "1", "status", dims=("design",),
+            codes=status_table())
+        for name, col in self._columns(met).items():
+            put(g, name, col, METRICS[name][0], METRICS[name][1], dims=("design",))
+
+    def _columns(self, metrics):
+        return {name: metric_values(metrics, name) for name in self.spec.metrics}
+
+    def _rows(self, status, metrics):
+        """The stored columns of rows (status, metrics): the metrics in their
+        units, constraints G, violation cv and feasibility."""
+        cols = self._columns(metrics)
+        G, cv = constraints(self.spec, metrics, status, self.has_margin)
+        objectives = np.stack([cols[o] for o in self.spec.objectives], axis=1)
+        feasible = ((status == kc.OK) & (cv == 0) & np.isfinite(objectives).all(axis=1)
+                    & bounded_finite(self.spec, metrics))
+        return cols, G, cv, feasible
+
+    def kept(self, chunk, x, status, metrics):
+        """With store = feasible: (x, status, metrics, index, counts) of the chunk's
+        feasible rows, ``index`` their candidate indices and ``counts`` the
+        chunk's candidates per status and feasible (COUNTED); else None."""
+        if not self.feasible_only:
+            return None
+        feasible = self._rows(status, metrics)[3]
+        lo, _ = self.spec.chunk_bounds(chunk)
+        keep = np.flatnonzero(feasible)
+        return x[keep], status[keep], metrics[keep], lo + keep, _counts(status, feasible)
+
+    def write_chunk(self, d, chunk, x, status, metrics, rejected, index=None, counts=None):
+        """Write one chunk's rows into the datasets ``d`` (``datasets(f)``): all
+        its candidates, or (store = feasible) the rows ``index`` kept, appended,
+        with the chunk's ``counts``."""
+        room_for(self.path, 2 * (x.nbytes + metrics.nbytes) + status.nbytes)
+        cols, G, cv, feasible = self._rows(status, metrics)
+        if index is None:
+            lo, hi = self.spec.chunk_bounds(chunk)
+            counts = _counts(status, feasible)
+        else:
+            lo = d["candidate"].shape[0]
+            hi = lo + len(index)
+            for name in self.row_names():
+                d[name].resize(hi, axis=0)
+            d["candidate"][lo:hi] = index
+        if len(rejected):
+            d["progress/rejected"][chunk] = rejected
+        d["progress/status_counts"][chunk] = counts
+        d["candidates/params"][lo:hi] = x
+        d["candidates/status"][lo:hi] = status
+        d["candidates/fail_phi"][lo:hi] = np.rad2deg(metrics[:, ks.M_FAIL_PHI])
+        group = metrics[:, ks.M_FAIL_GROUP]
+        d["candidates/fail_group"][lo:hi] = np.where(np.isfinite(group), group, -1).astype("i2")
+        d["candidates/forces_evaluated"][lo:hi] = metrics[:, ks.M_FORCES_DONE] == 1.0
+        for name, col in cols.items():
+            d[f"metrics/{name}"][lo:hi] = col
+        d["candidates/constraints"][lo:hi] = G
+        d["candidates/cv"][lo:hi] = cv
+        d["candidates/feasible"][lo:hi] = feasible
+        d["progress/chunk_done"][chunk] = True
+
+    def row_names(self):
+        """The datasets with a row per stored candidate."""
+        return (["candidate", "candidates/params", "candidates/status", "candidates/fail_phi",
+                 "candidates/fail_group", "candidates/forces_evaluated",
+                 "candidates/constraints", "candidates/cv", "candidates/feasible"]
+                + [f"metrics/{m}" for m in self.spec.metrics])
+
+    def sort_rows(self, f):
+        """store = feasible: rows in candidate order, whatever order the chunks
+        finished in (Dask, a resume); the kept rows are few by design."""
+        if not self.feasible_only:
+            return
+        index = f["candidate"][()]
+        if (np.diff(index) > 0).all():
+            return
+        room_for(self.path, sum(f[name].nbytes for name in self.row_names()))
+        order = np.argsort(index, kind="stable")
+        for name in self.row_names():
+            f[name][...] = f[name][()][order]
+
+    def datasets(self, f):
+        """The open file's datasets by path, looked up once (a path lookup costs
+        more than writing a chunk's column)."""
+        names = self.row_names() + ["progress/chunk_done", "progress/rejected",
+                                    "progress/status_counts"]
+        return {n: f[n] for n in names}
+
+
+def status_counts(f) -> dict:
+    """Candidates per status, OK-but-infeasible and feasible: count and percent."""
+    if attr_text(f.attrs.get("store", "all")) == "feasible":
+        # only the feasible rows are stored: the counts of every chunk written
+        done = f["progress/chunk_done"][()]
+        c = f["progress/status_counts"][()][done].sum(axis=0)
+        by_status, n_feasible = c[:-1], int(c[-1])
+    else:
+        st = f["candidates/status"][()].astype(np.int64)
+        bad = (st < 0) | (st >= len(kc.STATUS_NAMES))
+        if bad.any():
+            raise ResultsError(f.filename, f"damaged results file: {int(bad.sum()):,} "
+                                           "candidates have a status code outside "
+                                           f"0..{len(kc.STATUS_NAMES) - 1}")
+        by_status = np.bincount(st, minlength=len(kc.STATUS_NAMES))
+        n_feasible = int(f["candidates/feasible"][()].sum())
+    n = int(by_status.sum())
+    out = {}
+    for code, name in kc.STATUS_NAMES.items():
+        k = int(by_status[code])
+        if k:
+            out[name] = {"count": k, "percent": round(100.0 * k / max(n, 1), 2)}
+    ok_infeasible = int(by_status[kc.OK]) - n_feasible
+    out["OK but constraints violated"] = {"count": ok_infeasible,
+                                       "percent": round(100.0 * ok_infeasible / max(n, 1), 2)}
+    out["feasible"] = {"count": n_feasible, "percent": round(100.0 * n_feasible / n, 2)
+                       if n else 0.0}
+    if "progress/rejected" in f and f["progress/rejected"].size:
+        k = int(f["progress/rejected"][()].sum())
+        if k:   # draws that could not be built, replaced before solving (not candidates)
+            out["redrawn before solving"] = {  # percent of all draws, not of the candidates
+                "count": k, "percent": round(100.0 * k / max(n + k, 1), 2)}
+    return out
+
+
+def summarize(out) -> dict:
+    """Counts by status, feasible fraction, best objective values."""
+    with h5py.File(out, "r") as f:
+        feas = f["candidates/feasible"][()]
+        counts = status_counts(f)
+        s = {"candidates": sum(v["count"] for k, v in counts.items()
+                               if k in kc.STATUS_NAMES.values())}
+        if attr_text(f.attrs.get("store", "all")) == "feasible":
+            s["stored"] = f"the feasible candidates only ({len(feas)} rows; store = feasible)"
+        for name in kc.STATUS_NAMES.values():
+            if name in counts:
+                s[f"status {name}"] = f"{counts[name]['count']} ({counts[name]['percent']:.1f}%)"
+        s["feasible"] = f"{counts['feasible']['count']} ({counts['feasible']['percent']:.1f}%)"
+        def unit(name):
+            u = attr_text(f[f"metrics/{name}"].attrs.get("units", ""))
+            return "" if u in ("", "1") else f" {u}"
+        for o in f.attrs["objectives"]:
+            v = f[f"metrics/{o}"][()][feas]
+            if v.size:
+                s[f"best {o}"] = f"{v.min():.4g}{unit(o)}"
+        if "progress/rejected" in f and f["progress/rejected"].size:
+            rej = f["progress/rejected"][()].sum(axis=0)
+            labels = f["progress/rejected"].attrs["triangles"]
+            if rej.sum():
+                s["redrawn before solving"] = "; ".join(
+                    f"{int(k):,} draws broke the {attr_text(lab)}"
+                    for k, lab in zip(rej, labels) if k)
+        ref = f["reference"]
+        s["reference design"] = ", ".join(
+            f"{o} {ref[o][()][0]:.4g}{unit(o)}" for o in f.attrs["objectives"] if o in ref)
+    return s

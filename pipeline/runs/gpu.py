@@ -1,0 +1,306 @@
+"""Sweeps on an NVIDIA GPU: the mechanism's generated kernels compiled by
+numba.cuda (``pipeline.compiler.cuda_source``), fed in batches from the host.
+
+* ``probe()`` says what this machine has: the package (numba-cuda, from the
+  ``[gpu]`` extra), the driver, the toolkit (NVVM) and the devices;
+  ``require()`` turns a missing piece into a ``GpuUnavailable`` naming it, and
+  ``choose(device)`` resolves ``--device cpu|gpu|auto``.
+* ``GpuSweep(problem).evaluate_rows(pars)``: status and metric rows of every
+  parameter row, in batches of ``batch`` threads on two CUDA streams, so that
+  one batch's transfers overlap the other's kernel.  Device memory is bounded
+  by the batch size (two sets of per-thread work arrays); the host's by the
+  sweep's chunk.
+
+The numbers: every thread runs the careful path (``settle``) of the CPU
+module.  On the CPU most candidates take the lock-step lanes, which vouch for
+a candidate only where they agree with the careful path; statuses are the
+same, and metrics agree to rounding except two, by construction:
+``newton_mean`` (the lanes take a fixed number of Newton steps per position,
+the careful path counts the steps it took) and the class III ``margin``,
+which is det J at each path's own Newton iterate (the careful path stops at
+a residual of tols[T_NEWTON_TOL] = 1e-12, the lanes after two steps), a
+difference bounded by the closure tolerance over the margin.  On a real GPU,
+NVVM contracts a*b + c into FMA and uses its own libm (sin, cos, atan2 to
+1-2 ulp): last-digit differences, magnified near singular positions as on
+any two CPUs.  ``tests/test_gpu.py`` checks all of this under numba's CUDA
+simulator, which runs the same kernel on the CPU.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+
+import numpy as np
+
+log = logging.getLogger("pipeline")
+
+# numba-cuda's import still names np.row_stack, which numpy 2.5 removed: the same
+# function under its old name, before numba.cuda is imported (nothing else here uses it)
+if not hasattr(np, "row_stack"):    # pragma: no cover - numpy >= 2.5
+    np.row_stack = np.vstack
+
+from numba import config as _config     # noqa: E402
+from numba import cuda                  # noqa: E402
+
+SIMULATOR = bool(_config.ENABLE_CUDASIM)
+THREADS = 128            # threads per CUDA block
+BATCH = 1 << 16          # threads per launch (device memory: two sets of work arrays)
+STREAMS = 2
+
+if SIMULATOR:
+    def own(a):
+        """The numpy array inside the simulator's wrapper of a kernel argument
+        (the CPU-compiled functions the kernel calls take only numpy arrays)."""
+        inner = getattr(a, "_item", a)
+        return getattr(inner, "_ary", inner)
+else:
+    @cuda.jit(device=True, inline=True)
+    def own(a):
+        """On a GPU a kernel's array argument is already what the device
+        functions take."""
+        return a
+
+
+class GpuUnavailable(ValueError):
+    """A GPU was asked for and cannot be used; the message says what is missing."""
+
+
+# ----------------------------------------------------------------- what is here
+def probe() -> dict:
+    """What this machine offers numba.cuda: {"package", "simulator", "driver",
+    "toolkit", "devices" [(index, name, compute capability, memory GiB)],
+    "missing" (None or what to install / fix)}."""
+    out = {"package": _package(), "simulator": SIMULATOR, "driver": None, "toolkit": None,
+           "devices": [], "missing": None}
+    if SIMULATOR:
+        out.update(driver="simulated (NUMBA_ENABLE_CUDASIM=1)", toolkit="simulated",
+                   devices=[(0, "CUDA simulator (runs on the CPU)", (0, 0), 0.0)])
+        return out
+    try:
+        ok = cuda.is_available()
+    except Exception as e:     # pragma: no cover - depends on the installation
+        ok = False
+        out["driver"] = f"error: {e}"
+    if not ok:
+        reason = _driver_error()
+        out["driver"] = out["driver"] or f"not usable: {reason}"
+        out["missing"] = f"an NVIDIA driver and GPU (numba.cuda says: {reason})"
+        return out
+    out["driver"] = _driver_version()
+    for i, dev in enumerate(cuda.list_devices()):
+        with dev:
+            d = cuda.get_current_device()
+            free, total = cuda.current_context().get_memory_info()
+            out["devices"].append((i, _text(d.name), tuple(d.compute_capability),
+                                   round(total / 2**30, 1)))
+    out["toolkit"] = _toolkit()
+    if out["toolkit"].startswith("missing"):
+        out["missing"] = ("the CUDA toolkit's NVVM compiler: pip install -e '.[gpu]' "
+                          "(nvidia-cuda-nvcc) or a CUDA toolkit on CUDA_HOME")
+    return out
+
+
+def _package():
+    try:
+        from importlib.metadata import version
+        return f"numba-cuda {version('numba-cuda')}"
+    except Exception:
+        return "numba's built-in numba.cuda (deprecated; pip install -e '.[gpu]' for numba-cuda)"
+
+
+def _driver_error() -> str:
+    try:
+        from numba.cuda.cudadrv.driver import driver
+        driver.get_device_count()
+    except Exception as e:
+        return " ".join(str(e).split()).rstrip(" :")
+    return "found no CUDA device"
+
+
+def _driver_version():
+    try:
+        from numba.cuda.cudadrv.driver import driver
+        v = driver.get_version()
+        return f"CUDA driver {v[0]}.{v[1]}"
+    except Exception:    # pragma: no cover - depends on the installation
+        return "CUDA driver (version unknown)"
+
+
+def _toolkit():
+    try:
+        from numba.cuda.cudadrv import nvvm
+        v = nvvm.NVVM().get_version()
+        return f"NVVM {v[0]}.{v[1]}"
+    except Exception as e:
+        return f"missing ({' '.join(str(e).split())[:200]})"
+
+
+def _text(x):
+    return x.decode() if isinstance(x, bytes) else str(x)
+
+
+def describe(p: dict | None = None) -> str:
+    """One line: the device a sweep would run on."""
+    p = p or probe()
+    if p["devices"]:
+        i, name, cc, mem = p["devices"][0]
+        return (f"GPU 0: {name}" + (f" (compute capability {cc[0]}.{cc[1]}, {mem} GiB)"
+                                    if not p["simulator"] else ""))
+    return "no GPU"
+
+
+def require() -> dict:
+    """The probe, or GpuUnavailable naming what is missing."""
+    p = probe()
+    if p["missing"]:
+        raise GpuUnavailable(f"--device gpu: no usable GPU; missing {p['missing']} "
+                             "(`pipeline doctor` says more)")
+    return p
+
+
+def choose(device: str) -> str:
+    """'cpu' or 'gpu' for ``--device cpu|gpu|auto``; 'auto' says which it took."""
+    if device == "cpu":
+        return "cpu"
+    if device == "gpu":
+        log.info("device: %s", describe(require()))
+        return "gpu"
+    p = probe()
+    if p["missing"]:
+        log.info("device auto: the CPU (no usable GPU: missing %s)", p["missing"])
+        return "cpu"
+    log.info("device auto: %s", describe(p))
+    return "gpu"
+
+
+# ----------------------------------------------------------------- the sweep on a GPU
+class GpuSweep:
+    """The stages of a sweep problem (``pipeline.runs.sweep.SweepProblem``) on the GPU."""
+
+    def __init__(self, problem, batch=BATCH):
+        from ..compiler import gpu_kernels_for
+        from ..kernels import sweep as ks
+        self.problem = problem
+        self.cpu = problem.kernels
+        self.mod = gpu_kernels_for(problem.plan, problem.rocker)
+        self.batch = int(batch)
+        self.n_metrics = ks.N_METRICS
+        p = problem
+        self.settings = p.settings()
+        # shared inputs, on the device once
+        self.d_in = [cuda.to_device(np.ascontiguousarray(a)) for a in
+                     (p.phis, p.tols, self.settings, p.loads, np.zeros((1, 1)))]
+        self.streams = [cuda.stream() for _ in range(STREAMS)]
+        self.work = [self._work_arrays() for _ in range(STREAMS)]
+        self.stage = [self._staging() for _ in range(STREAMS)]
+
+    def _work_arrays(self):
+        """One set of per-thread work arrays (rows: threads of a batch), each
+        shaped like the one the CPU path allocates: ``evaluate``'s own four,
+        then continuation.work, forces.force_work and the module's watch_work."""
+        from ..kernels.continuation import work
+        from ..kernels.forces import force_work
+        m, n, w = self.cpu, len(self.problem.phis), self.problem.dwell_w
+        like = [np.empty(n), np.empty(n + w + 1, np.int64), np.empty(n + w + 1, np.int64),
+                np.empty(n), *work(m.N_POINTS, m.N_GROUPS, m.N_TRIADS),
+                *force_work(m.N_BODIES, m.N_JOINTS, m.N_SLIDES + m.N_INPUTS), *m.watch_work()]
+        if len(like) != len(self.mod.WORK_NAMES):
+            raise RuntimeError(f"{self.mod.SOURCE_PATH}: the kernel takes "
+                               f"{len(self.mod.WORK_NAMES)} work arrays, the CPU path "
+                               f"allocates {len(like)}")
+        return [cuda.device_array((self.batch,) + a.shape, a.dtype) for a in like]
+
+    def _staging(self):
+        """Page-locked host buffers of one batch (asynchronous copies) and the
+        device arrays of its rows."""
+        nv = self.problem.plan.par.shape[0]
+        return dict(pars=cuda.pinned_array((self.batch, nv)),
+                    status=cuda.pinned_array(self.batch, np.int8),
+                    metrics=cuda.pinned_array((self.batch, self.n_metrics)),
+                    d_pars=cuda.device_array((self.batch, nv)),
+                    d_status=cuda.device_array(self.batch, np.int8),
+                    d_metrics=cuda.device_array((self.batch, self.n_metrics)))
+
+    def evaluate_rows(self, pars):
+        """(status int8 (n,), metrics (n, N_METRICS)) of the rows ``pars``."""
+        pars = np.ascontiguousarray(pars, dtype=np.float64)
+        n = pars.shape[0]
+        status = np.empty(n, np.int8)
+        metrics = np.empty((n, self.n_metrics))
+        pending = [None] * STREAMS      # (lo, hi) of the batch in flight on each stream
+        for b, lo in enumerate(range(0, n, self.batch)):
+            s = b % STREAMS
+            self._collect(s, pending, status, metrics)
+            hi = min(lo + self.batch, n)
+            self._launch(s, pars[lo:hi])
+            pending[s] = (lo, hi)
+        for s in range(STREAMS):
+            self._collect(s, pending, status, metrics)
+        return status, metrics
+
+    def _launch(self, s, rows):
+        k = rows.shape[0]
+        st, stream = self.stage[s], self.streams[s]
+        st["pars"][:k] = rows
+        st["d_pars"][:k].copy_to_device(st["pars"][:k], stream=stream)
+        phis, tols, settings, loads, trail = self.d_in
+        blocks = (k + THREADS - 1) // THREADS
+        self.mod.sweep_kernel[blocks, THREADS, stream](
+            st["d_pars"][:k], phis, self.problem.phi_close, tols, settings, loads, trail,
+            st["d_status"][:k], st["d_metrics"][:k], *(a[:k] for a in self.work[s]))
+        st["d_status"][:k].copy_to_host(st["status"][:k], stream=stream)
+        st["d_metrics"][:k].copy_to_host(st["metrics"][:k], stream=stream)
+
+    def _collect(self, s, pending, status, metrics):
+        if pending[s] is None:
+            return
+        lo, hi = pending[s]
+        self.streams[s].synchronize()
+        status[lo:hi] = self.stage[s]["status"][:hi - lo]
+        metrics[lo:hi] = self.stage[s]["metrics"][:hi - lo]
+        pending[s] = None
+
+    def kernel_only(self, pars, repeats=1):
+        """Seconds per evaluation of ``pars`` already on the device, results left
+        there (the benchmark's kernel throughput; no host transfers)."""
+        import time
+        n = pars.shape[0]
+        if n > self.batch:
+            raise ValueError(f"kernel_only takes at most one batch ({self.batch} rows)")
+        st = self.stage[0]
+        st["d_pars"][:n].copy_to_device(np.ascontiguousarray(pars))
+        phis, tols, settings, loads, trail = self.d_in
+        blocks = (n + THREADS - 1) // THREADS
+        best = math.inf
+        for _ in range(repeats):
+            cuda.synchronize()
+            t = time.perf_counter()
+            self.mod.sweep_kernel[blocks, THREADS](
+                st["d_pars"][:n], phis, self.problem.phi_close, tols, settings, loads, trail,
+                st["d_status"][:n], st["d_metrics"][:n], *(a[:n] for a in self.work[0]))
+            cuda.synchronize()
+            best = min(best, time.perf_counter() - t)
+        return best
+
+
+def doctor() -> str:
+    """The report of ``pipeline doctor``: what numba.cuda sees, what is missing."""
+    p = probe()
+    lines = [f"numba.cuda package : {p['package']}",
+             f"CUDA driver        : {p['driver']}",
+             f"toolkit (NVVM)     : {p['toolkit'] or '-'}"]
+    if p["devices"]:
+        for i, name, cc, mem in p["devices"]:
+            lines.append(f"GPU {i}              : {name}"
+                         + (f", compute capability {cc[0]}.{cc[1]}, {mem} GiB" if mem else ""))
+    else:
+        lines.append("GPU                : none found")
+    if os.environ.get("CUDA_VISIBLE_DEVICES") is not None:
+        lines.append(f"CUDA_VISIBLE_DEVICES = {os.environ['CUDA_VISIBLE_DEVICES']!r}")
+    if p["missing"]:
+        lines.append(f"--device gpu: not available; missing {p['missing']}")
+    else:
+        lines.append("--device gpu: ready")
+    return "\n".join(lines)

@@ -1,0 +1,498 @@
+"""Monte-Carlo sweeps: chunks of candidates evaluated by the compiled kernel,
+locally on all cores or on a Dask cluster, written to HDF5 chunk by chunk.
+
+Never losing finished work: every finished chunk is first saved atomically
+(write to a temporary name, then rename) in a journal folder ``OUT.h5.parts``
+next to the results file, then written into the HDF5 file.  The journal is the
+source of truth until the run completes: ``--resume`` rebuilds the HDF5 file
+from it (so a file damaged by kill -9 in the middle of a write costs nothing)
+and computes only the chunks still missing.  On completion the journal is
+removed.  Chunks are deterministic (see ``sweep_spec``), so an interrupted and
+resumed run gives exactly the same datasets as an uninterrupted one.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import math
+import os
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from ..base.files import RunLock, fault_point, replacing
+from ..kernels import config as kc
+from ..kernels import sweep as ks
+from ..base.limits import CHUNK_WHY, MAX_CHUNK
+from ..results.storage import FORMAT, ResultsError, hdf5_writing, room_for
+from ..study.sampling import draw_checked
+from ..study.sweep_spec import SweepSpec, parameter_rows
+# the journal, the objectives and the results file have modules of their own; their
+# names stay importable from here (search, browse, report and the tests use them)
+from ..results.journal import JOURNAL_VERSION, MANIFEST_DEFAULTS, Journal, manifest_for  # noqa: F401
+from ..study.objectives import (COLUMN, DERIVED, bounded_finite, constraint_names,  # noqa: F401
+                                constraint_units, constraints, metric_values)
+from ..results.sweep_file import COUNTED, SweepFile, status_counts, summarize  # noqa: F401
+
+log = logging.getLogger("pipeline")
+
+# ----------------------------------------------------------------- the problem
+@dataclass
+class SweepProblem:
+    """Everything a worker needs to evaluate a chunk: plain arrays and the spec
+    (picklable; no study objects, no expressions)."""
+    spec: SweepSpec
+    plan: object
+    phis: np.ndarray
+    phi_close: float
+    tols: np.ndarray
+    rocker: tuple            # (pivot, point) names of the output rocker
+    dwell_w: int
+    omega1: float
+    eps1: float
+    loads: np.ndarray
+    work_point: int = -1     # point index of the working point (peak_acceleration)
+    law: np.ndarray | None = None   # the motion law at the grid's positions (law_error)
+    law_best: bool = True    # the law shifted to fit best (align = "best")
+    device: str = "cpu"      # cpu | gpu (resolved: never auto)
+
+    @property
+    def kernels(self):
+        """The mechanism's generated kernels (compiled on first use, then cached)."""
+        from ..compiler import kernels_for
+        return kernels_for(self.plan, self.rocker)
+
+    def settings(self):
+        s = self.spec
+        return ks.settings(s.stroke_radius, self.dwell_w, s.wants_forces, s.stroke_bounds[0],
+                           s.stroke_bounds[1], s.margin_min, self.omega1, self.eps1,
+                           want_peaks=s.wants_peaks, work_point=self.work_point,
+                           want_transmission=s.wants_transmission,
+                           law=self.law if s.wants_law else None, law_best=self.law_best)
+
+    @property
+    def device_name(self):
+        """'cpu', or the GPU the kernels run on (pipeline.runs.gpu.describe)."""
+        if self.device == "cpu":
+            return "cpu"
+        from .gpu import describe
+        return describe()
+
+    def gpu(self):
+        """The sweep's CUDA kernels on this process's GPU (made once; not pickled)."""
+        g = self.__dict__.get("_gpu")
+        if g is None:
+            from .gpu import BATCH, GpuSweep
+            # a launch no larger than a chunk: device memory follows --chunk-size
+            g = self.__dict__["_gpu"] = GpuSweep(self, batch=min(BATCH, self.spec.chunk_size))
+        return g
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state.pop("_gpu", None)
+        return state
+
+    def evaluate_rows(self, pars, parallel=True, n_jobs=None):
+        """Status and metric rows (N_METRICS) of the parameter rows ``pars``: on
+        the GPU (device 'gpu'), else on ``n_jobs`` threads (all cores by
+        default), or on the calling thread only (``parallel=False``: a Dask
+        task)."""
+        if self.device == "gpu":
+            return self.gpu().evaluate_rows(pars)
+        from ..compiler.parallel import run_rows
+        n = pars.shape[0]
+        status = np.zeros(n, np.int8)
+        metrics = np.full((n, ks.N_METRICS), np.nan)
+        run_rows(self.kernels.evaluate, np.ascontiguousarray(pars), self.phis, self.phi_close,
+                 self.tols, self.settings(), self.loads, status, metrics,
+                 n_jobs=n_jobs if parallel else 1)
+        return status, metrics
+
+    def evaluate_chunk(self, chunk, parallel=True, n_jobs=None):
+        """(chunk, x, status, metrics, rejected draws per triangle)."""
+        x, rejected = draw_checked(self.spec, chunk)
+        status, metrics = self.evaluate_rows(parameter_rows(self.plan, self.spec, x), parallel,
+                                             n_jobs)
+        return chunk, x, status, metrics, rejected
+
+
+def _device(spec: SweepSpec, distributed) -> str:
+    """The device a run takes ('cpu' or 'gpu'), before anything is written: a
+    GPU asked for and missing is an error naming what is missing."""
+    if distributed:
+        if spec.device == "gpu":
+            raise ValueError("--device gpu runs the sweep on this machine's GPU; a Dask "
+                             "cluster (--scheduler) runs it on the workers' CPUs: choose one")
+        return "cpu"
+    if spec.device == "cpu":
+        return "cpu"
+    try:
+        from .gpu import choose
+    except Exception as e:     # numba.cuda itself does not import
+        if spec.device == "auto":
+            log.info("device auto: the CPU (numba.cuda does not import: %s)", e)
+            return "cpu"
+        raise ValueError(f"--device gpu: numba.cuda does not import ({e}); "
+                         "pip install -e '.[gpu]' brings numba-cuda") from None
+    return choose(spec.device)
+
+
+def build_problem(study, spec: SweepSpec, tols=None, device="cpu") -> SweepProblem:
+    from ..solve.reactions import sample_loads
+    from ..solve.scene import revolution_angles
+    mech = study.mechanism
+    plan = mech.compile()
+    crank = mech.crank
+    phis = revolution_angles(crank, spec.positions)
+    out = study.output
+    law = out.motion_law
+    return SweepProblem(
+        spec=spec, plan=plan, phis=phis, phi_close=crank.phi0 + crank.rot * 2 * math.pi,
+        tols=kc.default_tolerances() if tols is None else tols,
+        rocker=(out.rocker[0], out.rocker[1]),
+        dwell_w=int(round(out.dwell_deg * spec.positions / 360)),
+        omega1=crank.omega1, eps1=crank.eps1,
+        loads=sample_loads(mech, phis) if mech.loads else np.zeros((len(phis), 0, 3)),
+        work_point=plan.point(out.working_point),
+        law=None if law is None else law.on_grid(crank, phis),
+        law_best=True if law is None else law.best, device=device)
+
+
+def evaluate_chunk_task(problem, chunk):
+    """Dask task: one chunk on one worker thread."""
+    return problem.evaluate_chunk(chunk, parallel=False)
+
+
+# ----------------------------------------------------------------- running
+@dataclass
+class SweepOutcome:
+    kind: str
+    results: Path
+    pictures: list
+    summary: dict
+
+
+def check_existing(out: Path, journal: Journal, resume: bool, overwrite: bool, *,
+                   journal_diff, same_results, what: str, other: str):
+    """Refuse anything that would overwrite or mix results silently (a sweep's
+    or a search's): ``journal_diff(manifest)`` lists what differs in an
+    interrupted run's journal (or raises), ``same_results(f)`` says whether a
+    finished file holds this run's results; ``what`` names the run ("sweep"),
+    ``other`` what else a file may hold."""
+    if not resume:
+        if journal.exists():
+            raise ResultsError(journal.dir, "holds an unfinished run; continue it with --resume "
+                                            "(or delete the folder to start again)")
+        if out.exists() and not overwrite:
+            raise ResultsError(out, "already exists; --overwrite replaces it, -o writes "
+                                    "another file, --resume continues an interrupted run")
+        return
+    if journal.exists():
+        diff = journal_diff(journal.manifest())
+        if diff:
+            raise ResultsError(journal.dir, "belongs to another run (different "
+                               + ", ".join(diff) + "); refusing to mix results")
+        return
+    if out.exists():
+        try:
+            with h5py.File(out, "r") as f:
+                ours = f.attrs.get("format") == FORMAT
+                same = ours and same_results(f)
+                complete = bool(f.attrs.get("complete", False))
+        except OSError:
+            raise ResultsError(out, "is truncated or not an HDF5 file and there is no journal "
+                                    "to rebuild it from; refusing to touch it") from None
+        if not ours:
+            raise ResultsError(out, "is not a pipeline results file; refusing to write into it")
+        if not same:
+            raise ResultsError(out, f"holds another study's results ({other}); "
+                                    "refusing to write into it")
+        if not complete:
+            raise ResultsError(out, f"is an unfinished {what} whose journal is gone; "
+                                    "run again into a new file")
+
+
+def _check_existing(out: Path, journal: Journal, study, spec, resume: bool,
+                    overwrite: bool = False):
+    want = manifest_for(study, spec)
+    check_existing(
+        out, journal, resume, overwrite,
+        journal_diff=lambda man: [k for k in want if k != "study_file"
+                                  and man.get(k, MANIFEST_DEFAULTS.get(k)) != want[k]],
+        same_results=lambda f: (f.attrs.get("study_toml") == study.text
+                                and int(f.attrs.get("n_candidates", -1)) == spec.candidates),
+        what="sweep", other="or another candidate count")
+
+
+def run_sweep(study, out, *, candidates=None, resume=False, overwrite=False, scheduler=None,
+              client=None, n_jobs=None, chunk_size=None, progress=True,
+              stop_after_chunks=None, device=None, store=None) -> SweepOutcome:
+    """Run (or resume) a sweep study into ``out``.  With ``resume`` the
+    candidate count and chunk size come from the interrupted run's journal
+    (or the finished file) unless given; ``overwrite`` replaces a finished
+    file.  ``device`` (cpu | gpu | auto) and ``store`` (all | feasible)
+    override the study's [sweep] device and store."""
+    from dataclasses import replace
+    from ..study.sweep_spec import DEVICES, STORES
+    spec: SweepSpec = study.sweep
+    for name, value, allowed in (("device", device, DEVICES), ("store", store, STORES)):
+        if value is not None and value not in allowed:
+            raise ValueError(f"--{name} must be one of {', '.join(allowed)}, got {value!r}")
+    spec = replace(spec, device=device or spec.device, store=store or spec.store)
+    if resume:
+        n, ch = _run_sizes(Path(out))
+        candidates = n if candidates is None else candidates
+        chunk_size = ch if chunk_size is None else chunk_size
+    if candidates is not None:
+        if candidates < 1:
+            raise ValueError(f"--candidates must be at least 1, got {candidates}")
+        spec = spec.with_candidates(candidates)
+    if chunk_size is not None:
+        if not 1 <= chunk_size <= MAX_CHUNK:
+            raise ValueError(f"--chunk-size must be between 1 and {MAX_CHUNK:,} ({CHUNK_WHY}), "
+                             f"got {chunk_size:,}")
+        spec = replace(spec, chunk_size=chunk_size)
+    scheduler = scheduler or spec.scheduler
+    out = Path(out)
+    with RunLock(out):
+        return _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs,
+                           progress, stop_after_chunks)
+
+
+def _run_sizes(out: Path):
+    """(candidates, chunk size) of the run that wrote ``out``: from its journal
+    if it was interrupted, else from the file; (None, None) if neither says."""
+    journal = Journal(out)
+    if journal.exists():
+        man = journal.manifest()
+        return man.get("candidates"), man.get("chunk_size")
+    if out.exists():
+        try:
+            with h5py.File(out, "r") as f:
+                n, ch = f.attrs.get("n_candidates"), f.attrs.get("chunk_size")
+                return (int(n) if n is not None else None), (int(ch) if ch is not None else None)
+        except OSError:
+            pass
+    return None, None
+
+
+def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, progress,
+                stop_after_chunks):
+    journal = Journal(out)
+    _check_existing(out, journal, study, spec, resume, overwrite)
+    done = aside_or_done(out, journal, resume, overwrite, "chunk", summarize)
+    if done is not None:
+        return done
+
+    problem = build_problem(study, spec, device=_device(spec, scheduler or client))
+    sf = SweepFile(out, study, problem)
+    fresh = not journal.exists()
+    own = scheduler is not None and client is None
+    if own:
+        client = _connect(scheduler)     # before anything is written
+    try:
+        with nothing_left_before_first(out, journal, fresh, "chunk"):
+            if fresh:
+                journal.start(dict(manifest_for(study, spec), replaces=out.exists()))
+            sf.path = journal.working_file(out)
+            return _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs,
+                               progress, stop_after_chunks)
+    finally:
+        if own:
+            client.close()
+
+
+@contextlib.contextmanager
+def compile_notice():
+    """Around the first evaluation of a run (the reference design), which compiles
+    a new mechanism's kernels: a notice if it takes more than a second, and how
+    long it took (the list it yields holds the seconds afterwards)."""
+    t = time.perf_counter()
+    took = [0.0]
+    notice = threading.Timer(1.0, log.info, ("compiling the kernels of this mechanism "
+                                             "(its first run only; about 15 s)...",))
+    notice.daemon = True
+    notice.start()
+    try:
+        yield took
+    finally:
+        notice.cancel()
+    took[0] = time.perf_counter() - t
+    if took[0] > 1.0:
+        log.info("kernels ready after %.1f s", took[0])
+
+
+def aside_or_done(out: Path, journal: Journal, resume: bool, overwrite: bool, unit: str,
+                  summary):
+    """Before a run (sweep or search) writes: with --overwrite the finished file
+    stays as it is, under its name, until the new run is complete (the new one
+    is written in the journal folder, ``Journal.working_file``); a --resume of
+    a finished run returns its outcome (``summary(out)``), else None."""
+    if overwrite and out.exists() and not resume:
+        log.info("replacing %s when the new run is complete (until then it stays as it is)",
+                 out)
+    if resume and not journal.exists() and out.exists():
+        log.info("%s is already complete; nothing to resume", out)
+        return SweepOutcome("sweep", out, [], summary(out))
+    return None
+
+
+@contextlib.contextmanager
+def nothing_left_before_first(out: Path, journal: Journal, fresh: bool, unit: str):
+    """A fresh run (sweep or search) that fails or is stopped before its first
+    ``unit`` is saved leaves nothing behind; a file it was to replace
+    (``--overwrite``) was never touched."""
+    replaces = out.exists()
+    try:
+        yield
+    except BaseException as e:
+        if fresh and not journal.done():
+            journal.remove()
+            if not replaces:
+                out.unlink(missing_ok=True)
+            if isinstance(e, KeyboardInterrupt):
+                raise SweepInterrupted(f"{out}: interrupted before the first {unit} finished; "
+                                       "nothing was written") from None
+        raise
+
+
+def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress,
+                stop_after_chunks):
+    # the file, fresh or rebuilt from the journal below; its reference design is the
+    # first evaluation, which compiles a new mechanism's kernels (once, then cached)
+    with compile_notice() as prep:
+        sf.create()
+    finished = set(journal.done())
+    t0 = time.perf_counter()
+    work = sf.path
+    with hdf5_writing(work, expendable=False) as f:
+        d = sf.datasets(f)
+        for c in sorted(finished):
+            sf.write_chunk(d, c, *journal.load(c))    # kept rows and counts, if any
+        f.flush()
+    todo = [c for c in range(spec.n_chunks) if c not in finished]
+    if finished:
+        log.info("resuming: %d of %d chunks already done", len(finished), spec.n_chunks)
+    bar = _progress(spec, len(finished), progress)
+    computed = 0
+    try:
+        with hdf5_writing(work, expendable=False) as f:
+            d = sf.datasets(f)
+            flushed = time.monotonic()
+            for c, x, status, metrics, rejected in _chunks(problem, todo, client, n_jobs):
+                computed += len(status)
+                bar.update(len(status))
+                kept = sf.kept(c, x, status, metrics)     # store = feasible: those rows only
+                if kept is not None:
+                    x, status, metrics, index, counts = kept
+                    journal.save(c, x, status, metrics, rejected, index, counts)
+                    sf.write_chunk(d, c, x, status, metrics, rejected, index, counts)
+                else:
+                    journal.save(c, x, status, metrics, rejected)   # the source of truth
+                    sf.write_chunk(d, c, x, status, metrics, rejected)
+                fault_point("chunk-written", out)
+                if time.monotonic() - flushed > 1.0:    # the HDF5 file: once a second
+                    f.flush()
+                    flushed = time.monotonic()
+                if stop_after_chunks is not None and computed >= stop_after_chunks * spec.chunk_size:
+                    raise KeyboardInterrupt  # test hook: an interruption at a chunk boundary
+    except KeyboardInterrupt:
+        bar.close()
+        done = len(journal.done())
+        raise SweepInterrupted(f"{out}: interrupted with {done} of {spec.n_chunks} chunks "
+                               "saved; run again with --resume to continue") from None
+    bar.close()
+    with hdf5_writing(work, expendable=False) as f:
+        sf.sort_rows(f)
+    return finish_run(out, journal, client, time.perf_counter() - t0, prep[0], computed,
+                      summarize, "candidates", device=problem.device_name)
+
+
+def finish_run(out: Path, journal: Journal, client, wall: float, compile_s: float,
+               computed: int, summary, unit: str, device: str = "cpu") -> SweepOutcome:
+    """A run (sweep or search) has written everything: the file is marked
+    complete (a replacement is renamed over the file it replaces only now), the
+    journal goes, and its outcome says the wall time, the compile time apart
+    and the throughput (``summary(out)``: the file's own summary; ``unit``:
+    what was computed)."""
+    work = journal.working_file(out)
+    room_for(work, 0)
+    with hdf5_writing(work, expendable=False) as f:
+        f.attrs["complete"] = True
+        f.attrs["wall_time_s"] = wall
+        f.attrs["engine"] = "dask" if client is not None else "local"
+        f.attrs["device"] = device
+    if work != out:
+        with replacing(out) as tmp:     # the earlier file is replaced whole, now
+            os.replace(work, tmp)
+    journal.remove()
+    res = summary(out)
+    res["wall_time"] = f"{wall:.1f} s"
+    if compile_s > 1.0:
+        res["compile_time"] = f"{compile_s:.1f} s (not in the wall time; cached from now on)"
+    if computed:
+        res["throughput"] = f"{computed / wall:,.0f} {unit}/s"
+    if device != "cpu":
+        res["device"] = device
+    return SweepOutcome("sweep", out, [], res)
+
+
+class SweepInterrupted(KeyboardInterrupt):
+    """Raised after an interruption, once everything finished is safe."""
+
+
+def _progress(spec, done, enabled):
+    from tqdm import tqdm
+    return tqdm(total=spec.candidates, initial=done * spec.chunk_size if done else 0,
+                unit="cand", unit_scale=True, disable=not enabled, smoothing=0.1,
+                desc="sweep", dynamic_ncols=True)
+
+
+def _chunks(problem, todo, client, n_jobs):
+    """Yield (chunk, x, status, metrics) as chunks finish."""
+    if client is not None:
+        yield from _dask_chunks(problem, todo, client)
+        return
+    if n_jobs is not None and n_jobs < 1:
+        raise ValueError(f"--jobs must be at least 1, got {n_jobs}")
+    # the next chunk is drawn and evaluated while the caller journals and writes
+    # this one (the kernels run on the worker threads, HDF5 on this one)
+    from concurrent.futures import ThreadPoolExecutor
+    with ThreadPoolExecutor(1, thread_name_prefix="pipeline-chunks") as ahead:
+        pending = None
+        for c in todo:
+            nxt = ahead.submit(problem.evaluate_chunk, c, True, n_jobs)
+            if pending is not None:
+                yield pending.result()
+            pending = nxt
+        if pending is not None:
+            yield pending.result()
+
+
+CONNECT_TIMEOUT = "20s"     # how long to wait for a Dask scheduler to answer
+
+
+def _connect(scheduler):
+    """A client of the Dask scheduler at ``scheduler``; dask is imported only here."""
+    try:
+        from dask.distributed import Client
+    except ImportError:  # pragma: no cover - depends on the installation
+        raise ValueError("--scheduler needs dask: pip install 'pipeline[dask]'") from None
+    try:
+        return Client(scheduler, timeout=CONNECT_TIMEOUT)
+    except (OSError, TimeoutError) as e:
+        raise ValueError(f"cannot reach the Dask scheduler {scheduler}: {e}") from None
+
+
+def _dask_chunks(problem, todo, client):
+    """The same kernels on the workers of a Dask ``client``."""
+    from dask.distributed import as_completed
+    remote = client.scatter(problem, broadcast=True)
+    futures = [client.submit(evaluate_chunk_task, remote, c, pure=False) for c in todo]
+    for fut in as_completed(futures):
+        yield fut.result()

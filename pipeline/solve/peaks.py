@@ -1,0 +1,264 @@
+"""Peaks a designer asks for, exact, with the crank angle where they happen.
+
+For a scene: the peak speed |v| and acceleration |a| of every named point, the
+peak |omega| and |eps| of every link, the smallest transmission angle of every
+dyad and class III lead, and, with forces, the peak reaction of every joint,
+the peak normal force |N| and couple |C| of every slide and the peak
+|balancing moment|.  Each peak is bracketed by the
+largest sample of the dense revolution and its two neighbours, then found by
+a bounded 1-D maximiser (SciPy's Brent) on the exact kinematics: the
+continuation is walked from the first position to the trial angle, so the
+peak lies on the revolution's own assembly branch.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .scene import real_motion, solve_curves
+
+XATOL = 1e-9          # rad: where a peak is, to about 6e-8 deg
+
+
+@dataclass
+class Peak:
+    quantity: str       # velocity, acceleration, omega, eps, reaction, slide_normal,
+                        # slide_couple, M_bal, min_transmission_angle
+    item: str           # the point, link, joint, slide or dyad
+    value: float        # the peak magnitude
+    unit: str
+    phi1: float         # crank angle of the peak, deg
+    grid_value: float   # the largest sample of the dense revolution
+
+
+def _magnitudes(study, plan, curves, forces=None):
+    """{(quantity, item, unit): array over the rows of ``curves``}."""
+    crank = study.mechanism.crank
+    v, a, om, ep = real_motion(curves, crank.omega1, crank.eps1)
+    nv = plan.n_visible
+    out = {}
+    for i, name in enumerate(plan.point_names[:nv]):
+        out[("velocity", name, "m/s")] = np.hypot(v[:, i, 0], v[:, i, 1])
+        out[("acceleration", name, "m/s^2")] = np.hypot(a[:, i, 0], a[:, i, 1])
+    for j, lab in enumerate(study.output.link_labels):
+        out[("omega", lab, "1/s")] = np.abs(om[:, j])
+        out[("eps", lab, "1/s^2")] = np.abs(ep[:, j])
+    for label, kind, names in transmission_items(study.mechanism):
+        # transmission angle, as its deviation from 90 deg
+        if kind == "lines":     # a group with a sliding pair: two lines (see below)
+            u, w = (_line(curves.pos, plan, *line) for line in names)
+        else:
+            P = [curves.pos[:, plan.point_names.index(p)] for p in names]
+            if kind == "dyad":  # at the middle joint B, between B->A and B->C
+                a, b, c = P
+                u, w = a - b, c - b
+            else:               # class III lead J-P: the lead against J->Q (see below)
+                j, piv, a, b, c, d = P
+                u, w = piv - j, _meet(a - j, b - j, c - j, d - j)
+        mu = np.degrees(np.arctan2(np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]),
+                                   np.abs(u[:, 0] * w[:, 0] + u[:, 1] * w[:, 1])))
+        out[("transmission_deviation", label, "deg")] = 90.0 - mu
+    if forces is not None:
+        mag = forces.magnitude
+        for j, name in enumerate(forces.joint_names):
+            out[("reaction", name, "N")] = mag[:, j]
+        for k, name in enumerate(forces.slide_names):   # each prismatic pair's |N|, |C|
+            out[("slide_normal", name, "N")] = np.abs(forces.slide[:, k, 0])
+            out[("slide_couple", name, "N*m")] = np.abs(forces.slide[:, k, 1])
+        out[("M_bal", "crank", "N*m")] = np.abs(forces.M_bal)
+    return out
+
+
+def transmission_items(mech):
+    """The mechanism's transmission angles, in order: (label, kind, what).
+
+    A transmission angle is 90 deg minus the pressure angle, the angle between
+    the line of the force a group passes to the member it drives (frictionless
+    joints, links without their own loads) and that member's velocity; 90 deg
+    is best, 0 a dead position.  Every angle is folded into [0, 90] deg
+    (min(mu, 180 - mu)).
+
+    * an RRR dyad A-B-C ("dyad", (A, B, C)): the angle at the middle joint B
+      between B->A and B->C (the force along A-B, B moving across C-B);
+    * each lead of a class III group that joins the ternary link at J to a
+      fixed pivot P (leads 4-6 and 5-7; "lead", (J, P, A, B, C, D)): the angle
+      at J between the lead J-P and the line from J through Q, the point where
+      the lines A-B and C-D of the other two leads meet.  With axial forces in
+      those leads, the ternary link (three forces in equilibrium meet in one
+      point) passes its force to this lead along J-Q: the four-bar's
+      transmission angle (coupler against rocker) generalised.  It is 0 when
+      the three leads' lines meet in one point, the group's singular position.
+
+    The groups with a sliding pair give two lines, ("lines", ((a, b, alpha),
+    (c, d, beta))): the link a->b turned by alpha (the absolute direction
+    alpha where a is None) against c->d turned by beta
+    (``kernels.metrics.lines_transmission``):
+
+    * RRP (slider B on its guide, link A-B): the force along A-B drives the
+      slider along the guide, so mu = 90 deg - angle(A-B, guide) = the angle
+      between A-B and the guide's normal (the slider-crank's: coupler against
+      the normal to the slider's path); 0 where A-B lies across the guide,
+      the group's toggle (its margin is sin mu);
+    * RPR (coulisse: block at A on a guide turning about C, guide end E): the
+      block pushes the guide along its normal n, and the guide's point under
+      the block moves across C->A, so mu = angle(C->A, n) = 90 deg -
+      angle(C->A, C->E); 90 deg with no offset, 0 where the block passes the
+      foot of the perpendicular from C (the group's toggle);
+    * PRP (two blocks joined at B, on guides 1 and 2): block 1 passes the
+      force to the pin along the normal of guide 1, and block 2 moves along
+      guide 2 (either way round), so mu = the angle between the two guides
+      (0 where they are parallel; sin mu is the group's margin);
+    * RPP (Scotch yoke; and PPR, the same chain): the block pushes the yoke along the slot's normal,
+      and the yoke moves along its guide, so mu = the angle between the slot
+      and the guide, |slot_angle| folded: constant over the revolution, a
+      design quantity (90 deg for the classic yoke).
+
+    Each group type gives its own items (its ``transmission`` hook,
+    ``pipeline.model.groups``)."""
+    out = []
+    for g in mech.groups:
+        out += g.transmission()     # the group type's items (pipeline.model.groups)
+    return out
+
+
+def _line(pos, plan, a, b, alpha):
+    """Direction (n, 2) of the link a->b turned by alpha, or of the absolute
+    alpha where a is None (``kernels.metrics._line``)."""
+    c, s = math.cos(alpha), math.sin(alpha)
+    if a is None:
+        return np.broadcast_to(np.array([c, s]), (pos.shape[0], 2))
+    d = pos[:, plan.point_names.index(b)] - pos[:, plan.point_names.index(a)]
+    return np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]], axis=1)
+
+
+def _meet(a, b, c, d):
+    """Direction (n, 2) from the origin to the meet of the lines a-b and c-d
+    (homogeneous coordinates: (X, Y), W's sign aside; parallel lines give
+    their common direction)."""
+    l1 = np.stack([a[:, 1] - b[:, 1], b[:, 0] - a[:, 0], a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]],
+                  axis=1)
+    l2 = np.stack([c[:, 1] - d[:, 1], d[:, 0] - c[:, 0], c[:, 0] * d[:, 1] - c[:, 1] * d[:, 0]],
+                  axis=1)
+    q = np.cross(l1, l2)
+    return q[:, :2]
+
+
+def scene_peaks(res) -> list[Peak]:
+    """Every peak of the scene ``res`` (pipeline.solve.scene.SceneResult), refined."""
+    from scipy.optimize import minimize_scalar
+
+    from .reactions import scene_forces
+    study, plan, dense = res.study, res.plan, res.dense
+    if dense.overall != 0 or not np.isfinite(dense.pos).all():
+        return []      # a scene that does not assemble everywhere has no peaks to refine
+    crank = study.mechanism.crank
+    phis = dense.phi
+    n = len(phis)
+    order = 2
+    with_forces = dense.forces is not None
+    grid = _magnitudes(study, plan, dense, dense.forces)
+    phi_end = crank.phi0 + crank.rot * 2.0 * math.pi
+    cache = {}
+
+    def at(k, phi):
+        """The magnitudes at ``phi``, walked from phis[0] through phis[:k]."""
+        key = (k, float(phi))
+        if key not in cache:
+            path = np.concatenate([phis[:k], [phi]])
+            c = solve_curves(plan, path, order, res.tolerances)
+            row = _row(c, -1)
+            f = scene_forces(study.mechanism, plan, row) if with_forces else None
+            cache[key] = (c.status[-1], _magnitudes(study, plan, row, f))
+        return cache[key]
+
+    out = []
+    for key, values in grid.items():
+        if not np.isfinite(values).any():
+            continue     # not computed at the study's analysis level (velocities, ...)
+        kmax = int(np.nanargmax(values))
+        best_phi, best = phis[kmax], float(values[kmax])
+        for k in _rivals(values):
+            lo = phis[k - 1] if k > 0 else phis[0]
+            hi = phis[k + 1] if k + 1 < n else phi_end
+            start = max(k - 1, 0)
+
+            def neg(phi, key=key, start=start):
+                st, mags = at(start, phi)
+                v = mags[key][0]
+                return -v if st == 0 and math.isfinite(v) else math.inf
+
+            r = minimize_scalar(neg, bounds=(min(lo, hi), max(lo, hi)), method="bounded",
+                                options={"xatol": XATOL})
+            if r.success and -r.fun > best:
+                best_phi, best = float(r.x), float(-r.fun)
+        if key[0] == "transmission_deviation":     # stored as what designers read
+            out.append(Peak("min_transmission_angle", key[1], 90.0 - best, key[2],
+                            math.degrees(best_phi), 90.0 - float(values[kmax])))
+        else:
+            out.append(Peak(key[0], key[1], best, key[2], math.degrees(best_phi),
+                            float(values[kmax])))
+    return out
+
+
+def scene_motion(res) -> dict:
+    """Dwell error and stroke of a scene with an output rocker (DOMAIN.md
+    section 9, as the sweep computes them), and with [output.motion_law] the
+    law error (``pipeline.model.motion_law``): {} without a rocker."""
+    from ..kernels.metrics import dwell_error, relative_angle
+    out_spec = res.study.output
+    if out_spec.rocker is None or res.dense.overall != 0:
+        return {}
+    plan, pos = res.plan, res.dense.pos
+    ip, iq = (plan.point_names.index(p) for p in out_spec.rocker)
+    rx, ry = pos[:, iq, 0] - pos[:, ip, 0], pos[:, iq, 1] - pos[:, ip, 1]
+    theta = np.array([relative_angle(rx[0], ry[0], x, y) for x, y in zip(rx, ry)])
+    n = len(theta)
+    w = int(round(out_spec.dwell_deg * n / 360))
+    q = np.empty(n + w + 1, np.int64)
+    err, start, full = dwell_error(theta, w, q, q.copy())
+    iw = plan.point_names.index(out_spec.working_point)
+    radius = math.hypot(pos[0, iw, 0] - pos[0, ip, 0], pos[0, iw, 1] - pos[0, ip, 1])
+    out = {"dwell_error": float(err), "dwell_start": float(np.degrees(res.dense.phi[start]))
+           if start >= 0 else math.nan, "stroke": radius * float(full), "dwell_deg":
+           out_spec.dwell_deg}
+    law = out_spec.motion_law
+    if law is not None:
+        out.update(law.error(theta, res.study.mechanism.crank, res.dense.phi))
+    return out
+
+
+RIVALS = 4            # local maxima refined per quantity (two humps of nearly one height)
+RIVAL_SHARE = 0.999   # ... those within 0.1 % of the largest sample
+
+
+def _rivals(values):
+    """Indices of the grid's local maxima (cyclic) within RIVAL_SHARE of the
+    largest sample, the largest first: the true peak lies next to one of them."""
+    v = np.nan_to_num(np.asarray(values, float), nan=-np.inf)
+    if not np.isfinite(v).any() or np.nanmax(v) <= 0.0:
+        return [int(np.argmax(v))]
+    local = (v >= np.roll(v, 1)) & (v >= np.roll(v, -1)) & (v >= RIVAL_SHARE * v.max())
+    idx = np.nonzero(local)[0]
+    return [int(i) for i in idx[np.argsort(-v[idx])][:RIVALS]] or [int(np.argmax(v))]
+
+
+def _row(curves, k):
+    """Row ``k`` of ``curves`` as a one-position Curves."""
+    from dataclasses import replace
+    sl = slice(k, None) if k == -1 else slice(k, k + 1)
+    return replace(curves, phi=curves.phi[sl], pos=curves.pos[sl], d1=curves.d1[sl],
+                   d2=curves.d2[sl], status=curves.status[sl], margin=curves.margin[sl],
+                   iterations=curves.iterations[sl], links=curves.links[sl], forces=None)
+
+
+def peaks_frame(peaks):
+    """The peaks as a DataFrame (units in ``df.attrs``)."""
+    import pandas as pd
+    df = pd.DataFrame([(p.quantity, p.item, p.value, p.unit, p.phi1, p.grid_value)
+                       for p in peaks],
+                      columns=["quantity", "item", "value", "unit", "phi1", "grid_value"])
+    df.attrs["units"] = {"phi1": "deg"}
+    return df

@@ -1,0 +1,126 @@
+"""Force analysis of a scene: loads sampled on the crank-angle grid, the
+kinetostatics kernel, peaks over the revolution and pin sizing."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..kernels.inputs import ROTARY
+
+
+PIN_LENGTH_MM = 10.0       # DOMAIN.md section 5: pin of length 10 mm in bending
+PIN_SIGMA_MPA = 200.0      # allowed bending stress
+
+
+def pin_diameter(r_max, length=PIN_LENGTH_MM, sigma=PIN_SIGMA_MPA):
+    """d_min = (32 R_max l / (pi sigma))^(1/3) [mm] for R in N, l in mm, sigma in MPa."""
+    return np.cbrt(32.0 * np.asarray(r_max, float) * length / (math.pi * sigma))
+
+
+def joint_peaks(phi_deg, magnitude, joint_names):
+    """Per joint: (name, R_max [N], phi1 at the peak [deg], d_min [mm]) from the
+    reaction magnitudes (n_positions, n_joints)."""
+    rows = []
+    for j, name in enumerate(joint_names):
+        col = magnitude[:, j]
+        k = int(np.nanargmax(col)) if np.isfinite(col).any() else 0
+        rows.append((name, float(col[k]), float(phi_deg[k]), float(pin_diameter(col[k]))))
+    return rows
+
+
+def slide_action(slide):
+    """Where the normal force of each prismatic pair acts: e = 1000 C / N [mm],
+    its distance from the slider's centre of mass along the slide's direction
+    (the guide's N n at S plus the couple C is the one force N n at S + e u,
+    u the slide's direction, n = u turned +90 deg).  ``slide`` (..., 2) holds
+    (N [N], C [N*m]); NaN where N = 0 (a pure couple has no line of action).
+
+    A slider that bears on its guide at two ends l [mm] apart, centred on S,
+    takes N/2 - 1000 C/l and N/2 + 1000 C/l [N] there: both press on the same
+    side of the guide while |e| < l/2; beyond that the slider is wedged
+    between the guide's two faces (edge loads larger than N, and jamming
+    with friction).  The larger end load sizes the slide."""
+    slide = np.asarray(slide, float)
+    n, c = slide[..., 0], slide[..., 1]
+    e = 1000.0 * c / np.where(n != 0.0, n, 1.0) + 0.0     # (+ 0.0: no -0 in tables)
+    return np.where(n != 0.0, e, np.nan)
+
+
+def slide_label(name):
+    """The slider's name in a slide's name: slide[block] -> block."""
+    return name[6:-1] if name.startswith("slide[") and name.endswith("]") else name
+
+
+def load_time(phi, crank):
+    """Time at crank angle phi on a uniform run from phi0 (the kinetostatic crank)."""
+    return (np.asarray(phi, float) - crank.phi0) / crank.omega1
+
+
+def sample_loads(mechanism, phi):
+    """External loads at the crank angles ``phi`` (rad): array (n, n_loads, 3)
+    of (fx [N], fy [N], moment [N*m])."""
+    phi = np.asarray(phi, float)
+    t = load_time(phi, mechanism.crank)
+    out = np.zeros((phi.shape[0], len(mechanism.loads), 3))
+    for k, ld in enumerate(mechanism.loads):
+        for c, e in enumerate((ld.fx, ld.fy, ld.moment)):
+            out[:, k, c] = np.broadcast_to(e.evaluate(phi, t), phi.shape)
+    return out
+
+
+@dataclass
+class Reactions:
+    phi: np.ndarray          # rad
+    R: np.ndarray            # (n, n_joints, 2) N: force of the first body on the second
+    slide: np.ndarray        # (n, n_slides, 2): normal force N, couple N*m
+    M_bal: np.ndarray        # (n,) N*m, delivered by the main shaft (the crank's moment
+                             # plus every input's share)
+    body_loads: np.ndarray   # (n, n_bodies, 3): applied + inertia loads at S (N, N*m)
+    joint_names: tuple
+    slide_names: tuple
+    body_names: tuple
+    # inputs besides the crank: (n, n_inputs, 2) = drive on the input (N*m for a
+    # rotary input, N along the guide for a slider input), its share of M_bal
+    drive: np.ndarray = None
+    input_names: tuple = ()
+    drive_units: tuple = ()  # per input: "N*m" (rotary) or "N" (slider)
+
+    @property
+    def magnitude(self):
+        return np.hypot(self.R[..., 0], self.R[..., 1])
+
+    def peaks(self):
+        """Per joint: (name, R_max, phi1 at the peak [deg], d_min [mm])."""
+        return joint_peaks(np.rad2deg(self.phi), self.magnitude, self.joint_names)
+
+    def summary(self):
+        peaks = self.peaks()
+        j = max(range(len(peaks)), key=lambda i: peaks[i][1]) if peaks else None
+        out = {}
+        if j is not None:
+            out["peak_reaction"] = f"{peaks[j][1]:.1f} N at {peaks[j][0]}, phi1 = {peaks[j][2]:g} deg"
+        k = int(np.nanargmax(np.abs(self.M_bal)))
+        out["peak_M_bal"] = f"{self.M_bal[k]:.3f} N*m at phi1 = {np.rad2deg(self.phi[k]):g} deg"
+        return out
+
+
+def scene_forces(mechanism, plan, curves) -> Reactions:
+    """Reactions at every position of ``curves`` (which must carry second analogs)."""
+    crank = mechanism.crank
+    n = curves.phi.shape[0]
+    loads = sample_loads(mechanism, curves.phi)
+    nb, nj, ns = len(plan.body_names), len(plan.joint_names), len(plan.slide_names)
+    body_loads = np.zeros((n, nb, 3))
+    R = np.zeros((n, nj, 2))
+    S = np.zeros((n, ns + plan.n_inputs, 2))
+    M = np.zeros(n)
+    from ..compiler import kernels_for
+    kernels_for(plan).forces_curve(plan.par, curves.pos, curves.d1, curves.d2, crank.omega1,
+                                   crank.eps1, loads, body_loads, R, S, M)
+    return Reactions(curves.phi, R, S[:, :ns], M, body_loads, plan.joint_names,
+                     plan.slide_names, plan.body_names, drive=S[:, ns:],
+                     input_names=plan.input_names,
+                     drive_units=tuple("N*m" if k == ROTARY else "N" for k in plan.input_kind))

@@ -1,0 +1,148 @@
+"""A scene: one mechanism analysed over a revolution (tables and dense curves).
+
+Pure computation over the compiled plan; writing files is ``pipeline.results.storage``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..kernels import config as kc
+from ..compiler import kernels_for
+from ..kernels.geometry import link_angles
+from ..model.mechanism import Plan
+
+ORDER = {"positions": kc.POSITIONS, "velocities": kc.VELOCITIES,
+         "accelerations": kc.ACCELERATIONS, "forces": kc.ACCELERATIONS}
+
+
+@dataclass
+class Curves:
+    """Kinematics at a sequence of crank angles (analogs with respect to phi1)."""
+    phi: np.ndarray          # rad
+    pos: np.ndarray          # (n, n_points, 2) mm
+    d1: np.ndarray           # mm/rad
+    d2: np.ndarray           # mm/rad^2
+    status: np.ndarray       # (n,) int8
+    margin: np.ndarray       # (n, n_groups)
+    iterations: np.ndarray   # (n,)
+    links: np.ndarray        # (n, n_links, 3): angle rad, analogs 1/rad, 1/rad^2
+    overall: int
+    fail_phi: float = math.nan   # rad: where the walk first failed, located between positions
+    fail_group: int = -1         # the group that failed there (-1: none, or the closure)
+    forces: object = None    # pipeline.solve.reactions.Reactions when computed
+    extra: dict = field(default_factory=dict)
+
+
+def revolution_angles(crank, n, closing_row=False):
+    """phi1_k = phi0 + rot * 2 pi k / n, k = 0..n-1 (and k = n if closing_row)."""
+    k = np.arange(n + 1 if closing_row else n, dtype=np.float64)
+    return crank.phi0 + crank.rot * 2.0 * math.pi * k / n
+
+
+def solve_curves(plan: Plan, phis, order, tols=None, par=None, close_at=math.nan) -> Curves:
+    """Kinematics of ``plan`` at crank angles ``phis`` by continuation."""
+    tols = kc.default_tolerances() if tols is None else tols
+    par = plan.par if par is None else par
+    n = len(phis)
+    npnt, ng = plan.n_points, plan.n_groups
+    pos = np.full((n, npnt, 2), np.nan)
+    d1 = np.full((n, npnt, 2), np.nan)
+    d2 = np.full((n, npnt, 2), np.nan)
+    status = np.zeros(n, np.int8)
+    margin = np.zeros((n, ng))
+    iters = np.zeros(n)
+    fail = np.empty(2)
+    overall = kernels_for(plan).revolution(
+        np.ascontiguousarray(par, dtype=np.float64), np.ascontiguousarray(phis, dtype=np.float64),
+        float(close_at), int(order), tols, pos, d1, d2, status, margin, iters, fail)
+    links = np.full((n, len(plan.link_a), 3), np.nan)
+    link_angles(pos, d1, d2, plan.link_a, plan.link_b, int(order), links)
+    return Curves(np.asarray(phis, float), pos, d1, d2, status, margin, iters, links, int(overall),
+                  fail_phi=float(fail[0]), fail_group=int(fail[1]))
+
+
+@dataclass
+class SceneResult:
+    study: object
+    plan: Plan
+    table: Curves
+    dense: Curves
+    tolerances: np.ndarray
+    dynamics: list | None = None     # solve.crank_motion.CaseResult per case, if the study asks
+    peaks: list | None = None        # pipeline.solve.peaks.Peak, refined between grid positions
+    motion: dict | None = None       # dwell error and stroke of the output rocker
+    reduced: object = None           # solve.crank_motion.Reduced for a study with dynamics
+
+    @property
+    def status(self):
+        """The scene's status: the dense revolution (which also checks closure)."""
+        return self.dense.overall if self.dense.overall != kc.OK else self.table.overall
+
+    @property
+    def failure(self):
+        """None for an OK scene; else where it fails first: {status, phi_deg (the
+        crank angle, located between positions), group (its name, or "closure"),
+        points (the group's points)}."""
+        c = self.dense if self.dense.overall != kc.OK else self.table
+        if c.overall == kc.OK:
+            return None
+        g = c.fail_group
+        names = self.plan.point_names
+        return {"status": kc.STATUS_NAMES[c.overall], "phi_deg": math.degrees(c.fail_phi),
+                "group": self.plan.group_names[g] if g >= 0 else "closure",
+                "points": [names[int(i)] for i in self.plan.gidx[g] if i >= 0] if g >= 0 else []}
+
+
+def run_scene(study, tols=None) -> SceneResult:
+    """Tables at the study's table positions (closing row included) and dense
+    curves over one revolution, with the forces if the study asks for them."""
+    plan = study.mechanism.compile()
+    out = study.output
+    order = ORDER[out.analysis]
+    tols = kc.default_tolerances() if tols is None else tols
+    crank = study.mechanism.crank
+    table = solve_curves(plan, revolution_angles(crank, out.table_positions, True), order, tols)
+    dense_phis = revolution_angles(crank, out.dense_positions)
+    dense = solve_curves(plan, dense_phis, order, tols,
+                         close_at=crank.phi0 + crank.rot * 2.0 * math.pi)
+    if out.analysis == "forces":
+        from .reactions import scene_forces
+        table.forces = scene_forces(study.mechanism, plan, table)
+        dense.forces = scene_forces(study.mechanism, plan, dense)
+    return SceneResult(study, plan, table, dense, tols)
+
+
+def real_motion(curves: Curves, omega1, eps1):
+    """Point velocities (m/s) and accelerations (m/s^2), link omega (1/s) and
+    eps (1/s^2) from the analogs: v = r' w, a = r'' w^2 + r' eps."""
+    v = curves.d1 * omega1 / 1000.0
+    a = (curves.d2 * omega1 ** 2 + curves.d1 * eps1) / 1000.0
+    om = curves.links[:, :, 1] * omega1
+    ep = curves.links[:, :, 2] * omega1 ** 2 + curves.links[:, :, 1] * eps1
+    return v, a, om, ep
+
+
+def batch_revolutions(study, pars, positions, order=kc.ACCELERATIONS, with_forces=False,
+                      tols=None, n_jobs=None):
+    """One revolution of every parameter row of ``pars`` (candidates of the
+    study's mechanism) on all cores, reduced to (status, peak |r''| of the
+    working point [mm/rad^2], peak joint reaction [N])."""
+    from .reactions import sample_loads
+    mech = study.mechanism
+    plan = mech.compile()
+    phis = revolution_angles(mech.crank, positions)
+    tols = kc.default_tolerances() if tols is None else tols
+    loads = sample_loads(mech, phis) if mech.loads else np.zeros((positions, 0, 3))
+    n = pars.shape[0]
+    status = np.zeros(n, np.int8)
+    acc = np.zeros(n)
+    peak = np.zeros(n)
+    from ..compiler.parallel import run_rows
+    run_rows(kernels_for(plan).batch, np.ascontiguousarray(pars), phis, int(order), tols,
+             plan.point(study.output.working_point), bool(with_forces), mech.crank.omega1,
+             mech.crank.eps1, loads, status, acc, peak, n_jobs=n_jobs)
+    return status, acc, peak

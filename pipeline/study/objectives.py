@@ -1,0 +1,70 @@
+"""A sweep's objectives and constraints, read from the kernels' metric rows:
+the stored value of each metric (its column and units), the constraints
+g <= 0 with their summed violation, and which rows are feasible."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..kernels import config as kc
+from ..kernels import sweep as ks
+from .sweep_spec import SweepSpec
+
+# a metric's column and units: the catalogue (pipeline.model.metrics); COLUMN and DERIVED
+# are its earlier forms, kept for one release
+from ..model.metrics import BY_NAME, METRICS, metric_values  # noqa: E402,F401
+COLUMN = {m.name: (m.column, m.factor) for m in BY_NAME.values() if not m.offset}
+DERIVED = {m.name: (m.column, m.factor, m.offset) for m in BY_NAME.values() if m.offset}
+
+
+def _bound_columns(spec: SweepSpec):
+    """(name, metric, sign, limit) of every [sweep.constraints] bound: g = sign
+    (value - limit) <= 0."""
+    out = []
+    for m, lo, hi in spec.bounds:
+        if math.isfinite(lo):
+            out.append((f"{m}_min", m, -1.0, lo))
+        if math.isfinite(hi):
+            out.append((f"{m}_max", m, 1.0, hi))
+    return out
+
+
+def constraint_names(has_margin: bool, spec: SweepSpec | None = None):
+    """The stored constraints, in column order (the margin only for class III
+    plans, then the study's bounds on metrics)."""
+    return (["stroke_min", "stroke_max"] + (["singularity_margin_min"] if has_margin else [])
+            + [b[0] for b in (_bound_columns(spec) if spec is not None else ())])
+
+
+def constraint_units(has_margin: bool, spec: SweepSpec):
+    """The units of each stored constraint, as ``constraint_names``."""
+    return (["mm", "mm"] + (["1"] if has_margin else [])
+            + [METRICS[m][0] for _, m, _, _ in _bound_columns(spec)])
+
+
+def constraints(spec: SweepSpec, metrics, status: np.ndarray, has_margin: bool):
+    """g <= 0 per constraint (columns as ``constraint_names``) and the summed
+    violation CV (NaN where the candidate failed), from the kernels' metric
+    rows.  A bounded metric that a candidate with status OK lacks (NaN: a
+    stage-2 metric of a candidate already outside the stroke or margin limits,
+    or a value that could not be computed) adds no violation of its own, but
+    the candidate is not feasible (``bounded_finite``)."""
+    stroke, margin = metrics[:, ks.M_STROKE], metrics[:, ks.M_MARGIN]
+    g = [spec.stroke_bounds[0] - stroke, stroke - spec.stroke_bounds[1]]
+    if has_margin:
+        g.append(spec.margin_min - margin)
+    for _, m, sign, limit in _bound_columns(spec):
+        g.append(sign * (metric_values(metrics, m) - limit))
+    G = np.stack(g, axis=1)
+    cv = np.where(status == kc.OK, np.nansum(np.maximum(G, 0.0), axis=1), np.nan)
+    return G, cv
+
+
+def bounded_finite(spec: SweepSpec, metrics):
+    """Rows whose bounded metrics (``spec.bounds``) are all finite."""
+    ok = np.ones(metrics.shape[0], bool)
+    for m, _, _ in spec.bounds:
+        ok &= np.isfinite(metric_values(metrics, m))
+    return ok

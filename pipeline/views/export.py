@@ -1,0 +1,50 @@
+"""The users' tables from a results file (`pipeline export OUT.h5 --csv DIR`).
+
+A scene gives points.csv, links.csv (and reactions.csv, peaks.csv,
+motion_<case>.csv) at every computed position (``every``: every N-th); a sweep
+gives candidates.csv (all candidates, the feasible ones, or the first Pareto
+fronts).  CSV headers carry their units (``V8_x [m/s]``); Parquet keeps plain
+column names with the units in the file's metadata.  Every file is written
+atomically.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..base.files import replacing
+from ..results.storage import attr_text, open_results
+from .tables import candidates, scene_tables, with_units
+
+
+def export(path, outdir, *, every=1, feasible=False, front=None, parquet=False) -> list[Path]:
+    """Write the tables of the results file ``path`` into ``outdir``; returns
+    the files written."""
+    with open_results(path) as f:
+        kind = attr_text(f.attrs["kind"])
+    if kind == "scene":
+        if feasible or front is not None:
+            raise ValueError("--feasible and --front select sweep candidates; this is a scene")
+        frames = scene_tables(path, every)
+    else:
+        if every != 1:
+            raise ValueError("--every thins the positions of a scene; this is a sweep")
+        frames = {"candidates": candidates(path, feasible=feasible, front=front)}
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    return [_write(df, outdir / f"{name}.csv", parquet) for name, df in frames.items()]
+
+
+def _write(df, path, parquet):
+    if parquet:
+        try:
+            import pyarrow  # noqa: F401
+        except ImportError:
+            raise ValueError("--parquet needs pyarrow: pip install pyarrow") from None
+        path = path.with_suffix(".parquet")
+        with replacing(path) as tmp:
+            df.to_parquet(tmp, index=False)
+        return path
+    with replacing(path) as tmp:
+        with_units(df).to_csv(tmp, index=False, float_format="%.12g")
+    return path

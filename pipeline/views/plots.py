@@ -1,0 +1,600 @@
+"""Pictures a designer wants to see.  Every function takes computed results and
+returns a matplotlib Figure: saving it (``files.save_figure``) or showing it
+is the caller's choice.  The backend is the caller's too: the command line
+chooses Agg, a notebook keeps its own.
+
+The drawings share one colour code: the k-th overlaid position of the
+mechanism, its marks on the point paths and the colour key beside the drawing
+all have the same colour, so the crank angle of every drawn position can be
+read off the key."""
+
+from __future__ import annotations
+
+import math
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from .dynamics_plots import eps1_figure  # noqa: F401 (a picture of plots, drawn there)
+from ..solve.scene import real_motion
+
+POSITION_CMAP = "viridis"
+MAX_KEY_TICKS = 12          # labelled crank angles on the colour key
+ARROWS_PER_PATH = 3         # arrows showing the direction of travel on each path
+LABEL_SPACING = 0.045       # crank-angle labels on a path: at least this share of the drawing apart
+
+
+def _links_to_draw(plan, study):
+    """Segments to draw: the crank, and each group's (its type's ``segments``)."""
+    m = study.mechanism
+    segs = [(m.crank.pivot, m.crank.tip)] + [s for g in m.groups for s in g.segments()]
+    return [(plan.point(a), plan.point(b)) for a, b in segs]
+
+
+def joint_labels(plan) -> dict:
+    """{point index: its joint names} of the joints whose reactions are
+    reported (R1 at P1, ...); empty without mass data."""
+    out = {}
+    for name, ip in zip(plan.joint_names, plan.joint_point):
+        out.setdefault(int(ip), []).append(name)
+    return out
+
+
+def joint_descriptions(plan) -> list[str]:
+    """One line per reported joint: 'R2: crank 1-2 / lead 2-3 at P2'."""
+    lines = []
+    for name, ip, (b0, b1) in zip(plan.joint_names, plan.joint_point, plan.joint_bodies):
+        what = " / ".join("ground" if b < 0 else plan.body_names[b] for b in (b0, b1))
+        lines.append(f"{name}: {what} at {plan.point_names[int(ip)]}")
+    return lines
+
+
+def point_label(plan, i, joints=None) -> str:
+    """A point's name with the joint reported there: 'P2 (R2)'."""
+    joints = joint_labels(plan) if joints is None else joints
+    name = plan.point_names[i]
+    return f"{name} ({', '.join(joints[i])})" if i in joints else name
+
+
+def position_colours(n):
+    cmap = plt.get_cmap(POSITION_CMAP)
+    return [cmap(k / max(n - 1, 1)) for k in range(n)]
+
+
+def _deg_text(phi_rad):
+    return f"{round(math.degrees(phi_rad), 6):g}"
+
+
+def crank_angle_key(ax, phis, orientation="vertical"):
+    """The colour key of the overlaid positions: one colour band per drawn
+    position, labelled with its crank angle phi1.  Returns the colorbar."""
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    n = len(phis)
+    sm = ScalarMappable(norm=BoundaryNorm(np.arange(n + 1) - 0.5, n),
+                        cmap=ListedColormap(position_colours(n)))
+    kw = dict(fraction=0.035, pad=0.02) if orientation == "vertical" else \
+        dict(fraction=0.05, pad=0.08, aspect=30)
+    cb = ax.figure.colorbar(sm, ax=ax, orientation=orientation, **kw)
+    every = max(1, math.ceil(n / (MAX_KEY_TICKS if orientation == "vertical" else 7)))
+    ticks = list(range(0, n, every))
+    cb.set_ticks(ticks, labels=[_deg_text(phis[k]) for k in ticks])
+    cb.minorticks_off()
+    cb.set_label("crank angle phi1 [deg] of each drawn position", fontsize=8)
+    cb.ax.tick_params(labelsize=7)
+    cb.ax.set_label("crank angle key")
+    return cb
+
+
+def _travel_arrows(ax, path, count=ARROWS_PER_PATH, color="0.25"):
+    """Arrows along a closed path, pointing the way the point travels."""
+    ok = np.isfinite(path).all(axis=1)
+    n = len(path)
+    drawn = 0
+    for j in range(count):
+        k = int(n * (j + 0.3) / count)
+        a, b = path[(k - 1) % n], path[(k + 1) % n]
+        if not (ok[(k - 1) % n] and ok[(k + 1) % n]) or np.allclose(a, b):
+            continue
+        ax.annotate("", xy=b, xytext=a, annotation_clip=False,
+                    arrowprops=dict(arrowstyle="-|>", color=color, lw=0.9, mutation_scale=11,
+                                    shrinkA=0, shrinkB=0))
+        drawn += 1
+    return drawn
+
+
+def _angle_labels(ax, pts, phis, cols, spacing, centre):
+    """Crank-angle labels at the marks of one path, those too close to an
+    already labelled one left out; each pushed outward from the path's centre."""
+    kept = []
+    for k, (p, phi) in enumerate(zip(pts, phis)):
+        if not np.isfinite(p).all() or any(np.hypot(*(p - q)) < spacing for q in kept):
+            continue
+        kept.append(p)
+        d = p - centre
+        d = d / np.hypot(*d) if np.hypot(*d) > 0 else np.array([1.0, 0.0])
+        ax.annotate(_deg_text(phi), p, textcoords="offset points", xytext=tuple(9 * d),
+                    fontsize=6.5, color=cols[k], ha="center", va="center", weight="bold")
+
+
+def draw_positions(ax, res, curves, highlight=None, key="vertical", marks=True, joint_key=True):
+    """The mechanism at every position of ``curves`` and its points' paths.
+
+    The positions are coloured by their crank angle (``key``: the colour key,
+    "vertical", "horizontal" or None); every moving point's path (dotted, from
+    the dense curves) carries coloured marks at the drawn positions and arrows
+    for the direction of travel, and the crank tip's and the working point's
+    marks are labelled with phi1; points where a reported joint sits are
+    named with it (P2 (R2)), and ``joint_key`` lists what each joint joins."""
+    plan, study = res.plan, res.study
+    segs = _links_to_draw(plan, study)
+    nv = plan.n_visible
+    fixed = [plan.point(p) for p in study.mechanism.fixed]
+    n = curves.pos.shape[0]
+    cols = position_colours(n)
+    for k in range(n):
+        lw, alpha = (2.4, 1.0) if k == highlight else (1.0, 0.55)
+        for a, b in segs:
+            ax.plot(curves.pos[k, [a, b], 0], curves.pos[k, [a, b], 1], "-", color=cols[k], lw=lw,
+                    alpha=alpha)
+    dense = res.dense.pos
+    every = np.concatenate([dense[:, :nv].reshape(-1, 2), curves.pos[:, :nv].reshape(-1, 2)])
+    every = every[np.isfinite(every).all(axis=1)]
+    span = float(np.ptp(every, axis=0).max()) if len(every) else 1.0
+    labelled = {plan.point(study.mechanism.crank.tip), plan.point(study.output.working_point)}
+    for i in range(nv):
+        if i in fixed:
+            continue
+        path = dense[:, i]
+        ax.plot(path[:, 0], path[:, 1], ":", color="0.35", lw=0.8)
+        if not marks:
+            continue
+        good = np.isfinite(path).all(axis=1)
+        if not good.any():
+            continue
+        moved = float(np.ptp(path[good], axis=0).max())
+        if moved > 0.004 * span:
+            _travel_arrows(ax, path)
+        ax.scatter(curves.pos[:, i, 0], curves.pos[:, i, 1], c=cols, s=9, zorder=3, lw=0)
+        if i in labelled and moved > 0.004 * span:
+            _angle_labels(ax, curves.pos[:, i], curves.phi, cols, LABEL_SPACING * span,
+                          path[good].mean(axis=0))
+    joints = joint_labels(plan)
+    for i in range(nv):
+        x, y = curves.pos[0, i]
+        if not np.isfinite(x):
+            continue
+        ax.plot(x, y, "s" if i in fixed else "o", color="k", ms=5 if i in fixed else 3)
+        ax.annotate(point_label(plan, i, joints), (x, y), textcoords="offset points",
+                    xytext=(4, 4), fontsize=8)
+    if joints and joint_key:
+        ax.text(0.98, 0.02, "\n".join(joint_descriptions(plan)), transform=ax.transAxes,
+                fontsize=6.5, ha="right", va="bottom", family="monospace", multialignment="left",
+                bbox=dict(boxstyle="round", fc="white", ec="0.7", alpha=0.85))
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.grid(alpha=0.3)
+    if key:
+        crank_angle_key(ax, curves.phi, key)
+
+
+def scene_figure(res):
+    """Mechanism at its table positions with trajectories, and the working
+    point's displacement, velocity and acceleration against crank angle.
+    Returns the Figure (saving it is the caller's choice)."""
+    study = res.study
+    crank = study.mechanism.crank
+    wp = study.output.working_point
+    iwp = res.plan.point(wp)
+    fig = plt.figure(figsize=(13, 8), layout="constrained")
+    gs = fig.add_gridspec(3, 2, width_ratios=[1.25, 1])
+    ax = fig.add_subplot(gs[:, 0])
+    table = res.table
+    draw_positions(ax, res, _without_closing_row(table), highlight=0)
+    ax.set_title(f"{study.title}\n{table.pos.shape[0] - 1} positions (thick: phi1 = "
+                 f"{_deg_text(table.phi[0])} deg), dotted: point paths, arrows: direction of "
+                 f"travel (working point {wp})", fontsize=10)
+    d = res.dense
+    phi = np.rad2deg(d.phi)
+    v, a, _, _ = real_motion(d, crank.omega1, crank.eps1)
+    disp = d.pos[:, iwp] - d.pos[0, iwp]
+    rows = [(disp, "displacement [mm]"), (v[:, iwp], "velocity [m/s]"),
+            (a[:, iwp], "acceleration [m/s$^2$]")]
+    for r, (data, label) in enumerate(rows):
+        axr = fig.add_subplot(gs[r, 1])
+        axr.plot(phi, data[:, 0], label="x")
+        axr.plot(phi, data[:, 1], label="y")
+        if np.isfinite(data).any():
+            axr.plot(phi, np.hypot(data[:, 0], data[:, 1]), "k--", lw=0.8, label="|.|")
+        axr.set_ylabel(f"{wp} {label}")
+        axr.grid(alpha=0.3)
+        if crank.rot < 0:
+            axr.invert_xaxis()
+        if r == 0:
+            axr.legend(fontsize=8, ncol=3)
+            axr.set_title(f"omega1 = {crank.omega1:g} rad/s", fontsize=10)
+    axr.set_xlabel("crank angle phi1 [deg]")
+    return fig
+
+
+def _without_closing_row(curves):
+    """The table without its closing row (same position as the first)."""
+    from dataclasses import replace
+    n = curves.pos.shape[0] - 1
+    return replace(curves, phi=curves.phi[:n], pos=curves.pos[:n], d1=curves.d1[:n],
+                   d2=curves.d2[:n])
+
+
+def forces_figure(res):
+    """Joint reactions and balancing moment against crank angle, and the polar
+    diagram of the reaction in the most loaded joint.  Returns the Figure."""
+    fr = res.dense.forces
+    mech = res.study.mechanism
+    crank = mech.crank
+    phi = np.rad2deg(res.dense.phi)
+    rows = 3 if mech.loads else 2
+    fig = plt.figure(figsize=(13, 5.5 if rows == 2 else 8.0), layout="constrained")
+    gs = fig.add_gridspec(rows, 2, width_ratios=[1.6, 1])
+    ax = fig.add_subplot(gs[0, 0])
+    mag = np.hypot(fr.R[:, :, 0], fr.R[:, :, 1])
+    where = dict(zip(res.plan.joint_names, joint_descriptions(res.plan)))
+    for j, name in enumerate(fr.joint_names):
+        ax.plot(phi, mag[:, j], label=where.get(name, name))
+    ax.set_ylabel("|R| [N]")
+    ax.legend(fontsize=7, ncol=2 if len(fr.joint_names) > 4 else 1)
+    ax.grid(alpha=0.3)
+    ax.set_title(f"Joint reactions at omega1 = {crank.omega1:g} rad/s", fontsize=10)
+    ax2 = fig.add_subplot(gs[1, 0], sharex=ax)
+    ax2.plot(phi, fr.M_bal, "k", label="M_bal: the main shaft's moment")
+    for k, name in enumerate(fr.input_names):      # inputs driven from the main shaft
+        ax2.plot(phi, fr.drive[:, k, 1], "--", label=f"share of input {name!r} (drive x dq/dphi1)")
+    if fr.input_names:
+        ax2.legend(fontsize=7)
+    ax2.set_ylabel("M_bal [N m]")
+    ax2.set_xlabel("crank angle phi1 [deg]")
+    ax2.grid(alpha=0.3)
+    if mech.loads:
+        # the loads as the study gives them (formulas of phi and t), against phi1
+        ax3 = fig.add_subplot(gs[2, 0], sharex=ax)
+        from ..solve.reactions import sample_loads
+        loads = sample_loads(mech, res.dense.phi)
+        for k, ld in enumerate(mech.loads):
+            for c, (e, what, unit) in enumerate(((ld.fx, "fx", "N"), (ld.fy, "fy", "N"),
+                                                 (ld.moment, "M", "N m"))):
+                y = loads[:, k, c]
+                if np.any(y != 0.0):
+                    ax3.plot(phi, y, label=f"{what} on {ld.body}"
+                             + (f" at {ld.point}" if ld.point and c < 2 else "")
+                             + f" = {getattr(e, 'text', e)} [{unit}]")
+        ax3.set_ylabel("load [N, N m]")
+        ax3.set_xlabel("crank angle phi1 [deg]")
+        ax3.legend(fontsize=7)
+        ax3.grid(alpha=0.3)
+        ax3.set_title("External loads, as the study gives them", fontsize=9)
+    if crank.rot < 0:
+        ax.invert_xaxis()
+    j = int(np.nanargmax(np.nanmax(mag, axis=0)))
+    axp = fig.add_subplot(gs[:, 1])
+    rx, ry = fr.R[:, j, 0], fr.R[:, j, 1]
+    axp.plot(np.append(rx, rx[0]), np.append(ry, ry[0]), "-", color="C3")
+    axp.plot([0], [0], "k+")
+    _travel_arrows(axp, np.stack([rx, ry], axis=1), color="C3")
+    # crank-angle marks every 30 deg of the revolution (the first one labelled)
+    step = max(1, len(phi) // 12)
+    axp.plot(rx[::step], ry[::step], "o", ms=3, color="C3")
+    for q in range(0, len(phi), step * 3):
+        axp.annotate(f"{phi[q]:.0f}", (rx[q], ry[q]), fontsize=7, color="0.3",
+                     xytext=(3, 3), textcoords="offset points")
+    k = int(np.nanargmax(mag[:, j]))
+    axp.annotate(f"max {mag[k, j]:.1f} N\nat {phi[k]:.0f} deg", (rx[k], ry[k]), fontsize=8)
+    axp.set_aspect("equal", adjustable="datalim")
+    axp.set_xlabel("Rx [N]")
+    axp.set_ylabel("Ry [N]")
+    axp.grid(alpha=0.3)
+    axp.set_title(f"Polar diagram of {where.get(fr.joint_names[j], fr.joint_names[j])} "
+                  "(most loaded joint; arrows: direction as the crank turns;\n"
+                  f"dots every {360 * step / len(phi):.0f} deg of phi1, labels in deg)", fontsize=9)
+    return fig
+
+
+# ----------------------------------------------------------------- small multiples
+def _angle_deg(x):
+    """Link angle in degrees, unwrapped over its finite samples."""
+    out = np.full(x.shape, np.nan)
+    ok = np.isfinite(x)
+    if ok.any():
+        out[ok] = np.rad2deg(np.unwrap(x[ok]))
+    return out
+
+
+def not_computed(ax, y, study):
+    """Say so on a panel whose quantity the study's analysis level leaves out."""
+    if not np.isfinite(y).any():
+        ax.text(0.5, 0.5, f"not computed (analysis = {study.output.analysis})",
+                ha="center", va="center", transform=ax.transAxes, fontsize=7)
+
+
+def trim_rows(axes, used):
+    """Remove the rows of a panel grid past the first ``used`` and label the
+    crank-angle axis of the last one kept."""
+    for r in range(used, axes.shape[0]):
+        for c in range(axes.shape[1]):
+            axes[r, c].remove()
+    for c in range(axes.shape[1]):
+        axes[used - 1, c].set_xlabel("crank angle phi1 [deg]", fontsize=8)
+        axes[used - 1, c].xaxis.set_tick_params(labelbottom=True)
+
+
+def moving_points(res) -> list[int]:
+    """Indices of the named points that move (the fixed pivots left out)."""
+    fixed = {res.plan.point(p) for p in res.study.mechanism.fixed}
+    return [i for i in range(res.plan.n_visible) if i not in fixed]
+
+
+def kinematics_figure(res):
+    """Small multiples against the crank angle: every link's angle, omega and
+    eps (one row per link of the study's ``[output] links``) and every moving
+    point's speed |v| and acceleration |a| with their x and y components (one
+    row per point); the refined peaks marked.  Panels: links x 3 + points x 2.
+    Returns the Figure."""
+    study, plan, d = res.study, res.plan, res.dense
+    crank = study.mechanism.crank
+    phi = np.rad2deg(d.phi)
+    v, a, om, ep = real_motion(d, crank.omega1, crank.eps1)
+    labels = list(study.output.link_labels)
+    pts = moving_points(res)
+    nrows = max(len(labels), len(pts), 1)
+    fig = plt.figure(figsize=(16, 1.25 * nrows + 1.3), layout="constrained")
+    left, right = fig.subfigures(1, 2, width_ratios=[3, 2]) if labels else (None, fig)
+    peaks = {(p.quantity, p.item): p for p in res.peaks or ()}
+    ticks = np.arange(-720, 721, 90)
+    ticks = ticks[(ticks >= min(phi.min(), phi.max())) & (ticks <= max(phi.min(), phi.max()))]
+
+    def mark_peak(ax, peak, sign, unit):
+        """The refined peak: a red dot and its value, the text kept inside the panel."""
+        frac = (peak.phi1 - phi[0]) / (phi[-1] - phi[0]) if phi[-1] != phi[0] else 0.0
+        right = frac > 0.7
+        ax.plot([peak.phi1], [sign * peak.value], "o", color="C3", ms=3.5)
+        ax.annotate(f"peak {peak.value:.4g} {unit}\nat {peak.phi1:.2f} deg",
+                    (peak.phi1, sign * peak.value), textcoords="offset points",
+                    xytext=(-4 if right else 4, -3 if sign > 0 else 3), fontsize=6.5,
+                    color="C3", va="top" if sign > 0 else "bottom",
+                    ha="right" if right else "left")
+
+    def panel(ax, label, title, peak=None, unit="", signed=True):
+        ax.set_label(label)
+        ax.set_title(title, fontsize=8, loc="left", pad=2)
+        ax.grid(alpha=0.3)
+        ax.tick_params(labelsize=7)
+        ax.set_xticks(ticks)
+        if crank.rot < 0 and not ax.xaxis_inverted():
+            ax.invert_xaxis()
+        if peak is not None:
+            k = int(np.argmin(np.abs(phi - peak.phi1)))
+            y = ax.get_lines()[0].get_ydata()
+            sign = -1.0 if signed and np.isfinite(y[k]) and y[k] < 0 else 1.0
+            mark_peak(ax, peak, sign, unit)
+
+    if labels:
+        axes = left.subplots(nrows, 3, sharex=True, squeeze=False)
+        for j, lab in enumerate(labels):
+            series = [(_angle_deg(d.links[:, j, 0]), "angle", "[deg]", None),
+                      (om[:, j], "omega", "[1/s]", peaks.get(("omega", lab))),
+                      (ep[:, j], "eps", "[1/s$^2$]", peaks.get(("eps", lab)))]
+            for c, (y, what, unit, pk) in enumerate(series):
+                ax = axes[j, c]
+                ax.plot(phi, y, "k-", lw=1.0)
+                not_computed(ax, y, study)
+                panel(ax, f"link {lab} {what}", f"link {lab}: {what} {unit}", pk,
+                      unit.strip("[]").replace("$^2$", "^2"))
+        trim_rows(axes, len(labels))
+        left.suptitle(f"Links: angle, omega, eps (omega1 = {crank.omega1:g} rad/s, "
+                      f"eps1 = {crank.eps1:g} rad/s$^2$)", fontsize=10)
+    if pts:
+        axes = right.subplots(nrows, 2, sharex=True, squeeze=False)
+        for r, i in enumerate(pts):
+            name = plan.point_names[i]
+            for c, (arr, what, unit) in enumerate(((v, "velocity", "m/s"),
+                                                    (a, "acceleration", "m/s^2"))):
+                ax = axes[r, c]
+                ax.plot(phi, arr[:, i, 0], "-", color="C0", lw=0.7, label="x")
+                ax.plot(phi, arr[:, i, 1], "-", color="C1", lw=0.7, label="y")
+                mag = np.hypot(arr[:, i, 0], arr[:, i, 1])
+                ax.plot(phi, mag, "k-", lw=1.1, label="|.|")
+                not_computed(ax, mag, study)
+                panel(ax, f"point {name} {what}", f"{name}: {what} [{unit}]",
+                      peaks.get((what, name)), unit, signed=False)
+                if r == 0 and c == 0:
+                    ax.legend(fontsize=6.5, ncol=3, loc="lower left", handlelength=1.2)
+        trim_rows(axes, len(pts))
+        right.suptitle("Moving points: velocity and acceleration (x, y and magnitude)",
+                       fontsize=10)
+    fig.suptitle(f"{study.title}: kinematics against the crank angle (red: refined peaks)",
+                 fontsize=11)
+    return fig
+
+
+# ----------------------------------------------------------------- cyclogram
+PHASE_COLOURS = {"dwell": "#9cc3e6", "forward": "#f6b26b", "back": "#93c47d"}
+DWELL_RESIDUAL = 0.10       # a window whose output moves more (share of its range) is no dwell
+
+
+def output_motion(res) -> dict | None:
+    """The output's motion over the dense revolution as one number per
+    position, and its best dwell window (DOMAIN.md section 9, computed as
+    ``peaks.scene_motion`` does): the rocker angle theta [deg] from its first
+    position when the study names ``[output] rocker``, else the working point's
+    displacement [mm] along the main direction of its path.  None when the
+    revolution does not assemble everywhere or the output does not move.
+
+    Returns {y, what, unit, start (index of the window's first position),
+    w (intervals in the window), error, dwell_deg}."""
+    from ..kernels.metrics import dwell_error, relative_angle
+    plan, d, out = res.plan, res.dense, res.study.output
+    if d.overall != 0 or not np.isfinite(d.pos[:, :plan.n_visible]).all():
+        return None
+    if out.rocker is not None:
+        ip, iq = (plan.point(p) for p in out.rocker)
+        r = d.pos[:, iq] - d.pos[:, ip]
+        y = np.degrees([relative_angle(r[0, 0], r[0, 1], x, z) for x, z in r])
+        what, unit = f"rocker angle theta of {out.rocker[0]}->{out.rocker[1]}", "deg"
+    else:
+        iw = plan.point(out.working_point)
+        p = d.pos[:, iw] - d.pos[:, iw].mean(axis=0)
+        u = np.linalg.svd(p, full_matrices=False)[2][0]
+        y = p @ u
+        y = y - y[0]
+        what, unit = f"{out.working_point} along its path's main direction", "mm"
+    n = len(y)
+    if not np.ptp(y) > 0:
+        return None
+    w = int(round(out.dwell_deg * n / 360))
+    q = np.empty(n + w + 1, np.int64)
+    err, start, _ = dwell_error(np.ascontiguousarray(y, dtype=np.float64), w, q, q.copy())
+    if start < 0:
+        return None
+    return {"y": np.asarray(y, float), "what": what, "unit": unit, "start": int(start), "w": w,
+            "error": float(err), "dwell_deg": out.dwell_deg}
+
+
+def design_phases(motion) -> list[tuple]:
+    """The design's own cycle as (name, start, length) in degrees of crank
+    travel from the first dense position: its dwell (the best window), forward
+    (to the position farthest from the dwell) and back (to the dwell again).
+    The lengths sum to 360 deg."""
+    y, s, w = motion["y"], motion["start"], motion["w"]
+    n = len(y)
+    step = 360.0 / n
+    rest = (s + np.arange(w + 1, n)) % n
+    mean = y[(s + np.arange(w + 1)) % n].mean()
+    far = w + 1 + int(np.argmax(np.abs(y[rest] - mean))) if rest.size else n
+    return [("dwell", s * step, w * step), ("forward", (s + w) * step, (far - w) * step),
+            ("back", (s + far) * step, (n - far) * step)]
+
+
+def stated_cycle(study):
+    """The cycle a study requires, from the phases of its ``[output.motion_law]``:
+    ([(name, start, end)] in degrees of the cycle angle psi, turn), where
+    ``turn`` is None when the law is aligned at its best (the cyclogram turns
+    it so that the dwells start together) and -phase when it is held fixed
+    (psi = rot * (phi1 - phi0) + phase).  (None, None) when the study states
+    no phases."""
+    law = getattr(study.output, "motion_law", None)
+    phases = getattr(law, "phases", None) or ()
+    if not phases:
+        return None, None
+    out = []
+    for p in phases:
+        name = "dwell" if p.law == "dwell" else (
+            f"{'forward' if p.level1 > p.level0 else 'back'} ({p.law})")
+        out.append((name, float(p.start), float(p.start) + float(p.length)))
+    fixed = getattr(law, "align", "best") == "fixed"
+    return out, (-float(getattr(law, "phase", 0.0)) if fixed else None)
+
+
+def cyclogram_figure(res, cycle=None, cycle_name="required cycle", turn=None):
+    """The circular cyclogram of one revolution (the dial turns the way the
+    crank turns, phi1 on the rim): the design's dwell, forward and back phases
+    from its output motion (inner ring; the dwell is the best window of the
+    study's ``dwell`` length, where the design actually dwells), the output
+    motion itself as a radial trace inside, and the required cycle on an outer
+    ring: ``cycle`` as (name, start, end[, colour]) in degrees of the cycle
+    (e.g. the OV-7 cycle of DOMAIN.md section 9), else the phases the study
+    states in ``[output.motion_law]``, if any.  The ring is turned so that its
+    dwell starts where the design's does (as the crank's mounting phase would
+    align it), or by ``turn`` degrees of crank travel (a law held fixed).
+    Every phase wedge carries the gid 'phase design NAME' or 'phase cycle
+    NAME'.  Returns the Figure."""
+    study = res.study
+    if cycle is None:
+        cycle, turn = stated_cycle(study)
+        cycle_name = "required ([output.motion_law])"
+    crank = study.mechanism.crank
+    fig = plt.figure(figsize=(8.6, 8.2), layout="constrained")
+    ax = fig.add_subplot(projection="polar")
+    ax.set_label("cyclogram")
+    ax.set_theta_zero_location("N")
+    ax.set_theta_direction(1 if crank.rot > 0 else -1)
+    motion = output_motion(res)
+    if motion is None:
+        why = "the mechanism does not assemble over the whole revolution" \
+            if res.dense.overall != 0 else "its output does not move"
+        ax.text(0.5, 0.5, f"no cyclogram: {why}", transform=ax.transAxes, ha="center")
+        ax.set_axis_off()
+        return fig
+    y, n = motion["y"], len(motion["y"])
+    step = 360.0 / n
+    tau = np.arange(n) * step
+    phases = design_phases(motion)
+    dwells = motion["error"] <= DWELL_RESIDUAL
+    r_in, r_ring, r_out = 0.42, 1.0, 1.22
+    for name, a, length in phases:
+        shown = name if name != "dwell" or dwells else "slowest"
+        bar = ax.bar(np.deg2rad(a), r_out - r_ring, width=np.deg2rad(length), bottom=r_ring,
+                     align="edge", color=PHASE_COLOURS[name] if shown != "slowest" else "0.85",
+                     ec="k", lw=0.8, hatch="//" if name == "dwell" else None)[0]
+        bar.set_gid(f"phase design {name}")
+        bar.set_label(f"design: {shown} {length:.0f} deg" + (
+            "" if shown != "slowest" else f" (moves {100 * motion['error']:.0f} % of its "
+                                          "range: no dwell)"))
+        mid = np.deg2rad(a + length / 2)
+        ax.text(mid, (r_ring + r_out) / 2, f"{shown}\n{length:.0f} deg", ha="center",
+                va="center", fontsize=8)
+    if cycle:
+        cyc = [(c[0], float(c[1]), float(c[2]), c[3] if len(c) > 3 else None) for c in cycle]
+        if turn is None:
+            dwell0 = next((a for nm, a, _, _ in cyc if nm == "dwell"), cyc[0][1])
+            turn = phases[0][1] - dwell0
+        rc0, rc1 = r_out + 0.05, r_out + 0.27
+        for nm, a, b, col in cyc:
+            length = (b - a) % 360.0 or 360.0
+            key = "dwell" if "dwell" in nm else ("forward" if "forward" in nm else "back")
+            bar = ax.bar(np.deg2rad(a + turn), rc1 - rc0, width=np.deg2rad(length), bottom=rc0,
+                         align="edge", color=col or PHASE_COLOURS[key],
+                         ec="k", lw=0.8, alpha=0.75)[0]
+            bar.set_gid(f"phase cycle {nm}")
+            bar.set_label(f"{cycle_name}: {nm} {a % 360:g}-{b % 360:g} deg")
+            ax.text(np.deg2rad(a + turn + length / 2), (rc0 + rc1) / 2,
+                    f"{nm}\n{a % 360:g}-{b % 360:g}", ha="center", va="center", fontsize=7)
+        r_lim = rc1 + 0.06
+    else:
+        r_lim = r_out + 0.06
+    # the output motion: inside the ring, low values at the centre
+    lo, hi = float(y.min()), float(y.max())
+    r = r_in + (0.92 - r_in) * (y - lo) / (hi - lo)
+    ax.plot(np.deg2rad(np.append(tau, 360.0)), np.append(r, r[0]), "k-", lw=1.3,
+            label=f"output: {motion['what']}")
+    s, w = motion["start"], motion["w"]
+    win = (s + np.arange(w + 1)) % n
+    ax.plot(np.deg2rad(s * step + np.arange(w + 1) * step), r[win], "-", color="C3", lw=2.6,
+            label="best dwell window")
+    # crank angles on the rim (phi1 of the study's revolution) and the turning direction
+    marks = np.arange(0, 360, 30)
+    ax.set_xticks(np.deg2rad(marks),
+                  labels=[f"{round(math.degrees(crank.phi0) + crank.rot * m, 6):g}" for m in marks],
+                  fontsize=8)
+    ax.set_yticks([])
+    ax.set_ylim(0, r_lim)
+    ax.grid(alpha=0.35)
+    arc = np.deg2rad(np.linspace(-60, 60, 40))
+    ax.plot(arc, np.full(arc.shape, 0.25), "-", color="C3", lw=1.2)
+    ax.annotate("", xy=(arc[-1], 0.25), xytext=(arc[-4], 0.25),
+                arrowprops=dict(arrowstyle="-|>", color="C3", lw=1.2, mutation_scale=12))
+    ax.text(0, 0.08, "crank\nturns", color="C3", fontsize=7.5, ha="center", va="center")
+    unit = motion["unit"]
+    stroke = (getattr(res, "motion", None) or {}).get("stroke")
+    info = (f"output: {motion['what']}\nrange {hi - lo:.3g} {unit}; in the best "
+            f"{motion['dwell_deg']:g} deg window it moves {100 * motion['error']:.2g} % of "
+            "that" + (f"\nstroke {stroke:.3g} mm" if stroke else ""))
+    fig.text(0.99, 0.01, info, ha="right", va="bottom", fontsize=7.5,
+             bbox=dict(boxstyle="round", fc="white", ec="0.7", alpha=0.9))
+    ax.legend(loc="lower left", bbox_to_anchor=(-0.08, -0.1), fontsize=7, ncol=2 if cycle else 1,
+              framealpha=0.9)
+    dwell_phi = round(math.degrees(crank.phi0) + crank.rot * phases[0][1], 6)
+    where = (f"the design dwells from phi1 = {dwell_phi:g} deg for {phases[0][2]:g} deg"
+             if dwells else f"no dwell: its slowest {phases[0][2]:g} deg start at phi1 = "
+                            f"{dwell_phi:g} deg")
+    ax.set_title(f"{study.title}\ncyclogram over one revolution (rim: crank angle phi1 [deg]); "
+                 f"{where}", fontsize=10)
+    return fig

@@ -1,0 +1,399 @@
+"""One self-contained HTML page about a sweep (`pipeline report`): the Pareto
+plot, the parameter importances, the representative designs drawn, front 1,
+the counts by status and the run's provenance.
+
+Everything is inline: the pictures are PNG data URIs, the style sheet is in the
+page, and a few lines of script only record (in ``data-*`` attributes of
+<body>) whether every picture decoded, so that a headless browser can check
+the page.  Nothing is fetched from anywhere.
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime as _dt
+import html
+import logging
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..base.version import __version__
+from ..analysis.fronts import analyze, has_analysis, read_analysis, read_sweep
+from ..analysis.candidate import rerun_candidate
+from ..base.files import write_text
+from ..analysis.ranking import design_table, ranking
+from .report_assets import CSS, SCRIPT
+from .report_figures import (_letters, _png, design_figure, importance_figure, pareto_figure,
+                             search_figure)
+from ..results.storage import attr_text, open_results
+from ..results.sweep_file import status_counts
+# the page's assets and pictures have modules of their own (report_assets,
+# report_figures); their names stay importable from here for one release
+from .report_figures import MAX_FRONT_POINTS, MAX_GREY  # noqa: F401
+
+log = logging.getLogger("pipeline")
+
+
+def _img(uri, alt):
+    return f'<img src="{uri}" alt="{html.escape(alt)}">'
+
+
+def _fmt(v, digits=4):
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        return html.escape(str(v))
+    if math.isnan(v):
+        return "&ndash;"
+    if math.isinf(v):
+        return "&infin;"
+    return f"{v:.{digits}g}"
+
+
+def _search_history(f):
+    """The per-generation history of a search file (None for a sweep)."""
+    if "search" not in f:
+        return None
+    g = f["search"]
+    return {"method": str(attr_text(g.attrs.get("method", "?"))),
+            "normalisation": str(attr_text(g.attrs.get("normalisation", ""))),
+            "evaluations": g["evaluations"][()], "hypervolume": g["hypervolume"][()]}
+
+
+ANIMATION_FRAMES = 60       # the animated design: one revolution in 3 s (about 0.5 MB)
+ANIMATION_DPI = 60
+
+
+def motion_html(path, ana) -> str:
+    """The knee design (else the first representative, else the reference
+    design) in motion: an animated GIF of one revolution, embedded like the
+    pictures, and its circular cyclogram against the cycle the study states
+    ([output.motion_law]), else the OV-7 cycle of DOMAIN.md section 9 that the
+    synthesis is for."""
+    from .animate import gif_bytes, motion_of
+    from .show import OV7_PHASES
+    from .plots import cyclogram_figure, stated_cycle
+    if ana.knee >= 0:
+        cid, why = int(ana.knee), "the knee of front 1"
+    elif len(ana.representatives):
+        cid, why = int(ana.representatives[0]), "representative A"
+    else:
+        cid, why = "reference", "no feasible design: the study's reference design"
+    try:
+        run = rerun_candidate(path, cid, forces=False)
+        gif = gif_bytes(motion_of(run.scene, f"{run.label} ({why})"), frames=ANIMATION_FRAMES,
+                        dpi=ANIMATION_DPI)
+        cycle, turn = stated_cycle(run.study)
+        if cycle is not None:
+            against, name = "the study's motion law", "required ([output.motion_law])"
+        else:
+            against, name, cycle = "the OV-7 cycle", "OV-7 cycle", OV7_PHASES
+        cyc = _png(cyclogram_figure(run.scene, cycle, name, turn), dpi=70)
+    except Exception as e:   # a design the scene path cannot redraw: say so, go on
+        log.warning("report: no animation of candidate %s (%s)", cid, e)
+        return f'<p class="note">No animation: {html.escape(str(e))}</p>'
+    uri = "data:image/gif;base64," + base64.b64encode(gif).decode("ascii")
+    return (f'<p class="note">{html.escape(run.label)}, {html.escape(why)}, over one revolution '
+            f"({ANIMATION_FRAMES} frames, {len(gif) / 1024:.0f} KiB; the working point's path "
+            "magnified when it is small), and its cyclogram: the phases of its own output "
+            f"motion (inner ring) against {against} (outer ring), turned so that both dwells "
+            "start together, as the crank's mounting phase would (unless the law is held "
+            "fixed). <code>pipeline show FILE "
+            f"--candidate {html.escape(str(run.index))} --animate</code> writes the full "
+            'animation.</p><div class="cards motion">'
+            f'<img class="animation" src="{uri}" alt="animation of {html.escape(run.label)}">'
+            f'{_img(cyc, "cyclogram of " + run.label)}</div>')
+
+
+EXPLORER_POINTS = 3000      # feasible designs in the interactive plot (front 1 always)
+EXPLORER_DRAWINGS = 12      # front-1 designs whose drawing and curves are embedded
+
+
+def explorer_html(path, data, ana) -> str:
+    """The interactive front: an SVG of the feasible designs (front 1 in red)
+    over the first two objectives; hover shows a design's numbers, a click its
+    variables, metrics and (for the first front-1 designs) its drawing and
+    curves.  Plain SVG and a few lines of script: one offline file."""
+    import json
+
+    from .show import candidate_figure
+    feas = np.nonzero(data.feasible & np.isfinite(data.F).all(axis=1))[0]
+    if data.F.shape[1] < 2:
+        return '<p class="note">The explorer plots two objectives; this study has one.</p>'
+    if feas.size == 0:
+        return '<p class="note">No feasible design to explore.</p>'
+    front1 = set(int(i) for i in ana.front1)
+    rest = np.array([i for i in feas if int(i) not in front1], np.int64)
+    rng = np.random.default_rng(data.seed)
+    if rest.size > EXPLORER_POINTS:
+        rest = np.sort(rng.choice(rest, EXPLORER_POINTS, replace=False))
+    idx = np.concatenate([rest, np.array(sorted(front1), np.int64)])
+    F = data.F[idx, :2]
+    lo, hi = F.min(axis=0), F.max(axis=0)
+    span = np.where(hi > lo, hi - lo, 1.0)
+    W, H, M = 620, 420, 56
+    X = M + (F[:, 0] - lo[0]) / span[0] * (W - 1.5 * M)
+    Y = H - M + (F[:, 1] - lo[1]) / span[1] * -(H - 1.5 * M)
+    points, circles = [], []
+    for k, (i, x, y) in enumerate(zip(idx, X, Y)):
+        f1 = int(i) in front1
+        points.append({"i": int(i), "f": int(ana.rank[i]), "m": [float(v) for v in data.F[i]],
+                       "v": [float(v) for v in data.params[i]]})
+        circles.append(f'<circle class="pt{" f1" if f1 else ""}" data-k="{k}" '
+                       f'cx="{x:.1f}" cy="{y:.1f}" r="{4.5 if f1 else 2.6}"/>')
+    ticks = []
+    for t in np.linspace(0.0, 1.0, 5):
+        x = M + t * (W - 1.5 * M)
+        y = H - M - t * (H - 1.5 * M)
+        ticks.append(f'<text x="{x:.0f}" y="{H - M + 16}" font-size="10" text-anchor="middle">'
+                     f"{lo[0] + t * span[0]:.4g}</text>")
+        ticks.append(f'<text x="{M - 6}" y="{y + 3:.0f}" font-size="10" text-anchor="end">'
+                     f"{lo[1] + t * span[1]:.4g}</text>")
+    o, u = data.objectives, data.objective_units
+    svg = (f'<svg width="{W}" height="{H}" viewBox="0 0 {W} {H}" role="img">'
+           f'<line x1="{M}" y1="{H - M}" x2="{W - M / 2}" y2="{H - M}" stroke="#444"/>'
+           f'<line x1="{M}" y1="{H - M}" x2="{M}" y2="{M / 2}" stroke="#444"/>'
+           + "".join(ticks) +
+           f'<text x="{W / 2:.0f}" y="{H - 14}" font-size="12" text-anchor="middle">'
+           f"{html.escape(o[0])} [{html.escape(u[0])}]</text>"
+           f'<text x="14" y="{H / 2:.0f}" font-size="12" text-anchor="middle" '
+           f'transform="rotate(-90 14 {H / 2:.0f})">{html.escape(o[1])} '
+           f"[{html.escape(u[1])}]</text>" + "".join(circles) + "</svg>")
+    drawings = {}
+    for i in list(ana.front1[np.argsort(data.F[ana.front1, 0])])[:EXPLORER_DRAWINGS]:
+        try:
+            fig = candidate_figure(rerun_candidate(path, int(i)))
+        except Exception as e:   # a design the scene path cannot redraw: say so, go on
+            log.warning("report: candidate %d not drawn (%s)", int(i), e)
+            continue
+        drawings[str(int(i))] = _png(fig, dpi=60)
+    payload = {"points": points, "objectives": list(o), "objective_units": list(u),
+               "names": list(data.names), "units": list(data.units),
+               "file": Path(path).name, "drawings": drawings}
+    # inside <script>: no character that the HTML parser reads as markup
+    text = (json.dumps(payload).replace("&", "\\u0026").replace("<", "\\u003c")
+            .replace(">", "\\u003e"))
+    return (f'<div id="explorer">{svg}<div id="design-panel"><p class="note">Hover a point '
+            "for its objectives; click it for the design (front-1 designs with their drawing "
+            "and curves).</p></div></div><div id=\"tip\"></div>"
+            f'<script type="application/json" id="explorer-data">{text}</script>')
+
+
+# ----------------------------------------------------------------- page parts
+def _table_html(df, knee=None) -> str:
+    cols = list(df.columns)
+    out = ['<table class="sortable"><thead><tr>']
+    out += [f'<th class="{"l" if c in ("selection", "mark") else ""}">{html.escape(str(c))}</th>'
+            for c in cols]
+    out.append("</tr></thead><tbody>")
+    for _, row in df.iterrows():
+        cls = ' class="knee"' if knee is not None and row.get("candidate") == knee else ""
+        out.append(f"<tr{cls}>" + "".join(
+            f'<td class="l">{html.escape(str(row[c]))}</td>' if c in ("selection", "mark")
+            else f"<td>{_fmt(row[c])}</td>" for c in cols) + "</tr>")
+    out.append("</tbody></table>")
+    return "".join(out)
+
+
+def _kv(pairs) -> str:
+    return '<table class="kv">' + "".join(
+        f"<tr><td>{html.escape(str(k))}</td><td>{v}</td></tr>" for k, v in pairs) + "</table>"
+
+
+def _card(title, run, values, data) -> str:
+    rows = [(k, v) for k, v in values]
+    rows += [(f"{n} [{u}]", _fmt(x, 5)) for n, x, u in zip(data.names, run.x, data.units)]
+    pic = design_figure(run)
+    return (f'<div class="card"><h3>{html.escape(title)}</h3>{_img(pic, title)}'
+            f"{_kv(rows)}</div>")
+
+
+def _metric_row(f, i, names):
+    out = []
+    for m in names:
+        if m in f["metrics"]:
+            d = f["metrics"][m]
+            v = float(d[i]) if i != "reference" else float(f["reference"][m][0])
+            out.append((f"{m} [{attr_text(d.attrs.get('units', '1'))}]", _fmt(v)))
+    return out
+
+
+def build_html(path, top=20) -> str:
+    """The report page of an analyzed sweep file."""
+    data = read_sweep(path)
+    with open_results(path, "sweep") as f:
+        ana = read_analysis(f)
+        a = {k: attr_text(f.attrs[k]) for k in f.attrs}
+        counts = status_counts(f)
+        rk = ranking(f)
+        front = ana.front1[:top]
+        ftab = design_table(f, front, "", rk).drop(columns=["selection", "front"])
+        mark = []
+        reps = list(ana.representatives)
+        letters = dict(zip(reps, _letters(len(reps))))
+        for i in front:
+            tags = (["knee"] if i == ana.knee else []) + \
+                ([f"representative {letters[i]}"] if i in letters else [])
+            mark.append(", ".join(tags))
+        ftab.insert(1, "mark", mark)
+        show_metrics = [m for m in ("dwell_error", "peak_reaction", "stroke",
+                                    "singularity_margin", "dwell_start", "peak_M_bal")]
+        rep_values = {i: _metric_row(f, i, show_metrics) for i in reps}
+        ref_values = _metric_row(f, "reference", show_metrics) if "reference" in f else None
+        ga = {k: attr_text(f["analysis"].attrs[k]) for k in f["analysis"].attrs}
+        history = _search_history(f)
+
+    title = a.get("study_title", a.get("study_name", "sweep"))
+    parts = [f"<h1>{html.escape(str(title))}</h1>",
+             f'<p class="sub">Sweep report of <code>{html.escape(Path(path).name)}</code>: '
+             f"{data.n} candidates, study <code>{html.escape(str(a.get('study_name', '')))}"
+             "</code></p>"]
+
+    # summary
+    ref = ana.reference
+    knee = ana.knee
+    summary = [("candidates", data.n),
+               ("feasible", f"{int(data.feasible.sum())} "
+                            f"({100 * data.feasible.mean():.1f}%)" if data.n else "0"),
+               ("objectives (minimised)", ", ".join(data.objectives)),
+               ("Pareto fronts", int(ana.rank.max(initial=0))),
+               ("front 1", f"{ana.front1.size} designs")]
+    if knee >= 0:
+        summary.append(("knee", f"#{data.id(knee)}: " + ", ".join(
+            f"{o} {_fmt(data.F[knee, j])} {data.objective_units[j]}"
+            for j, o in enumerate(data.objectives))))
+    if int(ref["rank"]) > 0:
+        summary.append(("reference design", f"front {int(ref['rank'])}, dominated by "
+                        f"{int(ref['dominated_by_count'])} feasible candidates "
+                        f"({len(ref['dominators_front1'])} of them on front 1); "
+                        f"{html.escape(str(ref.get('note', '')))}"))
+    parts += ["<h2>Summary</h2>", _kv(summary)]
+    if not a.get("complete", True):
+        parts.append('<p class="note"><b>The sweep is unfinished</b>: only the evaluated '
+                     "candidates are ranked.</p>")
+
+    parts += ["<h2>Pareto fronts</h2>",
+              '<p class="note">Every feasible candidate coloured by its front (front 1 in red, '
+              "joined by a line); grey: candidates that violate a constraint but have both "
+              "objectives; diamond: the knee of front 1; star: the study's reference design; "
+              "letters: the representative designs below.</p>",
+              _img(pareto_figure(data, ana), "Pareto plot"),
+              "<h3>Explore the designs</h3>", explorer_html(path, data, ana)]
+
+    parts += ["<h2>What drives each objective</h2>",
+              '<p class="note">A gradient-boosted tree model of each objective on the design '
+              "variables, fitted on the feasible candidates (seeded subsample and split); "
+              "permutation importance = how much the held-out R<sup>2</sup> drops when one "
+              "variable is shuffled (mean &plusmn; std over the repeats).</p>",
+              _img(importance_figure(data, ana), "parameter importances")]
+
+    parts.append("<h2>Representative designs</h2>")
+    parts.append('<p class="note">Front-1 members nearest the centroids of a k-means '
+                 "clustering of the normalised front-1 objectives, each drawn at 12 crank "
+                 "positions (thick: phi1 = 0), with the study's reference design for "
+                 "comparison. <code>pipeline show FILE --candidate ID</code> draws one with "
+                 "its motion and reactions.</p>")
+    cards = []
+    for i in reps:
+        run = rerun_candidate(path, int(i), forces=False)
+        cards.append(_card(f"{letters[i]}: candidate #{data.id(i)}"
+                           + (" (knee)" if i == knee else ""),
+                           run, rep_values[i], data))
+    if ref_values is not None:
+        run = rerun_candidate(path, "reference", forces=False)
+        cards.append(_card("reference design", run, ref_values, data))
+    parts.append('<div class="cards">' + "".join(cards) + "</div>" if cards else
+                 '<p class="note">No feasible design: nothing to draw.</p>')
+
+    parts += ["<h2>A design in motion</h2>", motion_html(path, ana)]
+
+    parts.append("<h2>Front 1</h2>")
+    more = f" (first {len(front)} of {ana.front1.size})" if ana.front1.size > len(front) else ""
+    parts.append(f'<p class="note">Non-dominated feasible designs sorted by '
+                 f"{html.escape(data.objectives[0])}{more}.</p>")
+    parts.append(f'<div class="wide">{_table_html(ftab, knee)}</div>' if len(front)
+                 else '<p class="note">empty</p>')
+
+    if history is not None and len(history["evaluations"]):
+        parts.append("<h2>Adaptive search</h2>")
+        seeded = a.get("seeded_from", "")
+        parts.append(_kv([("method", html.escape(f"{history['method']} (pymoo)")),
+                          ("generations", len(history["evaluations"])),
+                          ("evaluations", f"{int(history['evaluations'][-1]):,}"),
+                          ("seeded from", html.escape(f"{a.get('n_seeded', 0)} designs of "
+                                                      f"{seeded}") if seeded else "no"),
+                          ("hypervolume", _fmt(history["hypervolume"][-1]))]))
+        parts.append('<p class="note">Hypervolume of the feasible front of every candidate '
+                     f"evaluated so far: {html.escape(history['normalisation'])}.</p>")
+        parts.append(_img(search_figure(history), "hypervolume against evaluations"))
+
+    parts.append("<h2>Candidates by status</h2>")
+    parts.append(_kv([(k, f"{v['count']} ({v['percent']:.1f}%)") for k, v in counts.items()]))
+
+    parts.append("<h2>Provenance</h2>")
+    prov = [("results file", html.escape(str(Path(path).resolve()))),
+            ("study file", html.escape(str(a.get("study_file", "")))),
+            ("run with", f"pipeline {html.escape(str(a.get('software_version', '?')))}, "
+                         f"{html.escape(str(a.get('created', '?')))}"),
+            ("analysis", f"pipeline {html.escape(str(ga.get('software_version', '?')))}, "
+                         f"{html.escape(str(ga.get('created', '?')))}"),
+            ("report", f"pipeline {__version__}, "
+                       f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')}"),
+            ("seed", html.escape(str(a.get("seed", "?")))),
+            ("sampler", html.escape(str(a.get("sampler", "?")))),
+            ("positions per revolution", html.escape(str(a.get("positions_per_revolution", "?")))),
+            ("format", html.escape(f"{a.get('format', '?')} {a.get('format_version', '')}"))]
+    if "wall_time_s" in a:
+        prov.append(("sweep wall time", f"{float(a['wall_time_s']):.1f} s "
+                                        f"({html.escape(str(a.get('engine', '')))})"))
+    study_n = _study_candidates(a.get("study_toml", ""))
+    run_n = int(a.get("n_candidates", data.n))
+    prov.insert(1, ("candidates in this run", f"{run_n:,}" + (
+        f" (the study below says {study_n:,}; the run's --candidates replaced it)"
+        if study_n is not None and study_n != run_n else "")))
+    parts.append(_kv(prov))
+    parts.append("<p>The study, as stored verbatim in the results file:</p>")
+    parts.append(f"<pre>{html.escape(str(a.get('study_toml', '')))}</pre>")
+
+    return ("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+            "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+            f"<title>{html.escape(str(title))}: sweep report</title>\n"
+            f"<style>{CSS}</style>\n</head>\n<body>\n" + "\n".join(parts)
+            + f"\n<script>{SCRIPT}</script>\n</body>\n</html>\n")
+
+
+def _study_candidates(text):
+    """The candidate count the stored study asks for (None if it says none)."""
+    import tomllib
+    try:
+        return int(tomllib.loads(str(text)).get("sweep", {}).get("candidates"))
+    except (tomllib.TOMLDecodeError, TypeError, ValueError):
+        return None
+
+
+def default_report_output(path) -> Path:
+    path = Path(path)
+    return path.with_name(f"{path.stem}_report.html")
+
+
+def write_report(path, out=None, top=20) -> dict:
+    """Write the HTML report of a sweep file (running ``analyze`` first if the
+    file has no analysis); returns a summary."""
+    if top < 1:
+        raise ValueError(f"--top must be at least 1, got {top}")
+    with open_results(path, "sweep") as f:
+        analyzed = has_analysis(f)
+    info = {}
+    if not analyzed:
+        log.info("%s has no analysis: running `pipeline analyze` first", path)
+        info["analysis"] = "run now (stored in the results file)"
+        analyze(path)
+    page = build_html(path, top=top)
+    out = Path(out) if out else default_report_output(path)
+    write_text(out, page)
+    info.update(report=str(out), size=f"{out.stat().st_size / 1024:.0f} KiB")
+    return info

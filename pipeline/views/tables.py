@@ -1,0 +1,230 @@
+"""Results files as tables (pandas DataFrames), for the Python API and for
+`pipeline export`.
+
+* a sweep: one row per candidate (design variables, status name, feasibility,
+  constraint violation, Pareto front, metrics, constraints);
+* a scene: its points, links, reactions (the joints' Rx, Ry, |R|; each
+  slide's normal force N, couple C and the point of action e = C/N of
+  ``reactions.slide_action``; M_bal), peaks and dynamics motion tables, at every
+  computed position.
+
+Column names are plain (``L12``, ``P8_x``); the units of every column are in
+``df.attrs["units"]``, and ``with_units(df)`` gives headers such as
+``V8_x [m/s]`` for files meant for people.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from ..kernels import config as kc
+from ..results.storage import (ResultsError, attr_text, candidate_ids, open_results, read_units,
+                               variables)
+
+
+def with_units(df: pd.DataFrame) -> pd.DataFrame:
+    """A copy whose headers carry their units: ``name [unit]`` (none for text
+    columns and counts)."""
+    units = df.attrs.get("units", {})
+    return df.rename(columns={c: f"{c} [{units[c]}]" for c in df.columns if units.get(c)})
+
+
+def _frame(cols: dict, units: dict) -> pd.DataFrame:
+    df = pd.DataFrame(cols)
+    df.attrs["units"] = {c: units.get(c, "") for c in df.columns}
+    return df
+
+
+# ----------------------------------------------------------------- sweeps
+def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
+    """The candidates of a sweep file: all, only the feasible ones, or those of
+    Pareto fronts 1 .. ``front``.  The rows equal the HDF5 datasets."""
+    from ..analysis.ranking import ranking
+    from ..analysis.fronts import variable_units
+    with open_results(path, "sweep") as f:
+        p = f["candidates/params"]
+        names = [str(attr_text(x)) for x in p.attrs["names"]]
+        vunits = variable_units(p)
+        X = p[()]
+        status = f["candidates/status"][()]
+        feas = f["candidates/feasible"][()]
+        rk = ranking(f)
+        cols = {"candidate": candidate_ids(f),
+                "status": pd.Categorical.from_codes(
+                    np.where(status >= 0, status, kc.NOT_EVALUATED).astype(int),
+                    [kc.STATUS_NAMES[k] for k in sorted(kc.STATUS_NAMES)]),
+                "feasible": feas, "cv": f["candidates/cv"][()],
+                "front": rk.rank, "fail_phi": f["candidates/fail_phi"][()]}
+        units = {"cv": "1", "front": "", "fail_phi": "deg"}
+        if "candidates/fail_group" in f:     # format 1.2: the group that failed, by name
+            fg = f["candidates/fail_group"]
+            groups = np.array([str(attr_text(x)) for x in fg.attrs.get("groups", [])] + [""],
+                              dtype=object)
+            idx = fg[()].astype(np.int64)
+            cols["fail_group"] = groups[np.where((idx >= 0) & (idx < len(groups) - 1), idx, -1)]
+            units["fail_group"] = ""
+        if "candidates/generation" in f:     # an adaptive search: who proposed the design
+            cols["generation"] = f["candidates/generation"][()]
+            units["generation"] = ""
+        for j, n in enumerate(names):
+            cols[n] = X[:, j]
+            units[n] = vunits[j]
+        for m in f["metrics"]:
+            cols[m] = f[f"metrics/{m}"][()]
+            units[m] = str(attr_text(f[f"metrics/{m}"].attrs.get("units", "")))
+        g = f["candidates/constraints"]
+        cn = [str(attr_text(n)) for n in g.attrs.get("names", [])]
+        cu = read_units(g, len(cn))
+        G = g[()]
+        for j, n in enumerate(cn):
+            cols[f"g_{n}"] = G[:, j]
+            units[f"g_{n}"] = cu[j] if j < len(cu) else ""
+    df = _frame(cols, units)
+    if feasible:
+        df = df[df["feasible"]]
+    if front is not None:
+        if front < 1:
+            raise ValueError(f"--front must be at least 1, got {front}")
+        df = df[(df["front"] >= 1) & (df["front"] <= front)]
+    df.attrs["units"] = units | {"candidate": "", "status": "", "feasible": ""}
+    return df
+
+
+# ----------------------------------------------------------------- scenes
+def _peaks_table(f) -> pd.DataFrame:
+    """Every stored peak: quantity, item, value, unit, crank angle, the largest
+    grid sample it was refined from, and for a joint the pin diameter."""
+    from ..solve.reactions import pin_diameter
+    g = f["peaks"]
+    rows = []
+    for q in variables(g):
+        if q.endswith(("_phi1", "_grid")) or q.startswith("pin_"):
+            continue
+        d = g[q]
+        unit = str(attr_text(d.attrs.get("units", "")))
+        if d.ndim == 0:
+            items, vals = ["crank"], [float(d[()])]
+            phis, grid = [float(g[f"{q}_phi1"][()])], [float(g[f"{q}_grid"][()])]
+        else:
+            scale = d.dims[0][0]
+            items = [str(attr_text(x)) for x in scale[()]]
+            vals, phis, grid = d[()], g[f"{q}_phi1"][()], g[f"{q}_grid"][()]
+        dmin = g["pin_d_min"][()] if (q == "reaction" and "pin_d_min" in g) else None
+        for n, (it, v, ph, gv) in enumerate(zip(items, vals, phis, grid)):
+            d = float("nan")
+            if q == "reaction":
+                d = float(dmin[n]) if dmin is not None else float(pin_diameter(v))
+            rows.append((q, it, float(v), unit, float(ph), float(gv), d))
+    df = pd.DataFrame(rows, columns=["quantity", "item", "value", "unit", "phi1", "grid_value",
+                                     "d_min"])
+    df.attrs["units"] = {"phi1": "deg", "d_min": "mm"}
+    return df
+
+
+def _short(name, letter):
+    """P9 -> V9 (velocity columns), other names -> V[name]."""
+    if name.startswith("P") and name[1:].isdigit():
+        return f"{letter}{name[1:]}"
+    return f"{letter}[{name}]"
+
+
+def scene_tables(path, every=1) -> dict:
+    """{name: DataFrame} of a scene file at every computed position (every
+    ``every``-th): points, links, and reactions, peaks, motion_<case> where the
+    file has them."""
+    if every < 1:
+        raise ValueError(f"--every must be at least 1, got {every}")
+    out = {}
+    with open_results(path) as f:
+        if attr_text(f.attrs["kind"]) != "scene":
+            raise ResultsError(path, f"is a {attr_text(f.attrs['kind'])} result; its table is "
+                                     "`pipeline export FILE --csv DIR` (candidates.csv)")
+        m = f["mechanism"]
+        names = [str(attr_text(x)) for x in m.attrs["point_names"]]
+        links = [str(attr_text(x)) for x in m.attrs["link_labels"]]
+        d = f["dense"]
+        rows = slice(None, None, every)
+        phi = d["phi1"][rows]
+        cols, units = {"phi1": phi}, {"phi1": "deg"}
+        pos, vel, acc = d["position"][rows], d["velocity"][rows], d["acceleration"][rows]
+        for i, n in enumerate(names):
+            for key, arr, unit in ((n, pos, "mm"), (_short(n, "V"), vel, "m/s"),
+                                   (_short(n, "A"), acc, "m/s^2")):
+                for k, ax in enumerate("xy"):
+                    cols[f"{key}_{ax}"] = arr[:, i, k]
+                    units[f"{key}_{ax}"] = unit
+        out["points"] = _frame(cols, units)
+        cols, units = {"phi1": phi}, {"phi1": "deg"}
+        ang, om, ep = d["link_angle"][rows], d["link_omega"][rows], d["link_eps"][rows]
+        for j, lab in enumerate(links):
+            for key, arr, unit in (("phi", ang, "deg"), ("omega", om, "1/s"),
+                                   ("eps", ep, "1/s^2")):
+                cols[f"{key}_{lab}"] = arr[:, j]
+                units[f"{key}_{lab}"] = unit
+        out["links"] = _frame(cols, units)
+        if "com_position" in d:
+            bodies = [str(attr_text(x)) for x in d["com_position"].dims[1][0][()]]
+            cols, units = {"phi1": phi}, {"phi1": "deg"}
+            S, VS, AS = d["com_position"][rows], d["com_velocity"][rows], \
+                d["com_acceleration"][rows]
+            L = d["body_loads"][rows] if "body_loads" in d else None
+            for b, name in enumerate(bodies):
+                for key, arr, unit in ((f"S[{name}]", S, "mm"), (f"VS[{name}]", VS, "m/s"),
+                                       (f"AS[{name}]", AS, "m/s^2")):
+                    for k, ax in enumerate("xy"):
+                        cols[f"{key}_{ax}"] = arr[:, b, k]
+                        units[f"{key}_{ax}"] = unit
+                if L is not None:   # applied and inertia loads reduced to S
+                    for k, (comp, unit) in enumerate((("Fx", "N"), ("Fy", "N"), ("M", "N*m"))):
+                        cols[f"{comp}[{name}]"] = L[:, b, k]
+                        units[f"{comp}[{name}]"] = unit
+            out["bodies"] = _frame(cols, units)
+        if "reactions" in d:
+            from ..solve.reactions import joint_peaks
+            R = d["reactions"][()]
+            joints = [str(attr_text(x)) for x in d["reactions"].attrs["joints"]]
+            cols, units = {"phi1": phi}, {"phi1": "deg"}
+            mag = np.hypot(R[..., 0], R[..., 1])
+            for j, name in enumerate(joints):
+                cols[f"{name}_x"] = R[rows, j, 0]
+                cols[f"{name}_y"] = R[rows, j, 1]
+                cols[name] = mag[rows, j]
+                units.update({f"{name}_x": "N", f"{name}_y": "N", name: "N"})
+            if "slide_reactions" in d:     # prismatic pairs: N, C and where N acts
+                from ..solve.reactions import slide_action, slide_label
+                S = d["slide_reactions"][rows]
+                E = slide_action(S)
+                for k, name in enumerate(d["slide_reactions"].attrs["slides"]):
+                    lab = slide_label(str(attr_text(name)))
+                    cols[f"N[{lab}]"], cols[f"C[{lab}]"] = S[:, k, 0], S[:, k, 1]
+                    cols[f"e[{lab}]"] = E[:, k]
+                    units.update({f"N[{lab}]": "N", f"C[{lab}]": "N*m", f"e[{lab}]": "mm"})
+            if "input_drive" in d:        # inputs besides the crank: drive and share
+                from ..results.storage import read_units
+                D = d["input_drive"][rows]
+                H = d["input_share"][rows]
+                names = [str(attr_text(x)) for x in d["input_drive"].attrs["inputs"]]
+                du = read_units(d["input_drive"], len(names))
+                for k, name in enumerate(names):
+                    cols[f"drive[{name}]"], cols[f"share[{name}]"] = D[:, k], H[:, k]
+                    units.update({f"drive[{name}]": du[k], f"share[{name}]": "N*m"})
+            cols["M_bal"] = d["M_bal"][rows]
+            units["M_bal"] = "N*m"
+            out["reactions"] = _frame(cols, units)
+            if "peaks" not in f:       # a file written before refined peaks: grid peaks
+                peaks = pd.DataFrame(joint_peaks(d["phi1"][()], mag, joints),
+                                     columns=["joint", "R_max", "phi1", "d_min"])
+                peaks.attrs["units"] = {"joint": "", "R_max": "N", "phi1": "deg", "d_min": "mm"}
+                out["peaks"] = peaks
+        if "peaks" in f:
+            out["peaks"] = _peaks_table(f)
+        if "dynamics" in f:
+            from ..solve.crank_motion import motion_tables
+            out.update(motion_tables(f["dynamics"]))
+        if "reduced_dynamics" in f:
+            g = f["reduced_dynamics"]
+            cols = {c: g[c][()] for c in ("phi1", "J", "half_dJ", "Q")}
+            out["reduced"] = _frame(cols, {c: str(attr_text(g[c].attrs["units"]))
+                                           for c in cols})
+    return out
