@@ -3,7 +3,7 @@ plan interpreter (benchmarks/interpreter), on the same candidates.
 
 Cases:
   1. the stress suite's 100,000 constructed near-singular class III candidates
-     (built as tests/test_stress.py builds them: seed 11, 72 positions, stroke and
+     (built as tests/kernels/test_stress.py builds them: seed 11, 72 positions, stroke and
      margin constraints that never fail so the force stage runs for every
      assembled candidate) through the sweep evaluation of ov7_synthesis;
   2. N Monte-Carlo candidates of studies/ov7_synthesis.toml (its own sampler,

@@ -214,3 +214,18 @@ def test_an_old_path_is_the_module_itself():
             "print(len(MOVED))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
+
+
+def test_tests_mirror_the_packages():
+    """tests/ has a folder per layer package (tests of the face at the top) and
+    only tests/support/ besides; no test imports another test module, only
+    support."""
+    tests = Path(__file__).resolve().parent
+    folders = {d.name for d in tests.iterdir() if d.is_dir() and not d.name.startswith(("_", "."))}
+    assert folders - {"support"} <= set(LAYERS), sorted(folders - {"support"} - set(LAYERS))
+    for f in tests.rglob("test_*.py"):
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                assert not node.module.split(".")[-1].startswith("test_"), (f, node.module)
+            elif isinstance(node, ast.Import):
+                assert not any(a.name.split(".")[-1].startswith("test_") for a in node.names), f

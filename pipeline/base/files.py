@@ -51,7 +51,7 @@ def _fsync_dir(folder: Path):
         os.close(fd)
 
 
-# The fault-injection hook of the tests (tests/test_faults.py): the environment
+# The fault-injection hook of the tests (tests/base/test_faults.py): the environment
 # variable names a point of the write path where the process kills itself with
 # SIGKILL, as a power cut or `kill -9` would, so that a test knows the point was
 # reached.  Unset (always, outside the tests) it costs one dictionary lookup.

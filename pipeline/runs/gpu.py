@@ -22,7 +22,7 @@ a residual of tols[T_NEWTON_TOL] = 1e-12, the lanes after two steps), a
 difference bounded by the closure tolerance over the margin.  On a real GPU,
 NVVM contracts a*b + c into FMA and uses its own libm (sin, cos, atan2 to
 1-2 ulp): last-digit differences, magnified near singular positions as on
-any two CPUs.  ``tests/test_gpu.py`` checks all of this under numba's CUDA
+any two CPUs.  ``tests/runs/test_gpu.py`` checks all of this under numba's CUDA
 simulator, which runs the same kernel on the CPU.
 """
 

@@ -1,6 +1,6 @@
 """Constructed mechanisms whose failure lies between two sampled crank angles,
 and the independent references that say where it is (test oracle of
-tests/test_between_samples.py).
+tests/kernels/test_between_samples.py).
 
 Every case is built backwards: the locked range of crank angles is chosen
 first (its centre at a random angle, its width w = 10**U(-2, log10 2) deg,

@@ -1,4 +1,4 @@
-"""Brute-force references for tests/test_pareto.py (NOT used by the product).
+"""Brute-force references for tests/kernels/test_pareto.py (NOT used by the product).
 
 Written independently of pipeline.pareto, straight from the definitions:
 

@@ -112,7 +112,7 @@ EQUILIBRIUM_REL = 1e-12
 # and dense solve) on mechanism B: measured 2.9e-10 relative
 EQUILIBRIUM_VS_NAIVE_REL = 1e-8
 
-# property tests of the group kernels (tests/test_kernel_properties.py)
+# property tests of the group kernels (tests/kernels/test_kernel_properties.py)
 LENGTH_REL = 1e-9            # link lengths / guide constraints kept by a group, relative
 KERNEL_EXACT_REL = 1e-9      # differentiated closure equations hold to rounding (relative,
                              # further divided by the group's singularity margin)

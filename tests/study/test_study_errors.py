@@ -7,7 +7,7 @@ import pytest
 
 from pipeline.study.reader import StudyError, load_study, parse_study
 
-BASE = (__import__("pathlib").Path(__file__).resolve().parent.parent / "studies"
+BASE = (__import__("pathlib").Path(__file__).resolve().parents[2] / "studies"
         / "ov7_base.toml").read_text()
 
 

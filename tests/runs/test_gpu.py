@@ -25,7 +25,7 @@ from pipeline.study.reader import load_study
 from pipeline.runs.sweep import run_sweep
 from support.tolerances import GPU_AGREEMENT_REL
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(__file__).resolve().parents[1]   # tests/
 STUDIES = HERE.parent / "studies"
 SIM = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
 # metrics defined differently on the two CPU paths (pipeline.gpu's docstring):

@@ -29,7 +29,7 @@ from pipeline.base.files import RunLock
 from pipeline.study.reader import load_study
 from pipeline.runs.sweep import SweepFile, build_problem, run_sweep
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 N = 600
 
 

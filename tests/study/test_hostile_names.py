@@ -36,7 +36,7 @@ from pipeline.compile import source
 from pipeline.base.limits import MAX_NAME_LENGTH
 from pipeline.study.reader import StudyError, load_study, parse_study
 
-STUDIES = Path(__file__).resolve().parent.parent / "studies"
+STUDIES = Path(__file__).resolve().parents[2] / "studies"
 CAM = (STUDIES / "cam_rocker_input.toml").read_text()
 CAM_SWEEP = (STUDIES / "cam_rocker_input_sweep.toml").read_text()
 TAKEUP = (STUDIES / "takeup_dynamics.toml").read_text()

@@ -12,8 +12,8 @@ from pipeline.compiler import source_for
 from pipeline.compiler.skeleton import END, MARKER, part
 from pipeline.study.reader import load_study
 
-SKELETON = Path(__file__).resolve().parent.parent / "pipeline" / "compiler" / "skeleton"
-STUDIES = Path(__file__).resolve().parent.parent / "studies"
+SKELETON = Path(__file__).resolve().parents[2] / "pipeline" / "compiler" / "skeleton"
+STUDIES = Path(__file__).resolve().parents[2] / "studies"
 PARTS = sorted(f.stem for f in SKELETON.glob("*.py") if f.stem not in ("__init__", "_mechanism"))
 
 

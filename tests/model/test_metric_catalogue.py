@@ -10,7 +10,7 @@ import pipeline.model.metrics as mc
 from pipeline.study import objectives, sweep_spec
 from pipeline.kernels import sweep as ks
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_every_entry_reads_a_column_of_the_kernels_row():

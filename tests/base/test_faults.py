@@ -20,7 +20,7 @@ from pipeline.study.reader import load_study
 from pipeline.base.files import RunLock
 from pipeline.runs.sweep import run_sweep
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 N = 2000
 
 
@@ -154,7 +154,7 @@ def test_export_into_a_full_disk_is_one_line(studies, tmp_path, monkeypatch, cap
     assert not list((tmp_path / "csv").glob("*.csv"))
 
 
-# kill -9 at named points of the write path: tests/test_fault_injection.py
+# kill -9 at named points of the write path: tests/base/test_fault_injection.py
 
 
 # ------------------------------------------------------------ runs and journals
