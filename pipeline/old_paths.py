@@ -6,7 +6,7 @@ until the next release: ``import pipeline.sweep`` gives the module
 ``pipeline.runs.sweep`` itself (the very same object, so a monkeypatch through
 the old path acts on the real module), ``from pipeline.forces import
 scene_forces`` the function of ``pipeline.solve.reactions``, and
-``python -m pipeline.metrics`` runs ``pipeline.model.metrics``.
+``python -m pipeline.metrics`` runs ``pipeline.model.metric_catalogue``.
 
 ``MOVED`` below is the whole list.  Nothing inside ``pipeline/`` imports an old
 path (tests/test_architecture.py checks it); the next release deletes this
@@ -36,7 +36,7 @@ MOVED = {
     "pareto": "kernels.pareto",
     "groups": "model.groups",
     "motion_law": "model.motion_law",
-    "metrics": "model.metrics",
+    "metrics": "model.metric_catalogue",
     "compiler.forces": "compiler.force_equations",
     "compiler.gpu": "compiler.cuda_source",
     "scene": "solve.scene",

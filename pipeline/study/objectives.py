@@ -12,9 +12,9 @@ from ..kernels import config as kc
 from ..kernels import sweep as ks
 from .sweep_spec import SweepSpec
 
-# a metric's column and units: the catalogue (pipeline.model.metrics); COLUMN and DERIVED
+# a metric's column and units: the catalogue (pipeline.model.metric_catalogue); COLUMN and DERIVED
 # are its earlier forms, kept for one release
-from ..model.metrics import BY_NAME, METRICS, metric_values  # noqa: E402,F401
+from ..model.metric_catalogue import BY_NAME, METRICS, metric_values  # noqa: E402,F401
 COLUMN = {m.name: (m.column, m.factor) for m in BY_NAME.values() if not m.offset}
 DERIVED = {m.name: (m.column, m.factor, m.offset) for m in BY_NAME.values() if m.offset}
 

@@ -29,8 +29,8 @@ STORES = ("all", "feasible")         # [sweep] store, --store
 # drawing a chunk's candidates has a module of its own (pipeline.study.sampling); its
 # names stay importable from here for one release
 from .sampling import REDRAW_ROUNDS, draw_candidates, draw_checked, draw_unit  # noqa: E402,F401
-# the metrics, their units, stages and senses: one catalogue (pipeline.model.metrics)
-from ..model.metrics import DEFAULT_METRICS, METRICS, NOT_OBJECTIVES  # noqa: E402,F401
+# the metrics, their units, stages and senses: one catalogue (pipeline.model.metric_catalogue)
+from ..model.metric_catalogue import DEFAULT_METRICS, METRICS, NOT_OBJECTIVES  # noqa: E402,F401
 NOT_BOUNDED = {"peak_joint": "an index, not a quantity"}
 
 

@@ -1,4 +1,4 @@
-"""The catalogue of metrics (pipeline.model.metrics) is the one place a metric is
+"""The catalogue of metrics (pipeline.model.metric_catalogue) is the one place a metric is
 described: the study format, the stored columns, the results file's attributes
 and docs/metrics.md all read it."""
 
@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-import pipeline.model.metrics as mc
+import pipeline.model.metric_catalogue as mc
 from pipeline.study import objectives, sweep_spec
 from pipeline.kernels import sweep as ks
 

@@ -1,4 +1,4 @@
-"""The sweep metric ``equilibrium_residual`` (pipeline.model.metrics): the worst
+"""The sweep metric ``equilibrium_residual`` (pipeline.model.metric_catalogue): the worst
 relative virtual-power residual of the force stage over the revolution.
 
 Asked for by name in a copy of a shipped sweep study, it is stored with the
@@ -24,7 +24,7 @@ from support.tolerances import EQUILIBRIUM_REL, EQUILIBRIUM_VS_NAIVE_REL, VIRTUA
 from pipeline.analysis.candidate import rerun_candidate
 from pipeline.kernels import config as kc
 from pipeline.kernels.forces import equilibrium_residual
-from pipeline.model.metrics import BY_NAME, DEFAULT_METRICS
+from pipeline.model.metric_catalogue import BY_NAME, DEFAULT_METRICS
 from pipeline.study.reader import load_study
 from pipeline.runs.sweep import run_sweep
 

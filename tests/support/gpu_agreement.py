@@ -27,7 +27,7 @@ from support.stress_cases import near_singular_triads  # noqa: E402
 
 from pipeline.runs.gpu import SIMULATOR, GpuSweep  # noqa: E402
 from pipeline.kernels import sweep as ks  # noqa: E402
-from pipeline.model.metrics import CATALOGUE  # noqa: E402
+from pipeline.model.metric_catalogue import CATALOGUE  # noqa: E402
 from pipeline.study.reader import load_study  # noqa: E402
 from pipeline.runs.sweep import build_problem, draw_checked, parameter_rows  # noqa: E402
 

@@ -132,9 +132,9 @@ def metric_values(metrics, name):
 
 def markdown_table() -> str:
     """The catalogue as the Markdown table of docs/metrics.md (a test keeps the
-    two equal: ``python -m pipeline.model.metrics > docs/metrics.md`` after a change)."""
+    two equal: ``python -m pipeline.model.metric_catalogue > docs/metrics.md`` after a change)."""
     rows = ["# Sweep metrics", "",
-            "Generated from `pipeline/model/metrics.py` (`python -m pipeline.model.metrics > "
+            "Generated from `pipeline/model/metric_catalogue.py` (`python -m pipeline.model.metric_catalogue > "
             "docs/metrics.md`); every objective is minimised.", "",
             "| metric | units | stage | objective | what |", "|---|---|---|---|---|"]
     for m in CATALOGUE:
