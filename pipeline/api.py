@@ -41,7 +41,7 @@ def solve_scene(study):
     curves (positions, analogs, forces), refined peaks, dwell and stroke, and
     its dynamics cases with the reduced dynamics.  Draw it with
     ``pipeline.views.plots.scene_figure(result)``, ``forces_figure``, and
-    ``pipeline.solve.crank_motion.dynamics_figure(case)``."""
+    ``pipeline.views.dynamics_plots.dynamics_figure(case)``."""
     from .runner import solve_scene as solve
     if not isinstance(study, Study):
         study = _load_study(study)

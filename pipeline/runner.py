@@ -151,7 +151,7 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
         import matplotlib.pyplot as plt
 
         from .views import plots
-        from .solve.crank_motion import dynamics_figure
+        from .views.dynamics_plots import dynamics_figure
         # made and saved one at a time: a figure is closed before the next is drawn
         figures = [(lambda: plots.scene_figure(res), out.with_suffix(".png")),
                    (lambda: plots.kinematics_figure(res), out.with_name(
@@ -169,7 +169,7 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
             figures.append((lambda case=case: plots.eps1_figure(case),
                             out.with_name(f"{out.stem}_{name}_eps1.png")))
         if res.reduced is not None:
-            from .solve.crank_motion import reduced_figure
+            from .views.dynamics_plots import reduced_figure
             figures.append((lambda: reduced_figure(res.reduced),
                             out.with_name(f"{out.stem}_reduced.png")))
         for make, path in figures:

@@ -121,7 +121,7 @@ def test_pictures_are_figures_the_caller_saves(studies, tmp_path):
     from matplotlib.figure import Figure
 
     from pipeline.views import plots
-    from pipeline.solve.crank_motion import dynamics_figure
+    from pipeline.views.dynamics_plots import dynamics_figure
     before = set(tmp_path.iterdir())
     res = pipeline.solve_scene(studies / "ov7_class3.toml")
     for fig in (plots.scene_figure(res), plots.forces_figure(res)):

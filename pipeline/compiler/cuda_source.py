@@ -35,7 +35,7 @@ arrays are the caller's (``pipeline.runs.gpu``), one row per thread.
 import numpy as np
 from numba import cuda     # a module-level name: the CUDA simulator needs it here
 
-from pipeline.runs.gpu import own
+from pipeline.compiler.cuda_device import own
 from {cpu} import settle
 
 CPU_MODULE = "{cpu}"

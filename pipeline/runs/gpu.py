@@ -36,31 +36,12 @@ import numpy as np
 
 log = logging.getLogger("pipeline")
 
-# numba-cuda's import still names np.row_stack, which numpy 2.5 removed: the same
-# function under its old name, before numba.cuda is imported (nothing else here uses it)
-if not hasattr(np, "row_stack"):    # pragma: no cover - numpy >= 2.5
-    np.row_stack = np.vstack
-
-from numba import config as _config     # noqa: E402
+from ..compiler.cuda_device import SIMULATOR  # noqa: E402  (first: its numpy fix precedes numba.cuda)
 from numba import cuda                  # noqa: E402
 
-SIMULATOR = bool(_config.ENABLE_CUDASIM)
 THREADS = 128            # threads per CUDA block
 BATCH = 1 << 16          # threads per launch (device memory: two sets of work arrays)
 STREAMS = 2
-
-if SIMULATOR:
-    def own(a):
-        """The numpy array inside the simulator's wrapper of a kernel argument
-        (the CPU-compiled functions the kernel calls take only numpy arrays)."""
-        inner = getattr(a, "_item", a)
-        return getattr(inner, "_ary", inner)
-else:
-    @cuda.jit(device=True, inline=True)
-    def own(a):
-        """On a GPU a kernel's array argument is already what the device
-        functions take."""
-        return a
 
 
 class GpuUnavailable(ValueError):

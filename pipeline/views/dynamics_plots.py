@@ -1,5 +1,8 @@
-"""The crank's own picture of a dynamics case (``eps1_figure``, shown as
-``pipeline.views.plots.eps1_figure``): eps1 against phi1."""
+"""The pictures of the crank's motion: a dynamics case over time
+(``dynamics_figure``), eps1 against phi1 (``eps1_figure``, shown as
+``pipeline.views.plots.eps1_figure``) and the reduced dynamics
+(``reduced_figure``).  The motion itself is computed by
+``pipeline.solve.crank_motion``."""
 
 from __future__ import annotations
 
@@ -8,6 +11,9 @@ import math
 import matplotlib.pyplot as plt
 import numpy as np
 
+from ..kernels import config as kc
+from ..solve.crank_motion import TAIL_SECONDS
+
 
 def eps1_figure(case):
     """The crank's angular acceleration eps1 against its angle phi1 for one
@@ -15,7 +21,6 @@ def eps1_figure(case):
     (colour key), the fine record of the last seconds (every step) on top.
     A rotating crank is shown over one revolution (phi1 mod 360 deg).
     Returns the Figure."""
-    from ..solve.crank_motion import TAIL_SECONDS
     c = case.case
     s = case.steady()
     rotating = s is not None or np.ptp(case.phi1) >= 2.0 * math.pi
@@ -58,4 +63,74 @@ def eps1_figure(case):
         if o is not None:
             head += f"\noscillation about {o['phi_mid_deg']:.2f} deg"
     ax.set_title(head, fontsize=10)
+    return fig
+
+
+def dynamics_figure(case):
+    """phi1(t), omega1(t), eps1(t) and omega1 against phi1 (mod 360 deg for a
+    rotation); the title gives the coefficient of non-uniformity.  Returns the
+    Figure."""
+    c = case.case
+    s = case.steady()
+    o = None if s is not None else case.oscillation()
+    head = f"{case.name}: M1 = {c.M1.text} N m, b = {c.damping:g} N m s, {case.method}"
+    if s is not None:
+        head += (f"\nsteady rotation: omega_mean = {s['omega_mean']:.4g} rad/s "
+                 f"({s['rpm']:.0f} rpm), coefficient of non-uniformity "
+                 f"delta = {s['delta']:.4g} (last {s['revolutions']} revolutions)")
+    elif o is not None:
+        head += (f"\noscillation about {o['phi_mid_deg']:.2f} deg, amplitude "
+                 f"{o['amplitude_deg']:.3g} deg, period {o['period_s']:.4g} s")
+    if case.status != kc.OK:
+        head += f"\nstopped: {kc.STATUS_NAMES[case.status]}"
+    fig, axs = plt.subplots(2, 2, figsize=(12, 7.5), layout="constrained")
+    rows = [(np.rad2deg(case.phi1), None, "phi1 [deg]"),
+            (case.omega1, case.tail_omega1, "omega1 [rad/s]"),
+            (case.eps1, case.tail_eps1, "eps1 [rad/s$^2$]")]
+    for ax, (y, fine, label) in zip((axs[0, 0], axs[0, 1], axs[1, 0]), rows):
+        ax.plot(case.t, y, lw=0.8, label=f"every {c.sample_dt:g} s")
+        if fine is not None and fine.size:
+            # the samples alias a fast rotation; the tail shows every step
+            ax.plot(case.tail_t, fine, lw=0.4, color="C3", label="every step")
+            ax.legend(fontsize=8, loc="best")
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    ax = axs[1, 1]
+    rotating = s is not None
+    phi_s = np.rad2deg(case.phi1)
+    phi_t = np.rad2deg(case.tail_phi1)
+    if rotating:
+        ax.plot(np.mod(phi_s, 360.0), case.omega1, ".", ms=2, color="0.6", label="samples")
+        ax.plot(np.mod(phi_t, 360.0), case.tail_omega1, ",", color="C3",
+                label=f"last {TAIL_SECONDS:g} s (every step)")
+        ax.set_xlim(0, 360)
+    else:
+        ax.plot(phi_s, case.omega1, lw=0.6, label="samples")
+    ax.set_xlabel("phi1 [deg]" + (" (mod 360)" if rotating else ""))
+    ax.set_ylabel("omega1 [rad/s]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.suptitle(head, fontsize=10)
+    return fig
+
+
+def reduced_figure(red):
+    """J(phi), (1/2) dJ/dphi and Q(phi) against the crank angle, the equilibria
+    marked.  Returns the Figure."""
+    fig, axes = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True, layout="constrained")
+    deg = np.degrees(red.phi)
+    for ax, y, label in zip(axes, (red.J, red.half_dJ, red.Q),
+                            ("J [kg m^2]", "(1/2) dJ/dphi [kg m^2]", "Q [N m] (without M1)")):
+        ax.plot(deg, y, "k-", lw=1.2)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+        for p, st in red.equilibria:
+            ax.axvline(p, color="C2" if st else "C3", lw=1, ls="--")
+    axes[2].axhline(0.0, color="0.5", lw=0.8)
+    axes[-1].set_xlabel("crank angle phi1 [deg]")
+    axes[-1].set_xlim(0, 360)
+    fig.suptitle("Reduced dynamics of the crank; equilibria: " + (", ".join(
+        f"{p:.2f} deg ({'stable' if st else 'unstable'})" for p, st in red.equilibria)
+        or "none"), fontsize=10)
     return fig

@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from ..base.files import safe_name
 from ..kernels import config as kc
 from ..results.storage import (ResultsError, attr_text, candidate_ids, open_results, read_units,
                                variables)
@@ -220,11 +221,23 @@ def scene_tables(path, every=1) -> dict:
         if "peaks" in f:
             out["peaks"] = _peaks_table(f)
         if "dynamics" in f:
-            from ..solve.crank_motion import motion_tables
             out.update(motion_tables(f["dynamics"]))
         if "reduced_dynamics" in f:
             g = f["reduced_dynamics"]
             cols = {c: g[c][()] for c in ("phi1", "J", "half_dJ", "Q")}
             out["reduced"] = _frame(cols, {c: str(attr_text(g[c].attrs["units"]))
                                            for c in cols})
+    return out
+
+
+def motion_tables(group) -> dict:
+    """{"motion_<case>": DataFrame(t, phi1, omega1, eps1)} from the stored
+    dynamics group (units in ``df.attrs["units"]``)."""
+    out = {}
+    for name in group:
+        g = group[name]
+        df = pd.DataFrame({"t": g["t"][()], "phi1": g["phi1"][()], "omega1": g["omega1"][()],
+                           "eps1": g["eps1"][()]})
+        df.attrs["units"] = {c: str(g[c].attrs.get("units", "")) for c in df.columns}
+        out[f"motion_{safe_name(name, 'case')}"] = df
     return out

@@ -1,0 +1,32 @@
+"""The device side a generated CUDA module imports besides the CPU module's
+``settle``: ``own(a)``, a kernel's array argument as the CPU-compiled device
+functions take it.  Part of the compiler (the layer whose source it is), so
+that generated code imports nothing from the layers above.  Importing this
+imports numba.cuda (the ``[gpu]`` extra); the CPU path never does."""
+
+from __future__ import annotations
+
+import numpy as np
+
+# numba-cuda's import still names np.row_stack, which numpy 2.5 removed: the same
+# function under its old name, before numba.cuda is imported (nothing else here uses it)
+if not hasattr(np, "row_stack"):    # pragma: no cover - numpy >= 2.5
+    np.row_stack = np.vstack
+
+from numba import config as _config     # noqa: E402
+from numba import cuda                  # noqa: E402
+
+SIMULATOR = bool(_config.ENABLE_CUDASIM)
+
+if SIMULATOR:
+    def own(a):
+        """The numpy array inside the simulator's wrapper of a kernel argument
+        (the CPU-compiled functions the kernel calls take only numpy arrays)."""
+        inner = getattr(a, "_item", a)
+        return getattr(inner, "_ary", inner)
+else:
+    @cuda.jit(device=True, inline=True)
+    def own(a):
+        """On a GPU a kernel's array argument is already what the device
+        functions take."""
+        return a
