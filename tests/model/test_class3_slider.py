@@ -22,6 +22,7 @@ from pipeline.model.mechanism import ClassIIISlider
 from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
 from pipeline.study.reader import StudyError, load_study, parse_study
 from support.power import virtual_power
+from support.references import against_mp_reference
 from support.tolerances import FAIL_ANGLE_RAD, MP_REFERENCE_REL, REACTION_MP_REL, SELF_FD_REL, VIRTUAL_POWER_REL
 
 DEG = math.pi / 180.0
@@ -151,26 +152,6 @@ def _variant(studies, name):
     return study, naive.Class3SliderChain(dict(naive.SLIDER_DATA, **data))
 
 
-def _against_reference(plan, c, chain):
-    """Every point of the reference chain at every position: positions, first
-    and second analogs within MP_REFERENCE_REL of each one's largest value over
-    the cycle.  Returns the largest relative error seen."""
-    refs = [naive.mp_analogs(chain, phi) for phi in c.phi]
-    worst = 0.0
-    for name in refs[0]["pos"]:
-        i = plan.point(name)
-        for key, mine in (("pos", c.pos), ("d1", c.d1), ("d2", c.d2)):
-            ref = np.array([r[key][name] for r in refs])
-            scale = np.abs(ref).max()
-            err = np.abs(mine[:, i] - ref).max()
-            if scale == 0.0:
-                assert err == 0.0, (name, key, err)
-                continue
-            worst = max(worst, err / scale)
-            assert err <= MP_REFERENCE_REL * scale, f"{name} {key}: {err / scale:.2e} relative"
-    return worst
-
-
 @pytest.mark.parametrize("variant", list(VARIANTS))
 def test_matches_the_60_digit_reference(studies, variant):
     """A full cycle of 72 positions: every point's position, velocity and
@@ -179,7 +160,7 @@ def test_matches_the_60_digit_reference(studies, variant):
     study, chain = _variant(studies, variant)
     plan, c = _cycle(study)
     assert c.overall == kc.OK
-    worst = _against_reference(plan, c, chain)
+    worst, _ = against_mp_reference(plan, c, chain)
     assert 0.0 < worst <= MP_REFERENCE_REL
     print(f"{variant}: worst relative error {worst:.2e}")
     if variant == "moving-guide":    # the guide really turns

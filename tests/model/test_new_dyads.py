@@ -20,6 +20,7 @@ from pipeline.model.mechanism import PRP, RPP
 from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
 from pipeline.study.reader import StudyError, load_study, parse_study
 from support.power import virtual_power
+from support.references import against_mp_reference
 from support.tolerances import FAIL_ANGLE_RAD, MP_REFERENCE_REL, REACTION_MP_REL, SELF_FD_REL, VIRTUAL_POWER_REL
 
 DEG = math.pi / 180.0
@@ -41,27 +42,6 @@ def _cycle(study, n=N_CYCLE, order=kc.ACCELERATIONS):
     c = solve_curves(plan, revolution_angles(crank, n), order,
                      close_at=crank.phi0 + crank.rot * 2 * math.pi)
     return plan, c
-
-
-def _against_reference(plan, c, chain, rename=None):
-    """Every point of the reference chain at every position: positions, first
-    and second analogs within MP_REFERENCE_REL of each one's largest value
-    over the cycle.  Returns the largest relative error seen."""
-    rename = rename or {}
-    refs = [naive.mp_analogs(chain, phi) for phi in c.phi]
-    worst = 0.0
-    for name in refs[0]["pos"]:
-        i = plan.point(rename.get(name, name))
-        for key, mine in (("pos", c.pos), ("d1", c.d1), ("d2", c.d2)):
-            ref = np.array([r[key][name] for r in refs])
-            scale = np.abs(ref).max()
-            err = np.abs(mine[:, i] - ref).max()
-            if scale == 0.0:
-                assert err == 0.0, (name, key, err)
-                continue
-            worst = max(worst, err / scale)
-            assert err <= MP_REFERENCE_REL * scale, f"{name} {key}: {err / scale:.2e} relative"
-    return worst
 
 
 # ------------------------------------------------------------------ study format
@@ -147,7 +127,7 @@ def test_prp_matches_the_30_digit_reference(studies, variant):
     assert c.overall == kc.OK
     d = dict(naive.E_DATA, a1=ch.get("guide1_angle", 0.0), e1=ch.get("guide1_offset", 0.0),
              a2=ch.get("guide2_angle", 0.0), e2=ch.get("guide2_offset", 0.0))
-    assert _against_reference(plan, c, naive.SliderChain("PRP", d)) > 0.0
+    assert against_mp_reference(plan, c, naive.SliderChain("PRP", d))[0] > 0.0
 
 
 RPP_VARIANTS = {
@@ -164,7 +144,7 @@ def test_rpp_matches_the_30_digit_reference(studies, variant):
     assert c.overall == kc.OK
     d = dict(naive.F_DATA, a1=ch.get("guide_angle", 0.0), e1=ch.get("guide_offset", 0.0),
              slot=ch.get("slot_angle", 90 * DEG), e_s=ch.get("slot_offset", 0.0))
-    _against_reference(plan, c, naive.SliderChain("RPP", d), rename={"P5": "P3"})
+    against_mp_reference(plan, c, naive.SliderChain("RPP", d), rename={"P5": "P3"})
 
 
 YOKE_ON_ROCKER = """
@@ -217,7 +197,7 @@ def test_rpp_on_a_moving_guide_matches_the_30_digit_reference():
     assert c.overall == kc.OK
     d = dict(L12=15.0, phiM0=0.0, fourbar=True, P4=(38.0, 0.0), L23=41.0, L43=40.0, W=1,
              g1_rocker=True, a1=5 * DEG, e1=-3.0, slot=70 * DEG, e_s=2.0)
-    _against_reference(plan, c, naive.SliderChain("RPP", d))
+    against_mp_reference(plan, c, naive.SliderChain("RPP", d))
 
 
 TANGENT = """
