@@ -142,6 +142,18 @@ def cmd_report(a):
     return EXIT_OK
 
 
+def cmd_tolerance(a):
+    from .runner import run_tolerance
+    res = run_tolerance(a.results, a.candidate, a.output, samples=a.samples,
+                        pictures=not a.no_pictures, overwrite=a.overwrite, n_jobs=a.jobs)
+    info = {"results": str(res.results), **res.summary}
+    if res.pictures:
+        info["pictures"] = ", ".join(str(p) for p in res.pictures)
+    if not a.quiet:
+        _print(info, a.format)
+    return EXIT_OK
+
+
 def build_parser():
     p = argparse.ArgumentParser(prog="pipeline", description=(
         "Exact analysis and Monte-Carlo synthesis of hinged-lever mechanisms."))
@@ -254,6 +266,24 @@ def build_parser():
     rp.add_argument("--top", type=int, default=20, metavar="N",
                     help="rows of the front-1 table (default 20)")
     rp.set_defaults(func=cmd_report)
+
+    tl = sub.add_parser("tolerance", parents=[common], help=(
+        "how a design holds up when it is made: its builds within the study's [tolerance] "
+        "(ISO 2768-f by default) through the exact kernels, the spread of every metric, the "
+        "yield and the sensitivities"))
+    tl.add_argument("results", help="results HDF5 file of a scene or a sweep, or a study file")
+    tl.add_argument("--candidate", metavar="ID",
+                    help="a sweep's design: a number, 'knee' or 'reference'")
+    tl.add_argument("--samples", type=int, metavar="N",
+                    help="builds to draw (default: the study's [tolerance] samples, 4096)")
+    tl.add_argument("-o", "--output", metavar="FILE", help=(
+        "results file (default: next to the results file, <name>[_candidate<ID>]_tolerance.h5; "
+        "for a study file results/<study>_tolerance.h5)"))
+    tl.add_argument("--overwrite", action="store_true",
+                    help="replace an earlier tolerance results file of the same name")
+    tl.add_argument("--no-pictures", action="store_true", help="skip the PNG pictures")
+    tl.add_argument("-j", "--jobs", type=int, help="threads (default: all cores)")
+    tl.set_defaults(func=cmd_tolerance)
 
     bn = sub.add_parser("bench", parents=[common], help=(
         "speed and accuracy: run time against error and the throughput table, "

@@ -196,3 +196,128 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
     if res.reduced is not None:
         summary.update(res.reduced.summary())
     return RunOutcome("scene", out, pics, summary)
+
+
+# ----------------------------------------------------------------- tolerance analysis
+def tolerance_design(source, candidate=None):
+    """(study, design mechanism, label, sweep spec or None, origin attrs) of a
+    design: a scene's results file or study file, or a sweep's candidate
+    (``candidate``: a number, 'knee' or 'reference'; a sweep study file: its
+    reference design)."""
+    from .results.storage import attr_text, open_results
+    source = Path(source)
+    if source.suffix.lower() == ".toml":
+        study = load_study(source)
+        if candidate not in (None, "reference"):
+            raise ValueError(f"{source}: --candidate picks a design of a sweep's results "
+                             "file; a study file has its own design only")
+        label = "reference design" if study.kind == "sweep" else (study.name or "design")
+        return study, study.mechanism, label, study.sweep, {"source": str(source)}
+    with open_results(source) as f:
+        kind = attr_text(f.attrs.get("kind"))
+    if kind == "scene":
+        if candidate is not None:
+            raise ValueError(f"{source} is a scene result: it has one design, no --candidate")
+        from .study.reader import stored_study
+        with open_results(source, "scene") as f:
+            study = stored_study(f.attrs, source)
+        return study, study.mechanism, study.name or "design", None, {"source": str(source)}
+    if kind != "sweep":
+        raise ResultsError(source, f"is a {kind} result; give a scene or a sweep result")
+    if candidate is None:
+        raise ValueError(f"{source} is a sweep: say which design with --candidate ID (a "
+                         "number, 'knee' or 'reference')")
+    from .analysis.candidate import load_study_from_results, resolve_candidate
+    from .results.storage import candidate_ids
+    from .study.sweep_spec import apply_design
+    with open_results(source, "sweep") as f:
+        i = resolve_candidate(f, candidate)
+        study = load_study_from_results(f)
+        x = f["reference/params"][()] if i == "reference" else f["candidates/params"][i]
+        number = "reference" if i == "reference" else int(candidate_ids(f)[i])
+    import numpy as np
+    if not np.isfinite(x).all():
+        raise ValueError(f"{source}: candidate {number} was never evaluated (unfinished sweep)")
+    mech = apply_design(study.mechanism, study.sweep, x)
+    label = "reference design" if number == "reference" else f"candidate #{number}"
+    return study, mech, label, study.sweep, {"source": str(source), "candidate": str(number)}
+
+
+def tolerance_output(source, origin):
+    """results/<study>_tolerance.h5 for a study file; next to a results file
+    <name>[_candidate<ID>]_tolerance.h5."""
+    source = Path(source)
+    tag = f"_candidate{safe_name(origin['candidate'])}" if "candidate" in origin else ""
+    if source.suffix.lower() == ".toml":
+        return Path("results") / f"{safe_name(source.stem, 'study')}_tolerance.h5"
+    return source.with_name(f"{source.stem}{tag}_tolerance.h5")
+
+
+def run_tolerance(source, candidate=None, out=None, *, samples=None, pictures=True,
+                  overwrite=False, n_jobs=None) -> RunOutcome:
+    """The tolerance analysis of a design (``tolerance_design``) under its
+    study's [tolerance] section (ISO 2768-f without one): its results file,
+    pictures and summary."""
+    from .results.tolerance_file import write_tolerance
+    from .runs.tolerance import analyse
+    from .study.tolerance_spec import MAX_SAMPLES, ToleranceSpec
+    study, mech, label, sweep, origin = tolerance_design(source, candidate)
+    spec = study.tolerance or ToleranceSpec()
+    if samples is not None and not 2 <= samples <= MAX_SAMPLES:
+        raise ValueError(f"--samples must be between 2 and {MAX_SAMPLES:,}, got {samples:,}")
+    out = Path(out) if out else tolerance_output(source, origin)
+    with RunLock(out):
+        if out.exists() and not overwrite:
+            raise ResultsError(out, "already exists; --overwrite replaces it, -o writes "
+                                    "another file")
+        log.info("tolerance analysis of the %s: %s builds", label,
+                 f"{samples or spec.samples:,}")
+        a = analyse(study, mech, spec, label=label, sweep_spec=sweep, samples=samples,
+                    n_jobs=n_jobs)
+        write_tolerance(a, study, out, **origin)
+    pics = []
+    if pictures:
+        import matplotlib.pyplot as plt
+
+        from .views.tolerance_plots import histograms_figure, tornado_figure
+        for make, suffix in ((histograms_figure, "histograms"), (tornado_figure, "tornado")):
+            fig = make(a)
+            try:
+                pics.append(save_figure(fig, out.with_name(f"{out.stem}_{suffix}.png"),
+                                        dpi=110))
+            finally:
+                plt.close(fig)
+    return RunOutcome("tolerance", out, pics, tolerance_summary(a))
+
+
+def tolerance_summary(a) -> dict:
+    """The lines a designer reads first: the yield, the statuses, and per
+    metric the design's value, the spread and the dimension that moves it most."""
+    import numpy as np
+    out = {"design": a.label, "builds": f"{len(a.status):,} (scrambled Sobol, seed "
+                                         f"{a.spec.seed}, ISO 2768-{a.spec.iso_class} defaults)",
+           "yield": f"{100 * a.yield_:.2f} % assemble and meet "
+                    + (", ".join(_bound_text(*b) for b in a.constraints) or "nothing more")}
+    counts = a.status_counts()
+    if set(counts) != {"OK"}:
+        out["statuses"] = ", ".join(f"{k} {v:,}" for k, v in counts.items())
+    sig, lin = a.sigma_sampled(), a.sigma_linear()
+    p05, p95 = a.quantiles(0.05), a.quantiles(0.95)
+    share = a.contributions()
+    for k, (m, u) in enumerate(zip(a.metrics, a.units)):
+        unit = "" if u == "1" else f" {u}"
+        j = int(np.nanargmax(share[k])) if np.isfinite(share[k]).any() else 0
+        top = a.dimensions[j]
+        part = (share[k, j] / lin[k]) ** 2 if lin[k] > 0 else float("nan")
+        out[m] = (f"{a.nominal[k]:.4g}{unit}; sigma {sig[k]:.3g} (linear {lin[k]:.3g}); "
+                  f"5-95 % {p05[k]:.4g} to {p95[k]:.4g}; most: {top.param} "
+                  f"({100 * part:.0f} % of the variance)")
+    out["wall_time"] = f"{a.wall_s:.1f} s"
+    return out
+
+
+def _bound_text(metric, lo, hi):
+    import math
+    if math.isfinite(lo) and math.isfinite(hi):
+        return f"{lo:g} <= {metric} <= {hi:g}"
+    return f"{metric} >= {lo:g}" if math.isfinite(lo) else f"{metric} <= {hi:g}"

@@ -78,6 +78,7 @@ class Study:
     dynamics: DynamicsSpec | None = None
     sweep: object = None     # pipeline.study.sweep_spec.SweepSpec for kind = "sweep"
     search: object = None    # pipeline.study.search_spec.SearchSpec: a sweep study's [search]
+    tolerance: object = None  # pipeline.study.tolerance_spec.ToleranceSpec: [tolerance]
     extra: dict = field(default_factory=dict)
 
 
@@ -134,9 +135,14 @@ def parse_study(text: str, path="<study>") -> Study:
                                        "(it searches the [sweep] section's variables)")
         from .search_spec import parse_search
         search = parse_search(root, sweep)
+    tolerance = None
+    if root.has("tolerance"):
+        from .tolerance_spec import parse_tolerance
+        tolerance = parse_tolerance(root, mech, output, sweep)
     root.done()
     return Study(path=Path(path), text=text, kind=kind, name=name, title=title,
-                 mechanism=mech, output=output, dynamics=dynamics, sweep=sweep, search=search)
+                 mechanism=mech, output=output, dynamics=dynamics, sweep=sweep, search=search,
+                 tolerance=tolerance)
 
 
 # ----------------------------------------------------------------- mechanism
