@@ -4,10 +4,9 @@ the metrics as named coordinates (xarray, h5dump, HDFView, MATLAB).
 
     /                      attrs: design, source, candidate, samples, seed, iso_class,
                            yield, study_toml, ...
-    /dimension             coordinate: every toleranced dimension (parameter name)
-    /drawn                 coordinate: the dimensions with a tolerance (drawn)
-    /metric                coordinate: the metrics
-    /build                 coordinate: 0 .. samples - 1
+    coordinates (in each group that uses them): dimension (every toleranced
+    dimension, by parameter name), drawn (those with a tolerance), metric,
+    build (0 .. samples - 1), side (-tolerance, +tolerance)
     /dimensions/{kind, nominal, tolerance, sigma, units, distribution, source}
     /builds/deviation      (build, drawn)  mm or deg
     /builds/status         (build)  enum: OK, NO_ASSEMBLY, ...
@@ -49,14 +48,10 @@ def write_tolerance(a, study, path, **attrs):
                          seed=a.spec.seed, iso_class=a.spec.iso_class,
                          nominal_status=kc.STATUS_NAMES[a.nominal_status],
                          wall_time_s=a.wall_s, complete=True, **{"yield": a.yield_}, **attrs)
-        coordinate(f, "dimension", [d.param for d in dims], "1", "toleranced dimension "
-                   "(mechanism parameter)")
-        coordinate(f, "drawn", [d.param for d in drawn], "1", "dimension with a tolerance "
-                   "(drawn for every build)")
-        coordinate(f, "metric", list(a.metrics), "1", "metric of a build")
-        coordinate(f, "build", np.arange(len(a.status)), "1", "build (scrambled Sobol draw)")
-        coordinate(f, "side", ["-tolerance", "+tolerance"], "1", "side of the tolerance")
+        # each group holds the coordinates of its datasets (netCDF readers such as
+        # xarray name a group's dimensions from the scales in that group)
         g = f.create_group("dimensions")
+        _dimension(g, dims)
         du = [d.units for d in dims]
         put(g, "kind", _text([d.kind for d in dims]), "1", "length | coordinate | angle",
             dims=("dimension",))
@@ -72,17 +67,26 @@ def write_tolerance(a, study, path, **attrs):
         put(g, "source", _text([d.source for d in dims]), "1", "where the tolerance comes from",
             dims=("dimension",))
         b = f.create_group("builds")
+        coordinate(b, "build", np.arange(len(a.status)), "1", "build (scrambled Sobol draw)")
+        coordinate(b, "drawn", _text(d.param for d in drawn), "1", "dimension with a "
+                   "tolerance (drawn for every build)")
+        coordinate(b, "metric", _text(a.metrics), "1", "metric of a build")
         put(b, "deviation", a.deltas, [d.units for d in drawn], "deviation of each drawn "
             "dimension from the design", dims=("build", "drawn"))
         s = b.create_dataset("status", data=a.status.astype(np.int8), dtype=STATUS_ENUM)
         s.attrs["long_name"] = "status of the build over the revolution"
         s.attrs["units"] = "1"
-        s.dims[0].attach_scale(f["build"])
+        s.dims[0].attach_scale(b["build"])
         put(b, "meets", a.meets.astype(np.int8), "1", "1: the build assembles and meets the "
             "constraints", dims=("build",))
         n = f.create_group("nominal")
         sens = f.create_group("sensitivity")
+        _dimension(sens, dims)
+        coordinate(sens, "metric", _text(a.metrics), "1", "metric of a build")
         oat = f.create_group("one_at_a_time")
+        _dimension(oat, dims)
+        coordinate(oat, "side", _text(["-tolerance", "+tolerance"]), "1", "side of the "
+                   "tolerance")
         for k, m in enumerate(a.metrics):
             meta = BY_NAME[m]
             put(b, m, a.values[:, k], meta.units, meta.long_name, dims=("build",))
@@ -96,6 +100,7 @@ def write_tolerance(a, study, path, **attrs):
         put(sens, "checked", a.checked.astype(np.int8), "1", "1: the two steps of the central "
             "difference agree (the metric is smooth there)", dims=("metric", "dimension"))
         sm = f.create_group("summary")
+        coordinate(sm, "metric", _text(a.metrics), "1", "metric of a build")
         put(sm, "nominal", a.nominal, units, "the design's value", dims=("metric",))
         ok = (a.status == kc.OK)
         put(sm, "mean", [_stat(np.mean, a.values[ok, k]) for k in range(len(a.metrics))],
@@ -117,6 +122,11 @@ def write_tolerance(a, study, path, **attrs):
     return path
 
 
+def _dimension(group, dims):
+    coordinate(group, "dimension", _text(d.param for d in dims), "1",
+               "toleranced dimension (mechanism parameter)")
+
+
 def _text(values):
     return np.array(list(values), dtype=h5py.string_dtype())
 
@@ -129,10 +139,10 @@ def _stat(fn, v):
 def read_tolerance(path):
     """The summary of a tolerance results file as a dict (for show and tests)."""
     with open_results(path, "tolerance") as f:
-        metrics = [attr_text(x) for x in f["metric"][()]]
+        metrics = [attr_text(x) for x in f["summary/metric"][()]]
         out = {"design": attr_text(f.attrs["design"]), "yield": float(f.attrs["yield"]),
                "samples": int(f.attrs["samples"]), "metrics": metrics,
-               "dimensions": [attr_text(x) for x in f["dimension"][()]],
+               "dimensions": [attr_text(x) for x in f["dimensions/dimension"][()]],
                "units": read_units(f["summary/nominal"], len(metrics))}
         for key in ("nominal", "mean", "std", "std_linear", "p05", "p50", "p95"):
             out[key] = f[f"summary/{key}"][()]

@@ -38,6 +38,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..kernels import config as kc
+from ..kernels import sweep as ks
 from ..model.metric_catalogue import BY_NAME, metric_values
 from ..study.sweep_spec import SweepSpec
 from ..study.tolerance_spec import ToleranceSpec, drawn
@@ -183,6 +184,7 @@ class BuildEvaluator:
         self.metrics = metrics or available_metrics(self.study, self.plan)
         self.spec = evaluation_spec(self.study, self.plan, self.metrics)
         self.problem = build_problem(self.study, self.spec)
+        self.arm = working_arm(self.study, self.plan)
 
     def raw(self, pars, n_jobs=None):
         """(status, kernel metric rows) of parameter rows."""
@@ -190,10 +192,26 @@ class BuildEvaluator:
 
     def __call__(self, pars, n_jobs=None):
         status, rows = self.raw(pars, n_jobs)
+        if self.arm is not None:
+            # the stroke is the arc of the working point: its arm as built
+            rows[:, ks.M_STROKE] *= pars[:, self.arm] / self.plan.par[self.arm]
         return status, self.values(rows), rows
 
     def values(self, rows):
         return np.stack([metric_values(rows, m) for m in self.metrics], axis=1)
+
+
+def working_arm(study, plan):
+    """The parameter column of the working point's arm on the output rocker
+    (an attached point based on the rocker's pivot: its length), or None: the
+    stroke of a build is its arm times its swing (the sweep's stroke radius
+    is the design's arm)."""
+    pivot = study.output.rocker[0]
+    for label, g in zip(plan.group_names[1:], study.mechanism.groups):
+        if (getattr(g, "point", None) == study.output.working_point
+                and getattr(g, "base", None) == pivot and f"{label}.length" in plan.par_names):
+            return plan.param(f"{label}.length")
+    return None
 
 
 def unit_draws(n, d, seed):
