@@ -26,8 +26,22 @@ from ..kernels import sweep as ks
 
 # the stages of the kernels (pipeline.kernels.sweep): "positions" (stage 1), "law"
 # (stage 1, with [output.motion_law]), "kinematics", "transmission", "forces" (stage
-# 2, candidates that meet the stroke and margin constraints)
-STAGES = ("positions", "law", "kinematics", "transmission", "forces")
+# 2, candidates that meet the stroke and margin constraints); "robust": a design's
+# builds within the study's [tolerance] (pipeline.runs.tolerance.RobustBuilds), for
+# the designs that meet their constraints, in columns after the kernels' own
+STAGES = ("positions", "law", "kinematics", "transmission", "forces", "robust")
+
+# the robust metrics' columns, after the kernels' N_METRICS: (name, the metric of the
+# builds it is a quantile of; "" for the yield)
+ROBUST = (("robust_dwell_error", "dwell_error"), ("robust_peak_reaction", "peak_reaction"),
+          ("robust_law_error", "law_error"), ("build_yield", ""))
+ROBUST_COLUMN = {name: ks.N_METRICS + k for k, (name, _) in enumerate(ROBUST)}
+ROBUST_OF = dict(ROBUST)
+N_ROW = ks.N_METRICS + len(ROBUST)      # a metric row with the robust columns
+_QUANTILE = ("the [tolerance.robust] quantile (default the 95th percentile) of {m} over the "
+             "design's builds within the study's [tolerance] (default ISO 2768-f, the "
+             "reference design's size classes; a build that cannot assemble counts as "
+             "infinitely bad); only designs that meet their constraints carry it, NaN elsewhere")
 RAD_TO_DEG = 180.0 / math.pi
 
 
@@ -112,6 +126,18 @@ CATALOGUE = (
            "every term is exactly 0 (nothing moves, e.g. a cam follower's dwell: the sum is 0 "
            "too) counts 0; elsewhere the ratio is at most the number of terms",
            "forces", ks.M_EQUILIBRIUM, rounding=True),
+    Metric("robust_dwell_error", "1", _QUANTILE.format(m="dwell_error"), "robust",
+           ROBUST_COLUMN["robust_dwell_error"]),
+    Metric("robust_peak_reaction", "N", _QUANTILE.format(m="peak_reaction"), "robust",
+           ROBUST_COLUMN["robust_peak_reaction"]),
+    Metric("robust_law_error", "1", _QUANTILE.format(m="law_error"), "robust",
+           ROBUST_COLUMN["robust_law_error"]),
+    Metric("build_yield", "1",
+           "share of the design's builds within the study's [tolerance] that assemble and "
+           "meet the constraints (the designs that meet them nominally; NaN elsewhere)",
+           "robust", ROBUST_COLUMN["build_yield"], larger_is_better="build_loss"),
+    Metric("build_loss", "1", "1 - build_yield: the share of builds lost (an objective to "
+           "minimise)", "robust", ROBUST_COLUMN["build_yield"], -1.0, 1.0),
 )
 
 BY_NAME = {m.name: m for m in CATALOGUE}

@@ -42,6 +42,7 @@ import numpy as np
 from ..base.files import RunLock
 from ..kernels import sweep as ks
 from ..kernels.pareto import crowding_distance, nondominated_rank
+from ..model.metric_catalogue import ROBUST_OF
 from ..results.search_file import SearchFile, search_summary
 from .search_problem import FrontTracker, SweepBlackBox, TriangleRepair, _broken, hv_scale
 from ..study.search_spec import METHODS, SearchSpec
@@ -94,12 +95,16 @@ def front_seeds(path, spec: SweepSpec, n: int) -> np.ndarray:
             raise ResultsError(path, f"its design variables ({', '.join(names)}) are not this "
                                      f"study's ({', '.join(want)}); cannot seed the search "
                                      "from it")
-        missing = [o for o in spec.objectives if f"metrics/{o}" not in f]
+        # a robust objective (robust_dwell_error) that the earlier file lacks: its front
+        # by the metric the robust one is a quantile of (the designs that matter)
+        objectives = [o if f"metrics/{o}" in f else ROBUST_OF.get(o) or o
+                      for o in spec.objectives]
+        missing = [o for o in objectives if f"metrics/{o}" not in f]
         if missing:
             raise ResultsError(path, f"has no metrics/{missing[0]}, an objective of this study")
         X = p[()]
         feasible = f["candidates/feasible"][()].astype(bool)
-        F = np.stack([f[f"metrics/{o}"][()] for o in spec.objectives], axis=1)
+        F = np.stack([f[f"metrics/{o}"][()] for o in objectives], axis=1)
     lo = np.array([v.low for v in spec.variables])
     hi = np.array([v.high for v in spec.variables])
     with np.errstate(invalid="ignore"):

@@ -32,6 +32,7 @@ from ..base.limits import CHUNK_WHY, MAX_CHUNK
 from ..results.storage import FORMAT, ResultsError, hdf5_writing, room_for
 from ..study.sampling import draw_checked
 from ..study.sweep_spec import SweepSpec, parameter_rows
+from ..model.metric_catalogue import ROBUST_COLUMN
 # the journal, the objectives and the results file have modules of their own; their
 # names stay importable from here (search, browse, report and the tests use them)
 from ..results.journal import JOURNAL_VERSION, MANIFEST_DEFAULTS, Journal, manifest_for  # noqa: F401
@@ -60,6 +61,7 @@ class SweepProblem:
     law: np.ndarray | None = None   # the motion law at the grid's positions (law_error)
     law_best: bool = True    # the law shifted to fit best (align = "best")
     device: str = "cpu"      # cpu | gpu (resolved: never auto)
+    robust: object = None    # pipeline.runs.tolerance.RobustBuilds: the robust metrics asked
 
     @property
     def kernels(self):
@@ -103,14 +105,21 @@ class SweepProblem:
         default), or on the calling thread only (``parallel=False``: a Dask
         task)."""
         if self.device == "gpu":
-            return self.gpu().evaluate_rows(pars)
-        from ..compiler.parallel import run_rows
-        n = pars.shape[0]
-        status = np.zeros(n, np.int8)
-        metrics = np.full((n, ks.N_METRICS), np.nan)
-        run_rows(self.kernels.evaluate, np.ascontiguousarray(pars), self.phis, self.phi_close,
-                 self.tols, self.settings(), self.loads, status, metrics,
-                 n_jobs=n_jobs if parallel else 1)
+            status, metrics = self.gpu().evaluate_rows(pars)
+        else:
+            from ..compiler.parallel import run_rows
+            n = pars.shape[0]
+            status = np.zeros(n, np.int8)
+            metrics = np.full((n, ks.N_METRICS), np.nan)
+            run_rows(self.kernels.evaluate, np.ascontiguousarray(pars), self.phis,
+                     self.phi_close, self.tols, self.settings(), self.loads, status, metrics,
+                     n_jobs=n_jobs if parallel else 1)
+        if self.robust is not None:     # the robust metrics' columns after the kernels'
+            from ..model.metric_catalogue import N_ROW
+            metrics = np.concatenate([metrics, np.full((len(status), N_ROW - ks.N_METRICS),
+                                                       np.nan)], axis=1)
+            self.robust.fill(np.ascontiguousarray(pars, float), status, metrics, n_jobs,
+                             parallel)
         return status, metrics
 
     def evaluate_chunk(self, chunk, parallel=True, n_jobs=None):
@@ -160,7 +169,20 @@ def build_problem(study, spec: SweepSpec, tols=None, device="cpu") -> SweepProbl
         loads=sample_loads(mech, phis) if mech.loads else np.zeros((len(phis), 0, 3)),
         work_point=plan.point(out.working_point),
         law=None if law is None else law.on_grid(crank, phis),
-        law_best=True if law is None else law.best, device=device)
+        law_best=True if law is None else law.best, device=device,
+        robust=_robust(study, spec))
+
+
+def _robust(study, spec):
+    """The robust metrics' builds (``tolerance.RobustBuilds``) if the sweep asks
+    for one, else None."""
+    names = [m for m in dict.fromkeys(spec.metrics + spec.objectives) if m in ROBUST_COLUMN
+             or m == "build_loss"]
+    if not names:
+        return None
+    from .tolerance import RobustBuilds
+    names = ["build_yield" if m == "build_loss" else m for m in names]
+    return RobustBuilds(study, spec, dict.fromkeys(names))
 
 
 def evaluate_chunk_task(problem, chunk):

@@ -179,12 +179,12 @@ class BuildEvaluator:
         if study.output.rocker is None:
             raise ValueError(f"{study.path}: a tolerance analysis reads stroke and dwell from "
                              "the output rocker: give output.rocker = [pivot, point]")
-        self.study = replace(study, mechanism=mech)
+        study = replace(study, mechanism=mech)      # (not kept: a worker gets plain arrays)
         self.plan = mech.compile()
-        self.metrics = metrics or available_metrics(self.study, self.plan)
-        self.spec = evaluation_spec(self.study, self.plan, self.metrics)
-        self.problem = build_problem(self.study, self.spec)
-        self.arm = working_arm(self.study, self.plan)
+        self.metrics = metrics or available_metrics(study, self.plan)
+        self.spec = evaluation_spec(study, self.plan, self.metrics)
+        self.problem = build_problem(study, self.spec)
+        self.arm = working_arm(study, self.plan)
 
     def raw(self, pars, n_jobs=None):
         """(status, kernel metric rows) of parameter rows."""
@@ -333,3 +333,71 @@ def sensitivities(ev: BuildEvaluator, dims, nominal, n_jobs=None):
                 break
     oat = np.transpose(values[:, 8:10, :], (2, 0, 1))
     return sens, checked, oat
+
+
+# ----------------------------------------------------------------- robust metrics
+class RobustBuilds:
+    """The robust metrics of a sweep or a search (``metric_catalogue.ROBUST``):
+    every design that meets its constraints nominally is built ``builds``
+    times within the study's tolerances (the same scrambled Sobol deviations
+    for every design: common draws make designs comparable), and the quantile
+    of a metric over its builds, or the share of builds that meet the
+    constraints, fills the design's robust columns.  The other designs cannot
+    be on a feasible front: NaN.  The tolerances are the reference design's
+    (its size classes) for every design.  Picklable (a Dask worker gets it
+    with its problem)."""
+
+    def __init__(self, study, spec: SweepSpec, names):
+        from ..model.metric_catalogue import ROBUST_OF
+        tol = study.tolerance or ToleranceSpec()
+        self.names = tuple(names)
+        self.spec = spec
+        self.quantile = tol.robust.quantile
+        self.dims = drawn(tol.dimensions(study.mechanism))
+        self.deltas = deviations(self.dims, tol.robust.builds, tol.seed)
+        base = [ROBUST_OF[n] for n in self.names if ROBUST_OF[n]]
+        if "build_yield" in self.names:
+            base += ["stroke"] + [m for m, _, _ in spec.bounds if BY_NAME[m].stage != "robust"]
+        plan = study.mechanism.compile()
+        if np.isin(plan.codes, kc.CLASS3_GROUPS).any():
+            base.append("singularity_margin")
+        self.builds = BuildEvaluator(study, study.mechanism, tuple(dict.fromkeys(base)))
+        self.has_margin = "singularity_margin" in base
+        self.columns = [plan.param(d.param) for d in self.dims]
+        self.factors = np.array([d.factor for d in self.dims])
+
+    def describe(self) -> str:
+        return (f"{', '.join(self.names)}: {len(self.deltas)} builds per design that meets its "
+                f"constraints, quantile {self.quantile:g}, tolerances of "
+                f"{len(self.dims)} dimensions (the reference design's)")
+
+    def fill(self, pars, status, rows, n_jobs=None, parallel=True):
+        """Write the robust columns of ``rows`` (n, N_ROW) of the designs
+        ``pars`` whose nominal ``status`` and rows meet the constraints."""
+        from ..model.metric_catalogue import ROBUST_COLUMN, ROBUST_OF
+        from ..study.objectives import constraints
+        nominal = replace(self.spec, bounds=tuple(b for b in self.spec.bounds
+                                                   if BY_NAME[b[0]].stage != "robust"))
+        _, cv = constraints(nominal, rows, status, self.has_margin)
+        idx = np.flatnonzero((status == kc.OK) & (cv == 0))
+        if not len(idx):
+            return
+        B = len(self.deltas)
+        build = np.repeat(pars[idx], B, axis=0)
+        build[:, self.columns] += np.tile(self.deltas * self.factors, (len(idx), 1))
+        st, vals, brows = self.builds(build, n_jobs if parallel else 1)
+        ok = (st == kc.OK).reshape(len(idx), B)
+        for name in self.names:
+            col = ROBUST_COLUMN[name]
+            if name == "build_yield":
+                _, bcv = constraints(nominal, brows, st, self.has_margin)
+                meets = ((st == kc.OK) & (bcv == 0)).reshape(len(idx), B)
+                rows[idx, col] = meets.mean(axis=1)
+                continue
+            v = vals[:, self.builds.metrics.index(ROBUST_OF[name])].reshape(len(idx), B)
+            v = np.where(ok & np.isfinite(v), v, np.inf)     # a failed build: the worst
+            # interpolated between order statistics (a smoother objective than a single
+            # build's value); a quantile that reaches a failed build is infinite
+            with np.errstate(invalid="ignore"):
+                q = np.quantile(v, self.quantile, axis=1)
+            rows[idx, col] = np.where(np.isnan(q), np.inf, q)

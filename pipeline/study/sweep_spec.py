@@ -321,6 +321,13 @@ def _check_bounds_range(sec, v, name, param, low, high, units, factor, ref, spre
 
 def _check_available(sec, key, m, mech, output):
     """Refuse a metric the study cannot compute, naming the field."""
+    if METRICS[m][2] == "robust":        # a quantile of a metric over the builds: that metric's
+        from ..model.metric_catalogue import ROBUST_OF
+        base = ROBUST_OF.get(m, "")
+        if base:
+            _check_available(sec, key, base, mech, output)
+            if METRICS[base][2] == "forces" and not mech.bodies:
+                raise sec.error(key, f"{m} needs mass data: declare [[mechanism.bodies]]")
     if METRICS[m][2] == "law" and output.motion_law is None:
         raise sec.error(key, f"{m} needs the required motion law: declare [output.motion_law]")
     if METRICS[m][2] == "transmission":
