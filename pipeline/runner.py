@@ -199,50 +199,6 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
 
 
 # ----------------------------------------------------------------- tolerance analysis
-def tolerance_design(source, candidate=None):
-    """(study, design mechanism, label, sweep spec or None, origin attrs) of a
-    design: a scene's results file or study file, or a sweep's candidate
-    (``candidate``: a number, 'knee' or 'reference'; a sweep study file: its
-    reference design)."""
-    from .results.storage import attr_text, open_results
-    source = Path(source)
-    if source.suffix.lower() == ".toml":
-        study = load_study(source)
-        if candidate not in (None, "reference"):
-            raise ValueError(f"{source}: --candidate picks a design of a sweep's results "
-                             "file; a study file has its own design only")
-        label = "reference design" if study.kind == "sweep" else (study.name or "design")
-        return study, study.mechanism, label, study.sweep, {"source": str(source)}
-    with open_results(source) as f:
-        kind = attr_text(f.attrs.get("kind"))
-    if kind == "scene":
-        if candidate is not None:
-            raise ValueError(f"{source} is a scene result: it has one design, no --candidate")
-        from .study.reader import stored_study
-        with open_results(source, "scene") as f:
-            study = stored_study(f.attrs, source)
-        return study, study.mechanism, study.name or "design", None, {"source": str(source)}
-    if kind != "sweep":
-        raise ResultsError(source, f"is a {kind} result; give a scene or a sweep result")
-    if candidate is None:
-        raise ValueError(f"{source} is a sweep: say which design with --candidate ID (a "
-                         "number, 'knee' or 'reference')")
-    from .analysis.candidate import load_study_from_results, resolve_candidate
-    from .results.storage import candidate_ids
-    from .study.sweep_spec import apply_design
-    with open_results(source, "sweep") as f:
-        i = resolve_candidate(f, candidate)
-        study = load_study_from_results(f)
-        x = f["reference/params"][()] if i == "reference" else f["candidates/params"][i]
-        number = "reference" if i == "reference" else int(candidate_ids(f)[i])
-    import numpy as np
-    if not np.isfinite(x).all():
-        raise ValueError(f"{source}: candidate {number} was never evaluated (unfinished sweep)")
-    mech = apply_design(study.mechanism, study.sweep, x)
-    label = "reference design" if number == "reference" else f"candidate #{number}"
-    return study, mech, label, study.sweep, {"source": str(source), "candidate": str(number)}
-
-
 def tolerance_output(source, origin):
     """results/<study>_tolerance.h5 for a study file; next to a results file
     <name>[_candidate<ID>]_tolerance.h5."""
@@ -258,6 +214,7 @@ def run_tolerance(source, candidate=None, out=None, *, samples=None, pictures=Tr
     """The tolerance analysis of a design (``tolerance_design``) under its
     study's [tolerance] section (ISO 2768-f without one): its results file,
     pictures and summary."""
+    from .analysis.candidate import tolerance_design
     from .results.tolerance_file import write_tolerance
     from .runs.tolerance import analyse
     from .study.tolerance_spec import MAX_SAMPLES, ToleranceSpec

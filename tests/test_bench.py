@@ -72,3 +72,18 @@ def test_bench_and_compile_outside_a_checkout_say_what_to_name(tmp_path, monkeyp
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "pipeline compile STUDY.toml" in err, err
     assert not any(tmp_path.iterdir())                  # nothing written
+
+
+@pytest.mark.parametrize("name, written", [("bench_tolerance", "tolerance.md"),
+                                           ("bench_robust", "robust.md")])
+def test_benchmark_smoke_modes_run(name, written, tmp_path, monkeypatch):
+    """A benchmark that breaks fails the suite: each runs at tiny sizes."""
+    import importlib
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    mod = importlib.import_module(name)
+    res = mod.run(smoke=True, out=tmp_path, echo=lambda *a: None)
+    assert (tmp_path / written).read_text().startswith("#")
+    if name == "bench_tolerance":
+        assert res["builds"] == 256 and res["build_rate"] > 0 and res["sweep_rate"] > 0
+    else:
+        assert res["rows"] and all(n > 0 for n in res["fronts"].values())

@@ -138,3 +138,45 @@ def rerun_candidate(path, cid, *, forces=True, n_table=12, positions=None) -> Ca
     return CandidateRun(label, i, replace(study, mechanism=mech), plan, np.asarray(x, float),
                         names, units, table, dense, theta, float(err), int(start), w,
                         int(dense.overall), fail_phi)
+
+
+def tolerance_design(source, candidate=None):
+    """(study, design mechanism, label, sweep spec or None, origin attrs) of a
+    design: a scene's results file or study file, or a sweep's candidate
+    (``candidate``: a number, 'knee' or 'reference'; a sweep study file: its
+    reference design)."""
+    from ..results.storage import ResultsError, attr_text, open_results
+    from pathlib import Path
+    source = Path(source)
+    if source.suffix.lower() == ".toml":
+        from ..study.reader import load_study
+        study = load_study(source)
+        if candidate not in (None, "reference"):
+            raise ValueError(f"{source}: --candidate picks a design of a sweep's results "
+                             "file; a study file has its own design only")
+        label = "reference design" if study.kind == "sweep" else (study.name or "design")
+        return study, study.mechanism, label, study.sweep, {"source": str(source)}
+    with open_results(source) as f:
+        kind = attr_text(f.attrs.get("kind"))
+    if kind == "scene":
+        if candidate is not None:
+            raise ValueError(f"{source} is a scene result: it has one design, no --candidate")
+        with open_results(source, "scene") as f:
+            study = stored_study(f.attrs, source)
+        return study, study.mechanism, study.name or "design", None, {"source": str(source)}
+    if kind != "sweep":
+        raise ResultsError(source, f"is a {kind} result; give a scene or a sweep result")
+    if candidate is None:
+        raise ValueError(f"{source} is a sweep: say which design with --candidate ID (a "
+                         "number, 'knee' or 'reference')")
+    from ..study.sweep_spec import apply_design
+    with open_results(source, "sweep") as f:
+        i = resolve_candidate(f, candidate)
+        study = load_study_from_results(f)
+        x = f["reference/params"][()] if i == "reference" else f["candidates/params"][i]
+        number = "reference" if i == "reference" else int(candidate_ids(f)[i])
+    if not np.isfinite(x).all():
+        raise ValueError(f"{source}: candidate {number} was never evaluated (unfinished sweep)")
+    mech = apply_design(study.mechanism, study.sweep, x)
+    label = "reference design" if number == "reference" else f"candidate #{number}"
+    return study, mech, label, study.sweep, {"source": str(source), "candidate": str(number)}

@@ -15,24 +15,21 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import math
 import os
-import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import h5py
-import numpy as np
 
 from ..base.files import RunLock, fault_point, replacing
-from ..kernels import config as kc
-from ..kernels import sweep as ks
 from ..base.limits import CHUNK_WHY, MAX_CHUNK
 from ..results.storage import FORMAT, ResultsError, hdf5_writing, room_for
-from ..study.sampling import draw_checked
-from ..study.sweep_spec import SweepSpec, parameter_rows
-from ..model.metric_catalogue import ROBUST_COLUMN
+from ..study.sampling import draw_checked  # noqa: F401 (importable from here)
+from ..study.sweep_spec import SweepSpec, parameter_rows  # noqa: F401
+# the problem a worker evaluates has a module of its own (problem.py); its names stay
+# importable from here
+from .problem import SweepProblem, compile_notice, plain_problem  # noqa: E402,F401
 # the journal, the objectives and the results file have modules of their own; their
 # names stay importable from here (search, browse, report and the tests use them)
 from ..results.journal import JOURNAL_VERSION, MANIFEST_DEFAULTS, Journal, manifest_for  # noqa: F401
@@ -41,94 +38,6 @@ from ..study.objectives import (COLUMN, DERIVED, bounded_finite, constraint_name
 from ..results.sweep_file import COUNTED, SweepFile, status_counts, summarize  # noqa: F401
 
 log = logging.getLogger("pipeline")
-
-# ----------------------------------------------------------------- the problem
-@dataclass
-class SweepProblem:
-    """Everything a worker needs to evaluate a chunk: plain arrays and the spec
-    (picklable; no study objects, no expressions)."""
-    spec: SweepSpec
-    plan: object
-    phis: np.ndarray
-    phi_close: float
-    tols: np.ndarray
-    rocker: tuple            # (pivot, point) names of the output rocker
-    dwell_w: int
-    omega1: float
-    eps1: float
-    loads: np.ndarray
-    work_point: int = -1     # point index of the working point (peak_acceleration)
-    law: np.ndarray | None = None   # the motion law at the grid's positions (law_error)
-    law_best: bool = True    # the law shifted to fit best (align = "best")
-    device: str = "cpu"      # cpu | gpu (resolved: never auto)
-    robust: object = None    # pipeline.runs.tolerance.RobustBuilds: the robust metrics asked
-
-    @property
-    def kernels(self):
-        """The mechanism's generated kernels (compiled on first use, then cached)."""
-        from ..compiler import kernels_for
-        return kernels_for(self.plan, self.rocker)
-
-    def settings(self):
-        s = self.spec
-        return ks.settings(s.stroke_radius, self.dwell_w, s.wants_forces, s.stroke_bounds[0],
-                           s.stroke_bounds[1], s.margin_min, self.omega1, self.eps1,
-                           want_peaks=s.wants_peaks, work_point=self.work_point,
-                           want_transmission=s.wants_transmission,
-                           law=self.law if s.wants_law else None, law_best=self.law_best)
-
-    @property
-    def device_name(self):
-        """'cpu', or the GPU the kernels run on (pipeline.runs.gpu.describe)."""
-        if self.device == "cpu":
-            return "cpu"
-        from .gpu import describe
-        return describe()
-
-    def gpu(self):
-        """The sweep's CUDA kernels on this process's GPU (made once; not pickled)."""
-        g = self.__dict__.get("_gpu")
-        if g is None:
-            from .gpu import BATCH, GpuSweep
-            # a launch no larger than a chunk: device memory follows --chunk-size
-            g = self.__dict__["_gpu"] = GpuSweep(self, batch=min(BATCH, self.spec.chunk_size))
-        return g
-
-    def __getstate__(self):
-        state = dict(self.__dict__)
-        state.pop("_gpu", None)
-        return state
-
-    def evaluate_rows(self, pars, parallel=True, n_jobs=None):
-        """Status and metric rows (N_METRICS) of the parameter rows ``pars``: on
-        the GPU (device 'gpu'), else on ``n_jobs`` threads (all cores by
-        default), or on the calling thread only (``parallel=False``: a Dask
-        task)."""
-        if self.device == "gpu":
-            status, metrics = self.gpu().evaluate_rows(pars)
-        else:
-            from ..compiler.parallel import run_rows
-            n = pars.shape[0]
-            status = np.zeros(n, np.int8)
-            metrics = np.full((n, ks.N_METRICS), np.nan)
-            run_rows(self.kernels.evaluate, np.ascontiguousarray(pars), self.phis,
-                     self.phi_close, self.tols, self.settings(), self.loads, status, metrics,
-                     n_jobs=n_jobs if parallel else 1)
-        if self.robust is not None:     # the robust metrics' columns after the kernels'
-            from ..model.metric_catalogue import N_ROW
-            metrics = np.concatenate([metrics, np.full((len(status), N_ROW - ks.N_METRICS),
-                                                       np.nan)], axis=1)
-            self.robust.fill(np.ascontiguousarray(pars, float), status, metrics, n_jobs,
-                             parallel)
-        return status, metrics
-
-    def evaluate_chunk(self, chunk, parallel=True, n_jobs=None):
-        """(chunk, x, status, metrics, rejected draws per triangle)."""
-        x, rejected = draw_checked(self.spec, chunk)
-        status, metrics = self.evaluate_rows(parameter_rows(self.plan, self.spec, x), parallel,
-                                             n_jobs)
-        return chunk, x, status, metrics, rejected
-
 
 def _device(spec: SweepSpec, distributed) -> str:
     """The device a run takes ('cpu' or 'gpu'), before anything is written: a
@@ -152,37 +61,12 @@ def _device(spec: SweepSpec, distributed) -> str:
 
 
 def build_problem(study, spec: SweepSpec, tols=None, device="cpu") -> SweepProblem:
-    from ..solve.reactions import sample_loads
-    from ..solve.scene import revolution_angles
-    mech = study.mechanism
-    plan = mech.compile()
-    crank = mech.crank
-    phis = revolution_angles(crank, spec.positions)
-    out = study.output
-    law = out.motion_law
-    return SweepProblem(
-        spec=spec, plan=plan, phis=phis, phi_close=crank.phi0 + crank.rot * 2 * math.pi,
-        tols=kc.default_tolerances() if tols is None else tols,
-        rocker=(out.rocker[0], out.rocker[1]),
-        dwell_w=int(round(out.dwell_deg * spec.positions / 360)),
-        omega1=crank.omega1, eps1=crank.eps1,
-        loads=sample_loads(mech, phis) if mech.loads else np.zeros((len(phis), 0, 3)),
-        work_point=plan.point(out.working_point),
-        law=None if law is None else law.on_grid(crank, phis),
-        law_best=True if law is None else law.best, device=device,
-        robust=_robust(study, spec))
-
-
-def _robust(study, spec):
-    """The robust metrics' builds (``tolerance.RobustBuilds``) if the sweep asks
-    for one, else None."""
-    names = [m for m in dict.fromkeys(spec.metrics + spec.objectives) if m in ROBUST_COLUMN
-             or m == "build_loss"]
-    if not names:
-        return None
-    from .tolerance import RobustBuilds
-    names = ["build_yield" if m == "build_loss" else m for m in names]
-    return RobustBuilds(study, spec, dict.fromkeys(names))
+    """The sweep's problem (``problem.plain_problem``) with the builds of its
+    robust metrics if it asks for one (``builds.robust_for``)."""
+    from .builds import robust_for
+    problem = plain_problem(study, spec, tols, device)
+    problem.robust = robust_for(study, spec)
+    return problem
 
 
 def evaluate_chunk_task(problem, chunk):
@@ -327,26 +211,6 @@ def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, 
     finally:
         if own:
             client.close()
-
-
-@contextlib.contextmanager
-def compile_notice():
-    """Around the first evaluation of a run (the reference design), which compiles
-    a new mechanism's kernels: a notice if it takes more than a second, and how
-    long it took (the list it yields holds the seconds afterwards)."""
-    t = time.perf_counter()
-    took = [0.0]
-    notice = threading.Timer(1.0, log.info, ("compiling the kernels of this mechanism "
-                                             "(its first run only; about 15 s)...",))
-    notice.daemon = True
-    notice.start()
-    try:
-        yield took
-    finally:
-        notice.cancel()
-    took[0] = time.perf_counter() - t
-    if took[0] > 1.0:
-        log.info("kernels ready after %.1f s", took[0])
 
 
 def aside_or_done(out: Path, journal: Journal, resume: bool, overwrite: bool, unit: str,

@@ -188,3 +188,50 @@ def test_study_tolerances_and_iso_defaults():
     cand = {d.param: d for d in study.tolerance.dimensions(big)}
     assert cand["triad.L23"].nominal == pytest.approx(272.5 * 1.2)
     assert replace(cand["crank.length"]).tolerance == 0.3
+
+
+def robust_study(objectives='["robust_dwell_error", "peak_reaction"]', extra=""):
+    text = (STUDIES / "ov7_robust_search.toml").read_text()
+    text = text.replace('objectives = ["robust_dwell_error", "peak_reaction"]',
+                        f"objectives = {objectives}")
+    return parse_study(text + extra, STUDIES / "ov7_robust_search.toml")
+
+
+def test_robust_metrics_are_the_quantile_and_the_yield_of_the_designs_builds():
+    """The reference design's robust columns against its own tolerance analysis
+    with the same draws (64 builds, seed 1, the 95th percentile); a design that
+    fails its constraints nominally carries none."""
+    from pipeline.model.metric_catalogue import metric_values
+    from pipeline.runs.sweep import build_problem
+    study = robust_study()
+    spec = replace(study.sweep, metrics=study.sweep.metrics + ("build_yield",))
+    problem = build_problem(study, spec)
+    ref = problem.plan.par
+    short = ref.copy()
+    short[problem.plan.param("crank.length")] *= 0.5       # half the stroke: infeasible
+    status, rows = problem.evaluate_rows(np.stack([ref, short]))
+    a = analyse(study, study.mechanism, replace(study.tolerance, samples=64),
+                sweep_spec=study.sweep)
+    k = a.metrics.index("dwell_error")
+    want = np.quantile(np.where(a.status == kc.OK, a.values[:, k], np.inf), 0.95)
+    assert metric_values(rows, "robust_dwell_error")[0] == want
+    assert metric_values(rows, "build_yield")[0] == a.yield_
+    assert metric_values(rows, "dwell_error")[0] < want
+    assert np.isnan(metric_values(rows, "robust_dwell_error")[1])
+    assert np.isnan(metric_values(rows, "build_yield")[1])
+
+
+def test_a_sweep_with_a_robust_objective_says_which_designs_carry_it(tmp_path):
+    from pipeline.runs.sweep import run_sweep
+    study = robust_study()
+    study = replace(study, search=None)
+    out = tmp_path / "robust_sweep.h5"
+    run_sweep(study, out, candidates=300, chunk_size=300, progress=False)
+    with h5py.File(out, "r") as f:
+        r = f["metrics/robust_dwell_error"][()]
+        nominal = f["metrics/dwell_error"][()]
+        feasible = f["candidates/feasible"][()].astype(bool)
+        assert "builds" in f["metrics/robust_dwell_error"].attrs["long_name"]
+    assert feasible.any() and np.isfinite(r[feasible]).all()
+    assert (r[feasible] > nominal[feasible]).mean() > 0.9       # builds are worse, mostly
+    assert np.isnan(r[~np.isfinite(nominal)]).all()

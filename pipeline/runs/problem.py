@@ -1,0 +1,150 @@
+"""The problem a sweep's worker evaluates: plain arrays and the sweep's
+settings (picklable), the generated kernels on first use, and the notice
+around the first evaluation, which compiles a new mechanism's kernels."""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import math
+import threading
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..kernels import config as kc
+from ..kernels import sweep as ks
+from ..study.sampling import draw_checked
+from ..study.sweep_spec import SweepSpec, parameter_rows
+
+log = logging.getLogger("pipeline")
+
+
+@dataclass
+class SweepProblem:
+    """Everything a worker needs to evaluate a chunk: plain arrays and the spec
+    (picklable; no study objects, no expressions)."""
+    spec: SweepSpec
+    plan: object
+    phis: np.ndarray
+    phi_close: float
+    tols: np.ndarray
+    rocker: tuple            # (pivot, point) names of the output rocker
+    dwell_w: int
+    omega1: float
+    eps1: float
+    loads: np.ndarray
+    work_point: int = -1     # point index of the working point (peak_acceleration)
+    law: np.ndarray | None = None   # the motion law at the grid's positions (law_error)
+    law_best: bool = True    # the law shifted to fit best (align = "best")
+    device: str = "cpu"      # cpu | gpu (resolved: never auto)
+    robust: object = None    # pipeline.runs.tolerance.RobustBuilds: the robust metrics asked
+
+    @property
+    def kernels(self):
+        """The mechanism's generated kernels (compiled on first use, then cached)."""
+        from ..compiler import kernels_for
+        return kernels_for(self.plan, self.rocker)
+
+    def settings(self):
+        s = self.spec
+        return ks.settings(s.stroke_radius, self.dwell_w, s.wants_forces, s.stroke_bounds[0],
+                           s.stroke_bounds[1], s.margin_min, self.omega1, self.eps1,
+                           want_peaks=s.wants_peaks, work_point=self.work_point,
+                           want_transmission=s.wants_transmission,
+                           law=self.law if s.wants_law else None, law_best=self.law_best)
+
+    @property
+    def device_name(self):
+        """'cpu', or the GPU the kernels run on (pipeline.runs.gpu.describe)."""
+        if self.device == "cpu":
+            return "cpu"
+        from .gpu import describe
+        return describe()
+
+    def gpu(self):
+        """The sweep's CUDA kernels on this process's GPU (made once; not pickled)."""
+        g = self.__dict__.get("_gpu")
+        if g is None:
+            from .gpu import BATCH, GpuSweep
+            # a launch no larger than a chunk: device memory follows --chunk-size
+            g = self.__dict__["_gpu"] = GpuSweep(self, batch=min(BATCH, self.spec.chunk_size))
+        return g
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state.pop("_gpu", None)
+        return state
+
+    def evaluate_rows(self, pars, parallel=True, n_jobs=None):
+        """Status and metric rows (N_METRICS) of the parameter rows ``pars``: on
+        the GPU (device 'gpu'), else on ``n_jobs`` threads (all cores by
+        default), or on the calling thread only (``parallel=False``: a Dask
+        task)."""
+        if self.device == "gpu":
+            status, metrics = self.gpu().evaluate_rows(pars)
+        else:
+            from ..compiler.parallel import run_rows
+            n = pars.shape[0]
+            status = np.zeros(n, np.int8)
+            metrics = np.full((n, ks.N_METRICS), np.nan)
+            run_rows(self.kernels.evaluate, np.ascontiguousarray(pars), self.phis,
+                     self.phi_close, self.tols, self.settings(), self.loads, status, metrics,
+                     n_jobs=n_jobs if parallel else 1)
+        if self.robust is not None:     # the robust metrics' columns after the kernels'
+            from ..model.metric_catalogue import N_ROW
+            metrics = np.concatenate([metrics, np.full((len(status), N_ROW - ks.N_METRICS),
+                                                       np.nan)], axis=1)
+            self.robust.fill(np.ascontiguousarray(pars, float), status, metrics, n_jobs,
+                             parallel)
+        return status, metrics
+
+    def evaluate_chunk(self, chunk, parallel=True, n_jobs=None):
+        """(chunk, x, status, metrics, rejected draws per triangle)."""
+        x, rejected = draw_checked(self.spec, chunk)
+        status, metrics = self.evaluate_rows(parameter_rows(self.plan, self.spec, x), parallel,
+                                             n_jobs)
+        return chunk, x, status, metrics, rejected
+
+
+def plain_problem(study, spec: SweepSpec, tols=None, device="cpu") -> SweepProblem:
+    """The sweep's problem of ``study`` under ``spec``: plain arrays a worker
+    evaluates (its robust metrics' builds are ``runs.sweep.build_problem``'s)."""
+    from ..solve.reactions import sample_loads
+    from ..solve.scene import revolution_angles
+    mech = study.mechanism
+    plan = mech.compile()
+    crank = mech.crank
+    phis = revolution_angles(crank, spec.positions)
+    out = study.output
+    law = out.motion_law
+    return SweepProblem(
+        spec=spec, plan=plan, phis=phis, phi_close=crank.phi0 + crank.rot * 2 * math.pi,
+        tols=kc.default_tolerances() if tols is None else tols,
+        rocker=(out.rocker[0], out.rocker[1]),
+        dwell_w=int(round(out.dwell_deg * spec.positions / 360)),
+        omega1=crank.omega1, eps1=crank.eps1,
+        loads=sample_loads(mech, phis) if mech.loads else np.zeros((len(phis), 0, 3)),
+        work_point=plan.point(out.working_point),
+        law=None if law is None else law.on_grid(crank, phis),
+        law_best=True if law is None else law.best, device=device)
+
+@contextlib.contextmanager
+def compile_notice():
+    """Around the first evaluation of a run (the reference design), which compiles
+    a new mechanism's kernels: a notice if it takes more than a second, and how
+    long it took (the list it yields holds the seconds afterwards)."""
+    t = time.perf_counter()
+    took = [0.0]
+    notice = threading.Timer(1.0, log.info, ("compiling the kernels of this mechanism "
+                                             "(its first run only; about 15 s)...",))
+    notice.daemon = True
+    notice.start()
+    try:
+        yield took
+    finally:
+        notice.cancel()
+    took[0] = time.perf_counter() - t
+    if took[0] > 1.0:
+        log.info("kernels ready after %.1f s", took[0])
