@@ -253,8 +253,10 @@ def tolerance_summary(a) -> dict:
     import numpy as np
     out = {"design": a.label, "builds": f"{len(a.status):,} (scrambled Sobol, seed "
                                          f"{a.spec.seed}, ISO 2768-{a.spec.iso_class} defaults)",
-           "yield": f"{100 * a.yield_:.2f} % assemble and meet "
-                    + (", ".join(_bound_text(*b) for b in a.constraints) or "nothing more")}
+           "yield": f"{100 * a.yield_:.2f} % assemble" + (
+               " and meet " + ", ".join(_bound_text(*b) for b in a.constraints)
+               if a.constraints else " (no constraints: a scene's [tolerance.constraints] "
+                                     "bound its metrics)")}
     counts = a.status_counts()
     if set(counts) != {"OK"}:
         out["statuses"] = ", ".join(f"{k} {v:,}" for k, v in counts.items())

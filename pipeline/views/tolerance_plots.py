@@ -105,7 +105,7 @@ def tornado_figure(a, metrics=None):
         ax.plot(base + lin, y, "k|", ms=10, label="linear")
         ax.plot(base - lin, y, "k|", ms=10)
         ax.axvline(base, color="k", lw=0.8)
-        ax.set_yticks(y, [f"{a.dimensions[j].param} +-{tol[j]:g} {a.dimensions[j].units}"
+        ax.set_yticks(y, [f"{a.dimensions[j].param} ±{tol[j]:g} {a.dimensions[j].units}"
                           for j in order], fontsize=8)
         ax.set_xlabel(_label(a.metrics[k], a.units[k]))
         ax.grid(axis="x", alpha=0.3)
