@@ -143,6 +143,7 @@ def test_a_first_run_says_it_is_compiling(tmp_path, studies, monkeypatch, caplog
     import time
     import types
 
+    import pipeline.runs.problem as pr
     import pipeline.runs.sweep as sw
     real = sw.SweepFile.create
     noticed = threading.Event()
@@ -162,6 +163,7 @@ def test_a_first_run_says_it_is_compiling(tmp_path, studies, monkeypatch, caplog
                                   monotonic=lambda: time.monotonic() + offset[0])
     monkeypatch.setattr(sw.SweepFile, "create", slow_create)
     monkeypatch.setattr(sw, "time", clock)
+    monkeypatch.setattr(pr, "time", clock)       # compile_notice's clock (runs/problem.py)
     handler = Notice()
     logging.getLogger("pipeline").addHandler(handler)
     try:
