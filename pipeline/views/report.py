@@ -184,7 +184,7 @@ def explorer_html(path, data, ana) -> str:
 
 
 # ----------------------------------------------------------------- page parts
-TOLERANCE_BUILDS = 1024     # builds per design in the report's tolerance section
+TOLERANCE_BUILDS = 512      # builds per design in the report's tolerance section
 TOLERANCE_METRICS = ("dwell_error", "stroke", "peak_reaction")
 
 
@@ -207,7 +207,7 @@ def tolerance_html(path, ana, data) -> str:
                     sweep_spec=sweep, samples=TOLERANCE_BUILDS)
         if i == ana.knee:
             label += " (knee)"
-            knee_fig = _png(histograms_figure(a))
+            knee_fig = _png(histograms_figure(a), dpi=72)
         p05, p95 = a.quantiles(0.05), a.quantiles(0.95)
         share = a.contributions()
         cells = [html.escape(label), f"{100 * a.yield_:.1f} %"]
