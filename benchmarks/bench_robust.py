@@ -22,7 +22,6 @@ Writes robust.md and robust.png into DIR (default results/bench/).  --smoke:
 
 from __future__ import annotations
 
-import argparse
 import tempfile
 import time
 from dataclasses import replace
@@ -31,7 +30,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from common import ROOT, STUDIES, hardware
+from common import ROOT, STUDIES, hardware, smoke_main
 
 JUDGE_BUILDS = 1024
 JUDGE_SEED = 2
@@ -153,13 +152,5 @@ def _picture(path, pa, qa, pb, qb):
     plt.close(fig)
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--smoke", action="store_true", help="tiny sizes (seconds), for the suite")
-    ap.add_argument("-o", "--output", help="folder for robust.md (default results/bench/)")
-    a = ap.parse_args()
-    run(a.smoke, a.output)
-
-
 if __name__ == "__main__":
-    main()
+    smoke_main(run, __doc__, "robust.md")

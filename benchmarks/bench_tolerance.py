@@ -22,14 +22,11 @@ and 512 sweep candidates, seconds, for the test suite (no figure to hold).
 
 from __future__ import annotations
 
-import argparse
-import time
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
 
-from common import ROOT, STUDIES, best_of, first_call, hardware
+from common import ROOT, STUDIES, best_of, first_call, hardware, smoke_main
 
 BUILDS = 10_000
 TARGET_S = 1.0          # issue 30: 10,000 builds of mechanism B in at most 1 s
@@ -84,13 +81,5 @@ def run(smoke=False, out=None, echo=print):
             "build_rate": build_rate, "builds": builds}
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--smoke", action="store_true", help="tiny sizes (seconds), for the suite")
-    ap.add_argument("-o", "--output", help="folder for tolerance.md (default results/bench/)")
-    a = ap.parse_args()
-    run(a.smoke, a.output)
-
-
 if __name__ == "__main__":
-    main()
+    smoke_main(run, __doc__, "tolerance.md")

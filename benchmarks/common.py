@@ -63,3 +63,14 @@ def batch_runner(study, pars, positions, order, with_forces):
     def run():
         return batch_revolutions(study, pars, positions, order, with_forces)
     return run
+
+
+def smoke_main(run, doc, written):
+    """The command line of a benchmark with a smoke mode: ``run(smoke, out)``
+    (``doc``: the module's text; ``written``: what it writes into -o DIR)."""
+    import argparse
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--smoke", action="store_true", help="tiny sizes (seconds), for the suite")
+    ap.add_argument("-o", "--output", help=f"folder for {written} (default results/bench/)")
+    a = ap.parse_args()
+    run(a.smoke, a.output)
