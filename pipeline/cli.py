@@ -145,7 +145,8 @@ def cmd_report(a):
 def cmd_tolerance(a):
     from .runner import run_tolerance
     res = run_tolerance(a.results, a.candidate, a.output, samples=a.samples,
-                        pictures=not a.no_pictures, overwrite=a.overwrite, n_jobs=a.jobs)
+                        pictures=not a.no_pictures, overwrite=a.overwrite, n_jobs=a.jobs,
+                        metrics=[m.strip() for m in a.metrics.split(",")] if a.metrics else None)
     info = {"results": str(res.results), **res.summary}
     if res.pictures:
         info["pictures"] = ", ".join(str(p) for p in res.pictures)
@@ -276,6 +277,9 @@ def build_parser():
                     help="a sweep's design: a number, 'knee' or 'reference'")
     tl.add_argument("--samples", type=int, metavar="N",
                     help="builds to draw (default: the study's [tolerance] samples, 4096)")
+    tl.add_argument("--metrics", metavar="M1,M2", help=(
+        "the metrics of every build (default: the study's [tolerance] metrics, else every one "
+        "the mechanism has); stroke and dwell error alone skip the force stage"))
     tl.add_argument("-o", "--output", metavar="FILE", help=(
         "results file (default: next to the results file, <name>[_candidate<ID>]_tolerance.h5; "
         "for a study file results/<study>_tolerance.h5)"))

@@ -210,7 +210,7 @@ def tolerance_output(source, origin):
 
 
 def run_tolerance(source, candidate=None, out=None, *, samples=None, pictures=True,
-                  overwrite=False, n_jobs=None) -> RunOutcome:
+                  overwrite=False, n_jobs=None, metrics=None) -> RunOutcome:
     """The tolerance analysis of a design (``tolerance_design``) under its
     study's [tolerance] section (ISO 2768-f without one): its results file,
     pictures and summary."""
@@ -220,6 +220,15 @@ def run_tolerance(source, candidate=None, out=None, *, samples=None, pictures=Tr
     from .study.tolerance_spec import MAX_SAMPLES, ToleranceSpec
     study, mech, label, sweep, origin = tolerance_design(source, candidate)
     spec = study.tolerance or ToleranceSpec()
+    if metrics:
+        from dataclasses import replace
+
+        from .model.metric_catalogue import TOLERANCED_METRICS
+        unknown = [m for m in metrics if m not in TOLERANCED_METRICS]
+        if unknown:
+            raise ValueError(f"--metrics: {unknown[0]!r} is not a metric of a build; known: "
+                             f"{', '.join(TOLERANCED_METRICS)}")
+        spec = replace(spec, metrics=tuple(metrics))
     if samples is not None and not 2 <= samples <= MAX_SAMPLES:
         raise ValueError(f"--samples must be between 2 and {MAX_SAMPLES:,}, got {samples:,}")
     out = Path(out) if out else tolerance_output(source, origin)

@@ -15,17 +15,11 @@ import numpy as np
 
 from ..kernels import config as kc
 from ..kernels import sweep as ks
-from ..model.metric_catalogue import BY_NAME, ROBUST_COLUMN, ROBUST_OF, metric_values
+from ..model.metric_catalogue import (BY_NAME, ROBUST_COLUMN, ROBUST_OF, TOLERANCED_METRICS,
+                                      metric_values)
 from ..study.sweep_spec import SweepSpec
 from ..study.tolerance_spec import ToleranceSpec, drawn
 from .problem import plain_problem
-
-# the metrics a build's quality is read from (indices, angles of peaks and residuals
-# are not quantities to tolerance)
-TOLERANCED_METRICS = ("stroke", "dwell_error", "law_error", "singularity_margin",
-                      "min_transmission_angle", "peak_acceleration", "peak_reaction",
-                      "peak_M_bal")
-
 
 def available_metrics(study, plan):
     """The toleranced metrics this mechanism has (forces need bodies, the law
@@ -84,7 +78,9 @@ class BuildEvaluator:
                              "the output rocker: give output.rocker = [pivot, point]")
         study = replace(study, mechanism=mech)      # (not kept: a worker gets plain arrays)
         self.plan = mech.compile()
-        self.metrics = metrics or available_metrics(study, self.plan)
+        self.metrics = tuple(metrics or available_metrics(study, self.plan))
+        if "stroke" not in self.metrics:        # the arm scales it; constraints read it
+            self.metrics = ("stroke",) + self.metrics
         self.spec = evaluation_spec(study, self.plan, self.metrics)
         self.problem = plain_problem(study, self.spec)
         self.arm = working_arm(study, self.plan)

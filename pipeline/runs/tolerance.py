@@ -125,7 +125,7 @@ def analyse(study, mech, spec: ToleranceSpec, *, label="design", sweep_spec=None
     the sweep whose constraints the builds must meet."""
     t0 = time.perf_counter()
     with compile_notice():
-        ev = BuildEvaluator(study, mech)
+        ev = BuildEvaluator(study, mech, _wanted(spec, sweep_spec, mech))
         nom_status, nom_values, _ = ev(ev.plan.par[None, :], n_jobs)
     n = spec.samples if samples is None else int(samples)
     dims = spec.dimensions(mech)
@@ -137,6 +137,19 @@ def analyse(study, mech, spec: ToleranceSpec, *, label="design", sweep_spec=None
                              deltas,
                              status, values, meets, bounds, sens, checked, oat,
                              time.perf_counter() - t0)
+
+
+def _wanted(spec, sweep_spec, mech):
+    """The metrics the study's [tolerance] metrics name, with those its
+    constraints bound (None: every metric the mechanism has)."""
+    if not spec.metrics:
+        return None
+    bounds = [b[0] for b in spec.bounds]
+    if sweep_spec is not None:
+        bounds += [b[0] for b in sweep_spec.bounds]
+        if np.isin(mech.compile().codes, kc.CLASS3_GROUPS).any():
+            bounds.append("singularity_margin")
+    return tuple(dict.fromkeys(spec.metrics + tuple(bounds)))
 
 
 def _meets(ev, status, values, rows, sweep_spec, spec):

@@ -109,6 +109,7 @@ class ToleranceSpec:
     seed: int = 1
     bounds: tuple = ()          # (metric, min, max): what a build must meet (a scene's)
     robust: RobustSpec = RobustSpec()
+    metrics: tuple = ()         # the metrics of every build (empty: every one the mechanism has)
 
     def dimensions(self, mech):
         """Every toleranced dimension of design ``mech`` (Dimension)."""
@@ -238,6 +239,15 @@ def parse_tolerance(root, mech, output, sweep=None) -> ToleranceSpec:
             dims[param] = Dimension(d.param, d.kind, d.nominal, tol, dist, d.factor, "study")
             overrides.append((param, tol, dist))
         ds.done()
+    metrics = ()
+    if sec.has("metrics"):
+        from ..model.metric_catalogue import TOLERANCED_METRICS
+        metrics = sec.names("metrics")
+        for m in metrics:
+            if m not in TOLERANCED_METRICS:
+                raise sec.error("metrics", f"{m!r} is not a metric of a build; known: "
+                                           f"{', '.join(TOLERANCED_METRICS)}")
+            _check_available(sec, "metrics", m, mech, output)
     samples = sec.integer("samples", SAMPLES, minimum=2, maximum=MAX_SAMPLES,
                           why="a million builds resolve a 1e-3 yield")
     seed = sec.integer("seed", 1, minimum=0)
@@ -259,7 +269,8 @@ def parse_tolerance(root, mech, output, sweep=None) -> ToleranceSpec:
     sec.done()
     if not drawn(tuple(dims.values())):
         raise sec.error("dimensions", "every dimension is exact: nothing to draw")
-    return ToleranceSpec(iso_class, distribution, tuple(overrides), samples, seed, bounds, robust)
+    return ToleranceSpec(iso_class, distribution, tuple(overrides), samples, seed, bounds, robust,
+                         tuple(metrics))
 
 
 def _parse_bounds(cons, mech, output, metrics, check_available):

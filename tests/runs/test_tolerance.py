@@ -235,3 +235,21 @@ def test_a_sweep_with_a_robust_objective_says_which_designs_carry_it(tmp_path):
     assert feasible.any() and np.isfinite(r[feasible]).all()
     assert (r[feasible] > nominal[feasible]).mean() > 0.9       # builds are worse, mostly
     assert np.isnan(r[~np.isfinite(nominal)]).all()
+
+
+def test_the_metrics_of_the_builds_can_be_chosen(tmp_path, capsys):
+    """--metrics (or [tolerance] metrics): stroke and dwell error alone skip the
+    force stage, and give the same numbers as the whole analysis."""
+    out = tmp_path / "k.h5"
+    study = STUDIES / "ov7_class3.toml"
+    assert main(["tolerance", str(study), "--metrics", "dwell_error", "--samples", "128",
+                 "-o", str(out), "-q", "--no-pictures"]) == 0
+    whole = tmp_path / "w.h5"
+    assert main(["tolerance", str(study), "--samples", "128", "-o", str(whole), "-q",
+                 "--no-pictures"]) == 0
+    with h5py.File(out, "r") as f, h5py.File(whole, "r") as g:
+        assert [x.decode() for x in f["summary/metric"][()]] == ["stroke", "dwell_error"]
+        np.testing.assert_array_equal(f["builds/dwell_error"][()], g["builds/dwell_error"][()])
+    assert main(["tolerance", str(study), "--metrics", "peak_joint", "-o",
+                 str(tmp_path / "x.h5")]) == 2
+    assert "not a metric of a build" in capsys.readouterr().err
