@@ -105,10 +105,10 @@ def _slsqp(f, b, w0):
 def crank_counterweight(mechanism, plan, curves, force) -> Counterweight | None:
     """The counterweight on the crank that minimises the peak |shaking force|
     ``force`` (n, 2) [N] over the positions of ``curves`` (None where the
-    shaking force is not finite everywhere)."""
+    shaking force is not finite everywhere, or 0 everywhere: nothing to balance)."""
     crank = mechanism.crank
     force = np.asarray(force, float)
-    if force.size == 0 or not np.isfinite(force).all():
+    if force.size == 0 or not np.isfinite(force).all() or not np.any(force != 0.0):
         return None
     ip, it = plan.point(crank.pivot), plan.point(crank.tip)
     w1, e1 = crank.omega1, crank.eps1
