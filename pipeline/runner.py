@@ -68,9 +68,11 @@ def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
 def peak_summary(res) -> dict:
     """The peaks a designer reads first: the working point's speed and
     acceleration, the largest joint reaction, slide normal force and balancing
-    moment (refined between grid positions, with their crank angles)."""
+    moment, the shaking force and moment on the frame (refined between grid
+    positions, with their crank angles); the worst equilibrium residual and
+    the crank's counterweight over the dense positions."""
     wp = res.study.output.working_point
-    point, moment, transmission, reactions, slides = {}, {}, {}, [], []
+    point, moment, transmission, reactions, slides, shaking = {}, {}, {}, [], [], {}
     for p in res.peaks or ():          # one pass, shown in this order
         if p.item == wp and p.quantity in ("velocity", "acceleration"):
             point[f"peak {p.quantity} {wp}"] = f"{p.value:.6g} {p.unit} at phi1 = {p.phi1:.4f} deg"
@@ -80,6 +82,11 @@ def peak_summary(res) -> dict:
             slides.append(p)
         elif p.quantity == "M_bal":
             moment["peak_M_bal"] = f"{p.value:.3f} N*m at phi1 = {p.phi1:.4f} deg"
+        elif p.quantity in ("shaking_force", "shaking_moment"):
+            about = (f" about {res.dense.forces.shaking_about}"
+                     if p.quantity == "shaking_moment" else "")
+            shaking[f"peak_{p.quantity}"] = (f"{p.value:.6g} {p.unit}{about} at phi1 = "
+                                             f"{p.phi1:.4f} deg")
         elif p.quantity == "min_transmission_angle":
             transmission[f"min transmission angle {p.item}"] = (f"{p.value:.3f} deg at phi1 = "
                                                                 f"{p.phi1:.4f} deg")
@@ -95,6 +102,16 @@ def peak_summary(res) -> dict:
         p = max(slides, key=lambda q: q.value)
         out["peak_slide_force"] = f"{p.value:.1f} N at {p.item}, phi1 = {p.phi1:.4f} deg"
     out.update(moment)
+    import numpy as np
+    fr = res.dense.forces
+    if fr is not None and fr.residual is not None and np.isfinite(fr.residual).any():
+        k = int(np.nanargmax(fr.residual))
+        out["equilibrium_residual"] = (f"{fr.residual[k]:.3g} at phi1 = "
+                                       f"{np.degrees(fr.phi[k]):g} deg (the worst of the dense "
+                                       "positions: virtual power / its largest term)")
+    out.update(shaking)
+    if res.counterweight is not None:
+        out.update(res.counterweight.summary())
     out.update(transmission)
     m = res.motion or {}
     if m:
@@ -114,8 +131,10 @@ def solve_scene(study):
     refined peaks, dwell and stroke, dynamics cases and reduced dynamics."""
     from .solve.peaks import scene_motion, scene_peaks
     from .solve.scene import run_scene
+    from .solve.shaking import scene_counterweight
     res = run_scene(study)
     res.peaks = scene_peaks(res)
+    res.counterweight = scene_counterweight(res)
     res.motion = scene_motion(res)
     if study.dynamics is not None:
         from .solve.crank_motion import reduced_dynamics, run_dynamics
@@ -162,6 +181,10 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
         if res.dense.forces is not None:
             figures.append((lambda: plots.forces_figure(res),
                             out.with_name(out.stem + "_forces.png")))
+            if res.dense.forces.shaking is not None:
+                from .views.shaking_plots import shaking_figure
+                figures.append((lambda: shaking_figure(res),
+                                out.with_name(out.stem + "_shaking.png")))
         for case in res.dynamics or ():
             name = safe_name(case.name, "case")
             figures.append((lambda case=case: dynamics_figure(case),

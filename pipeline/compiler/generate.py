@@ -86,6 +86,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
     w(_array("WATCH_G", watched, "int64"))
     w(f"N_WATCH = {len(watched)}")
     w(f"CRANK_BODY = {plan.crank_body}")
+    w(f"CRANK_PIVOT = {plan.crank_pivot}   # the shaking moment's reference point")
     w(f"N_BODIES = {len(plan.body_names)}")
     w(f"N_JOINTS = {len(plan.joint_names)}")
     w(f"N_SLIDES = {len(plan.slide_names)}")

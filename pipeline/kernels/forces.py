@@ -138,6 +138,34 @@ def equilibrium_residual(pos, d1, d2, m_bal, loads, body_com, body_turn):
 
 
 @njit(**JIT)
+def shaking(pos, d1, d2, omega1, eps1, par, body_com, body_turn, body_mass_off, ref):
+    """The shaking force and moment at one position: what the moving bodies'
+    inertia puts on the frame, gravity and external loads apart.  Returns
+    (Fx, Fy, M): F = sum over bodies of -m a_S [N], the rate of change of the
+    total momentum sum m v_S with its sign turned; M = sum of -J_S eps + (S - O)
+    x (-m a_S) [N*m] about the fixed point O = pos[ref] (the crank's pivot), the
+    rate of change of the angular momentum about O, sum J_S omega + (S - O) x
+    m v_S, with its sign turned.  a_S = S'' omega1^2 + S' eps1 (mm analogs, so
+    * MM), eps the body's angular acceleration (0 for a body that does not turn)."""
+    fx = 0.0
+    fy = 0.0
+    mz = 0.0
+    ox = pos[ref, 0]
+    oy = pos[ref, 1]
+    for i in range(body_com.shape[0]):
+        s = body_com[i]
+        m = par[body_mass_off[i]]
+        j = par[body_mass_off[i] + 1]
+        gx = -m * (d2[s, 0] * omega1 * omega1 + d1[s, 0] * eps1) * MM
+        gy = -m * (d2[s, 1] * omega1 * omega1 + d1[s, 1] * eps1) * MM
+        _, eps = body_motion(pos, d1, d2, body_turn[i, 0], body_turn[i, 1], omega1, eps1)
+        fx += gx
+        fy += gy
+        mz += -j * eps + ((pos[s, 0] - ox) * gy - (pos[s, 1] - oy) * gx) * MM
+    return fx, fy, mz
+
+
+@njit(**JIT)
 def _add_force(a, row_body, col, fx_coef, fy_coef, lever_x, lever_y):
     """Unknown force (fx_coef, fy_coef) * x[col] on a body at lever (P - S) [m]."""
     r = 3 * row_body

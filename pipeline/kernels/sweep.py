@@ -7,7 +7,8 @@ Stages, cheapest first:
   2. only for candidates still feasible (status OK, stroke and margin within
      their limits) and only if one of its metrics is asked for: second analogs,
      kinetostatics at every position -> peak reaction, its joint and angle,
-     peak balancing moment, worst equilibrium residual; the working point's
+     peak balancing moment, worst equilibrium residual, peak shaking force
+     and moment on the frame; the working point's
      peak |a| and the output rocker's peak |eps| (SET_WANT_PEAKS); the
      smallest transmission angle (SET_WANT_TRANSMISSION).  Each is a maximum
      (minimum) over the grid's positions, not refined between them
@@ -40,7 +41,9 @@ M_LAW_RMS = 15      # RMS deviation of the normalised rocker angle from the moti
 M_LAW_MAX = 16      # largest |deviation| (the same alignment and orientation)
 M_LAW_SHIFT = 17    # rad: cycle-angle shift of the law that fits best (0: align fixed)
 M_EQUILIBRIUM = 18  # largest relative virtual-power residual of the kinetostatics
-N_METRICS = 19
+M_SHAKING_F = 19    # N: largest |shaking force| on the frame (kernels.forces.shaking)
+M_SHAKING_M = 20    # N*m: largest |shaking moment| about the crank's pivot
+N_METRICS = 21
 
 # slots of the settings vector of a sweep (one float array: the kernels'
 # signatures stay short, and the numba cache is not tied to a study)

@@ -171,6 +171,11 @@ class Plan:
     def n_inputs(self):
         return len(self.input_group)
 
+    @property
+    def crank_pivot(self):
+        """Point index of the crank's pivot (the crank is the plan's first group)."""
+        return int(self.gidx[0, 0])
+
     def point(self, name):
         return self.point_names.index(name)
 

@@ -126,6 +126,17 @@ CATALOGUE = (
            "every term is exactly 0 (nothing moves, e.g. a cam follower's dwell: the sum is 0 "
            "too) counts 0; elsewhere the ratio is at most the number of terms",
            "forces", ks.M_EQUILIBRIUM, rounding=True),
+    Metric("peak_shaking_force", "N",
+           "largest |shaking force| on the frame over the revolution: the moving links' inertia "
+           "forces sum(-m a_S) = -d/dt sum(m v_S) (gravity and external loads apart) at the "
+           "operating speed, the largest of the grid's positions (not refined between them)",
+           "forces", ks.M_SHAKING_F),
+    Metric("peak_shaking_moment", "N*m",
+           "largest |shaking moment| on the frame about the crank's pivot over the revolution: "
+           "sum(-J_S eps + (S - O) x (-m a_S)) = -d/dt of the angular momentum about O (gravity "
+           "and external loads apart), the largest of the grid's positions (not refined between "
+           "them)",
+           "forces", ks.M_SHAKING_M),
     Metric("robust_dwell_error", "1", _QUANTILE.format(m="dwell_error"), "robust",
            ROBUST_COLUMN["robust_dwell_error"]),
     Metric("robust_peak_reaction", "N", _QUANTILE.format(m="peak_reaction"), "robust",

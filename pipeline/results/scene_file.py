@@ -81,6 +81,20 @@ def _reactions(g, r):
     put(g, "body_loads", r.body_loads, ["N", "N", "N*m"],
         "applied and inertia loads reduced to the centre of mass",
         dims=("phi1", "body", "load_component"), bodies=list(r.body_names))
+    if r.residual is not None:
+        put(g, "equilibrium_residual", r.residual, "1",
+            "relative virtual-power residual: |M_bal omega1 + sum over moving links (F . v_S + "
+            "M omega)| / its largest term (0 where every term is 0)", dims=("phi1",))
+    if r.shaking is not None:
+        put(g, "shaking_force", r.shaking[:, :2], "N",
+            "shaking force on the frame: the moving links' inertia forces sum(-m a_S) = "
+            "-d/dt sum(m v_S), gravity and external loads apart", dims=("phi1", "axis"))
+        put(g, "shaking_force_magnitude", r.shaking_magnitude, "N", "|shaking force| on the frame",
+            dims=("phi1",))
+        put(g, "shaking_moment", r.shaking[:, 2], "N*m",
+            f"shaking moment on the frame about the crank's pivot {r.shaking_about}: "
+            "sum(-J_S eps + (S - O) x (-m a_S)) = -d/dt of the angular momentum about it, "
+            "gravity and external loads apart", dims=("phi1",), about=r.shaking_about)
 
 
 def _dynamics_case(group, res):
@@ -122,6 +136,27 @@ def _reduced(group, red):
     put(group, "J", red.J, "kg*m^2", "reduced moment of inertia J(phi)", dims=("phi1",))
     put(group, "half_dJ", red.half_dJ, "kg*m^2", "(1/2) dJ/dphi", dims=("phi1",))
     put(group, "Q", red.Q, "N*m", "generalised force without M1", dims=("phi1",))
+
+
+def _counterweight(group, cw):
+    """The crank's counterweight (``solve.shaking.Counterweight``) in ``group``."""
+    pivot, tip = cw.crank
+    group.attrs["long_name"] = ("the point mass on the crank that minimises the peak |shaking "
+                                "force| over the dense positions: m_c r_c at the angle from the "
+                                f"crank line {pivot}->{tip}")
+    put(group, "phi1", np.rad2deg(cw.phi), "deg", "crank angle phi1", dims=("phi1",))
+    put(group, "mass_radius", np.float64(cw.mass_radius), "kg*mm",
+        "counterweight: its mass times its radius, m_c r_c")
+    put(group, "angle", np.float64(cw.angle), "deg",
+        f"counterweight: its angle from the crank line {pivot}->{tip}, counter-clockwise")
+    for key, value, what in (("peak_before", cw.before, "without"),
+                             ("peak_after", cw.after, "with")):
+        put(group, key, np.float64(value), "N",
+            f"peak |shaking force| over the positions {what} the counterweight")
+        put(group, f"{key}_phi1", np.float64(getattr(cw, f"{key[5:]}_phi1")), "deg",
+            f"crank angle phi1 of the peak |shaking force| {what} the counterweight")
+    put(group, "shaking_force", cw.force_after, "N",
+        "shaking force on the frame with the counterweight", dims=("phi1", "axis"))
 
 
 # the tolerance vector's entries (kernels.config T_*), named, with their units
@@ -171,7 +206,9 @@ PEAK_DIMS = {"velocity": "point", "acceleration": "point", "omega": "link", "eps
 
 
 PEAK_WHAT = {"slide_normal": "peak |N| (a slide's normal force)",
-             "slide_couple": "peak |C| (a slide's couple)"}
+             "slide_couple": "peak |C| (a slide's couple)",
+             "shaking_force": "peak |shaking force| on the frame",
+             "shaking_moment": "peak |shaking moment| on the frame about the crank's pivot"}
 
 
 def _peaks(g, peaks, output=None):
@@ -188,7 +225,9 @@ def _peaks(g, peaks, output=None):
         phi = np.array([p.phi1 for p in ps]) if dims else np.float64(ps[0].phi1)
         grid = np.array([p.grid_value for p in ps]) if dims else np.float64(ps[0].grid_value)
         what = q.replace("_", " ") if q.startswith("min_") else PEAK_WHAT.get(q, f"peak |{q}|")
-        put(g, q, val, ps[0].unit, what, dims=dims)
+        d = put(g, q, val, ps[0].unit, what, dims=dims)
+        if not dims:
+            d.attrs["item"] = ps[0].item     # crank (M_bal), frame (shaking)
         put(g, f"{q}_phi1", phi, "deg", f"crank angle phi1 of the {what}", dims=dims)
         put(g, f"{q}_grid", grid, ps[0].unit, f"{what} among the dense positions only",
             dims=dims)
@@ -231,6 +270,8 @@ def write_scene(res, path):
             _peaks(f.create_group("peaks"), res.peaks, study.output)
         if res.reduced is not None:
             _reduced(f.create_group("reduced_dynamics"), res.reduced)
+        if res.counterweight is not None:
+            _counterweight(f.create_group("counterweight"), res.counterweight)
         if res.motion:
             g = f.create_group("motion")
             g.attrs["long_name"] = ("the output rocker's dwell and stroke (DOMAIN.md section "

@@ -3,8 +3,9 @@
 For a scene: the peak speed |v| and acceleration |a| of every named point, the
 peak |omega| and |eps| of every link, the smallest transmission angle of every
 dyad and class III lead, and, with forces, the peak reaction of every joint,
-the peak normal force |N| and couple |C| of every slide and the peak
-|balancing moment|.  Each peak is bracketed by the
+the peak normal force |N| and couple |C| of every slide, the peak
+|balancing moment| and the peak |shaking force| and |shaking moment| on the
+frame (``kernels.forces.shaking``).  Each peak is bracketed by the
 largest sample of the dense revolution and its two neighbours, then found by
 a bounded 1-D maximiser (SciPy's Brent) on the exact kinematics: the
 continuation is walked from the first position to the trial angle, so the
@@ -26,7 +27,8 @@ XATOL = 1e-9          # rad: where a peak is, to about 6e-8 deg
 @dataclass
 class Peak:
     quantity: str       # velocity, acceleration, omega, eps, reaction, slide_normal,
-                        # slide_couple, M_bal, min_transmission_angle
+                        # slide_couple, M_bal, shaking_force, shaking_moment,
+                        # min_transmission_angle
     item: str           # the point, link, joint, slide or dyad
     value: float        # the peak magnitude
     unit: str
@@ -69,6 +71,9 @@ def _magnitudes(study, plan, curves, forces=None):
             out[("slide_normal", name, "N")] = np.abs(forces.slide[:, k, 0])
             out[("slide_couple", name, "N*m")] = np.abs(forces.slide[:, k, 1])
         out[("M_bal", "crank", "N*m")] = np.abs(forces.M_bal)
+        if forces.shaking is not None:      # on the frame (kernels.forces.shaking)
+            out[("shaking_force", "frame", "N")] = forces.shaking_magnitude
+            out[("shaking_moment", "frame", "N*m")] = np.abs(forces.shaking[:, 2])
     return out
 
 

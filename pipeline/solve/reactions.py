@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..kernels.forces import equilibrium_residual, shaking
 from ..kernels.inputs import ROTARY
 
 
@@ -87,10 +88,21 @@ class Reactions:
     drive: np.ndarray = None
     input_names: tuple = ()
     drive_units: tuple = ()  # per input: "N*m" (rotary) or "N" (slider)
+    # per position: the relative virtual-power residual (kernels.forces.equilibrium_residual)
+    residual: np.ndarray = None
+    # per position: the shaking force and moment on the frame, (n, 3) = (Fx [N], Fy [N],
+    # M [N*m] about the point ``shaking_about``, the crank's pivot): kernels.forces.shaking
+    shaking: np.ndarray = None
+    shaking_about: str = ""
 
     @property
     def magnitude(self):
         return np.hypot(self.R[..., 0], self.R[..., 1])
+
+    @property
+    def shaking_magnitude(self):
+        """|shaking force| [N] per position."""
+        return np.hypot(self.shaking[:, 0], self.shaking[:, 1])
 
     def peaks(self):
         """Per joint: (name, R_max, phi1 at the peak [deg], d_min [mm])."""
@@ -120,7 +132,17 @@ def scene_forces(mechanism, plan, curves) -> Reactions:
     from ..compiler import kernels_for
     kernels_for(plan).forces_curve(plan.par, curves.pos, curves.d1, curves.d2, crank.omega1,
                                    crank.eps1, loads, body_loads, R, S, M)
+    residual = np.empty(n)
+    shake = np.empty((n, 3))
+    for k in range(n):      # the sweep's force stage calls the same two kernels
+        residual[k] = equilibrium_residual(curves.pos[k], curves.d1[k], curves.d2[k], M[k],
+                                           body_loads[k], plan.body_com, plan.body_turn)
+        shake[k] = shaking(curves.pos[k], curves.d1[k], curves.d2[k], crank.omega1, crank.eps1,
+                           plan.par, plan.body_com, plan.body_turn, plan.body_mass_off,
+                           plan.crank_pivot)
     return Reactions(curves.phi, R, S[:, :ns], M, body_loads, plan.joint_names,
                      plan.slide_names, plan.body_names, drive=S[:, ns:],
                      input_names=plan.input_names,
-                     drive_units=tuple("N*m" if k == ROTARY else "N" for k in plan.input_kind))
+                     drive_units=tuple("N*m" if k == ROTARY else "N" for k in plan.input_kind),
+                     residual=residual, shaking=shake,
+                     shaking_about=plan.point_names[plan.crank_pivot])

@@ -76,6 +76,7 @@ class SceneResult:
     peaks: list | None = None        # pipeline.solve.peaks.Peak, refined between grid positions
     motion: dict | None = None       # dwell error and stroke of the output rocker
     reduced: object = None           # solve.crank_motion.Reduced for a study with dynamics
+    counterweight: object = None     # solve.shaking.Counterweight, with forces
 
     @property
     def status(self):

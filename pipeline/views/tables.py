@@ -5,7 +5,8 @@
   constraint violation, Pareto front, metrics, constraints);
 * a scene: its points, links, reactions (the joints' Rx, Ry, |R|; each
   slide's normal force N, couple C and the point of action e = C/N of
-  ``reactions.slide_action``; M_bal), peaks and dynamics motion tables, at every
+  ``reactions.slide_action``; the shaking force and moment on the frame; the
+  equilibrium residual; M_bal), peaks and dynamics motion tables, at every
   computed position.
 
 Column names are plain (``L12``, ``P8_x``); the units of every column are in
@@ -104,8 +105,8 @@ def _peaks_table(f) -> pd.DataFrame:
             continue
         d = g[q]
         unit = str(attr_text(d.attrs.get("units", "")))
-        if d.ndim == 0:
-            items, vals = ["crank"], [float(d[()])]
+        if d.ndim == 0:     # M_bal (the crank), the shaking force and moment (the frame)
+            items, vals = [str(attr_text(d.attrs.get("item", "crank")))], [float(d[()])]
             phis, grid = [float(g[f"{q}_phi1"][()])], [float(g[f"{q}_grid"][()])]
         else:
             scale = d.dims[0][0]
@@ -132,8 +133,8 @@ def _short(name, letter):
 
 def scene_tables(path, every=1) -> dict:
     """{name: DataFrame} of a scene file at every computed position (every
-    ``every``-th): points, links, and reactions, peaks, motion_<case> where the
-    file has them."""
+    ``every``-th): points, links, and reactions, peaks, counterweight,
+    motion_<case> where the file has them."""
     if every < 1:
         raise ValueError(f"--every must be at least 1, got {every}")
     out = {}
@@ -210,6 +211,16 @@ def scene_tables(path, every=1) -> dict:
                 for k, name in enumerate(names):
                     cols[f"drive[{name}]"], cols[f"share[{name}]"] = D[:, k], H[:, k]
                     units.update({f"drive[{name}]": du[k], f"share[{name}]": "N*m"})
+            if "shaking_force" in d:      # on the frame; the moment about the crank's pivot
+                F = d["shaking_force"][rows]
+                cols["shaking_Fx"], cols["shaking_Fy"] = F[:, 0], F[:, 1]
+                cols["shaking_F"] = d["shaking_force_magnitude"][rows]
+                cols["shaking_M"] = d["shaking_moment"][rows]
+                units.update({"shaking_Fx": "N", "shaking_Fy": "N", "shaking_F": "N",
+                              "shaking_M": "N*m"})
+            if "equilibrium_residual" in d:
+                cols["equilibrium_residual"] = d["equilibrium_residual"][rows]
+                units["equilibrium_residual"] = "1"
             cols["M_bal"] = d["M_bal"][rows]
             units["M_bal"] = "N*m"
             out["reactions"] = _frame(cols, units)
@@ -220,6 +231,12 @@ def scene_tables(path, every=1) -> dict:
                 out["peaks"] = peaks
         if "peaks" in f:
             out["peaks"] = _peaks_table(f)
+        if "counterweight" in f:      # one row: m_c r_c, its angle, the peaks before and after
+            g = f["counterweight"]
+            keys = ("mass_radius", "angle", "peak_before", "peak_before_phi1", "peak_after",
+                    "peak_after_phi1")
+            out["counterweight"] = _frame({k: [float(g[k][()])] for k in keys},
+                                          {k: str(attr_text(g[k].attrs["units"])) for k in keys})
         if "dynamics" in f:
             out.update(motion_tables(f["dynamics"]))
         if "reduced_dynamics" in f:

@@ -42,14 +42,17 @@ def yoke_run(tmp_path_factory, studies):
 
 # ------------------------------------------------------------------ slide forces in the exports
 def test_reactions_csv_has_every_slide_as_the_kernel_gives_it(yoke_run):
-    """N, C and e per slide, with units, between the joints and M_bal; the rows
-    equal the HDF5 datasets and the kinetostatics kernel on the dense curves."""
+    """N, C and e per slide, with units, between the joints and the shaking
+    force and moment, the equilibrium residual and M_bal; the rows equal the HDF5
+    datasets and the kinetostatics kernel on the dense curves."""
     study, out, csv = yoke_run
     r = pd.read_csv(csv / "reactions.csv")
     assert list(r.columns) == ["phi1 [deg]", "R1_x [N]", "R1_y [N]", "R1 [N]", "R2_x [N]",
                                "R2_y [N]", "R2 [N]", "N[block] [N]", "C[block] [N*m]",
                                "e[block] [mm]", "N[yoke] [N]", "C[yoke] [N*m]",
-                               "e[yoke] [mm]", "M_bal [N*m]"]
+                               "e[yoke] [mm]", "shaking_Fx [N]", "shaking_Fy [N]",
+                               "shaking_F [N]", "shaking_M [N*m]", "equilibrium_residual [1]",
+                               "M_bal [N*m]"]
     res = run_scene(study)
     fr = res.dense.forces
     assert fr.slide_names == ("slide[block]", "slide[yoke]")

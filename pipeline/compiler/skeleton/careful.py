@@ -16,10 +16,11 @@ from .header import (math, np, njit, JIT, JIT_ALLOC, OK, BRANCH_JUMP, S_A, S_B, 
                      SET_EPS1, SET_WANT_PEAKS, SET_WORK_POINT, SET_WANT_TRANSMISSION, SET_WANT_LAW,
                      SET_LAW0, LAW_BEST)
 from .header import M_EQUILIBRIUM, equilibrium_residual
+from .header import M_SHAKING_F, M_SHAKING_M, shaking
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_WATCH, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, constants, start, advance, forces_at, transmission,
                          ROCKER_PIVOT, ROCKER_POINT, NEWTON_STEPS)
-from ._mechanism import BODY_COM, BODY_TURN
+from ._mechanism import BODY_COM, BODY_TURN, BODY_MASS_OFF, CRANK_PIVOT
 from .watch import (locate, watch, watch_work)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
@@ -261,10 +262,11 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
     """Stage 2 at every position of the grid, what the settings ask for:
     kinetostatics (SET_WANT_FORCES: the peak reaction, its joint and angle,
     the peak |balancing moment|, the worst relative virtual-power residual:
-    kernels.forces.equilibrium_residual), the working point's peak |a| and the
-    output rocker's peak |eps| (SET_WANT_PEAKS), the smallest transmission
-    angle (SET_WANT_TRANSMISSION); maxima (minima) over the grid's
-    positions.  With ``use_trail`` every position is solved directly from
+    kernels.forces.equilibrium_residual; the peak |shaking force| and |shaking
+    moment| about the crank's pivot: kernels.forces.shaking), the working
+    point's peak |a| and the output rocker's peak |eps| (SET_WANT_PEAKS), the
+    smallest transmission angle (SET_WANT_TRANSMISSION); maxima (minima) over
+    the grid's positions.  With ``use_trail`` every position is solved directly from
     the class III solution the lane path found there (trail[k] = e(a), e(b)
     per group: Newton confirms it, the branch checks still apply);
     otherwise by the careful continuation.  wk, fw: work arrays (work,
@@ -284,6 +286,8 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
     peak_phi = math.nan
     peak_m = 0.0
     worst_eq = 0.0
+    peak_sf = 0.0
+    peak_sm = 0.0
     peak_a = 0.0
     peak_e = 0.0
     trans = math.inf
@@ -308,6 +312,13 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
             eq = equilibrium_residual(pos, d1, d2, mb, loads_out, BODY_COM, BODY_TURN)
             if eq > worst_eq or not math.isfinite(eq):
                 worst_eq = eq
+            sfx, sfy, sm = shaking(pos, d1, d2, omega1, eps1, par, BODY_COM, BODY_TURN,
+                                   BODY_MASS_OFF, CRANK_PIVOT)
+            sf = math.hypot(sfx, sfy)
+            if sf > peak_sf or not math.isfinite(sf):
+                peak_sf = sf
+            if abs(sm) > peak_sm or not math.isfinite(sm):
+                peak_sm = abs(sm)
             for j in range(N_JOINTS):
                 r = math.hypot(r_out[j, 0], r_out[j, 1])
                 if r > peak or not math.isfinite(r):
@@ -345,6 +356,8 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
         out[M_PEAK_PHI] = peak_phi
         out[M_PEAK_MBAL] = abs(peak_m)
         out[M_EQUILIBRIUM] = worst_eq
+        out[M_SHAKING_F] = peak_sf
+        out[M_SHAKING_M] = peak_sm
     if want_p:
         out[M_PEAK_ACC] = peak_a / 1000.0        # m/s^2
         out[M_PEAK_EPS] = peak_e

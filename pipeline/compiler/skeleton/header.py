@@ -27,7 +27,7 @@ from pipeline.kernels.continuation import (accept, closes, copy2, predict, resto
                                            step_limit, work, wrap)
 from pipeline.kernels.dynamics import drive, lagrange_terms, potential
 from pipeline.kernels.forces import (applied_loads, equilibrium_residual, force_work, gauss_solve,
-                                     kinetostatics)
+                                     kinetostatics, shaking)
 from pipeline.kernels.groups import attach, crank, prp, rpp, rpr, rrp, rrr
 from pipeline.kernels.inputs import (linear_law, rise_return, rotary_input, slider_input,
                                      table_law)
@@ -37,7 +37,8 @@ from pipeline.kernels.sweep import (M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, 
                                     M_PEAK_JOINT, M_PEAK_PHI, M_PEAK_MBAL, M_FAIL_PHI,
                                     M_NEWTON_MEAN, M_FORCES_DONE, M_FAIL_GROUP, M_PEAK_ACC,
                                     M_PEAK_EPS, M_MIN_TRANS, M_LAW_RMS, M_LAW_MAX, M_LAW_SHIFT,
-                                    M_EQUILIBRIUM, N_METRICS, SET_STROKE_RADIUS,
+                                    M_EQUILIBRIUM, M_SHAKING_F, M_SHAKING_M, N_METRICS,
+                                    SET_STROKE_RADIUS,
                                     SET_DWELL_W, SET_WANT_FORCES, SET_STROKE_LO, SET_STROKE_HI,
                                     SET_MARGIN_MIN, SET_OMEGA1, SET_EPS1, SET_MARGIN_SAFE,
                                     SET_WANT_PEAKS, SET_WORK_POINT, SET_WANT_TRANSMISSION,
@@ -56,15 +57,15 @@ __all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_LANES', 'OK', 'BRANCH_
            'closes', 'copy2', 'predict', 'restore', 'start_triad', 'step_limit', 'work',
            'wrap', 'drive', 'lagrange_terms', 'potential', 'applied_loads',
            'equilibrium_residual', 'force_work',
-           'gauss_solve', 'kinetostatics', 'attach', 'crank', 'prp', 'rpp', 'rpr', 'rrp',
+           'gauss_solve', 'kinetostatics', 'shaking', 'attach', 'crank', 'prp', 'rpp', 'rpr', 'rrp',
            'rrr', 'linear_law', 'rise_return', 'rotary_input', 'slider_input', 'table_law',
            'dwell_error', 'dwell_lanes', 'dyad_transmission', 'law_error',
            'lead_transmission', 'lines_transmission', 'relative_angle', 'M_STROKE',
            'M_DWELL', 'M_DWELL_START', 'M_MARGIN', 'M_PEAK_R', 'M_PEAK_JOINT',
            'M_PEAK_PHI', 'M_PEAK_MBAL', 'M_FAIL_PHI', 'M_NEWTON_MEAN', 'M_FORCES_DONE',
            'M_FAIL_GROUP', 'M_PEAK_ACC', 'M_PEAK_EPS', 'M_MIN_TRANS', 'M_LAW_RMS',
-           'M_LAW_MAX', 'M_LAW_SHIFT', 'M_EQUILIBRIUM', 'N_METRICS', 'SET_STROKE_RADIUS',
-           'SET_DWELL_W',
+           'M_LAW_MAX', 'M_LAW_SHIFT', 'M_EQUILIBRIUM', 'M_SHAKING_F', 'M_SHAKING_M',
+           'N_METRICS', 'SET_STROKE_RADIUS', 'SET_DWELL_W',
            'SET_WANT_FORCES', 'SET_STROKE_LO', 'SET_STROKE_HI', 'SET_MARGIN_MIN',
            'SET_OMEGA1', 'SET_EPS1', 'SET_MARGIN_SAFE', 'SET_WANT_PEAKS', 'SET_WORK_POINT',
            'SET_WANT_TRANSMISSION', 'SET_WANT_LAW', 'SET_LAW0', 'LAW_BEST', 'class3',
