@@ -53,7 +53,9 @@ class SweepProblem:
                            s.stroke_bounds[1], s.margin_min, self.omega1, self.eps1,
                            want_peaks=s.wants_peaks, work_point=self.work_point,
                            want_transmission=s.wants_transmission,
-                           law=self.law if s.wants_law else None, law_best=self.law_best)
+                           law=self.law if s.wants_law else None, law_best=self.law_best,
+                           want_equilibrium=s.wants("equilibrium_residual"),
+                           want_shaking=s.wants("peak_shaking_force", "peak_shaking_moment"))
 
     @property
     def device_name(self):

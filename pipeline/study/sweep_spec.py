@@ -99,6 +99,10 @@ class SweepSpec:
     def _wants(self, stage):
         return any(METRICS[m][2] == stage for m in self.metrics + self.objectives)
 
+    def wants(self, *names):
+        """Whether the sweep stores one of the metrics ``names``."""
+        return any(m in names for m in self.metrics + self.objectives)
+
     @property
     def wants_forces(self):
         return self._wants("forces")

@@ -14,7 +14,7 @@ from .header import (math, np, njit, JIT, JIT_ALLOC, OK, BRANCH_JUMP, S_A, S_B, 
                      M_LAW_MAX, M_LAW_SHIFT, N_METRICS, SET_STROKE_RADIUS, SET_DWELL_W,
                      SET_WANT_FORCES, SET_STROKE_LO, SET_STROKE_HI, SET_MARGIN_MIN, SET_OMEGA1,
                      SET_EPS1, SET_WANT_PEAKS, SET_WORK_POINT, SET_WANT_TRANSMISSION, SET_WANT_LAW,
-                     SET_LAW0, LAW_BEST)
+                     SET_LAW0, LAW_BEST, SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING)
 from .header import M_EQUILIBRIUM, equilibrium_residual
 from .header import M_SHAKING_F, M_SHAKING_M, shaking
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_WATCH, N_BODIES, N_JOINTS, N_SLIDES,
@@ -276,6 +276,8 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
     want_f = settings[SET_WANT_FORCES] != 0.0
     want_p = settings[SET_WANT_PEAKS] != 0.0
     want_t = settings[SET_WANT_TRANSMISSION] != 0.0
+    want_eq = settings[SET_WANT_EQUILIBRIUM] != 0.0
+    want_sh = settings[SET_WANT_SHAKING] != 0.0
     order = 2 if (want_f or want_p) else 0
     iw = int(settings[SET_WORK_POINT])
     pos, d1, d2, margins, state, _ = wk
@@ -309,16 +311,18 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
                            loads_out, r_out, slide_out)
             if abs(mb) > abs(peak_m) or not math.isfinite(mb):
                 peak_m = mb
-            eq = equilibrium_residual(pos, d1, d2, mb, loads_out, BODY_COM, BODY_TURN)
-            if eq > worst_eq or not math.isfinite(eq):
-                worst_eq = eq
-            sfx, sfy, sm = shaking(pos, d1, d2, omega1, eps1, par, BODY_COM, BODY_TURN,
-                                   BODY_MASS_OFF, CRANK_PIVOT)
-            sf = math.hypot(sfx, sfy)
-            if sf > peak_sf or not math.isfinite(sf):
-                peak_sf = sf
-            if abs(sm) > peak_sm or not math.isfinite(sm):
-                peak_sm = abs(sm)
+            if want_eq:
+                eq = equilibrium_residual(pos, d1, d2, mb, loads_out, BODY_COM, BODY_TURN)
+                if eq > worst_eq or not math.isfinite(eq):
+                    worst_eq = eq
+            if want_sh:
+                sfx, sfy, sm = shaking(pos, d1, d2, omega1, eps1, par, BODY_COM, BODY_TURN,
+                                       BODY_MASS_OFF, CRANK_PIVOT)
+                sf = math.hypot(sfx, sfy)
+                if sf > peak_sf or not math.isfinite(sf):
+                    peak_sf = sf
+                if abs(sm) > peak_sm or not math.isfinite(sm):
+                    peak_sm = abs(sm)
             for j in range(N_JOINTS):
                 r = math.hypot(r_out[j, 0], r_out[j, 1])
                 if r > peak or not math.isfinite(r):
@@ -355,9 +359,9 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
         out[M_PEAK_JOINT] = peak_j
         out[M_PEAK_PHI] = peak_phi
         out[M_PEAK_MBAL] = abs(peak_m)
-        out[M_EQUILIBRIUM] = worst_eq
-        out[M_SHAKING_F] = peak_sf
-        out[M_SHAKING_M] = peak_sm
+        out[M_EQUILIBRIUM] = worst_eq if want_eq else math.nan
+        out[M_SHAKING_F] = peak_sf if want_sh else math.nan
+        out[M_SHAKING_M] = peak_sm if want_sh else math.nan
     if want_p:
         out[M_PEAK_ACC] = peak_a / 1000.0        # m/s^2
         out[M_PEAK_EPS] = peak_e
