@@ -32,7 +32,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -124,6 +124,9 @@ def analyse(study, mech, spec: ToleranceSpec, *, label="design", sweep_spec=None
     mechanism or a sweep candidate's, ``sweep.apply_design``); ``sweep_spec``:
     the sweep whose constraints the builds must meet."""
     t0 = time.perf_counter()
+    if sweep_spec is not None:      # a build has no builds of its own: robust bounds apart
+        sweep_spec = replace(sweep_spec, bounds=tuple(
+            b for b in sweep_spec.bounds if BY_NAME[b[0]].stage != "robust"))
     with compile_notice():
         ev = BuildEvaluator(study, mech, _wanted(spec, sweep_spec, mech))
         nom_status, nom_values, _ = ev(ev.plan.par[None, :], n_jobs)
@@ -134,8 +137,7 @@ def analyse(study, mech, spec: ToleranceSpec, *, label="design", sweep_spec=None
     meets, bounds = _meets(ev, status, values, rows, sweep_spec, spec)
     sens, checked, oat = sensitivities(ev, dims, nom_values[0], n_jobs)
     return ToleranceAnalysis(label, spec, dims, ev.metrics, nom_values[0], int(nom_status[0]),
-                             deltas,
-                             status, values, meets, bounds, sens, checked, oat,
+                             deltas, status, values, meets, bounds, sens, checked, oat,
                              time.perf_counter() - t0)
 
 
