@@ -140,6 +140,11 @@ def solve_scene(study):
         from .solve.crank_motion import reduced_dynamics, run_dynamics
         res.dynamics = run_dynamics(study, res.plan)
         res.reduced = reduced_dynamics(study, res.plan)
+        if study.dynamics.flywheel is not None:
+            from .solve.flywheel import size_flywheel
+            name, target = study.dynamics.flywheel
+            case = next(c for c in study.dynamics.cases if c.name == name)
+            res.flywheel = size_flywheel(res.plan, study.mechanism, case, target)
     return res
 
 
@@ -218,6 +223,8 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
             summary[f"{case.name} {k}"] = v
     if res.reduced is not None:
         summary.update(res.reduced.summary())
+    if res.flywheel is not None:
+        summary.update(res.flywheel.summary())
     return RunOutcome("scene", out, pics, summary)
 
 

@@ -159,6 +159,24 @@ def _counterweight(group, cw):
         "shaking force on the frame with the counterweight", dims=("phi1", "axis"))
 
 
+def _flywheel(group, fw):
+    """A dynamics case's flywheel (``solve.flywheel.Flywheel``) in ``group``."""
+    group.attrs["long_name"] = ("the moment of inertia to add on the crank shaft for the "
+                                f"steady rotation of case {fw.case!r} to have the target "
+                                "coefficient of non-uniformity")
+    group.attrs["case"] = fw.case
+    group.attrs["body"] = fw.J_body
+    put(group, "J_add", np.float64(fw.J_add), "kg*m^2",
+        "moment of inertia added on the crank shaft (to the crank body's J_S)")
+    for key, what in (("target", "asked for"), ("delta", "with the flywheel"),
+                      ("delta_without", "without the flywheel")):
+        put(group, key, np.float64(getattr(fw, key)), "1",
+            f"coefficient of non-uniformity (omega_max - omega_min) / omega_mean, {what}")
+    for key in ("omega_min", "omega_max", "omega_mean"):
+        put(group, key, np.float64(getattr(fw, key)), "rad/s",
+            f"{key.replace('_', ' ')} of the steady rotation with the flywheel")
+
+
 # the tolerance vector's entries (kernels.config T_*), named, with their units
 TOLERANCES = (("newton_tol", "1"), ("newton_maxiter", "1"), ("newton_step", "rad"),
               ("singular", "1"), ("jump", "rad"), ("substep", "rad"), ("close", "rad"),
@@ -272,6 +290,8 @@ def write_scene(res, path):
             _reduced(f.create_group("reduced_dynamics"), res.reduced)
         if res.counterweight is not None:
             _counterweight(f.create_group("counterweight"), res.counterweight)
+        if getattr(res, "flywheel", None) is not None:
+            _flywheel(f.create_group("flywheel"), res.flywheel)
         if res.motion:
             g = f.create_group("motion")
             g.attrs["long_name"] = ("the output rocker's dwell and stroke (DOMAIN.md section "

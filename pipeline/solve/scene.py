@@ -77,6 +77,7 @@ class SceneResult:
     motion: dict | None = None       # dwell error and stroke of the output rocker
     reduced: object = None           # solve.crank_motion.Reduced for a study with dynamics
     counterweight: object = None     # solve.shaking.Counterweight, with forces
+    flywheel: object = None          # solve.flywheel.Flywheel: [dynamics.flywheel]
 
     @property
     def status(self):

@@ -64,6 +64,7 @@ class DynamicsCase:
 class DynamicsSpec:
     cases: tuple
     method: str = "rk4"
+    flywheel: tuple | None = None   # (case name, target delta): [dynamics.flywheel]
 
 
 @dataclass(frozen=True)
@@ -516,8 +517,31 @@ def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
         # M1 and the loads must be constant, 2*pi-periodic in phi, or functions of t alone
         from ..solve.crank_motion import check_drive
         check_drive(mech, cases[-1], c.file)
+    flywheel = None
+    if sec.has("flywheel"):      # size a flywheel for a case's steady rotation
+        fw = sec.table("flywheel")
+        case = fw.name("case", cases[0].name if cases else "")
+        if case not in names:
+            raise fw.error("case", f"no dynamics case {case!r}; known: {', '.join(sorted(names))}")
+        delta = fw.number("delta", positive=True)
+        if not delta < 1.0:
+            raise fw.error("delta", f"the coefficient of non-uniformity (omega_max - omega_min) "
+                                    f"/ omega_mean is below 1 for a flywheel to reach; got "
+                                    f"{delta:g}")
+        timed = [e.text for ld in mech.loads for e in (ld.fx, ld.fy, ld.moment)
+                 if e.depends_on_time]
+        if timed:
+            raise fw.error("case", f"a load depends on time ({timed[0]!r}): a steady rotation "
+                                   "(for a flywheel) needs the loads constant or functions of phi")
+        for c in cases:
+            if c.name == case and c.M1.depends_on_time:
+                raise fw.error("case", f"case {case!r} has a driving moment that depends on "
+                                       "time: a steady rotation (for a flywheel) needs M1 "
+                                       "constant or a function of phi")
+        fw.done()
+        flywheel = (case, delta)
     sec.done()
-    return DynamicsSpec(cases=tuple(cases), method=method)
+    return DynamicsSpec(cases=tuple(cases), method=method, flywheel=flywheel)
 
 
 def stored_study(attrs, results_path=None):

@@ -1,0 +1,179 @@
+"""Flywheel sizing: the moment of inertia to add on the crank shaft so that a
+dynamics case's steady rotation has a given coefficient of non-uniformity
+delta = (omega_max - omega_min) / omega_mean.
+
+The steady rotation is found directly, as the periodic solution of the
+energy equation over one revolution (not by running the crank up and
+waiting): with K = J(phi) omega^2 / 2 the equation of motion
+J phi'' + (1/2) J'(phi) phi'^2 + b phi' = Q(phi) + M1(phi) reads, along the
+direction of rotation s (theta = s (phi - phi0)),
+
+    dK/dtheta = s (M1 + Q) - b |omega|,     |omega| = sqrt(2 K / (J + J_f)),
+
+integrated by RK4 over one revolution from the exact J(phi) and Q(phi) of the
+mechanism (``crank_motion.reduced_terms``), and made periodic, K(2 pi) = K(0),
+by Brent's method on K(0).  omega_mean is the time mean (2 pi over the period,
+as ``CaseResult.steady`` measures it).  J_f is then found by Brent's method on
+delta(J_f) = target: delta falls as J_f grows.  Needs M1 and the loads to be
+constants or functions of phi (a steady rotation has no clock), and a net
+positive work per revolution in the direction of rotation.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .crank_motion import reduced_terms
+
+ORBIT_STEPS = 1440          # RK4 steps over the revolution (0.25 deg)
+XTOL = 1e-12                # Brent's method, relative to the bracket
+
+
+@dataclass
+class Flywheel:
+    case: str
+    target: float               # delta asked for
+    J_add: float                # kg m^2 added on the crank shaft (0: none needed)
+    delta: float                # of the sized system's steady rotation
+    delta_without: float        # without the flywheel
+    omega_min: float            # rad/s, with the flywheel (signed as the rotation)
+    omega_max: float
+    omega_mean: float
+    J_body: str                 # the body that carries it (the crank's)
+
+    def summary(self) -> dict:
+        if self.J_add == 0.0:
+            return {f"{self.case} flywheel": (
+                f"none needed: delta {self.delta_without:.4g} is already at most "
+                f"{self.target:g}")}
+        return {f"{self.case} flywheel": (
+            f"J = {self.J_add:.4g} kg m^2 added on the crank shaft brings delta from "
+            f"{self.delta_without:.4g} to {self.delta:.4g} (target {self.target:g}); omega1 "
+            f"{self.omega_min:.4f} to {self.omega_max:.4f} rad/s, mean {self.omega_mean:.4f}")}
+
+
+def crank_inertia(plan, mech) -> int:
+    """The column of plan.par holding J_S of the body that turns with the crank
+    (a flywheel on the shaft adds to it: its centre is on the axis)."""
+    a, b = plan.point(mech.crank.pivot), plan.point(mech.crank.tip)
+    for i, name in enumerate(plan.body_names):
+        if tuple(int(x) for x in plan.body_turn[i]) == (a, b):
+            return plan.param(f"{name}.J_S")
+    raise ValueError("a flywheel goes on the crank's shaft: declare the crank as a body "
+                     f"(joints [{mech.crank.pivot!r}, {mech.crank.tip!r}])")
+
+
+def with_flywheel(plan, mech, J_add):
+    """The plan with ``J_add`` added to the crank body's J_S."""
+    from dataclasses import replace
+    par = plan.par.copy()
+    par[crank_inertia(plan, mech)] += J_add
+    return replace(plan, par=par)
+
+
+class _Orbit:
+    """J, Q and M1 sampled at the RK4 nodes and half steps of one revolution."""
+
+    def __init__(self, plan, mech, case, n=ORBIT_STEPS):
+        Q_rev, M_rev = self._net(plan, mech, case)
+        net = float(np.mean(Q_rev + M_rev))
+        if not net != 0.0:
+            raise ValueError(f"case {case.name!r}: M1 and the loads do no net work over a "
+                             "revolution; there is no steady rotation to size a flywheel for")
+        self.s = 1.0 if net > 0.0 else -1.0
+        self.n = n
+        self.h = 2.0 * math.pi / n
+        self.phi = case.phi_start + self.s * self.h * 0.5 * np.arange(2 * n + 1)
+        J, _, Q = reduced_terms(plan, self.phi, 0.0, mech)
+        M1 = np.broadcast_to(case.M1.evaluate(self.phi, 0.0), self.phi.shape)
+        self.J = np.asarray(J, float)
+        self.drive = self.s * (np.asarray(M1, float) + np.asarray(Q, float))
+        self.b = case.damping
+        if not (np.isfinite(self.J).all() and np.isfinite(self.drive).all()):
+            raise ValueError(f"case {case.name!r}: the mechanism cannot be assembled over the "
+                             "whole revolution")
+
+    @staticmethod
+    def _net(plan, mech, case):
+        phi = np.linspace(0.0, 2.0 * math.pi, 720, endpoint=False)
+        _, _, Q = reduced_terms(plan, phi, 0.0, mech)
+        M1 = np.broadcast_to(case.M1.evaluate(phi, 0.0), phi.shape)
+        return np.asarray(Q, float), np.asarray(M1, float)
+
+    def run(self, K0, J_add):
+        """K at the nodes over one revolution from K0."""
+        J = self.J + J_add
+        K = np.empty(self.n + 1)
+        K[0] = k = K0
+        h, b, d = self.h, self.b, self.drive
+
+        def f(i, k):
+            return d[i] - b * math.sqrt(max(2.0 * k / J[i], 0.0))
+
+        for j in range(self.n):
+            i = 2 * j
+            k1 = f(i, k)
+            k2 = f(i + 1, k + 0.5 * h * k1)
+            k3 = f(i + 1, k + 0.5 * h * k2)
+            k4 = f(i + 2, k + h * k3)
+            k = k + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+            if not k > 0.0:
+                return None            # the crank stops: no rotation from this K0
+            K[j + 1] = k
+        return K
+
+    def periodic(self, J_add):
+        """|omega| at the nodes of the periodic rotation (J_add on the shaft)."""
+        from scipy.optimize import brentq
+        J0 = self.J[0] + J_add
+
+        def gap(K0):
+            K = self.run(K0, J_add)
+            return -K0 if K is None else K[-1] - K0
+
+        # bracket: K0 where the revolution gains energy (gap > 0) and where it loses it
+        lo = hi = 0.5 * J0 * (abs(np.mean(self.drive)) / max(self.b, 1e-300)) ** 2
+        lo = min(lo, 1.0)
+        for _ in range(200):
+            if gap(lo) > 0.0:
+                break
+            lo *= 0.25
+        for _ in range(200):
+            if gap(hi) < 0.0:
+                break
+            hi *= 4.0
+        K0 = brentq(gap, lo, hi, xtol=1e-300, rtol=4 * np.finfo(float).eps, maxiter=500)
+        K = self.run(K0, J_add)
+        return np.sqrt(2.0 * K / (self.J[::2] + J_add))
+
+    def delta(self, J_add):
+        """(delta, omega_min, omega_max, omega_mean) of the periodic rotation."""
+        w = self.periodic(J_add)
+        inv = 1.0 / w                          # time = integral of dtheta / |omega|: Simpson
+        period = self.h / 3.0 * (inv[0] + inv[-1] + 4.0 * inv[1:-1:2].sum()
+                                 + 2.0 * inv[2:-1:2].sum()) if self.n % 2 == 0 else \
+            self.h * (inv.sum() - 0.5 * (inv[0] + inv[-1]))
+        mean = 2.0 * math.pi / period
+        return (float((w.max() - w.min()) / mean), self.s * float(w.min()),
+                self.s * float(w.max()), self.s * float(mean))
+
+
+def size_flywheel(plan, mech, case, target) -> Flywheel:
+    """The flywheel (kg m^2 on the crank shaft) that brings the steady rotation
+    of dynamics case ``case`` to the non-uniformity ``target``."""
+    from scipy.optimize import brentq
+    body = plan.body_names[[plan.param(f"{n}.J_S") for n in plan.body_names]
+                           .index(crank_inertia(plan, mech))]
+    orbit = _Orbit(plan, mech, case)
+    d0 = orbit.delta(0.0)
+    if d0[0] <= target:
+        return Flywheel(case.name, target, 0.0, d0[0], d0[0], *d0[1:], body)
+    hi = max(float(np.mean(orbit.J)), 1e-12)
+    while orbit.delta(hi)[0] > target:
+        hi *= 4.0
+    J_add = brentq(lambda j: orbit.delta(j)[0] - target, 0.0, hi, xtol=XTOL * hi, rtol=1e-12)
+    d = orbit.delta(J_add)
+    return Flywheel(case.name, target, float(J_add), d[0], d0[0], *d[1:], body)
