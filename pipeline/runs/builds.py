@@ -21,6 +21,7 @@ from ..study.sweep_spec import SweepSpec
 from ..study.tolerance_spec import ToleranceSpec, drawn
 from .problem import plain_problem
 
+
 def available_metrics(study, plan):
     """The toleranced metrics this mechanism has (forces need bodies, the law
     error a motion law, the transmission angle a dyad or a class III group,
