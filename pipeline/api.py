@@ -16,7 +16,8 @@ from __future__ import annotations
 from .study.reader import Study, load_study as _load_study
 from .views.tables import candidates, scene_tables, with_units
 
-__all__ = ["load_study", "run", "solve_scene", "open", "candidates", "scene_tables", "with_units"]
+__all__ = ["load_study", "run", "solve_scene", "open", "tolerance", "candidates", "scene_tables",
+           "with_units"]
 
 
 def load_study(path) -> Study:
@@ -49,6 +50,28 @@ def solve_scene(study):
         raise ValueError(f"{study.path}: pipeline.solve_scene solves a scene; this study is a "
                          f"{study.kind} (use pipeline.run)")
     return solve(study)
+
+
+def tolerance(source, candidate=None, *, samples=None, metrics=None):
+    """How a design holds up when it is made, in memory (writes nothing): the
+    design of a scene's results file or study file, or a sweep's candidate
+    (a number, 'knee' or 'reference'), built ``samples`` times within its
+    study's [tolerance] (ISO 2768-f without one).  Returns the analysis
+    (``pipeline.runs.tolerance.ToleranceAnalysis``): ``.table()`` (a
+    DataFrame per metric: design value, mean, std, linear std, percentiles),
+    ``.yield_``, ``.values`` and ``.status`` per build, ``.sensitivity``;
+    draw it with ``pipeline.views.tolerance_plots``.  ``pipeline tolerance``
+    writes the same to a results file with its pictures."""
+    from dataclasses import replace
+
+    from .analysis.candidate import tolerance_design
+    from .runs.tolerance import analyse
+    from .study.tolerance_spec import ToleranceSpec
+    study, mech, label, sweep, _ = tolerance_design(source, candidate)
+    spec = study.tolerance or ToleranceSpec()
+    if metrics:
+        spec = replace(spec, metrics=tuple(metrics))
+    return analyse(study, mech, spec, label=label, sweep_spec=sweep, samples=samples)
 
 
 def open(path):  # noqa: A001 - pipeline.open, as the users asked for it

@@ -27,8 +27,8 @@ def test_run_returns_where_it_wrote(tmp_path, studies):
 
 
 def test_the_package_offers_its_api():
-    for name in ("load_study", "run", "solve_scene", "open", "candidates", "scene_tables",
-                 "with_units"):
+    for name in ("load_study", "run", "solve_scene", "open", "tolerance", "candidates",
+                 "scene_tables", "with_units"):
         assert name in dir(pipeline) and callable(getattr(pipeline, name))
 
 
@@ -134,3 +134,14 @@ def test_pictures_are_figures_the_caller_saves(studies, tmp_path):
     assert set(tmp_path.iterdir()) == before
     with pytest.raises(ValueError, match="pipeline.run"):
         pipeline.solve_scene(studies / "ov7_synthesis.toml")
+
+
+def test_tolerance_in_memory_writes_nothing(studies, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    a = pipeline.tolerance(studies / "ov7_class3.toml", samples=64,
+                           metrics=["stroke", "dwell_error"])
+    t = a.table()
+    assert list(t.index) == ["stroke", "dwell_error"] and t.loc["stroke", "units"] == "mm"
+    assert t.loc["stroke", "p05"] < t.loc["stroke", "design"] < t.loc["stroke", "p95"]
+    assert t.loc["dwell_error", "std"] > 0 and a.yield_ == 1.0
+    assert not list(tmp_path.iterdir())

@@ -112,6 +112,19 @@ class ToleranceAnalysis:
                 out[k] = float(np.quantile(v, q))
         return out
 
+    def table(self):
+        """One row per metric: units, the design's value, mean, std, the linear
+        prediction of the std, 5th, 50th and 95th percentiles (a DataFrame)."""
+        import pandas as pd
+        ok = self.status == kc.OK
+        mean = [float(np.mean(v[np.isfinite(v)])) if np.isfinite(v).any() else np.nan
+                for v in (self.values[ok, k] for k in range(len(self.metrics)))]
+        return pd.DataFrame({"units": self.units, "design": self.nominal, "mean": mean,
+                             "std": self.sigma_sampled(), "std_linear": self.sigma_linear(),
+                             "p05": self.quantiles(0.05), "p50": self.quantiles(0.5),
+                             "p95": self.quantiles(0.95)},
+                            index=pd.Index(self.metrics, name="metric"))
+
     def status_counts(self):
         codes, counts = np.unique(self.status, return_counts=True)
         return {kc.STATUS_NAMES.get(int(c), str(int(c))): int(n) for c, n in zip(codes, counts)}
