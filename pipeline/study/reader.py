@@ -87,10 +87,19 @@ KINDS = ("scene", "sweep")
 ANALYSES = ("positions", "velocities", "accelerations", "forces")
 
 
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"    # the first bytes of every HDF5 file
+
+
 def load_study(path) -> Study:
     """Read and validate a study file."""
     path = Path(path)
     try:
+        with open(path, "rb") as f:
+            if f.read(8) == HDF5_SIGNATURE:
+                raise StudyError(path, "", "is an HDF5 file (a results file?), not a study: "
+                                           "`pipeline run` takes a study's TOML file; browse, "
+                                           "show, report, export and tolerance read results "
+                                           "files")
         # at most one character past the limit is read (a huge file, /dev/zero)
         with open(path, encoding="utf-8") as f:
             text = f.read(MAX_STUDY_BYTES + 1)

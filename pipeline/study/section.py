@@ -41,7 +41,10 @@ class Section:
         self.used.add(key)
         if key not in self.data:
             if default is _MISSING:
-                raise self.error(key, "required field is missing")
+                near = _closest(key, [k for k in self.data if k not in self.used])
+                raise self.error(key, "required field is missing" + (
+                    f" ({_quote(near)} is given: a misspelling of {_quote(key)}?)" if near
+                    else ""))
             return default
         return self.data[key]
 
@@ -170,8 +173,18 @@ class Section:
         """Reject keys nobody asked for (typos must not be silently ignored)."""
         extra = sorted(set(self.data) - self.used)
         if extra:
+            near = _closest(extra[0], self.used)
             raise self.error(extra[0], f"unknown key {_quote(extra[0])}"
+                             + (f"; did you mean {_quote(near)}?" if near else "")
                              + (f" (known here: {', '.join(sorted(self.used))})" if self.used else ""))
+
+
+def _closest(name, candidates):
+    """The candidate that ``name`` most likely misspells (difflib), or None."""
+    import difflib
+    found = difflib.get_close_matches(str(name), [str(c) for c in candidates], n=1,
+                                      cutoff=0.75)
+    return found[0] if found else None
 
 
 def _show(v):

@@ -28,7 +28,10 @@ CASES = [
     (('B = "P5"', 'B = "P3"'), "mechanism.groups[1].B", "defined twice"),
     (("W = -1", "W = 2"), "mechanism.groups[0].W", "must be one of -1, 1"),
     (("W = -1", "Wmode = -1"), "mechanism.groups[0]", "W"),
-    (("length = 14.9", "length = 14.9\nlenght = 3"), "mechanism.crank.lenght", "unknown key"),
+    (("length = 14.9", "length = 14.9\nlenght = 3"), "mechanism.crank.lenght",
+     "unknown key 'lenght'; did you mean 'length'?"),
+    (("length = 14.9", "lenght = 14.9"), "mechanism.crank.length",
+     "required field is missing ('lenght' is given: a misspelling of 'length'?)"),
     (('type = "RRR"', 'type = "RRRR"'), "mechanism.groups[0].type", "must be one of"),
     (('pivot = "P1"', 'pivot = "P2"'), "mechanism.crank.pivot", "must be a fixed point"),
     (("P4 = [26.0, 98.7]", "P4 = [26.0]"), "mechanism.fixed.P4", "expected 2 numbers"),
@@ -276,3 +279,15 @@ def test_a_huge_table_law_and_a_huge_study_file_are_refused(studies, tmp_path):
     # a results file's stored copy is held to the same bound
     with pytest.raises(StudyError, match="at most 1,000,000 bytes"):
         parse_study(text + "#" * 1_000_001, "stored")
+
+
+def test_a_results_file_given_as_a_study_says_so(tmp_path, capsys):
+    import h5py
+
+    from pipeline.cli import main
+    path = tmp_path / "x.h5"
+    with h5py.File(path, "w") as f:
+        f.attrs["kind"] = "scene"
+    assert main(["run", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "is an HDF5 file (a results file?)" in err, err
