@@ -65,8 +65,8 @@ def test_export_a_sweep(sweep, tmp_path):
     assert main(["export", str(sweep), "--csv", str(tmp_path / "f1"), "--front", "1",
                  "-q"]) == 0
     everything = pd.read_csv(tmp_path / "all" / "candidates.csv")
-    feas = pd.read_csv(tmp_path / "feas" / "candidates.csv")
-    f1 = pd.read_csv(tmp_path / "f1" / "candidates.csv")
+    feas = pd.read_csv(tmp_path / "feas" / "candidates_feasible.csv")
+    f1 = pd.read_csv(tmp_path / "f1" / "candidates_front1.csv")
     df = pipeline.open(sweep)
     assert len(everything) == N and len(feas) == int(df["feasible"].sum())
     assert len(f1) == int((df["front"] == 1).sum()) and (f1["front"] == 1).all()
@@ -145,3 +145,17 @@ def test_tolerance_in_memory_writes_nothing(studies, tmp_path, monkeypatch):
     assert t.loc["stroke", "p05"] < t.loc["stroke", "design"] < t.loc["stroke", "p95"]
     assert t.loc["dwell_error", "std"] > 0 and a.yield_ == 1.0
     assert not list(tmp_path.iterdir())
+
+
+def test_two_selections_exported_into_one_folder_keep_both(sweep, tmp_path):
+    """--feasible then --front 1 into the same folder: two files, each named for
+    what it holds (neither overwrites the other)."""
+    out = tmp_path / "tables"
+    for extra in (["--feasible"], ["--front", "1"], ["--front", "2"]):
+        assert main(["export", str(sweep), "--csv", str(out), "-q", *extra]) == 0
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["candidates_feasible.csv", "candidates_front1.csv",
+                     "candidates_fronts1-2.csv"]
+    feas = pd.read_csv(out / "candidates_feasible.csv")
+    f1 = pd.read_csv(out / "candidates_front1.csv")
+    assert len(f1) < len(feas) and (f1["front"] == 1).all()

@@ -2,8 +2,10 @@
 
 A scene gives points.csv, links.csv (and reactions.csv, peaks.csv,
 motion_<case>.csv) at every computed position (``every``: every N-th); a sweep
-gives candidates.csv (all candidates, the feasible ones, or the first Pareto
-fronts).  CSV headers carry their units (``V8_x [m/s]``); Parquet keeps plain
+gives candidates.csv (all candidates), candidates_feasible.csv (the feasible
+ones) or candidates_front1.csv, candidates_fronts1-N.csv (the first Pareto
+fronts): each file names what it holds, so two selections never overwrite
+each other.  CSV headers carry their units (``V8_x [m/s]``); Parquet keeps plain
 column names with the units in the file's metadata.  Every file is written
 atomically.
 """
@@ -29,10 +31,18 @@ def export(path, outdir, *, every=1, feasible=False, front=None, parquet=False) 
     else:
         if every != 1:
             raise ValueError("--every thins the positions of a scene; this is a sweep")
-        frames = {"candidates": candidates(path, feasible=feasible, front=front)}
+        frames = {candidates_name(feasible, front): candidates(path, feasible=feasible,
+                                                               front=front)}
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     return [_write(df, outdir / f"{name}.csv", parquet) for name, df in frames.items()]
+
+
+def candidates_name(feasible=False, front=None) -> str:
+    """The name of a sweep's candidates table for a selection."""
+    if front is not None:
+        return "candidates_front1" if front == 1 else f"candidates_fronts1-{front}"
+    return "candidates_feasible" if feasible else "candidates"
 
 
 def _write(df, path, parquet):

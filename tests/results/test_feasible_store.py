@@ -100,7 +100,7 @@ def test_export_equals_the_full_files_feasible_export(files, tmp_path):
     full, feas, keep = files
     assert main(["export", str(feas), "--csv", str(tmp_path / "b"), "-q"]) == 0
     assert main(["export", str(full), "--csv", str(tmp_path / "a"), "--feasible", "-q"]) == 0
-    a = pd.read_csv(tmp_path / "a" / "candidates.csv")
+    a = pd.read_csv(tmp_path / "a" / "candidates_feasible.csv")
     b = pd.read_csv(tmp_path / "b" / "candidates.csv")
     assert len(b) == keep.sum()
     pd.testing.assert_frame_equal(a, b)
