@@ -162,13 +162,13 @@ class RobustBuilds:
     def __init__(self, study, spec: SweepSpec, names):
         tol = study.tolerance or ToleranceSpec()
         self.names = tuple(names)
-        self.spec = spec
+        self.spec = spec.nominal()     # a design's own constraints, robust bounds apart
         self.quantile = tol.robust.quantile
         self.dims = drawn(tol.dimensions(study.mechanism))
         self.deltas = deviations(self.dims, tol.robust.builds, tol.seed)
         base = [ROBUST_OF[n] for n in self.names if ROBUST_OF[n]]
         if "build_yield" in self.names:
-            base += ["stroke"] + [m for m, _, _ in spec.bounds if BY_NAME[m].stage != "robust"]
+            base += ["stroke"] + [m for m, _, _ in self.spec.bounds]
         plan = study.mechanism.compile()
         if np.isin(plan.codes, kc.CLASS3_GROUPS).any():
             base.append("singularity_margin")
@@ -186,9 +186,7 @@ class RobustBuilds:
         """Write the robust columns of ``rows`` (n, N_ROW) of the designs
         ``pars`` whose nominal ``status`` and rows meet the constraints."""
         from ..study.objectives import constraints
-        nominal = replace(self.spec, bounds=tuple(b for b in self.spec.bounds
-                                                   if BY_NAME[b[0]].stage != "robust"))
-        _, cv = constraints(nominal, rows, status, self.has_margin)
+        _, cv = constraints(self.spec, rows, status, self.has_margin)
         idx = np.flatnonzero((status == kc.OK) & (cv == 0))
         if not len(idx):
             return
@@ -200,7 +198,7 @@ class RobustBuilds:
         for name in self.names:
             col = ROBUST_COLUMN[name]
             if name == "build_yield":
-                _, bcv = constraints(nominal, brows, st, self.has_margin)
+                _, bcv = constraints(self.spec, brows, st, self.has_margin)
                 meets = ((st == kc.OK) & (bcv == 0)).reshape(len(idx), B)
                 rows[idx, col] = meets.mean(axis=1)
                 continue

@@ -32,7 +32,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -138,8 +138,7 @@ def analyse(study, mech, spec: ToleranceSpec, *, label="design", sweep_spec=None
     the sweep whose constraints the builds must meet."""
     t0 = time.perf_counter()
     if sweep_spec is not None:      # a build has no builds of its own: robust bounds apart
-        sweep_spec = replace(sweep_spec, bounds=tuple(
-            b for b in sweep_spec.bounds if BY_NAME[b[0]].stage != "robust"))
+        sweep_spec = sweep_spec.nominal()
     with compile_notice():
         ev = BuildEvaluator(study, mech, _wanted(spec, sweep_spec, mech))
         nom_status, nom_values, _ = ev(ev.plan.par[None, :], n_jobs)

@@ -103,6 +103,13 @@ class SweepSpec:
         """Whether the sweep stores one of the metrics ``names``."""
         return any(m in names for m in self.metrics + self.objectives)
 
+    def nominal(self):
+        """The sweep without its bounds on robust metrics (``build_yield``): the
+        constraints a single build, which has no builds of its own, is held to."""
+        from dataclasses import replace
+        return replace(self, bounds=tuple(b for b in self.bounds
+                                          if METRICS[b[0]][2] != "robust"))
+
     @property
     def wants_forces(self):
         return self._wants("forces")
