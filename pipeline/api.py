@@ -62,15 +62,10 @@ def tolerance(source, candidate=None, *, samples=None, metrics=None):
     ``.yield_``, ``.values`` and ``.status`` per build, ``.sensitivity``;
     draw it with ``pipeline.views.tolerance_plots``.  ``pipeline tolerance``
     writes the same to a results file with its pictures."""
-    from dataclasses import replace
-
-    from .analysis.candidate import tolerance_design
+    from .runner import tolerance_setup
     from .runs.tolerance import analyse
-    from .study.tolerance_spec import ToleranceSpec
-    study, mech, label, sweep, _ = tolerance_design(source, candidate)
-    spec = study.tolerance or ToleranceSpec()
-    if metrics:
-        spec = replace(spec, metrics=tuple(metrics))
+    study, mech, label, sweep, _, spec = tolerance_setup(source, candidate, samples=samples,
+                                                         metrics=metrics)
     return analyse(study, mech, spec, label=label, sweep_spec=sweep, samples=samples)
 
 

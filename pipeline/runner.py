@@ -239,21 +239,19 @@ def tolerance_output(source, origin):
     return source.with_name(f"{source.stem}{tag}_tolerance.h5")
 
 
-def run_tolerance(source, candidate=None, out=None, *, samples=None, pictures=True,
-                  overwrite=False, n_jobs=None, metrics=None) -> RunOutcome:
-    """The tolerance analysis of a design (``tolerance_design``) under its
-    study's [tolerance] section (ISO 2768-f without one): its results file,
-    pictures and summary."""
+def tolerance_setup(source, candidate=None, *, samples=None, metrics=None):
+    """(study, design mechanism, label, sweep spec or None, origin attrs,
+    ToleranceSpec) of a tolerance analysis: the design (``tolerance_design``),
+    its study's [tolerance] (ISO 2768-f without one) with the metrics asked
+    for, the sample count checked."""
+    from dataclasses import replace
+
     from .analysis.candidate import tolerance_design
-    from .results.tolerance_file import write_tolerance
-    from .runs.tolerance import analyse
+    from .model.metric_catalogue import TOLERANCED_METRICS
     from .study.tolerance_spec import MAX_SAMPLES, ToleranceSpec
     study, mech, label, sweep, origin = tolerance_design(source, candidate)
     spec = study.tolerance or ToleranceSpec()
     if metrics:
-        from dataclasses import replace
-
-        from .model.metric_catalogue import TOLERANCED_METRICS
         unknown = [m for m in metrics if m not in TOLERANCED_METRICS]
         if unknown:
             raise ValueError(f"--metrics: {unknown[0]!r} is not a metric of a build; known: "
@@ -261,6 +259,17 @@ def run_tolerance(source, candidate=None, out=None, *, samples=None, pictures=Tr
         spec = replace(spec, metrics=tuple(metrics))
     if samples is not None and not 2 <= samples <= MAX_SAMPLES:
         raise ValueError(f"--samples must be between 2 and {MAX_SAMPLES:,}, got {samples:,}")
+    return study, mech, label, sweep, origin, spec
+
+
+def run_tolerance(source, candidate=None, out=None, *, samples=None, pictures=True,
+                  overwrite=False, n_jobs=None, metrics=None) -> RunOutcome:
+    """The tolerance analysis of a design (``tolerance_setup``): its results
+    file, pictures and summary."""
+    from .results.tolerance_file import write_tolerance
+    from .runs.tolerance import analyse
+    study, mech, label, sweep, origin, spec = tolerance_setup(source, candidate,
+                                                              samples=samples, metrics=metrics)
     out = Path(out) if out else tolerance_output(source, origin)
     with RunLock(out):
         if out.exists() and not overwrite:

@@ -145,6 +145,8 @@ def test_tolerance_in_memory_writes_nothing(studies, tmp_path, monkeypatch):
     assert t.loc["stroke", "p05"] < t.loc["stroke", "design"] < t.loc["stroke", "p95"]
     assert t.loc["dwell_error", "std"] > 0 and a.yield_ == 1.0
     assert not list(tmp_path.iterdir())
+    with pytest.raises(ValueError, match="not a metric of a build"):   # as the command says
+        pipeline.tolerance(studies / "ov7_class3.toml", samples=64, metrics=["peak_joint"])
 
 
 def test_two_selections_exported_into_one_folder_keep_both(sweep, tmp_path):
