@@ -78,30 +78,28 @@ class _Orbit:
     """J, Q and M1 sampled at the RK4 nodes and half steps of one revolution."""
 
     def __init__(self, plan, mech, case, n=ORBIT_STEPS):
-        Q_rev, M_rev = self._net(plan, mech, case)
-        net = float(np.mean(Q_rev + M_rev))
+        self.n = n
+        self.h = 2.0 * math.pi / n
+        # one revolution forward from phi_start at the nodes and half steps: 2n + 1
+        # samples, the last the first again; backwards they are the same, reversed
+        phi = case.phi_start + self.h * 0.5 * np.arange(2 * n + 1)
+        J, _, Q = reduced_terms(plan, phi, 0.0, mech)
+        M1 = np.broadcast_to(case.M1.evaluate(phi, 0.0), phi.shape)
+        drive = np.asarray(M1, float) + np.asarray(Q, float)
+        J = np.asarray(J, float)
+        if not (np.isfinite(J).all() and np.isfinite(drive).all()):
+            raise ValueError(f"case {case.name!r}: the mechanism cannot be assembled over the "
+                             "whole revolution")
+        net = float(np.mean(drive[:-1]))
         if not net != 0.0:
             raise ValueError(f"case {case.name!r}: M1 and the loads do no net work over a "
                              "revolution; there is no steady rotation to size a flywheel for")
         self.s = 1.0 if net > 0.0 else -1.0
-        self.n = n
-        self.h = 2.0 * math.pi / n
+        order = slice(None) if self.s > 0 else slice(None, None, -1)
         self.phi = case.phi_start + self.s * self.h * 0.5 * np.arange(2 * n + 1)
-        J, _, Q = reduced_terms(plan, self.phi, 0.0, mech)
-        M1 = np.broadcast_to(case.M1.evaluate(self.phi, 0.0), self.phi.shape)
-        self.J = np.asarray(J, float)
-        self.drive = self.s * (np.asarray(M1, float) + np.asarray(Q, float))
+        self.J = J[order]
+        self.drive = self.s * drive[order]
         self.b = case.damping
-        if not (np.isfinite(self.J).all() and np.isfinite(self.drive).all()):
-            raise ValueError(f"case {case.name!r}: the mechanism cannot be assembled over the "
-                             "whole revolution")
-
-    @staticmethod
-    def _net(plan, mech, case):
-        phi = np.linspace(0.0, 2.0 * math.pi, 720, endpoint=False)
-        _, _, Q = reduced_terms(plan, phi, 0.0, mech)
-        M1 = np.broadcast_to(case.M1.evaluate(phi, 0.0), phi.shape)
-        return np.asarray(Q, float), np.asarray(M1, float)
 
     def run(self, K0, J_add):
         """K at the nodes over one revolution from K0."""

@@ -45,13 +45,23 @@ def fourbar():
                        STUDIES / "warp_feed_fourbar.toml")
 
 
-@pytest.mark.parametrize("make", [takeup, fourbar], ids=["takeup", "fourbar"])
+def fourbar_backwards():
+    """The same driven the other way round (the orbit's samples are reversed)."""
+    text = FOURBAR_DYNAMICS.replace("M1 = 8.0", "M1 = -8.0").replace("omega_start = 60.0",
+                                                                      "omega_start = -60.0")
+    return parse_study((STUDIES / "warp_feed_fourbar.toml").read_text() + text,
+                       STUDIES / "warp_feed_fourbar.toml")
+
+
+@pytest.mark.parametrize("make", [takeup, fourbar, fourbar_backwards],
+                         ids=["takeup", "fourbar", "fourbar_backwards"])
 def test_the_sized_system_integrated_again_has_the_target_delta(make):
     study = make()
     plan, mech = study.mechanism.compile(), study.mechanism
     name, target = study.dynamics.flywheel
     case = next(c for c in study.dynamics.cases if c.name == name)
     fw = size_flywheel(plan, mech, case, target)
+    assert (fw.omega_mean < 0) == (make is fourbar_backwards)
     assert fw.J_add > 0 and fw.delta == pytest.approx(target, rel=1e-9)
     orbit = _Orbit(plan, mech, case)
     for J_add, want in ((fw.J_add, target), (0.0, fw.delta_without)):
