@@ -8,7 +8,7 @@ for robustness) and once from scratch.
 
 Each search's own feasible front (its objectives) is then judged alike, on
 builds neither search has seen: 1,024 builds per design with another seed
-(``pipeline.runs.tolerance.RobustBuilds``), the 95th percentile of the dwell
+(``pipeline.runs.builds.RobustBuilds``), the 95th percentile of the dwell
 error over them (p95), against the design's peak reaction.  At equal peak
 reaction: for each peak-reaction level, the lowest p95 of the designs of a
 front whose peak reaction is at most that level; the table lists the levels

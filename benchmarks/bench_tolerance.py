@@ -36,7 +36,8 @@ TARGET_S = 1.0          # issue 30: 10,000 builds of mechanism B in at most 1 s
 
 def run(smoke=False, out=None, echo=print):
     from pipeline.runs.sweep import build_problem
-    from pipeline.runs.tolerance import BuildEvaluator, analyse, build_rows, deviations
+    from pipeline.runs.builds import BuildEvaluator, build_rows, deviations
+    from pipeline.runs.tolerance import analyse
     from pipeline.study.reader import load_study
     from pipeline.study.sampling import draw_checked
     from pipeline.study.sweep_spec import parameter_rows

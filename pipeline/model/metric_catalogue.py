@@ -27,7 +27,7 @@ from ..kernels import sweep as ks
 # the stages of the kernels (pipeline.kernels.sweep): "positions" (stage 1), "law"
 # (stage 1, with [output.motion_law]), "kinematics", "transmission", "forces" (stage
 # 2, candidates that meet the stroke and margin constraints); "robust": a design's
-# builds within the study's [tolerance] (pipeline.runs.tolerance.RobustBuilds), for
+# builds within the study's [tolerance] (pipeline.runs.builds.RobustBuilds), for
 # the designs that meet their constraints, in columns after the kernels' own
 STAGES = ("positions", "law", "kinematics", "transmission", "forces", "robust")
 

@@ -39,7 +39,7 @@ class SweepProblem:
     law: np.ndarray | None = None   # the motion law at the grid's positions (law_error)
     law_best: bool = True    # the law shifted to fit best (align = "best")
     device: str = "cpu"      # cpu | gpu (resolved: never auto)
-    robust: object = None    # pipeline.runs.tolerance.RobustBuilds: the robust metrics asked
+    robust: object = None    # pipeline.runs.builds.RobustBuilds: the robust metrics asked
 
     @property
     def kernels(self):

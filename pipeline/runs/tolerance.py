@@ -39,8 +39,7 @@ import numpy as np
 from ..kernels import config as kc
 from ..model.metric_catalogue import BY_NAME, metric_values
 from ..study.tolerance_spec import ToleranceSpec, drawn
-from .builds import (TOLERANCED_METRICS, BuildEvaluator, available_metrics,  # noqa: F401
-                     build_rows, deviations, evaluation_spec)
+from .builds import BuildEvaluator, build_rows, deviations
 from .problem import compile_notice
 
 log = logging.getLogger("pipeline")
