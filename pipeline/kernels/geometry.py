@@ -95,3 +95,18 @@ def link_angles(pos, d1, d2, ia, ib, order, out):
                 out[k, j, 1] = math.nan
                 out[k, j, 2] = math.nan
 
+
+
+# below this share of the square of a running peak, a length cannot reach the peak
+_REACH = 1.0 - 1e-9
+
+
+@njit(inline='always', **JIT)
+def may_reach(x, y, peak):
+    """False only where |(x, y)| is certainly below ``peak`` (>= 0): a running
+    maximum then needs no ``math.hypot`` (a library call) for this vector.
+    hypot is within an ulp of the exact length and x^2 + y^2 within a few of
+    its square, so below (1 - 1e-9) peak^2 the hypot is below the peak and the
+    maximum is the same to the bit; NaN, inf and a negative peak (none yet)
+    give True, so they reach the caller's own test."""
+    return not (peak >= 0.0 and x * x + y * y < _REACH * peak * peak)

@@ -51,7 +51,8 @@ def ternary_angle(l34, l45, l35, orientation):
 
 @njit(**JIT)
 def closure(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b):
-    """Residuals (F1, F2) and Jacobian d(F1, F2)/d(a, b) at (a, b)."""
+    """Residuals (F1, F2) and Jacobian d(F1, F2)/d(a, b) at (a, b), and the
+    cos/sin of a, b and b + U435 (``_place`` reuses them)."""
     ca = math.cos(a)
     sa = math.sin(a)
     cb = math.cos(b)
@@ -71,7 +72,7 @@ def closure(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b):
     j12 = 2.0 * l34 * (-r4x * sb + r4y * cb)
     j21 = 2.0 * l23 * (-r5x * sa + r5y * ca)
     j22 = 2.0 * l35 * (-r5x * sc + r5y * cc)
-    return f1, f2, j11, j12, j21, j22
+    return f1, f2, j11, j12, j21, j22, (ca, sa, cb, sb, cc, sc)
 
 
 @njit(**JIT)
@@ -79,34 +80,36 @@ def newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b,
            tol, maxiter, max_step):
     """Damped Newton on the closure equations from (a, b).
 
-    Returns (outcome, a, b, iterations, det J): outcome CONVERGED, MAXITER or
-    SINGULAR_JACOBIAN.  Converged means both closure residuals, expressed as
+    Returns (outcome, a, b, iterations, det J, trig): outcome CONVERGED, MAXITER or
+    SINGULAR_JACOBIAN; trig the cos/sin of a, b and b + U435 where it converged
+    (the last residual's: ``_place`` does not compute them again).  Converged means both closure residuals, expressed as
     distances (|F| / 2L, mm), are at most ``tol`` times the longer lead
     (a relative tolerance: the same digits at 1e-3 mm and at 1e4 mm).
     """
     det = math.nan
+    trig = (math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
     tol_mm = tol * max(l46, l57)
     for it in range(maxiter + 1):
-        f1, f2, j11, j12, j21, j22 = closure(p2x, p2y, p6x, p6y, p7x, p7y,
+        f1, f2, j11, j12, j21, j22, trig = closure(p2x, p2y, p6x, p6y, p7x, p7y,
                                              l23, l34, l35, l46, l57, u435, a, b)
         det = j11 * j22 - j12 * j21
         res = max(abs(f1) / (2.0 * l46), abs(f2) / (2.0 * l57))
         if res <= tol_mm:
-            return CONVERGED, a, b, it, det
+            return CONVERGED, a, b, it, det, trig
         if it == maxiter:
             break
         if not (det != 0.0 and math.isfinite(det)):
-            return SINGULAR_JACOBIAN, a, b, it, det
+            return SINGULAR_JACOBIAN, a, b, it, det, trig
         da, db = solve2(j11, j12, j21, j22, f1, f2)
         step = max(abs(da), abs(db))
         if not math.isfinite(step):
-            return SINGULAR_JACOBIAN, a, b, it, det
+            return SINGULAR_JACOBIAN, a, b, it, det, trig
         if step > max_step:
             da *= max_step / step
             db *= max_step / step
         a -= da
         b -= db
-    return MAXITER, a, b, maxiter, det
+    return MAXITER, a, b, maxiter, det, trig
 
 
 @njit(**JIT)
@@ -136,15 +139,11 @@ def _accept(state, g, a, b, a0, b0, det, margin, tols):
 
 
 @njit(**JIT)
-def _place(pos, i2, i3, i4, i5, l23, l34, l35, u435, a, b):
-    """Vertices 3, 4, 5 at the angles (a, b); returns the cos/sin of a, b and
-    b + U435 for the analogs."""
-    ca = math.cos(a)
-    sa = math.sin(a)
-    cb = math.cos(b)
-    sb = math.sin(b)
-    cc = math.cos(b + u435)
-    sc = math.sin(b + u435)
+def _place(pos, i2, i3, i4, i5, l23, l34, l35, trig):
+    """Vertices 3, 4, 5 at the angles (a, b) whose cos/sin (and those of
+    b + U435) are ``trig`` (Newton's last residual computed them); returns
+    them for the analogs."""
+    ca, sa, cb, sb, cc, sc = trig
     pos[i3, 0] = pos[i2, 0] + l23 * ca
     pos[i3, 1] = pos[i2, 1] + l23 * sa
     pos[i4, 0] = pos[i3, 0] + l34 * cb
@@ -192,7 +191,7 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
     p7y = pos[i7, 1]
     a0 = state[g, S_A]
     b0 = state[g, S_B]
-    outcome, a, b, iters, det = newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57,
+    outcome, a, b, iters, det, trig = newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57,
                                        u435, a0, b0, tols[T_NEWTON_TOL],
                                        int(tols[T_NEWTON_MAXITER]), tols[T_NEWTON_STEP])
     state[g, S_ITERS] = iters
@@ -208,7 +207,7 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
     margin = abs(det) / scale
     state[g, S_MARGIN] = margin
     status = _accept(state, g, a, b, a0, b0, det, margin, tols)
-    ca, sa, cb, sb, cc, sc = _place(pos, i2, i3, i4, i5, l23, l34, l35, u435, a, b)
+    ca, sa, cb, sb, cc, sc = _place(pos, i2, i3, i4, i5, l23, l34, l35, trig)
     if order < 1:
         return status, margin
     if status == SINGULAR:
@@ -273,7 +272,7 @@ def slider_closure(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, u435,
     j12 = l34 * (-r4x * sb + r4y * cb)
     j21 = l23 * (-nx * sa + ny * ca)
     j22 = l35 * (-nx * sc + ny * cc)
-    return f1, f2, j11, j12, j21, j22
+    return f1, f2, j11, j12, j21, j22, (ca, sa, cb, sb, cc, sc)
 
 
 @njit(**JIT)
@@ -285,28 +284,29 @@ def slider_newton(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, u435, 
     off its circle; |F2|: how far P5 is off its line, mm), are at most ``tol``
     times the longer lead (L23 or L46)."""
     det = math.nan
+    trig = (math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
     tol_mm = tol * max(l23, l46)
     for it in range(maxiter + 1):
-        f1, f2, j11, j12, j21, j22 = slider_closure(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23,
+        f1, f2, j11, j12, j21, j22, trig = slider_closure(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23,
                                                     l34, l35, l46, u435, offset, a, b)
         det = j11 * j22 - j12 * j21
         res = max(abs(f1) / l46, abs(f2))
         if res <= tol_mm:
-            return CONVERGED, a, b, it, det
+            return CONVERGED, a, b, it, det, trig
         if it == maxiter:
             break
         if not (det != 0.0 and math.isfinite(det)):
-            return SINGULAR_JACOBIAN, a, b, it, det
+            return SINGULAR_JACOBIAN, a, b, it, det, trig
         da, db = solve2(j11, j12, j21, j22, f1, f2)
         step = max(abs(da), abs(db))
         if not math.isfinite(step):
-            return SINGULAR_JACOBIAN, a, b, it, det
+            return SINGULAR_JACOBIAN, a, b, it, det, trig
         if step > max_step:
             da *= max_step / step
             db *= max_step / step
         a -= da
         b -= db
-    return MAXITER, a, b, maxiter, det
+    return MAXITER, a, b, maxiter, det, trig
 
 
 @njit(**JIT)
@@ -354,7 +354,7 @@ def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l
     gy = pos[i7, 1]
     a0 = state[g, S_A]
     b0 = state[g, S_B]
-    outcome, a, b, iters, det = slider_newton(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34,
+    outcome, a, b, iters, det, trig = slider_newton(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34,
                                               l35, l46, u435, offset, a0, b0,
                                               tols[T_NEWTON_TOL], int(tols[T_NEWTON_MAXITER]),
                                               tols[T_NEWTON_STEP])
@@ -368,7 +368,7 @@ def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l
     margin = abs(det) / (l23 * l46 * max(l34, l35))
     state[g, S_MARGIN] = margin
     status = _accept(state, g, a, b, a0, b0, det, margin, tols)
-    ca, sa, cb, sb, cc, sc = _place(pos, i2, i3, i4, i5, l23, l34, l35, u435, a, b)
+    ca, sa, cb, sb, cc, sc = _place(pos, i2, i3, i4, i5, l23, l34, l35, trig)
     if order < 1:
         return status, margin
     if status == SINGULAR:

@@ -16,7 +16,7 @@ from .header import (math, np, njit, JIT, JIT_ALLOC, OK, BRANCH_JUMP, S_A, S_B, 
                      SET_EPS1, SET_WANT_PEAKS, SET_WORK_POINT, SET_WANT_TRANSMISSION, SET_WANT_LAW,
                      SET_LAW0, LAW_BEST, SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING)
 from .header import M_EQUILIBRIUM, equilibrium_residual
-from .header import M_SHAKING_F, M_SHAKING_M, shaking
+from .header import M_SHAKING_F, M_SHAKING_M, shaking, may_reach
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_WATCH, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, constants, start, advance, forces_at, transmission,
                          ROCKER_PIVOT, ROCKER_POINT, NEWTON_STEPS)
@@ -318,12 +318,15 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
             if want_sh:
                 sfx, sfy, sm = shaking(pos, d1, d2, omega1, eps1, par, BODY_COM, BODY_TURN,
                                        BODY_MASS_OFF, CRANK_PIVOT)
-                sf = math.hypot(sfx, sfy)
-                if sf > peak_sf or not math.isfinite(sf):
-                    peak_sf = sf
+                if may_reach(sfx, sfy, peak_sf):
+                    sf = math.hypot(sfx, sfy)
+                    if sf > peak_sf or not math.isfinite(sf):
+                        peak_sf = sf
                 if abs(sm) > peak_sm or not math.isfinite(sm):
                     peak_sm = abs(sm)
             for j in range(N_JOINTS):
+                if not may_reach(r_out[j, 0], r_out[j, 1], peak):
+                    continue        # (the same peak to the bit, without the hypot)
                 r = math.hypot(r_out[j, 0], r_out[j, 1])
                 if r > peak or not math.isfinite(r):
                     peak = r
@@ -333,9 +336,10 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
             # |a| = |r'' omega1^2 + r' eps1| of the working point (mm/s^2)
             ax = d2[iw, 0] * omega1 ** 2 + d1[iw, 0] * eps1
             ay = d2[iw, 1] * omega1 ** 2 + d1[iw, 1] * eps1
-            a = math.hypot(ax, ay)
-            if a > peak_a or not math.isfinite(a):
-                peak_a = a
+            if may_reach(ax, ay, peak_a):
+                a = math.hypot(ax, ay)
+                if a > peak_a or not math.isfinite(a):
+                    peak_a = a
             # the rocker's angle analogs (geometry.angle_analogs), eps = theta'' w^2 + theta' eps1
             dx = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]
             dy = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]

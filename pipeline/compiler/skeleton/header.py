@@ -28,6 +28,7 @@ from pipeline.kernels.continuation import (accept, closes, copy2, predict, resto
 from pipeline.kernels.dynamics import drive, lagrange_terms, potential
 from pipeline.kernels.forces import (applied_loads, equilibrium_residual, force_work, gauss_solve,
                                      kinetostatics, shaking)
+from pipeline.kernels.geometry import may_reach
 from pipeline.kernels.groups import attach, crank, prp, rpp, rpr, rrp, rrr
 from pipeline.kernels.inputs import (linear_law, rise_return, rotary_input, slider_input,
                                      table_law)
@@ -73,4 +74,4 @@ __all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_LANES', 'OK', 'BRANCH_
            'SET_WANT_EQUILIBRIUM', 'SET_WANT_SHAKING', 'class3',
            'class3_slider', 'ternary_angle', 'FOLD_BACK', 'LOCATE_MIN_STEP',
            'LOCATE_NEWTON_TOL', 'RESOLVED', 'SUB', 'cubic_bound', 'fold_distance',
-           'third_difference', 'uniform_hit', 'window_score', 'window_vertex')
+           'third_difference', 'uniform_hit', 'window_score', 'window_vertex', 'may_reach')
