@@ -140,6 +140,10 @@ def solve_scene(study):
         from .solve.crank_motion import reduced_dynamics, run_dynamics
         res.dynamics = run_dynamics(study, res.plan)
         res.reduced = reduced_dynamics(study, res.plan)
+        if study.mechanism.bodies:
+            from .solve.motion_forces import case_forces
+            res.motion_forces = {c.name: case_forces(study.mechanism, res.plan, c)
+                                 for c in res.dynamics}
         if study.dynamics.flywheel is not None:
             from .solve.flywheel import size_flywheel
             name, target = study.dynamics.flywheel
@@ -196,6 +200,11 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
                             out.with_name(f"{out.stem}_{name}.png")))
             figures.append((lambda case=case: plots.eps1_figure(case),
                             out.with_name(f"{out.stem}_{name}_eps1.png")))
+            if (res.motion_forces or {}).get(case.name):
+                from .views.dynamics_plots import motion_forces_figure
+                figures.append((lambda case=case: motion_forces_figure(
+                    case.name, res.motion_forces[case.name], constant_forces(res)),
+                    out.with_name(f"{out.stem}_{name}_forces.png")))
         if res.reduced is not None:
             from .views.dynamics_plots import reduced_figure
             figures.append((lambda: reduced_figure(res.reduced),
@@ -221,11 +230,57 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
     for case in res.dynamics or ():
         for k, v in case.summary_lines().items():
             summary[f"{case.name} {k}"] = v
+        summary.update(motion_force_summary(case.name, (res.motion_forces or {}).get(case.name),
+                                            constant_forces(res)))
     if res.reduced is not None:
         summary.update(res.reduced.summary())
     if res.flywheel is not None:
         summary.update(res.flywheel.summary())
     return RunOutcome("scene", out, pics, summary)
+
+
+def constant_forces(res):
+    """The scene's kinetostatics at its constant crank speed over the dense
+    revolution (the forces analysis's own, or computed from the dense
+    curves' analogs), or None without bodies or second analogs."""
+    import numpy as np
+    if res.dense.forces is not None:
+        return res.dense.forces
+    if not res.study.mechanism.bodies or not np.isfinite(res.dense.d2).any():
+        return None
+    from .solve.reactions import scene_forces
+    return scene_forces(res.study.mechanism, res.plan, res.dense)
+
+
+def motion_force_summary(name, records, constant) -> dict:
+    """Summary lines of a dynamics case's kinetostatics along the motion: the
+    peak reaction and the peak |M_bal| of its steady rotation (or of its
+    samples), beside the constant-speed peaks."""
+    import numpy as np
+    if not records:
+        return {}
+    rec = records.get("steady") or records["samples"]
+    where = "steady rotation" if rec.record == "steady" else "samples"
+    out = {}
+    peaks = rec.peaks()
+    if peaks:
+        j = max(range(len(peaks)), key=lambda i: peaks[i][1])
+        jn, r, t, phi, _ = peaks[j]
+        line = f"{r:.1f} N at {jn}, t = {t:.4f} s, phi1 = {phi:.1f} deg ({where})"
+        if constant is not None:
+            cp = dict((p[0], p) for p in constant.peaks())
+            cj = max(cp.values(), key=lambda p: p[1])
+            line += f"; constant speed: {cj[1]:.1f} N at {cj[0]}, phi1 = {cj[2]:g} deg"
+        out[f"{name} peak_reaction"] = line
+    mb, t, phi = rec.peak_M_bal()
+    line = f"{mb:.4g} N*m at t = {t:.4f} s, phi1 = {phi:.1f} deg ({where})"
+    if constant is not None and np.isfinite(constant.M_bal).any():
+        k = int(np.nanargmax(np.abs(constant.M_bal)))
+        line += (f"; constant speed: {constant.M_bal[k]:.4g} N*m at phi1 = "
+                 f"{np.rad2deg(constant.phi[k]):g} deg")
+    out[f"{name} peak_M_bal"] = line
+    out[f"{name} equilibrium_residual"] = f"{rec.worst_residual():.2g} at worst"
+    return out
 
 
 # ----------------------------------------------------------------- tolerance analysis

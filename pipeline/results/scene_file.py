@@ -55,51 +55,53 @@ def _curves(g, res, curves, study):
         _reactions(g, curves.forces)
 
 
-def _reactions(g, r):
-    """The reactions of a scene (``solve.reactions.Reactions``) at the positions of group ``g``."""
+def _reactions(g, r, along="phi1"):
+    """The reactions of a scene (``solve.reactions.Reactions``) at the positions of group
+    ``g``, along its coordinate ``along`` (the crank angle; the time along a motion)."""
     put(g, "reactions", r.R, "N", "joint reaction (force of the first body on the second)",
-        dims=("phi1", "joint", "axis"), joints=list(r.joint_names))
+        dims=(along, "joint", "axis"), joints=list(r.joint_names))
     put(g, "M_bal", r.M_bal, "N*m", "balancing moment the main shaft delivers (on the crank; "
-        "with inputs besides the crank, plus their shares)", dims=("phi1",))
+        "with inputs besides the crank, plus their shares)", dims=(along,))
     if r.slide.shape[1]:
         put(g, "slide_reactions", r.slide, ["N", "N*m"],
             "prismatic pair: normal force N of the guide on the slider (along the slide's "
             "direction turned +90 deg) and couple C, at the slider's centre of mass",
-            dims=("phi1", "slide", "slide_component"), slides=list(r.slide_names))
+            dims=(along, "slide", "slide_component"), slides=list(r.slide_names))
         put(g, "slide_action", slide_action(r.slide), "mm",
             "where the normal force acts: e = C/N, its distance from the slider's centre "
             "of mass along the slide's direction (NaN where N = 0)",
-            dims=("phi1", "slide"), slides=list(r.slide_names))
+            dims=(along, "slide"), slides=list(r.slide_names))
     if r.input_names:
         put(g, "input_drive", r.drive[:, :, 0], list(r.drive_units),
             "drive of each input besides the crank: a moment on a rotary input, a force "
-            "along the guide of a slider input", dims=("phi1", "input"),
+            "along the guide of a slider input", dims=(along, "input"),
             inputs=list(r.input_names))
         put(g, "input_share", r.drive[:, :, 1], "N*m",
-            "each input's share of M_bal: its drive times dq/dphi1", dims=("phi1", "input"),
+            "each input's share of M_bal: its drive times dq/dphi1", dims=(along, "input"),
             inputs=list(r.input_names))
     put(g, "body_loads", r.body_loads, ["N", "N", "N*m"],
         "applied and inertia loads reduced to the centre of mass",
-        dims=("phi1", "body", "load_component"), bodies=list(r.body_names))
+        dims=(along, "body", "load_component"), bodies=list(r.body_names))
     if r.residual is not None:
         put(g, "equilibrium_residual", r.residual, "1",
             "relative virtual-power residual: |M_bal omega1 + sum over moving links (F . v_S + "
-            "M omega)| / its largest term (0 where every term is 0)", dims=("phi1",))
+            "M omega)| / its largest term (0 where every term is 0)", dims=(along,))
     if r.shaking is not None:
         put(g, "shaking_force", r.shaking[:, :2], "N",
             "shaking force on the frame: the moving links' inertia forces sum(-m a_S) = "
-            "-d/dt sum(m v_S), gravity and external loads apart", dims=("phi1", "axis"))
+            "-d/dt sum(m v_S), gravity and external loads apart", dims=(along, "axis"))
         put(g, "shaking_force_magnitude", r.shaking_magnitude, "N", "|shaking force| on the frame",
-            dims=("phi1",))
+            dims=(along,))
         put(g, "shaking_moment", r.shaking[:, 2], "N*m",
             f"shaking moment on the frame about the crank's pivot {r.shaking_about}: "
             "sum(-J_S eps + (S - O) x (-m a_S)) = -d/dt of the angular momentum about it, "
-            "gravity and external loads apart", dims=("phi1",), about=r.shaking_about)
+            "gravity and external loads apart", dims=(along,), about=r.shaking_about)
 
 
-def _dynamics_case(group, res):
+def _dynamics_case(group, res, motion_forces=None):
     """Datasets of one dynamics case (``solve.crank_motion.CaseResult``) under group/<case
-    name> (and the fine tail under .../tail)."""
+    name> (and the fine tail under .../tail), with its kinetostatics along the motion
+    (``solve.motion_forces.case_forces``) under .../forces and .../steady_forces."""
     g = group.create_group(res.name)
     c = res.case
     g.attrs["method"] = res.method
@@ -123,7 +125,30 @@ def _dynamics_case(group, res):
         put(grp, "omega1", w, "rad/s", "crank angular velocity omega1", dims=("t",))
         put(grp, "eps1", e, "rad/s^2", "crank angular acceleration eps1", dims=("t",))
     g["tail"].attrs["description"] = "every integration step of the last seconds"
+    for rec in (motion_forces or {}).values():
+        _motion_forces(g.create_group(MOTION_FORCE_GROUPS[rec.record]), rec)
     return g
+
+
+# the groups of a dynamics case that hold its kinetostatics along the motion
+MOTION_FORCE_GROUPS = {"samples": "forces", "steady": "steady_forces"}
+
+
+def _motion_forces(g, rec):
+    """The kinetostatics along one record of a dynamics case
+    (``solve.motion_forces.MotionForces``), along the time."""
+    g.attrs["long_name"] = (
+        "joint reactions, slide forces and the balancing moment along the crank's actual "
+        "motion (omega1(t), eps1(t) of the equation of motion), " + (
+            "at every recorded sample of the case" if rec.record == "samples" else
+            "at every integration step of the last whole revolutions of the steady rotation"))
+    put(g, "t", rec.t, "s", "time", dims=("t",))
+    put(g, "phi1", np.rad2deg(rec.phi1), "deg", "crank angle phi1", dims=("t",))
+    put(g, "omega1", rec.omega1, "rad/s", "crank angular velocity omega1", dims=("t",))
+    put(g, "eps1", rec.eps1, "rad/s^2", "crank angular acceleration eps1", dims=("t",))
+    put(g, "status", rec.status.astype(STATUS_ENUM), "1", "position status", dims=("t",),
+        codes=status_table())
+    _reactions(g, rec.forces, along="t")
 
 
 def _reduced(group, red):
@@ -283,7 +308,8 @@ def write_scene(res, path):
             _curves(f.create_group(name), res, curves, study)
         if res.dynamics:
             for case in res.dynamics:
-                _dynamics_case(f.require_group("dynamics"), case)
+                _dynamics_case(f.require_group("dynamics"), case,
+                               (res.motion_forces or {}).get(case.name))
         if res.peaks:
             _peaks(f.create_group("peaks"), res.peaks, study.output)
         if res.reduced is not None:

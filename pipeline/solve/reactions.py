@@ -60,11 +60,12 @@ def load_time(phi, crank):
     return (np.asarray(phi, float) - crank.phi0) / crank.omega1
 
 
-def sample_loads(mechanism, phi):
+def sample_loads(mechanism, phi, t=None):
     """External loads at the crank angles ``phi`` (rad): array (n, n_loads, 3)
-    of (fx [N], fy [N], moment [N*m])."""
+    of (fx [N], fy [N], moment [N*m]); at the times ``t`` (s) where given (a
+    crank motion), else at the times of a uniform run (``load_time``)."""
     phi = np.asarray(phi, float)
-    t = load_time(phi, mechanism.crank)
+    t = load_time(phi, mechanism.crank) if t is None else np.asarray(t, float)
     out = np.zeros((phi.shape[0], len(mechanism.loads), 3))
     for k, ld in enumerate(mechanism.loads):
         for c, e in enumerate((ld.fx, ld.fy, ld.moment)):
@@ -119,27 +120,41 @@ class Reactions:
         return out
 
 
-def scene_forces(mechanism, plan, curves) -> Reactions:
-    """Reactions at every position of ``curves`` (which must carry second analogs)."""
+def scene_forces(mechanism, plan, curves, omega1=None, eps1=None, t=None) -> Reactions:
+    """Reactions at every position of ``curves`` (which must carry second
+    analogs), at the crank's constant omega1 and eps1, or along a crank
+    motion: ``omega1``, ``eps1`` (rad/s, rad/s^2) and ``t`` (s, for the
+    loads) one per position (``pipeline.solve.motion_forces``)."""
     crank = mechanism.crank
     n = curves.phi.shape[0]
-    loads = sample_loads(mechanism, curves.phi)
+    along = omega1 is not None
+    omega = np.broadcast_to(np.asarray(crank.omega1 if not along else omega1, float), (n,))
+    eps = np.broadcast_to(np.asarray(crank.eps1 if not along else eps1, float), (n,))
+    loads = sample_loads(mechanism, curves.phi, t)
     nb, nj, ns = len(plan.body_names), len(plan.joint_names), len(plan.slide_names)
     body_loads = np.zeros((n, nb, 3))
     R = np.zeros((n, nj, 2))
     S = np.zeros((n, ns + plan.n_inputs, 2))
     M = np.zeros(n)
     from ..compiler import kernels_for
-    kernels_for(plan).forces_curve(plan.par, curves.pos, curves.d1, curves.d2, crank.omega1,
-                                   crank.eps1, loads, body_loads, R, S, M)
+    kern = kernels_for(plan)
+    if not along:
+        kern.forces_curve(plan.par, curves.pos, curves.d1, curves.d2, crank.omega1, crank.eps1,
+                          loads, body_loads, R, S, M)
+    else:
+        for k in range(n):  # the same kernel, one position at a time with its own speed
+            s = slice(k, k + 1)
+            kern.forces_curve(plan.par, curves.pos[s], curves.d1[s], curves.d2[s],
+                              float(omega[k]), float(eps[k]), loads[s], body_loads[s], R[s],
+                              S[s], M[s])
     residual = np.empty(n)
     shake = np.empty((n, 3))
     for k in range(n):      # the sweep's force stage calls the same two kernels
         residual[k] = equilibrium_residual(curves.pos[k], curves.d1[k], curves.d2[k], M[k],
                                            body_loads[k], plan.body_com, plan.body_turn)
-        shake[k] = shaking(curves.pos[k], curves.d1[k], curves.d2[k], crank.omega1, crank.eps1,
-                           plan.par, plan.body_com, plan.body_turn, plan.body_mass_off,
-                           plan.crank_pivot)
+        shake[k] = shaking(curves.pos[k], curves.d1[k], curves.d2[k], float(omega[k]),
+                           float(eps[k]), plan.par, plan.body_com, plan.body_turn,
+                           plan.body_mass_off, plan.crank_pivot)
     return Reactions(curves.phi, R, S[:, :ns], M, body_loads, plan.joint_names,
                      plan.slide_names, plan.body_names, drive=S[:, ns:],
                      input_names=plan.input_names,

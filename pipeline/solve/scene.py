@@ -78,6 +78,8 @@ class SceneResult:
     reduced: object = None           # solve.crank_motion.Reduced for a study with dynamics
     counterweight: object = None     # solve.shaking.Counterweight, with forces
     flywheel: object = None          # solve.flywheel.Flywheel: [dynamics.flywheel]
+    # per dynamics case: {"samples"[, "steady"]: solve.motion_forces.MotionForces}
+    motion_forces: dict | None = None
 
     @property
     def status(self):

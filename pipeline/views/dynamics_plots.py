@@ -134,3 +134,66 @@ def reduced_figure(red):
         f"{p:.2f} deg ({'stable' if st else 'unstable'})" for p, st in red.equilibria)
         or "none"), fontsize=10)
     return fig
+
+
+def motion_forces_figure(name, records, constant):
+    """The kinetostatics along a dynamics case's motion beside the constant
+    speed's (``pipeline.solve.motion_forces``): the peak |R| of every joint
+    (constant speed, the whole case's samples, the steady rotation), and
+    over the crank angle the largest joint's |R| and the balancing moment of
+    the steady rotation (every step) against the constant-speed curves.
+    ``records``: {"samples"[, "steady"]: MotionForces}; ``constant``: the
+    scene's Reactions at constant speed (or None).  Returns the Figure."""
+    fig, axs = plt.subplots(1, 3, figsize=(15, 5.2), layout="constrained")
+    rec = records.get("steady") or records["samples"]
+    joints = list(rec.forces.joint_names)
+    x = np.arange(len(joints))
+    bars = []
+    if constant is not None:
+        bars.append(("constant speed", [p[1] for p in constant.peaks()], "0.6"))
+    bars.append(("whole case (samples)", [p[1] for p in records["samples"].peaks()], "C0"))
+    if "steady" in records:
+        bars.append(("steady rotation (every step)", [p[1] for p in records["steady"].peaks()],
+                     "C3"))
+    width = 0.8 / len(bars)
+    ax = axs[0]
+    ax.set_label("peak reactions")
+    for i, (label, vals, colour) in enumerate(bars):
+        ax.bar(x + (i - (len(bars) - 1) / 2) * width, vals, width, label=label, color=colour)
+    ax.set_xticks(x, joints)
+    ax.set_ylabel("peak |R| [N]")
+    ax.set_title("peak joint reactions", fontsize=10)
+    ax.grid(alpha=0.3, axis="y")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=1)
+    peaks = rec.peaks()
+    j = max(range(len(peaks)), key=lambda i: peaks[i][1]) if peaks else 0
+    rotating = rec.record == "steady"
+
+    def angle(phi):
+        deg = np.rad2deg(phi)
+        return np.mod(deg, 360.0) if rotating else deg
+
+    for ax, y, y0, label, what in (
+            (axs[1], rec.forces.magnitude[:, j],
+             None if constant is None else constant.magnitude[:, j],
+             f"|{joints[j]}| [N]", f"reaction {joints[j]}"),
+            (axs[2], rec.forces.M_bal, None if constant is None else constant.M_bal,
+             "M_bal [N*m]", "balancing moment")):
+        ax.set_label(what)
+        ax.plot(angle(rec.phi1), y, ".", ms=1.5, color="C3",
+                label="along the motion" + (" (steady rotation)" if rotating else ""))
+        if y0 is not None:
+            order = np.argsort(np.mod(np.rad2deg(constant.phi), 360.0))
+            ax.plot(np.mod(np.rad2deg(constant.phi), 360.0)[order], y0[order], "-", lw=1.0,
+                    color="0.3", label="constant speed")
+        ax.set_xlabel("crank angle phi1 [deg]" + (" (mod 360)" if rotating else ""))
+        ax.set_ylabel(label)
+        if rotating:
+            ax.set_xlim(0, 360)
+            ax.set_xticks(np.arange(0, 361, 60))
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
+        ax.set_title(what, fontsize=10)
+    fig.suptitle(f"{name}: forces under the real crank motion (omega1(t), eps1(t)) against "
+                 "the constant speed", fontsize=11)
+    return fig

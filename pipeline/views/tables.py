@@ -184,45 +184,8 @@ def scene_tables(path, every=1) -> dict:
             out["bodies"] = _frame(cols, units)
         if "reactions" in d:
             from ..solve.reactions import joint_peaks
-            R = d["reactions"][()]
-            joints = [str(attr_text(x)) for x in d["reactions"].attrs["joints"]]
             cols, units = {"phi1": phi}, {"phi1": "deg"}
-            mag = np.hypot(R[..., 0], R[..., 1])
-            for j, name in enumerate(joints):
-                cols[f"{name}_x"] = R[rows, j, 0]
-                cols[f"{name}_y"] = R[rows, j, 1]
-                cols[name] = mag[rows, j]
-                units.update({f"{name}_x": "N", f"{name}_y": "N", name: "N"})
-            if "slide_reactions" in d:     # prismatic pairs: N, C and where N acts
-                from ..solve.reactions import slide_action, slide_label
-                S = d["slide_reactions"][rows]
-                E = slide_action(S)
-                for k, name in enumerate(d["slide_reactions"].attrs["slides"]):
-                    lab = slide_label(str(attr_text(name)))
-                    cols[f"N[{lab}]"], cols[f"C[{lab}]"] = S[:, k, 0], S[:, k, 1]
-                    cols[f"e[{lab}]"] = E[:, k]
-                    units.update({f"N[{lab}]": "N", f"C[{lab}]": "N*m", f"e[{lab}]": "mm"})
-            if "input_drive" in d:        # inputs besides the crank: drive and share
-                from ..results.storage import read_units
-                D = d["input_drive"][rows]
-                H = d["input_share"][rows]
-                names = [str(attr_text(x)) for x in d["input_drive"].attrs["inputs"]]
-                du = read_units(d["input_drive"], len(names))
-                for k, name in enumerate(names):
-                    cols[f"drive[{name}]"], cols[f"share[{name}]"] = D[:, k], H[:, k]
-                    units.update({f"drive[{name}]": du[k], f"share[{name}]": "N*m"})
-            if "shaking_force" in d:      # on the frame; the moment about the crank's pivot
-                F = d["shaking_force"][rows]
-                cols["shaking_Fx"], cols["shaking_Fy"] = F[:, 0], F[:, 1]
-                cols["shaking_F"] = d["shaking_force_magnitude"][rows]
-                cols["shaking_M"] = d["shaking_moment"][rows]
-                units.update({"shaking_Fx": "N", "shaking_Fy": "N", "shaking_F": "N",
-                              "shaking_M": "N*m"})
-            if "equilibrium_residual" in d:
-                cols["equilibrium_residual"] = d["equilibrium_residual"][rows]
-                units["equilibrium_residual"] = "1"
-            cols["M_bal"] = d["M_bal"][rows]
-            units["M_bal"] = "N*m"
+            mag, joints = reaction_columns(d, rows, cols, units)
             out["reactions"] = _frame(cols, units)
             if "peaks" not in f:       # a file written before refined peaks: grid peaks
                 peaks = pd.DataFrame(joint_peaks(d["phi1"][()], mag, joints),
@@ -247,6 +210,54 @@ def scene_tables(path, every=1) -> dict:
     return out
 
 
+def reaction_columns(d, rows, cols, units):
+    """The force columns of a group ``d`` holding a ``Reactions`` (a scene's
+    dense curves, or a dynamics case's forces along the motion) at the rows
+    ``rows``, added to ``cols`` and ``units``: every joint's components and
+    magnitude, the slides' N, C and e, the inputs' drives, the shaking force
+    and moment, the equilibrium residual and M_bal.  Returns (|R| at every
+    row, the joint names)."""
+    R = d["reactions"][()]
+    joints = [str(attr_text(x)) for x in d["reactions"].attrs["joints"]]
+    mag = np.hypot(R[..., 0], R[..., 1])
+    for j, name in enumerate(joints):
+        cols[f"{name}_x"] = R[rows, j, 0]
+        cols[f"{name}_y"] = R[rows, j, 1]
+        cols[name] = mag[rows, j]
+        units.update({f"{name}_x": "N", f"{name}_y": "N", name: "N"})
+    if "slide_reactions" in d:     # prismatic pairs: N, C and where N acts
+        from ..solve.reactions import slide_action, slide_label
+        S = d["slide_reactions"][rows]
+        E = slide_action(S)
+        for k, name in enumerate(d["slide_reactions"].attrs["slides"]):
+            lab = slide_label(str(attr_text(name)))
+            cols[f"N[{lab}]"], cols[f"C[{lab}]"] = S[:, k, 0], S[:, k, 1]
+            cols[f"e[{lab}]"] = E[:, k]
+            units.update({f"N[{lab}]": "N", f"C[{lab}]": "N*m", f"e[{lab}]": "mm"})
+    if "input_drive" in d:        # inputs besides the crank: drive and share
+        from ..results.storage import read_units
+        D = d["input_drive"][rows]
+        H = d["input_share"][rows]
+        names = [str(attr_text(x)) for x in d["input_drive"].attrs["inputs"]]
+        du = read_units(d["input_drive"], len(names))
+        for k, name in enumerate(names):
+            cols[f"drive[{name}]"], cols[f"share[{name}]"] = D[:, k], H[:, k]
+            units.update({f"drive[{name}]": du[k], f"share[{name}]": "N*m"})
+    if "shaking_force" in d:      # on the frame; the moment about the crank's pivot
+        F = d["shaking_force"][rows]
+        cols["shaking_Fx"], cols["shaking_Fy"] = F[:, 0], F[:, 1]
+        cols["shaking_F"] = d["shaking_force_magnitude"][rows]
+        cols["shaking_M"] = d["shaking_moment"][rows]
+        units.update({"shaking_Fx": "N", "shaking_Fy": "N", "shaking_F": "N",
+                      "shaking_M": "N*m"})
+    if "equilibrium_residual" in d:
+        cols["equilibrium_residual"] = d["equilibrium_residual"][rows]
+        units["equilibrium_residual"] = "1"
+    cols["M_bal"] = d["M_bal"][rows]
+    units["M_bal"] = "N*m"
+    return mag, joints
+
+
 def motion_tables(group) -> dict:
     """{"motion_<case>": DataFrame(t, phi1, omega1, eps1)} from the stored
     dynamics group (units in ``df.attrs["units"]``)."""
@@ -257,4 +268,11 @@ def motion_tables(group) -> dict:
                            "eps1": g["eps1"][()]})
         df.attrs["units"] = {c: str(g[c].attrs.get("units", "")) for c in df.columns}
         out[f"motion_{safe_name(name, 'case')}"] = df
+        for sub, tag in (("forces", "forces"), ("steady_forces", "steady_forces")):
+            if sub in g:         # the kinetostatics along the motion
+                h = g[sub]
+                cols = {c: h[c][()] for c in ("t", "phi1", "omega1", "eps1")}
+                units = {c: str(attr_text(h[c].attrs.get("units", ""))) for c in cols}
+                reaction_columns(h, slice(None), cols, units)
+                out[f"motion_{safe_name(name, 'case')}_{tag}"] = _frame(cols, units)
     return out

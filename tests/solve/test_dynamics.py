@@ -252,8 +252,25 @@ def test_cli_run_and_export_motion_tables(studies, tmp_path):
             assert g[name].attrs["units"] == unit and g[name].attrs["long_name"]
         assert g.attrs["method"] == "rk4" and g.attrs["status"] == "OK"
         assert 0.0 < g.attrs["summary_delta"] < 0.1
+        # the kinetostatics along the motion (pipeline.solve.motion_forces)
+        for sub, n in (("runup/forces", 1001), ("runup/steady_forces", None),
+                       ("free/forces", 1001)):
+            h = f["dynamics/" + sub]
+            assert h.attrs["long_name"]
+            for name, unit in (("t", "s"), ("omega1", "rad/s"), ("eps1", "rad/s^2"),
+                               ("reactions", "N"), ("M_bal", "N*m"),
+                               ("equilibrium_residual", "1")):
+                assert h[name].attrs["units"] == unit and h[name].attrs["long_name"], name
+            assert n is None or h["t"].shape == (n,)
+        assert "steady_forces" not in f["dynamics/free"]
+        R = f["dynamics/runup/steady_forces/reactions"][()]
+    assert (tmp_path / "c_runup_forces.png").stat().st_size > 10_000
     csv = tmp_path / "csv"
     assert main(["export", str(out), "--csv", str(csv), "-q"]) == 0
+    df = pd.read_csv(csv / "motion_runup_steady_forces.csv")
+    assert list(df.columns[:4]) == ["t [s]", "phi1 [deg]", "omega1 [rad/s]", "eps1 [rad/s^2]"]
+    np.testing.assert_allclose(df["R2 [N]"], np.hypot(R[:, 1, 0], R[:, 1, 1]), rtol=1e-9)
+    assert {"M_bal [N*m]", "N[needle bar] [N]", "equilibrium_residual [1]"} <= set(df.columns)
     for case, phi0 in (("runup", 269.18), ("free", 280.0)):
         df = pd.read_csv(csv / f"motion_{case}.csv")
         assert list(df.columns) == ["t [s]", "phi1 [deg]", "omega1 [rad/s]", "eps1 [rad/s^2]"]
