@@ -2,17 +2,18 @@
 
 The Python API (``pipeline.api``; see docs/api.md): ``load_study``, ``run``,
 ``solve_scene`` (a scene solved in memory), ``open`` (a results file as pandas
-DataFrames), ``tolerance`` (how a design holds up when it is made), ``candidates``, ``scene_tables``, ``with_units``; pictures from
+DataFrames), ``tolerance`` (how a design holds up when it is made), ``compare``
+(designs side by side), ``candidates``, ``scene_tables``, ``with_units``; pictures from
 ``pipeline.views.plots`` as matplotlib Figures.  Importing the package loads no kernels and
 leaves matplotlib's backend alone.
 """
 
-from .api import (candidates, load_study, open, run, scene_tables, solve_scene,  # noqa: A004
-                  tolerance, with_units)
+from .api import (candidates, compare, load_study, open, run, scene_tables,  # noqa: A004
+                  solve_scene, tolerance, with_units)
 from .base.version import __version__
 from .old_paths import install as _install_old_paths
 
 _install_old_paths()    # the flat package's import paths, kept for one release (old_paths.py)
 
-__all__ = ["__version__", "load_study", "run", "solve_scene", "open", "tolerance", "candidates",
-           "scene_tables", "with_units"]
+__all__ = ["__version__", "load_study", "run", "solve_scene", "open", "tolerance", "compare",
+           "candidates", "scene_tables", "with_units"]

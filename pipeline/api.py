@@ -16,8 +16,8 @@ from __future__ import annotations
 from .study.reader import Study, load_study as _load_study
 from .views.tables import candidates, scene_tables, with_units
 
-__all__ = ["load_study", "run", "solve_scene", "open", "tolerance", "candidates", "scene_tables",
-           "with_units"]
+__all__ = ["load_study", "run", "solve_scene", "open", "tolerance", "compare", "candidates",
+           "scene_tables", "with_units"]
 
 
 def load_study(path) -> Study:
@@ -67,6 +67,20 @@ def tolerance(source, candidate=None, *, samples=None, metrics=None):
     study, mech, label, sweep, _, spec = tolerance_setup(source, candidate, samples=samples,
                                                          metrics=metrics)
     return analyse(study, mech, spec, label=label, sweep_spec=sweep, samples=samples)
+
+
+def compare(*results, candidate=None):
+    """Designs side by side, in memory (writes nothing): scene results files
+    (the first is the base), or with ``candidate`` (a number or 'knee') one
+    sweep's design against the sweep's reference design, both re-run as
+    scenes.  Returns ``pipeline.analysis.compare.Comparison``: ``.table()`` (a
+    DataFrame: every quantity with its unit, each design's value, crank angle
+    and item, the change against the first), ``.rows``, ``.notes`` (what is
+    not compared, and why); draw it with
+    ``pipeline.views.compare.comparison_figure``.  ``pipeline compare`` prints
+    the same table and writes the picture."""
+    from .runner import comparison
+    return comparison(results, candidate)
 
 
 def open(path):  # noqa: A001 - pipeline.open, as the users asked for it

@@ -155,6 +155,20 @@ def cmd_tolerance(a):
     return EXIT_OK
 
 
+def cmd_compare(a):
+    from .runner import run_compare
+    from .views.compare import comparison_records, comparison_text
+    cmp, pics = run_compare(a.results, a.candidate, a.output, pictures=not a.no_pictures)
+    if a.format == "json":
+        print(json.dumps(comparison_records(cmp) | {"pictures": [str(p) for p in pics]},
+                         indent=2))
+    elif not a.quiet:
+        print(comparison_text(cmp))
+        for p in pics:
+            print(f"picture: {p}")
+    return EXIT_OK
+
+
 def build_parser():
     p = argparse.ArgumentParser(prog="pipeline", description=(
         "Exact analysis and Monte-Carlo synthesis of hinged-lever mechanisms."))
@@ -288,6 +302,22 @@ def build_parser():
     tl.add_argument("--no-pictures", action="store_true", help="skip the PNG pictures")
     tl.add_argument("-j", "--jobs", type=int, help="threads (default: all cores)")
     tl.set_defaults(func=cmd_tolerance)
+
+    cp = sub.add_parser("compare", parents=[common], help=(
+        "designs side by side: stroke, dwell error, the working point's peaks, the smallest "
+        "transmission angle, every joint's peak reaction and pin diameter, peak M_bal and "
+        "shaking, each with its crank angle, and one picture overlaying them"))
+    cp.add_argument("results", nargs="+", metavar="RESULTS.h5", help=(
+        "scene results files (the first is the base the others are measured against), or one "
+        "sweep's results file with --candidate"))
+    cp.add_argument("--candidate", metavar="ID", help=(
+        "a sweep's design (a number or 'knee'), compared with the sweep's reference design, "
+        "both re-run as scenes"))
+    cp.add_argument("-o", "--output", metavar="DIR", help=(
+        "folder of the picture (default: the first results file's folder; the picture "
+        "<name>_vs_<name>_compare.png, or <name>_candidate<ID>_vs_reference_compare.png)"))
+    cp.add_argument("--no-pictures", action="store_true", help="print the table only")
+    cp.set_defaults(func=cmd_compare)
 
     bn = sub.add_parser("bench", parents=[common], help=(
         "speed and accuracy: run time against error and the throughput table, "

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from .base.errors import ResultsError
 from .base.files import RunLock, safe_name, save_figure
+from .solve.scene_study import solve_scene  # noqa: F401  (runner.solve_scene: the API's)
 from .study.reader import load_study
 
 log = logging.getLogger("pipeline")
@@ -124,32 +125,6 @@ def peak_summary(res) -> dict:
             out["law_error"] = (f"{m['law_error']:.4g} RMS, {m['law_error_max']:.4g} at most "
                                 f"(normalised rocker angle against the motion law{shift})")
     return out
-
-
-def solve_scene(study):
-    """Everything a scene study asks for, in memory: its curves (and forces),
-    refined peaks, dwell and stroke, dynamics cases and reduced dynamics."""
-    from .solve.peaks import scene_motion, scene_peaks
-    from .solve.scene import run_scene
-    from .solve.shaking import scene_counterweight
-    res = run_scene(study)
-    res.peaks = scene_peaks(res)
-    res.counterweight = scene_counterweight(res)
-    res.motion = scene_motion(res)
-    if study.dynamics is not None:
-        from .solve.crank_motion import reduced_dynamics, run_dynamics
-        res.dynamics = run_dynamics(study, res.plan)
-        res.reduced = reduced_dynamics(study, res.plan)
-        if study.mechanism.bodies:
-            from .solve.motion_forces import case_forces
-            res.motion_forces = {c.name: case_forces(study.mechanism, res.plan, c)
-                                 for c in res.dynamics}
-        if study.dynamics.flywheel is not None:
-            from .solve.flywheel import size_flywheel
-            name, target = study.dynamics.flywheel
-            case = next(c for c in study.dynamics.cases if c.name == name)
-            res.flywheel = size_flywheel(res.plan, study.mechanism, case, target)
-    return res
 
 
 def run_scene_study(study, out, pictures=True, overwrite=False) -> RunOutcome:
@@ -383,3 +358,58 @@ def _bound_text(metric, lo, hi):
     if math.isfinite(lo) and math.isfinite(hi):
         return f"{lo:g} <= {metric} <= {hi:g}"
     return f"{metric} >= {lo:g}" if math.isfinite(lo) else f"{metric} <= {hi:g}"
+
+
+# ----------------------------------------------------------------- comparison
+def compare_output(paths, candidate=None, out_dir=None) -> Path:
+    """The comparison's picture: next to the first results file (or in
+    ``out_dir``), <stem>_vs_<stem>[...]_compare.png, or for a sweep's design
+    (``candidate``: its candidate number, 'knee' resolved)
+    <stem>_candidate<N>_vs_reference_compare.png."""
+    first = Path(paths[0])
+    folder = Path(out_dir) if out_dir else first.parent
+    if candidate is not None:
+        name = f"{safe_name(first.stem)}_candidate{safe_name(str(candidate))}_vs_reference"
+    else:
+        name = "_vs_".join(safe_name(Path(p).stem) for p in paths)
+    return folder / f"{name}_compare.png"
+
+
+def comparison(paths, candidate=None):
+    """The comparison of scene results files (the first the base), or of a
+    sweep's design ``candidate`` with the sweep's reference design
+    (``analysis.compare``), the arguments checked."""
+    from .analysis.compare import compare_candidate, compare_files, read_design
+    paths = [Path(p) for p in paths]
+    if candidate is not None:
+        if len(paths) != 1:
+            raise ValueError("--candidate compares a design of one sweep's results file with "
+                             f"its reference design; got {len(paths)} files")
+        return compare_candidate(paths[0], candidate)
+    if len(paths) == 1:
+        read_design(paths[0])       # a sweep's file says how to pick its design
+    if len(paths) < 2:
+        raise ValueError(f"{paths[0] if paths else 'compare'}: give two scene results files or "
+                         "more (or one sweep's results file with --candidate ID)")
+    return compare_files(paths)
+
+
+def run_compare(paths, candidate=None, out_dir=None, *, pictures=True):
+    """`pipeline compare`: the comparison (``comparison``) and its picture;
+    returns (Comparison, [picture paths]).  The picture is replaced like
+    `pipeline show`'s (written to a temporary name and renamed)."""
+    if out_dir is not None and Path(out_dir).exists() and not Path(out_dir).is_dir():
+        raise ResultsError(out_dir, "is a file; -o names the folder of the picture")
+    cmp = comparison(paths, candidate)
+    pics = []
+    if pictures:
+        import matplotlib.pyplot as plt
+
+        from .views.compare import comparison_figure
+        fig = comparison_figure(cmp)
+        try:
+            number = cmp.designs[-1].candidate if candidate is not None else None
+            pics.append(save_figure(fig, compare_output(paths, number, out_dir), dpi=110))
+        finally:
+            plt.close(fig)
+    return cmp, pics

@@ -27,8 +27,8 @@ def test_run_returns_where_it_wrote(tmp_path, studies):
 
 
 def test_the_package_offers_its_api():
-    for name in ("load_study", "run", "solve_scene", "open", "tolerance", "candidates",
-                 "scene_tables", "with_units"):
+    for name in ("load_study", "run", "solve_scene", "open", "tolerance", "compare",
+                 "candidates", "scene_tables", "with_units"):
         assert name in dir(pipeline) and callable(getattr(pipeline, name))
 
 

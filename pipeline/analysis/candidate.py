@@ -180,3 +180,20 @@ def tolerance_design(source, candidate=None):
     mech = apply_design(study.mechanism, study.sweep, x)
     label = "reference design" if number == "reference" else f"candidate #{number}"
     return study, mech, label, study.sweep, {"source": str(source), "candidate": str(number)}
+
+
+def candidate_scene(source, candidate):
+    """A sweep's design (``candidate``: a number, 'knee' or 'reference') as a
+    scene study: the sweep's study with the design's mechanism, analysed as a
+    scene at the sweep's positions per revolution and operating speed (with
+    the force analysis where the mechanism has mass data), so that its peaks,
+    pins, dwell and stroke are a scene's.  Returns (scene study, label,
+    candidate number or 'reference')."""
+    study, mech, label, sweep, origin = tolerance_design(source, candidate)
+    if sweep is None:
+        raise ValueError(f"{source} is not a sweep: --candidate picks a design of a sweep's "
+                         "results file")
+    output = replace(study.output, dense_positions=int(sweep.positions),
+                     analysis="forces" if mech.bodies else "accelerations")
+    return (replace(study, kind="scene", mechanism=mech, output=output, sweep=None, search=None),
+            label, origin.get("candidate", "reference"))

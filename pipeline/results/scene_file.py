@@ -15,7 +15,8 @@ from ..kernels import config as kc
 from ..base.files import replacing
 from ..solve.reactions import slide_action
 from ..solve.scene import real_motion
-from .storage import STATUS_ENUM, coordinate, hdf5_image, put, status_table, write_root_attrs
+from .storage import (STATUS_ENUM, attr_text, coordinate, hdf5_image, put, status_table,
+                      variables, write_root_attrs)
 
 
 def _curves(g, res, curves, study):
@@ -284,6 +285,40 @@ def _peaks(g, peaks, output=None):
             put(g, "pin_d_min", [float(pin_diameter(p.value, ln, sg))
                                  for p, (ln, sg) in zip(ps, pins)], "mm",
                 "smallest pin diameter: (32 R l / (pi sigma))^(1/3)", dims=dims)
+
+
+def peaks_table(f):
+    """Every stored peak of the open scene file ``f`` as a DataFrame (what
+    `pipeline export` writes to peaks.csv and `pipeline compare` reads):
+    quantity, item, value, unit, crank angle, the largest grid sample it was
+    refined from, and for a joint the pin diameter."""
+    import pandas as pd
+
+    from ..solve.reactions import pin_diameter
+    g = f["peaks"]
+    rows = []
+    for q in variables(g):
+        if q.endswith(("_phi1", "_grid")) or q.startswith("pin_"):
+            continue
+        d = g[q]
+        unit = str(attr_text(d.attrs.get("units", "")))
+        if d.ndim == 0:     # M_bal (the crank), the shaking force and moment (the frame)
+            items, vals = [str(attr_text(d.attrs.get("item", "crank")))], [float(d[()])]
+            phis, grid = [float(g[f"{q}_phi1"][()])], [float(g[f"{q}_grid"][()])]
+        else:
+            scale = d.dims[0][0]
+            items = [str(attr_text(x)) for x in scale[()]]
+            vals, phis, grid = d[()], g[f"{q}_phi1"][()], g[f"{q}_grid"][()]
+        dmin = g["pin_d_min"][()] if (q == "reaction" and "pin_d_min" in g) else None
+        for n, (it, v, ph, gv) in enumerate(zip(items, vals, phis, grid)):
+            d = float("nan")
+            if q == "reaction":
+                d = float(dmin[n]) if dmin is not None else float(pin_diameter(v))
+            rows.append((q, it, float(v), unit, float(ph), float(gv), d))
+    df = pd.DataFrame(rows, columns=["quantity", "item", "value", "unit", "phi1", "grid_value",
+                                     "d_min"])
+    df.attrs["units"] = {"phi1": "deg", "d_min": "mm"}
+    return df
 
 
 def write_scene(res, path):

@@ -233,6 +233,33 @@ def tolerance_html(path, ana, data) -> str:
     return "".join(out)
 
 
+def comparison_section_html(path, ana, data) -> str:
+    """The knee (else representative A) against the study's reference design,
+    both re-run as scenes (``analysis.compare.compare_candidate``): the table
+    of ``pipeline compare FILE --candidate ID`` and its picture."""
+    from ..analysis.compare import compare_candidate
+    from .compare import comparison_figure, comparison_html
+    if ana.knee >= 0:
+        i, why = int(ana.knee), "the knee of front 1"
+    elif len(ana.representatives):
+        i, why = int(ana.representatives[0]), "representative A"
+    else:
+        return '<p class="note">No feasible design to compare with the reference design.</p>'
+    cid = str(data.id(i))
+    try:
+        cmp = compare_candidate(path, cid)
+    except Exception as e:   # a design the scene path cannot redo: say so, go on
+        log.warning("report: no comparison of candidate %s (%s)", cid, e)
+        return f'<p class="note">No comparison: {html.escape(str(e))}</p>'
+    return (f'<p class="note">Candidate #{html.escape(cid)} ({html.escape(why)}) against the '
+            "study's reference design, both re-run as scenes at the operating speed: each "
+            "peak with the crank angle where it happens, the change against the reference "
+            f"design. <code>pipeline compare FILE --candidate {html.escape(cid)}</code> prints "
+            "the same table.</p>" + comparison_html(cmp)
+            + _img(_png(comparison_figure(cmp), dpi=72), "the design against the reference "
+                                                         "design"))
+
+
 def _table_html(df, knee=None) -> str:
     cols = list(df.columns)
     out = ['<table class="sortable"><thead><tr>']
@@ -359,6 +386,9 @@ def build_html(path, top=20) -> str:
                  '<p class="note">No feasible design: nothing to draw.</p>')
 
     parts += ["<h2>How the designs hold up when made</h2>", tolerance_html(path, ana, data)]
+
+    parts += ["<h2>Against the reference design</h2>",
+              comparison_section_html(path, ana, data)]
 
     parts += ["<h2>A design in motion</h2>", motion_html(path, ana)]
 

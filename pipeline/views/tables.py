@@ -21,8 +21,8 @@ import pandas as pd
 
 from ..base.files import safe_name
 from ..kernels import config as kc
-from ..results.storage import (ResultsError, attr_text, candidate_ids, open_results, read_units,
-                               variables)
+from ..results.scene_file import peaks_table
+from ..results.storage import ResultsError, attr_text, candidate_ids, open_results, read_units
 
 
 def with_units(df: pd.DataFrame) -> pd.DataFrame:
@@ -94,36 +94,6 @@ def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
 
 
 # ----------------------------------------------------------------- scenes
-def _peaks_table(f) -> pd.DataFrame:
-    """Every stored peak: quantity, item, value, unit, crank angle, the largest
-    grid sample it was refined from, and for a joint the pin diameter."""
-    from ..solve.reactions import pin_diameter
-    g = f["peaks"]
-    rows = []
-    for q in variables(g):
-        if q.endswith(("_phi1", "_grid")) or q.startswith("pin_"):
-            continue
-        d = g[q]
-        unit = str(attr_text(d.attrs.get("units", "")))
-        if d.ndim == 0:     # M_bal (the crank), the shaking force and moment (the frame)
-            items, vals = [str(attr_text(d.attrs.get("item", "crank")))], [float(d[()])]
-            phis, grid = [float(g[f"{q}_phi1"][()])], [float(g[f"{q}_grid"][()])]
-        else:
-            scale = d.dims[0][0]
-            items = [str(attr_text(x)) for x in scale[()]]
-            vals, phis, grid = d[()], g[f"{q}_phi1"][()], g[f"{q}_grid"][()]
-        dmin = g["pin_d_min"][()] if (q == "reaction" and "pin_d_min" in g) else None
-        for n, (it, v, ph, gv) in enumerate(zip(items, vals, phis, grid)):
-            d = float("nan")
-            if q == "reaction":
-                d = float(dmin[n]) if dmin is not None else float(pin_diameter(v))
-            rows.append((q, it, float(v), unit, float(ph), float(gv), d))
-    df = pd.DataFrame(rows, columns=["quantity", "item", "value", "unit", "phi1", "grid_value",
-                                     "d_min"])
-    df.attrs["units"] = {"phi1": "deg", "d_min": "mm"}
-    return df
-
-
 def _short(name, letter):
     """P9 -> V9 (velocity columns), other names -> V[name]."""
     if name.startswith("P") and name[1:].isdigit():
@@ -193,7 +163,7 @@ def scene_tables(path, every=1) -> dict:
                 peaks.attrs["units"] = {"joint": "", "R_max": "N", "phi1": "deg", "d_min": "mm"}
                 out["peaks"] = peaks
         if "peaks" in f:
-            out["peaks"] = _peaks_table(f)
+            out["peaks"] = peaks_table(f)
         if "counterweight" in f:      # one row: m_c r_c, its angle, the peaks before and after
             g = f["counterweight"]
             keys = ("mass_radius", "angle", "peak_before", "peak_before_phi1", "peak_after",

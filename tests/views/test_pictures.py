@@ -353,6 +353,11 @@ def test_report_embeds_the_animation_and_stays_offline(small_sweep, tmp_path, mo
     info = report.write_report(p, tmp_path / "r.html")
     page = (tmp_path / "r.html").read_text()
     assert info["report"].endswith("r.html") and "A design in motion" in page
+    # the comparison section: the knee against the reference design (pipeline compare)
+    assert "<h2>Against the reference design</h2>" in page
+    section = page.split("<h2>Against the reference design</h2>")[1].split("<h2>")[0]
+    assert "--candidate" in section and "largest peak |R|" in section
+    assert 'alt="the design against the reference design"' in section
     gifs = re.findall(r'<img class="animation" src="data:image/gif;base64,([A-Za-z0-9+/=]+)"',
                       page)
     assert len(gifs) == 1
