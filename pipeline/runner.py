@@ -136,6 +136,8 @@ def solve_scene(study):
     res.peaks = scene_peaks(res)
     res.counterweight = scene_counterweight(res)
     res.motion = scene_motion(res)
+    from .solve.cyclogram import scene_cyclogram
+    res.cyclogram = scene_cyclogram(res)
     if study.dynamics is not None:
         from .solve.crank_motion import reduced_dynamics, run_dynamics
         res.dynamics = run_dynamics(study, res.plan)
@@ -225,6 +227,8 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
         summary.update(res.reduced.summary())
     if res.flywheel is not None:
         summary.update(res.flywheel.summary())
+    if res.cyclogram is not None and res.cyclogram.rings:
+        summary.update(res.cyclogram.summary())
     return RunOutcome("scene", out, pics, summary)
 
 

@@ -78,6 +78,7 @@ class SceneResult:
     reduced: object = None           # solve.crank_motion.Reduced for a study with dynamics
     counterweight: object = None     # solve.shaking.Counterweight, with forces
     flywheel: object = None          # solve.flywheel.Flywheel: [dynamics.flywheel]
+    cyclogram: object = None         # solve.cyclogram.Cyclogram: phases and phase errors
 
     @property
     def status(self):
