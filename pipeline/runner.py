@@ -211,6 +211,8 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
         summary.update(res.reduced.summary())
     if res.flywheel is not None:
         summary.update(res.flywheel.summary())
+    if res.cyclogram is not None and res.cyclogram.rings:
+        summary.update(res.cyclogram.summary())
     return RunOutcome("scene", out, pics, summary)
 
 

@@ -98,7 +98,12 @@ def test_parquet_without_pyarrow_says_how_to_get_it(sweep, tmp_path, capsys, mon
 def test_open_a_scene(tmp_path, studies):
     res = pipeline.run(studies / "ov7_base.toml", tmp_path / "a.h5", pictures=False)
     tables = pipeline.open(res.results)
-    assert set(tables) == {"points", "links", "peaks"}
+    assert set(tables) == {"points", "links", "peaks", "cyclogram"}
+    cyc = tables["cyclogram"]          # [cycle]: the eyelet's boundaries, cycle angle psi
+    assert list(cyc["boundary"]) == ["dwell start", "forward start", "back start"]
+    assert list(cyc["required"]) == pytest.approx([240.0, 30.0, 130.0])
+    assert list(cyc["phase_error"]) == pytest.approx(list(cyc["design"] - cyc["required"]))
+    assert cyc.attrs["units"]["phase_error"] == "deg"
     pts = tables["points"]
     with h5py.File(res.results, "r") as f:
         np.testing.assert_array_equal(pts["phi1"], f["dense/phi1"][()])

@@ -321,6 +321,34 @@ def peaks_table(f):
     return df
 
 
+def _cyclogram(f, cg):
+    """The phase errors of the machine's cyclogram (``solve.cyclogram.Cyclogram``):
+    /cyclogram with the boundaries of the output organ's phases as its dimension."""
+    from ..solve.cyclogram import BOUNDARIES
+    g = f.create_group("cyclogram")
+    ring = cg.output_ring
+    g.attrs["long_name"] = (f"the machine's cyclogram: where the design's output phases begin "
+                            f"against the required phases of {ring.organ} (DOMAIN.md section 9)")
+    g.attrs["organ"] = ring.organ
+    g.attrs["align"] = cg.align
+    g.attrs["turn"] = cg.turn
+    g.attrs["description"] = (
+        "crank travel tau = rot (phi1 - phi0) in deg, 0 at the first dense position; the "
+        "cycle angle psi = tau - turn (align = best: the required dwell turned to start "
+        "where the design's does; fixed: turn = -phase)")
+    coordinate(g, "boundary", list(BOUNDARIES), "1",
+               "boundary of the output's phases: where its dwell, forward and back swing begin")
+    put(g, "actual", cg.actual, "deg",
+        "crank travel tau where the design's phase begins", dims=("boundary",))
+    put(g, "required", cg.required, "deg",
+        "crank travel tau where the required phase begins (its cycle angle + turn)",
+        dims=("boundary",))
+    put(g, "phase_error", cg.error, "deg",
+        f"phase error of the design against {ring.organ}'s required phases: actual - required "
+        "boundary, in (-180, 180]; positive: the design's phase begins later in the cycle",
+        dims=("boundary",))
+
+
 def write_scene(res, path):
     """Write a scene result; returns the path."""
     study = res.study
@@ -369,4 +397,7 @@ def write_scene(res, path):
                 g.attrs["law_align"] = res.motion["law_align"]
                 for key in ("law_error", "law_error_max", "law_shift"):
                     put(g, key, np.float64(res.motion[key]), METRICS[key][0], METRICS[key][1])
+        cg = getattr(res, "cyclogram", None)
+        if cg is not None and cg.error is not None:
+            _cyclogram(f, cg)
     return path

@@ -80,6 +80,7 @@ class SceneResult:
     flywheel: object = None          # solve.flywheel.Flywheel: [dynamics.flywheel]
     # per dynamics case: {"samples"[, "steady"]: solve.motion_forces.MotionForces}
     motion_forces: dict | None = None
+    cyclogram: object = None         # solve.cyclogram.Cyclogram: phases and phase errors
 
     @property
     def status(self):

@@ -1,6 +1,6 @@
 """Everything a scene study asks for, in memory: the scene's curves (and
 forces), refined peaks, the crank's counterweight, the output rocker's dwell
-and stroke, and the dynamics cases with the forces along their motion, the reduced dynamics
+and stroke, the machine's cyclogram (phases and phase errors), and the dynamics cases with the forces along their motion, the reduced dynamics
 and the flywheel.
 
 One place for it: ``pipeline run`` (``runner``) writes it to a results file,
@@ -22,6 +22,8 @@ def solve_scene(study):
     res.peaks = scene_peaks(res)
     res.counterweight = scene_counterweight(res)
     res.motion = scene_motion(res)
+    from .cyclogram import scene_cyclogram
+    res.cyclogram = scene_cyclogram(res)
     if study.dynamics is not None:
         from .crank_motion import reduced_dynamics, run_dynamics
         res.dynamics = run_dynamics(study, res.plan)

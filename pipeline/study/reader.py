@@ -80,6 +80,7 @@ class Study:
     sweep: object = None     # pipeline.study.sweep_spec.SweepSpec for kind = "sweep"
     search: object = None    # pipeline.study.search_spec.SearchSpec: a sweep study's [search]
     tolerance: object = None  # pipeline.study.tolerance_spec.ToleranceSpec: [tolerance]
+    cycle: object = None     # pipeline.model.cycle.Cycle: [cycle], the machine's cyclogram
     extra: dict = field(default_factory=dict)
 
 
@@ -145,6 +146,10 @@ def parse_study(text: str, path="<study>") -> Study:
                                        "(it searches the [sweep] section's variables)")
         from .search_spec import parse_search
         search = parse_search(root, sweep)
+    cycle = None
+    if root.has("cycle"):
+        from .cycle_spec import parse_cycle
+        cycle = parse_cycle(root.table("cycle"), output)
     tolerance = None
     if root.has("tolerance"):
         from .tolerance_spec import parse_tolerance
@@ -152,7 +157,7 @@ def parse_study(text: str, path="<study>") -> Study:
     root.done()
     return Study(path=Path(path), text=text, kind=kind, name=name, title=title,
                  mechanism=mech, output=output, dynamics=dynamics, sweep=sweep, search=search,
-                 tolerance=tolerance)
+                 tolerance=tolerance, cycle=cycle)
 
 
 # ----------------------------------------------------------------- mechanism

@@ -104,7 +104,8 @@ def _short(name, letter):
 def scene_tables(path, every=1) -> dict:
     """{name: DataFrame} of a scene file at every computed position (every
     ``every``-th): points, links, and reactions, peaks, counterweight,
-    motion_<case> where the file has them."""
+    cyclogram (the output's phase boundaries and errors, deg of the cycle
+    angle), motion_<case> where the file has them."""
     if every < 1:
         raise ValueError(f"--every must be at least 1, got {every}")
     out = {}
@@ -170,6 +171,15 @@ def scene_tables(path, every=1) -> dict:
                     "peak_after_phi1")
             out["counterweight"] = _frame({k: [float(g[k][()])] for k in keys},
                                           {k: str(attr_text(g[k].attrs["units"])) for k in keys})
+        if "cyclogram" in f:          # the output's phase boundaries against the required cycle
+            g = f["cyclogram"]
+            turn = float(g.attrs["turn"])
+            cols = {"boundary": [str(attr_text(x)) for x in g["boundary"][()]],
+                    "design": np.mod(g["actual"][()] - turn, 360.0),
+                    "required": np.mod(g["required"][()] - turn, 360.0),
+                    "phase_error": g["phase_error"][()]}
+            out["cyclogram"] = _frame(cols, {"design": "deg", "required": "deg",
+                                             "phase_error": "deg"})
         if "dynamics" in f:
             out.update(motion_tables(f["dynamics"]))
         if "reduced_dynamics" in f:

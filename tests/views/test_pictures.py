@@ -108,7 +108,8 @@ def test_cyclogram_phases_fill_the_revolution(scenes, name):
     start = {k: math.degrees(p.get_x()) for k, p in w.items()}
     assert start["forward"] == pytest.approx(start["dwell"] + widths["dwell"])
     assert start["back"] == pytest.approx(start["forward"] + widths["forward"])
-    assert not _wedges(fig, "cycle")
+    # the required ring: the eyelet's phases of the study's [cycle] (ov7_base), else none
+    assert bool(_wedges(fig, "cycle")) == (res.study.cycle is not None)
 
 
 def test_cyclogram_dwell_is_the_scenes_dwell_window(scenes):
@@ -166,6 +167,97 @@ def test_a_design_without_a_dwell_is_not_said_to_dwell(scenes):
     fig = plots.cyclogram_figure(res)
     assert "no dwell" in _wedges(fig, "design")["dwell"].get_label()
     assert "no dwell" in fig.axes[0].get_title()
+    # ... and no best dwell window is drawn where it says so
+    assert not [ln for ln in fig.axes[0].get_lines() if ln.get_label() == "best dwell window"]
+    assert not [ln for ln in fig.axes[0].get_lines()
+                if (ln.get_gid() or "").startswith("phase error")]
+
+
+# ---------------------------------------------------------------- the machine's cyclogram
+def _rocker_phase_errors(pos, points, rocker, dwell_deg, required, turn=None):
+    """The eyelet's phase errors from the stored positions alone (numpy, every
+    window tried): the rocker angle, its best dwell window (its first start on a
+    tie), forward to the sample farthest from the window's mean, back to the dwell;
+    the required phases' starts ``required`` (dwell, forward, back; deg of the
+    cycle angle) turned to the design's dwell, or by ``turn``."""
+    ip, iq = points.index(rocker[0]), points.index(rocker[1])
+    r = pos[:, iq] - pos[:, ip]
+    theta = np.degrees(np.unwrap(np.arctan2(r[:, 1], r[:, 0])))
+    n = len(theta)
+    w = int(round(dwell_deg * n / 360))
+    idx = (np.arange(n)[:, None] + np.arange(w + 1)[None, :]) % n
+    s = int(np.argmin(np.ptp(theta[idx], axis=1)))
+    rest = [(s + j) % n for j in range(w + 1, n)]
+    far = w + 1 + int(np.argmax(np.abs(theta[rest] - theta[idx[s]].mean())))
+    actual = np.array([s, s + w, s + far]) * 360.0 / n
+    turn = actual[0] - required[0] if turn is None else turn
+    err = (actual - (np.asarray(required) + turn) + 180.0) % 360.0 - 180.0
+    return actual, err
+
+
+def test_the_machine_cyclogram_has_a_ring_per_organ(scenes):
+    """ov7_base's [cycle]: the eyelet's required ring and the needle's, sinker's and
+    presser's, each its declared phases round the whole turn, and the eyelet's
+    three phase errors marked."""
+    from collections import Counter
+    from pipeline.solve.cyclogram import BOUNDARIES
+    res = scenes["ov7_base"]
+    fig = plots.cyclogram_figure(res)
+    ax = next(a for a in fig.axes if a.get_label() == "cyclogram")
+    rings = [p for p in ax.patches if (p.get_gid() or "").startswith(("phase cycle ",
+                                                                      "phase organ"))]
+    organ = [p.get_label().split(": ")[0] for p in rings]
+    assert Counter(organ) == {"eyelet": 3, "needle": 4, "sinker": 6, "presser": 4}
+    for name in ("eyelet", "needle", "sinker", "presser"):
+        assert sum(math.degrees(p.get_width()) for p, o in zip(rings, organ)
+                   if o == name) == pytest.approx(360.0)
+    assert "sinker: dwell 70-190 deg" in [p.get_label() for p in rings]
+    cycle, design = _wedges(fig, "cycle"), _wedges(fig, "design")
+    assert cycle["dwell"].get_x() == pytest.approx(design["dwell"].get_x())  # dwells aligned
+    err = res.cyclogram.error
+    marks = {ln.get_gid(): ln for ln in ax.get_lines() if (ln.get_gid() or "").startswith(
+        "phase error")}
+    texts = {t.get_gid(): t.get_text() for t in ax.texts}
+    for b, e in zip(BOUNDARIES, err):
+        arc = np.degrees(marks[f"phase error {b}"].get_xdata())
+        assert arc[-1] - arc[0] == pytest.approx(e)          # required -> actual boundary
+        assert texts[f"phase error {b} text"] == f"{e:+.1f}"
+
+
+def test_phase_errors_are_stored_and_match_the_rocker_angle(scenes, tmp_path):
+    """/cyclogram/phase_error (deg, long_name, the boundaries as its dimension)
+    against the errors computed here from the file's own dense positions; held
+    fixed (align = "fixed", phase), the cycle is placed at psi = tau + phase."""
+    import copy
+    from dataclasses import replace
+
+    import h5py
+
+    from pipeline.results.scene_file import write_scene
+    from pipeline.solve.cyclogram import scene_cyclogram
+    res = scenes["ov7_base"]
+    path = write_scene(res, tmp_path / "ov7_base.h5")
+    with h5py.File(path, "r") as f:
+        d = f["cyclogram/phase_error"]
+        assert d.attrs["units"] == "deg" and "phase error" in d.attrs["long_name"]
+        assert [x.decode() if isinstance(x, bytes) else x for x in d.dims[0][0][()]] == [
+            "dwell start", "forward start", "back start"]
+        stored, actual = d[()], f["cyclogram/actual"][()]
+        assert f["cyclogram/actual"].attrs["units"] == "deg"
+        assert f["cyclogram"].attrs["organ"] == "eyelet"
+        pos = f["dense/position"][()]
+        points = [x.decode() if isinstance(x, bytes) else x for x in f["point"][()]]
+    ours, err = _rocker_phase_errors(pos, points, ("P8", "P7"), 150.0, (240.0, 30.0, 130.0))
+    assert actual == pytest.approx(ours, abs=1e-9)
+    assert stored == pytest.approx(err, abs=1e-9)
+    assert stored[0] == 0.0 and stored[2] != 0.0        # the dwells aligned; the back swing late
+    fixed = copy.copy(res)
+    fixed.study = replace(res.study, cycle=replace(res.study.cycle, align="fixed", phase=20.0))
+    cg = scene_cyclogram(fixed)
+    _, err = _rocker_phase_errors(pos, points, ("P8", "P7"), 150.0, (240.0, 30.0, 130.0),
+                                  turn=-20.0)
+    assert cg.error == pytest.approx(err, abs=1e-9)
+    assert cg.required == pytest.approx([220.0, 10.0, 110.0])
 
 
 # ---------------------------------------------------------------- the drawing
