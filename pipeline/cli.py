@@ -136,7 +136,7 @@ def cmd_doctor(a):
 
 def cmd_report(a):
     from .views.report import write_report
-    info = write_report(a.results, a.output, top=a.top)
+    info = write_report(a.results, a.output, top=a.top, drawings=a.drawings)
     if not a.quiet:
         _print(info, a.format)
     return EXIT_OK
@@ -280,6 +280,9 @@ def build_parser():
                     help="report file (default: next to the results file, <name>_report.html)")
     rp.add_argument("--top", type=int, default=20, metavar="N",
                     help="rows of the front-1 table (default 20)")
+    rp.add_argument("--drawings", type=int, default=12, metavar="N",
+                    help="front-1 designs whose drawing and curves the explorer embeds "
+                         "(default 12; about a second each)")
     rp.set_defaults(func=cmd_report)
 
     tl = sub.add_parser("tolerance", parents=[common], help=(

@@ -113,11 +113,11 @@ EXPLORER_POINTS = 3000      # feasible designs in the interactive plot (front 1 
 EXPLORER_DRAWINGS = 12      # front-1 designs whose drawing and curves are embedded
 
 
-def explorer_html(path, data, ana) -> str:
+def explorer_html(path, data, ana, drawings=EXPLORER_DRAWINGS) -> str:
     """The interactive front: an SVG of the feasible designs (front 1 in red)
     over the first two objectives; hover shows a design's numbers, a click its
-    variables, metrics and (for the first front-1 designs) its drawing and
-    curves.  Plain SVG and a few lines of script: one offline file."""
+    variables, metrics and (for the first ``drawings`` front-1 designs) its
+    drawing and curves.  Plain SVG and a few lines of script: one offline file."""
     import json
 
     from .show import candidate_figure
@@ -164,7 +164,7 @@ def explorer_html(path, data, ana) -> str:
            f'transform="rotate(-90 14 {H / 2:.0f})">{html.escape(o[1])} '
            f"[{html.escape(u[1])}]</text>" + "".join(circles) + "</svg>")
     drawings = {}
-    for i in list(ana.front1[np.argsort(data.F[ana.front1, 0])])[:EXPLORER_DRAWINGS]:
+    for i in list(ana.front1[np.argsort(data.F[ana.front1, 0])])[:drawings]:
         try:
             fig = candidate_figure(rerun_candidate(path, int(i)))
         except Exception as e:   # a design the scene path cannot redraw: say so, go on
@@ -298,7 +298,7 @@ def _metric_row(f, i, names):
     return out
 
 
-def build_html(path, top=20) -> str:
+def build_html(path, top=20, drawings=EXPLORER_DRAWINGS) -> str:
     """The report page of an analyzed sweep file."""
     data = read_sweep(path)
     with open_results(path, "sweep") as f:
@@ -358,7 +358,7 @@ def build_html(path, top=20) -> str:
               "objectives; diamond: the knee of front 1; star: the study's reference design; "
               "letters: the representative designs below.</p>",
               _img(pareto_figure(data, ana), "Pareto plot"),
-              "<h3>Explore the designs</h3>", explorer_html(path, data, ana)]
+              "<h3>Explore the designs</h3>", explorer_html(path, data, ana, drawings)]
 
     parts += ["<h2>What drives each objective</h2>",
               '<p class="note">A gradient-boosted tree model of each objective on the design '
@@ -461,11 +461,14 @@ def default_report_output(path) -> Path:
     return path.with_name(f"{path.stem}_report.html")
 
 
-def write_report(path, out=None, top=20) -> dict:
+def write_report(path, out=None, top=20, drawings=EXPLORER_DRAWINGS) -> dict:
     """Write the HTML report of a sweep file (running ``analyze`` first if the
-    file has no analysis); returns a summary."""
+    file has no analysis); returns a summary.  ``drawings``: front-1 designs
+    whose drawing the explorer embeds (about a second each)."""
     if top < 1:
         raise ValueError(f"--top must be at least 1, got {top}")
+    if drawings < 0:
+        raise ValueError(f"--drawings must be at least 0, got {drawings}")
     with open_results(path, "sweep") as f:
         analyzed = has_analysis(f)
     info = {}
@@ -473,7 +476,7 @@ def write_report(path, out=None, top=20) -> dict:
         log.info("%s has no analysis: running `pipeline analyze` first", path)
         info["analysis"] = "run now (stored in the results file)"
         analyze(path)
-    page = build_html(path, top=top)
+    page = build_html(path, top=top, drawings=drawings)
     out = Path(out) if out else default_report_output(path)
     write_text(out, page)
     info.update(report=str(out), size=f"{out.stat().st_size / 1024:.0f} KiB")

@@ -371,7 +371,7 @@ def test_a_scene_on_a_full_disk_keeps_the_earlier_result(studies, tmp_path):
 def test_outputs_onto_a_full_disk_name_the_file(sweep, tmp_path, command):
     assert main(["analyze", str(sweep), "-q"]) == 0
     with small_disk(tmp_path / "disk", "64k") as disk:
-        args = {"report": ["report", sweep, "-o", disk / "r.html"],
+        args = {"report": ["report", sweep, "-o", disk / "r.html", "--drawings", 0],
                 "export": ["export", sweep, "--csv", disk / "tables"],
                 "show": ["show", sweep, "--candidate", "reference", "-o", disk / "c.png"],
                 "animate": ["show", sweep, "--candidate", "reference", "--animate",
@@ -494,7 +494,9 @@ def test_analyze_killed_before_its_rename_keeps_the_sweep(sweep):
 
 
 def test_report_killed_before_its_rename_leaves_no_page(sweep):
-    rc, err = cli("report", sweep, "-q", env={files.FAULT_VARIABLE: "before-rename:s_report.html"})
+    # (no design drawn: what is tested is the page's rename, not its pictures)
+    rc, err = cli("report", sweep, "-q", "--drawings", "0",
+                  env={files.FAULT_VARIABLE: "before-rename:s_report.html"})
     assert rc == -signal.SIGKILL, err
     partial = [n for n in hidden(sweep.parent) if n.endswith(".partial.html")]
     assert len(partial) == 1 and (sweep.parent / partial[0]).read_text().rstrip().endswith(
@@ -502,7 +504,7 @@ def test_report_killed_before_its_rename_leaves_no_page(sweep):
     assert not list(sweep.parent.glob("*_report.html"))
     with h5py.File(sweep, "r") as f:                            # its analysis came first, whole
         assert f["analysis"].attrs["complete"]
-    assert main(["report", str(sweep), "-q"]) == 0
+    assert main(["report", str(sweep), "-q", "--drawings", "0"]) == 0
     assert hidden(sweep.parent) == []
 
 

@@ -359,7 +359,7 @@ def test_names_and_units_never_become_markup_in_the_report(studies, tmp_path):
                             'L12 = { param = "crank.length", units = "<img src=x onerror=alert(1)>" }')])
     out = tmp_path / "s.h5"
     assert main(["run", str(study), "-o", str(out), "--candidates", "600", "-q"]) == 0
-    assert main(["report", str(out), "-o", str(tmp_path / "r.html"), "-q"]) == 0
+    assert main(["report", str(out), "-o", str(tmp_path / "r.html"), "-q", "--drawings", "1"]) == 0
     page = (tmp_path / "r.html").read_text()
     data = page.split('id="explorer-data">', 1)[1].split("</script>", 1)[0]
     assert "<" not in data and ">" not in data and "\\u003cimg" in data
