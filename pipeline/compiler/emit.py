@@ -79,7 +79,10 @@ class Emitter:
 
     def transmission(self):
         """Lines that lower ``tr`` to the group's transmission angles at this
-        position (rad; ``pipeline.solve.peaks.transmission_items``); none by default."""
+        position (rad; ``pipeline.solve.peaks.transmission_items``), given the
+        cos and sin of the smallest angle so far (``best_cos``, ``best_sin``:
+        ``kernels.metrics.fold_angle`` skips an angle certainly above it); none
+        by default."""
         return []
 
 
@@ -153,7 +156,7 @@ class RRREmitter(Emitter):
     def transmission(self):
         a, c, b = (self.p(j) for j in range(3))
         return [f"# {self.title()}: the angle at {self.pname(2)} between the links",
-                f"tr = min(tr, dyad_transmission(pos, {a}, {b}, {c}))"]
+                f"tr = min(tr, dyad_transmission(pos, {a}, {b}, {c}, best_cos, best_sin))"]
 
 
 class RRPEmitter(Emitter):
@@ -173,7 +176,7 @@ class RRPEmitter(Emitter):
         return [f"# {self.title()}: link {self.pname(0)}-{self.pname(2)} against the guide's "
                 "normal",
                 _wrap_line(f"tr = min(tr, lines_transmission(pos, {self.p(0)}, {self.p(2)}, 0.0, "
-                           f"{ga}, {gb}, {self.k('guide_angle')} + 0.5 * math.pi))")]
+                           f"{ga}, {gb}, {self.k('guide_angle')} + 0.5 * math.pi, best_cos, best_sin))")]
 
 
 class RPREmitter(Emitter):
@@ -190,7 +193,7 @@ class RPREmitter(Emitter):
         c, a, e = self.p(1), self.p(0), self.p(2)
         return [f"# {self.title()}: {self.pname(1)}->{self.pname(0)} against the guide's normal",
                 _wrap_line(f"tr = min(tr, lines_transmission(pos, {c}, {a}, 0.0, {c}, {e}, "
-                           "0.5 * math.pi))")]
+                           "0.5 * math.pi, best_cos, best_sin))")]
 
 
 def _guide_link(e, j):
@@ -229,7 +232,8 @@ class PRPEmitter(Emitter):
         a2, b2 = _guide_link(self, 4)
         return [f"# {self.title()}: the angle between the two guides",
                 _wrap_line(f"tr = min(tr, lines_transmission(pos, {a1}, {b1}, "
-                           f"{self.k('guide1_angle')}, {a2}, {b2}, {self.k('guide2_angle')}))")]
+                           f"{self.k('guide1_angle')}, {a2}, {b2}, {self.k('guide2_angle')}, best_cos, "
+                           "best_sin))")]
 
 
 class RPPEmitter(Emitter):
@@ -251,7 +255,7 @@ class RPPEmitter(Emitter):
         g = self.k("guide_angle")
         return [f"# {self.title()}: the angle between the slot and the guide",
                 _wrap_line(f"tr = min(tr, lines_transmission(pos, {ga}, {gb}, {g}, {ga}, {gb}, "
-                           f"{g} + {self.k('slot_angle')}))")]
+                           f"{g} + {self.k('slot_angle')}, best_cos, best_sin))")]
 
 
 class AttachEmitter(Emitter):
@@ -398,15 +402,17 @@ class ClassIIIEmitter(Emitter):
                 f"{self.triad_row}",
                 f"st, m = class3(pos, d1, d2, {i2}, {i6}, {i7}, {i3}, {i4}, {i5}, {k('L23')}, "
                 f"{k('L34')}, {k('U435')}, {k('L35')}, {k('L46')}, {k('L57')}, state, "
-                f"{self.triad_row}, order, tols)"]
+                f"{self.triad_row}, order, tols, {k('U435')}_cos, {k('U435')}_sin)"]
 
     def transmission(self):
         i2, i6, i7, i3, i4, i5 = (self.p(j) for j in range(6))
         n = self.pname
         return [f"# {self.title()}: leads {n(4)}-{n(1)} and {n(5)}-{n(2)}, each against the "
                 "line to the meet of the other two leads",
-                f"tr = min(tr, lead_transmission(pos, {i4}, {i6}, {i2}, {i3}, {i5}, {i7}))",
-                f"tr = min(tr, lead_transmission(pos, {i5}, {i7}, {i2}, {i3}, {i4}, {i6}))"]
+                f"tr = min(tr, lead_transmission(pos, {i4}, {i6}, {i2}, {i3}, {i5}, {i7}, best_cos, "
+                "best_sin))",
+                f"tr = min(tr, lead_transmission(pos, {i5}, {i7}, {i2}, {i3}, {i4}, {i6}, best_cos, "
+                "best_sin))"]
 
 
 class ClassIIISliderEmitter(Emitter):

@@ -117,7 +117,12 @@ S_HAS_SLOPE = 7
 S_A_OLD = 8       # the state before the step being tried
 S_B_OLD = 9
 S_SIGN_OLD = 10
-N_STATE = 11
+S_HANDED = 11     # 1.0: the solution at this position is handed over as unit vectors
+S_CA = 12         # e(a) = (cos a, sin a) and e(b) handed over (the lane path's solution:
+S_SA = 13         # ``triad.class3`` confirms it by its residual, without a cos or sin)
+S_CB = 14
+S_SB = 15
+N_STATE = 16
 
 
 def default_tolerances(newton_tol=1e-12, newton_maxiter=50, newton_step=0.5,

@@ -261,22 +261,36 @@ def law_error(theta, law, off, best, corr):
     return math.sqrt(sq / n), top, shift
 
 
-@njit(**JIT)
-def fold_angle(ux, uy, wx, wy):
-    """The angle between the lines of directions u and w, in [0, pi/2]."""
-    return math.atan2(abs(ux * wy - uy * wx), abs(ux * wx + uy * wy))
+# above this share of the cos/sin cross test an angle is certainly above the smallest so far
+_ABOVE = 1.0 + 1e-9
 
 
 @njit(**JIT)
-def dyad_transmission(pos, ia, ib, ic):
+def fold_angle(ux, uy, wx, wy, best_cos=math.nan, best_sin=math.nan):
+    """The angle between the lines of directions u and w, in [0, pi/2].  With
+    the cos and sin of the smallest angle found so far (a running minimum):
+    inf where this angle is certainly larger, without the atan2 (a library
+    call): |u x w| cos(best) > |u . w| sin(best) (1 + 1e-9) says
+    atan2(|u x w|, |u . w|) > best, whatever the rounding of either side, so
+    the minimum is the same to the bit; NaN (no minimum yet) never skips."""
+    c = abs(ux * wy - uy * wx)
+    d = abs(ux * wx + uy * wy)
+    if c * best_cos > d * best_sin * _ABOVE:
+        return math.inf
+    return math.atan2(c, d)
+
+
+@njit(**JIT)
+def dyad_transmission(pos, ia, ib, ic, best_cos=math.nan, best_sin=math.nan):
     """Transmission angle of an RRR dyad A-B-C at its middle joint B: the
-    angle between B->A and B->C, folded into [0, pi/2] (``pipeline.solve.peaks``)."""
+    angle between B->A and B->C, folded into [0, pi/2] (``pipeline.solve.peaks``;
+    best_cos, best_sin: ``fold_angle``'s running minimum)."""
     return fold_angle(pos[ia, 0] - pos[ib, 0], pos[ia, 1] - pos[ib, 1],
-                      pos[ic, 0] - pos[ib, 0], pos[ic, 1] - pos[ib, 1])
+                      pos[ic, 0] - pos[ib, 0], pos[ic, 1] - pos[ib, 1], best_cos, best_sin)
 
 
 @njit(**JIT)
-def lead_transmission(pos, ij, ip, ia, ib, ic, idd):
+def lead_transmission(pos, ij, ip, ia, ib, ic, idd, best_cos=math.nan, best_sin=math.nan):
     """Transmission angle of a class III lead J-P (J on the ternary link, P
     its pivot): the angle at J between the lead and the line from J through
     Q, where the lines A-B and C-D of the other two leads meet (with axial
@@ -305,7 +319,7 @@ def lead_transmission(pos, ij, ip, ia, ib, ic, idd):
     qx = l1y * l2w - l1w * l2y
     qy = l1w * l2x - l1x * l2w
     # J is the origin: the direction J -> Q is (X, Y) (times W, whose sign folds away)
-    return fold_angle(pos[ip, 0] - jx, pos[ip, 1] - jy, qx, qy)
+    return fold_angle(pos[ip, 0] - jx, pos[ip, 1] - jy, qx, qy, best_cos, best_sin)
 
 
 @njit(**JIT)
@@ -322,7 +336,7 @@ def _line(pos, ia, ib, alpha):
 
 
 @njit(**JIT)
-def lines_transmission(pos, ia, ib, alpha, ic, idd, beta):
+def lines_transmission(pos, ia, ib, alpha, ic, idd, beta, best_cos=math.nan, best_sin=math.nan):
     """Transmission angle of a group with a sliding pair: the angle between
     line 1 (the link a->b turned by ``alpha``, or the absolute ``alpha`` where
     ia < 0) and line 2 (c->d turned by ``beta``), folded into [0, pi/2].  Each
@@ -331,4 +345,4 @@ def lines_transmission(pos, ia, ib, alpha, ic, idd, beta):
     of the member it drives (``pipeline.solve.peaks.transmission_items``)."""
     ux, uy = _line(pos, ia, ib, alpha)
     wx, wy = _line(pos, ic, idd, beta)
-    return fold_angle(ux, uy, wx, wy)
+    return fold_angle(ux, uy, wx, wy, best_cos, best_sin)

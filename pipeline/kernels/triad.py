@@ -26,7 +26,8 @@ import math
 from numba import njit
 
 from .config import (JIT, OK, NEWTON_MAXITER, SINGULAR, BRANCH_JUMP,
-                     BAD_GEOMETRY, S_A, S_B, S_DET_SIGN, S_MARGIN, S_ITERS,
+                     BAD_GEOMETRY, S_A, S_B, S_DET_SIGN, S_MARGIN, S_ITERS, S_HANDED, S_CA,
+                     S_SA, S_CB, S_SB,
                      T_NEWTON_TOL, T_NEWTON_MAXITER, T_NEWTON_STEP, T_SINGULAR, T_JUMP)
 from .geometry import solve2
 from .groups import _direction as guide_direction
@@ -53,12 +54,15 @@ def ternary_angle(l34, l45, l35, orientation):
 def closure(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b):
     """Residuals (F1, F2) and Jacobian d(F1, F2)/d(a, b) at (a, b), and the
     cos/sin of a, b and b + U435 (``_place`` reuses them)."""
-    ca = math.cos(a)
-    sa = math.sin(a)
-    cb = math.cos(b)
-    sb = math.sin(b)
-    cc = math.cos(b + u435)
-    sc = math.sin(b + u435)
+    return closure_unit(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57,
+                        math.cos(a), math.sin(a), math.cos(b), math.sin(b),
+                        math.cos(b + u435), math.sin(b + u435))
+
+
+@njit(inline='always', **JIT)
+def closure_unit(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, ca, sa, cb, sb, cc, sc):
+    """``closure`` at the unit vectors e(a) = (ca, sa), e(b) = (cb, sb) and
+    e(b + U435) = (cc, sc)."""
     p3x = p2x + l23 * ca
     p3y = p2y + l23 * sa
     r4x = p3x + l34 * cb - p6x
@@ -113,22 +117,49 @@ def newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b,
 
 
 @njit(**JIT)
+def handed(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, u_cos, u_sin, state, g,
+           tol, maxiter, max_step):
+    """The solution handed over in state row ``g`` as unit vectors e(a), e(b)
+    (the lane path's, ``S_CA`` .. ``S_SB``), confirmed: where its closure
+    residual is within Newton's tolerance it is taken as it is (the test
+    Newton's first iteration makes, without its cos and sin; the unit
+    vectors are the solution), else Newton runs from its angles.  Returns
+    ``newton``'s tuple (the angles NaN when taken as handed: not needed, the
+    next position is handed over too).  Clears the hand-over flag."""
+    state[g, S_HANDED] = 0.0
+    ca = state[g, S_CA]
+    sa = state[g, S_SA]
+    cb = state[g, S_CB]
+    sb = state[g, S_SB]
+    cc = cb * u_cos - sb * u_sin
+    sc = sb * u_cos + cb * u_sin
+    f1, f2, j11, j12, j21, j22, trig = closure_unit(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34,
+                                                    l35, l46, l57, ca, sa, cb, sb, cc, sc)
+    det = j11 * j22 - j12 * j21
+    if max(abs(f1) / (2.0 * l46), abs(f2) / (2.0 * l57)) <= tol * max(l46, l57):
+        return CONVERGED, math.nan, math.nan, 0, det, trig
+    return newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435,
+                  math.atan2(sa, ca), math.atan2(sb, cb), tol, maxiter, max_step)
+
+
+@njit(**JIT)
 def _wrap(x):
     """Angle difference wrapped to (-pi, pi]."""
     return x - 2.0 * math.pi * math.floor((x + math.pi) / (2.0 * math.pi))
 
 
 @njit(**JIT)
-def _accept(state, g, a, b, a0, b0, det, margin, tols):
+def _accept(state, g, a, b, a0, b0, det, margin, tols, moved=True):
     """Status of a converged solve (a, b) from (a0, b0): BRANCH_JUMP where det J
-    changed sign or an angle moved more than tols[T_JUMP], SINGULAR below
+    changed sign or (``moved``: a solve from a prediction, not a solution
+    handed over) an angle moved more than tols[T_JUMP], SINGULAR below
     tols[T_SINGULAR]; the continuation state row g takes the new solution."""
     status = OK
     sign = 1.0 if det > 0.0 else -1.0
     if state[g, S_DET_SIGN] != 0.0:
         if sign != state[g, S_DET_SIGN]:
             status = BRANCH_JUMP
-        elif (abs(_wrap(a - a0)) > tols[T_JUMP] or abs(_wrap(b - b0)) > tols[T_JUMP]):
+        elif moved and (abs(_wrap(a - a0)) > tols[T_JUMP] or abs(_wrap(b - b0)) > tols[T_JUMP]):
             status = BRANCH_JUMP
     state[g, S_A] = a
     state[g, S_B] = b
@@ -169,17 +200,21 @@ def _place_analogs(d, i2, i3, i4, i5, l23, l34, l35, a_k, b_k, a1, b1, ca, sa, c
 
 @njit(**JIT)
 def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
-           state, g, order, tols):
+           state, g, order, tols, u_cos=math.nan, u_sin=math.nan):
     """Solve the class III group whose continuation state is row ``g`` of
     ``state``, at the current crank position.
 
     ``u435`` is the ternary link's angle at vertex 3 (``ternary_angle``, NaN
     when the triangle cannot be built), computed once per candidate by the
-    caller.  ``state[g]`` carries the continuation: the last (a, b), the sign
-    of det J there (0 before the first solve), and receives the singularity
-    margin and the Newton iterations.  Returns (status, margin).
+    caller (``u_cos``, ``u_sin``: its cos and sin, computed here if NaN).
+    ``state[g]`` carries the continuation: the last (a, b), the sign of det J
+    there (0 before the first solve), and receives the singularity margin and
+    the Newton iterations; or, flagged ``S_HANDED``, the solution at this
+    position as unit vectors (``handed``).  Returns (status, margin).
     """
+    moved = state[g, S_HANDED] == 0.0      # (a hand-over holds for one solve only)
     if not (math.isfinite(u435) and l23 > 0.0 and l46 > 0.0 and l57 > 0.0):
+        state[g, S_HANDED] = 0.0
         _nan_joints(pos, d1, d2, i3, i4, i5, 0)
         state[g, S_MARGIN] = 0.0
         return BAD_GEOMETRY, 0.0
@@ -191,9 +226,20 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
     p7y = pos[i7, 1]
     a0 = state[g, S_A]
     b0 = state[g, S_B]
-    outcome, a, b, iters, det, trig = newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57,
-                                       u435, a0, b0, tols[T_NEWTON_TOL],
-                                       int(tols[T_NEWTON_MAXITER]), tols[T_NEWTON_STEP])
+    if moved:
+        outcome, a, b, iters, det, trig = newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35,
+                                                 l46, l57, u435, a0, b0, tols[T_NEWTON_TOL],
+                                                 int(tols[T_NEWTON_MAXITER]),
+                                                 tols[T_NEWTON_STEP])
+    else:
+        if not (u_cos == u_cos and u_sin == u_sin):
+            u_cos = math.cos(u435)
+            u_sin = math.sin(u435)
+        outcome, a, b, iters, det, trig = handed(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35,
+                                                 l46, l57, u435, u_cos, u_sin, state, g,
+                                                 tols[T_NEWTON_TOL],
+                                                 int(tols[T_NEWTON_MAXITER]),
+                                                 tols[T_NEWTON_STEP])
     state[g, S_ITERS] = iters
     scale = 4.0 * l23 * l46 * l57 * max(l34, l35)
     if outcome != CONVERGED:
@@ -206,7 +252,7 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
         return NEWTON_MAXITER, 0.0
     margin = abs(det) / scale
     state[g, S_MARGIN] = margin
-    status = _accept(state, g, a, b, a0, b0, det, margin, tols)
+    status = _accept(state, g, a, b, a0, b0, det, margin, tols, moved)
     ca, sa, cb, sb, cc, sc = _place(pos, i2, i3, i4, i5, l23, l34, l35, trig)
     if order < 1:
         return status, margin

@@ -6,7 +6,7 @@ The text below the marker line is pasted into the generated module
 for linters and readers, the names the generated module gives it."""
 
 
-from .header import (math, np, njit, JIT, JIT_ALLOC, OK, BRANCH_JUMP, S_A, S_B, S_ITERS, S_MARGIN,
+from .header import (math, np, njit, JIT, JIT_ALLOC, OK, BRANCH_JUMP, S_ITERS, S_MARGIN,
                      N_STATE, closes, copy2, work, force_work, dwell_error, law_error,
                      relative_angle, M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, M_PEAK_R,
                      M_PEAK_JOINT, M_PEAK_PHI, M_PEAK_MBAL, M_FAIL_PHI, M_NEWTON_MEAN,
@@ -16,6 +16,7 @@ from .header import (math, np, njit, JIT, JIT_ALLOC, OK, BRANCH_JUMP, S_A, S_B, 
                      SET_EPS1, SET_WANT_PEAKS, SET_WORK_POINT, SET_WANT_TRANSMISSION, SET_WANT_LAW,
                      SET_LAW0, LAW_BEST, SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING)
 from .header import M_EQUILIBRIUM, equilibrium_residual
+from .header import S_HANDED, S_CA, S_SA, S_CB, S_SB
 from .header import M_SHAKING_F, M_SHAKING_M, shaking, may_reach
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_WATCH, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, constants, start, advance, forces_at, transmission,
@@ -268,7 +269,9 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
     smallest transmission angle (SET_WANT_TRANSMISSION); maxima (minima) over
     the grid's positions.  With ``use_trail`` every position is solved directly from
     the class III solution the lane path found there (trail[k] = e(a), e(b)
-    per group: Newton confirms it, the branch checks still apply);
+    per group, handed over as unit vectors: its closure residual confirms it,
+    Newton runs only where that is above the tolerance, the branch check on
+    det J still applies);
     otherwise by the careful continuation.  wk, fw: work arrays (work,
     force_work)."""
     omega1 = settings[SET_OMEGA1]
@@ -293,12 +296,19 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
     peak_a = 0.0
     peak_e = 0.0
     trans = math.inf
+    trans_cos = math.nan
+    trans_sin = math.nan
     for k in range(phis.shape[0]):
         if use_trail:
-            # a walk of length zero: Newton at phis[k] from the lane's solution
+            # a walk of length zero at phis[k], the lane's solution handed over as
+            # unit vectors: the class III solve confirms it by its residual (Newton
+            # from its angles only where that is above the tolerance)
             for j in range(N_TRIADS):
-                state[j, S_A] = math.atan2(trail[k, 4 * j + 1], trail[k, 4 * j])
-                state[j, S_B] = math.atan2(trail[k, 4 * j + 3], trail[k, 4 * j + 2])
+                state[j, S_HANDED] = 1.0
+                state[j, S_CA] = trail[k, 4 * j]
+                state[j, S_SA] = trail[k, 4 * j + 1]
+                state[j, S_CB] = trail[k, 4 * j + 2]
+                state[j, S_SB] = trail[k, 4 * j + 3]
             phi_prev = phis[k]
         st = advance(K, phi_prev, phis[k], order, tols, state, pos, d1, d2, margins,
                      want_f)
@@ -355,9 +365,12 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
             if e > peak_e or not math.isfinite(e):
                 peak_e = e
         if want_t:
-            t = transmission(K, pos)
-            if t < trans or not math.isfinite(t):
+            # (angles certainly above the smallest so far need no atan2: the same minimum)
+            t = transmission(K, pos, trans_cos, trans_sin)
+            if t < trans or (not math.isfinite(t) and t != math.inf):
                 trans = t
+                trans_cos = math.cos(t)
+                trans_sin = math.sin(t)
     if want_f:
         out[M_PEAK_R] = peak
         out[M_PEAK_JOINT] = peak_j

@@ -19,7 +19,8 @@ from numba import njit
 
 from pipeline.kernels.config import (JIT, JIT_ALLOC, JIT_LANES, OK, BRANCH_JUMP, NEWTON_MAXITER,
                                      SINGULAR, NO_ASSEMBLY, BAD_GEOMETRY, S_A, S_B, S_DET_SIGN,
-                                     S_ITERS, S_MARGIN, N_STATE, N_TOLS, T_SINGULAR,
+                                     S_ITERS, S_MARGIN, S_HANDED, S_CA, S_SA, S_CB, S_SB,
+                                     N_STATE, N_TOLS, T_SINGULAR,
                                      T_ASSEMBLY_SLACK, T_SUBSTEP,
                                      T_MIN_STEP, T_NEWTON_TOL, T_JUMP, T_STEP_CHANGE, T_CLOSE,
                                      T_WATCH, T_TOUCH, T_LOCATE)
@@ -53,7 +54,8 @@ from pipeline.kernels.watch import (FOLD_BACK, LOCATE_MIN_STEP,
 # ---- end of the skeleton ----
 __all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_LANES', 'OK', 'BRANCH_JUMP',
            'NEWTON_MAXITER', 'SINGULAR', 'NO_ASSEMBLY', 'BAD_GEOMETRY', 'S_A', 'S_B',
-           'S_DET_SIGN', 'S_ITERS', 'S_MARGIN', 'N_STATE', 'N_TOLS', 'T_SINGULAR',
+           'S_DET_SIGN', 'S_ITERS', 'S_MARGIN', 'S_HANDED', 'S_CA', 'S_SA', 'S_CB', 'S_SB',
+           'N_STATE', 'N_TOLS', 'T_SINGULAR',
            'T_ASSEMBLY_SLACK', 'T_SUBSTEP', 'T_MIN_STEP', 'T_NEWTON_TOL', 'T_JUMP',
            'T_STEP_CHANGE', 'T_CLOSE', 'T_WATCH', 'T_TOUCH', 'T_LOCATE', 'accept',
            'closes', 'copy2', 'predict', 'restore', 'start_triad', 'step_limit', 'work',
