@@ -149,7 +149,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
     for e in ems[:plan.n_kinematic]:
         body += e.transmission()
     body.append("return tr")
-    w(_fn("transmission(K, pos, best_cos, best_sin)",
+    w(_fn("transmission(K, pos, best_cos=math.nan, best_sin=math.nan)",
           "The smallest transmission angle at this position (rad, in [0, pi/2]) over the\n"
           "dyads and the class III leads (``pipeline.peaks.transmission_items``); inf\n"
           "where the mechanism has none, or where every angle is certainly above the\n"

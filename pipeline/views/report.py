@@ -113,10 +113,10 @@ EXPLORER_POINTS = 3000      # feasible designs in the interactive plot (front 1 
 EXPLORER_DRAWINGS = 12      # front-1 designs whose drawing and curves are embedded
 
 
-def explorer_html(path, data, ana, drawings=EXPLORER_DRAWINGS) -> str:
+def explorer_html(path, data, ana, n_drawings=EXPLORER_DRAWINGS) -> str:
     """The interactive front: an SVG of the feasible designs (front 1 in red)
     over the first two objectives; hover shows a design's numbers, a click its
-    variables, metrics and (for the first ``drawings`` front-1 designs) its
+    variables, metrics and (for the first ``n_drawings`` front-1 designs) its
     drawing and curves.  Plain SVG and a few lines of script: one offline file."""
     import json
 
@@ -164,7 +164,7 @@ def explorer_html(path, data, ana, drawings=EXPLORER_DRAWINGS) -> str:
            f'transform="rotate(-90 14 {H / 2:.0f})">{html.escape(o[1])} '
            f"[{html.escape(u[1])}]</text>" + "".join(circles) + "</svg>")
     drawings = {}
-    for i in list(ana.front1[np.argsort(data.F[ana.front1, 0])])[:drawings]:
+    for i in list(ana.front1[np.argsort(data.F[ana.front1, 0])])[:n_drawings]:
         try:
             fig = candidate_figure(rerun_candidate(path, int(i)))
         except Exception as e:   # a design the scene path cannot redraw: say so, go on
