@@ -169,6 +169,29 @@ def parse_motion_law(sec) -> MotionLaw:
                      interpolation=interpolation, align=align, phase=phase)
 
 
+JOIN_TOL = 1e-9         # deg: a phase starts where the one before ends
+
+
+def check_turn(sec, spans):
+    """Phases that follow each other round the turn and cover it once (a
+    motion law's, an organ's in ``[cycle]``): ``spans`` [(its study item,
+    start in [0, 360) deg, length deg)] in order.  A gap or an overlap raises
+    the next item's one-line error, a span other than one turn the section
+    ``sec``'s."""
+    for (_, start, length), (nxt, start2, _) in zip(spans, spans[1:] + spans[:1]):
+        end = (start + length) % 360.0
+        if abs((start2 - end + 180.0) % 360.0 - 180.0) > JOIN_TOL:
+            gap = (start2 - end) % 360.0
+            what = (f"a gap of {gap:g} deg" if gap < 180.0 else
+                    f"an overlap of {360.0 - gap:g} deg")
+            raise nxt.error("from", f"the phases must join round the turn: this one starts at "
+                                    f"{start2:g} deg, the one before ends at {end:g} ({what})")
+    total = sum(s[2] for s in spans)
+    if abs(total - 360.0) > 1e-6:
+        raise sec.error("phases", f"the phases span {total:g} deg; they must cover the turn "
+                                  "exactly once (360 deg)")
+
+
 def _phases(sec):
     items = sec.tables("phases")
     if not items:
@@ -190,15 +213,7 @@ def _phases(sec):
             raise it.error("to", f"the phase {start:g} -> {end:g} deg is empty")
         it.done()
         raw.append((it, start % 360.0, length, law, level))
-    for (it, start, length, _, _), (nxt, start2, _, _, _) in zip(raw, raw[1:] + raw[:1]):
-        end = (start + length) % 360.0
-        if abs((start2 - end + 180.0) % 360.0 - 180.0) > 1e-9:
-            raise nxt.error("from", f"the phases must join round the turn: this one starts at "
-                                    f"{start2:g} deg, the one before ends at {end:g}")
-    total = sum(r[2] for r in raw)
-    if abs(total - 360.0) > 1e-6:
-        raise sec.error("phases", f"the phases span {total:g} deg; they must make one turn "
-                                  "(360 deg)")
+    check_turn(sec, [r[:3] for r in raw])
     swings = [k for k, r in enumerate(raw) if r[3] != "dwell"]
     if not swings:
         raise sec.error("phases", "every phase is a dwell: the law needs a swing")

@@ -18,11 +18,11 @@ from __future__ import annotations
 
 from ..base.limits import ANGLE
 from ..model.cycle import ALIGN, KINDS, OUTPUT_KINDS, Cycle, Organ, OrganPhase, output_shaped
+from ..model.motion_law import check_turn
 from .section import _closest, _quote
 
 MAX_ORGANS = 8          # rings of one cyclogram: more are unreadable on one page
 MAX_PHASES = 24         # phases of one organ (the thesis's busiest organ has 6)
-JOIN_TOL = 1e-9         # deg: a phase starts where the one before ends
 
 
 def parse_cycle(sec, output) -> Cycle:
@@ -84,16 +84,5 @@ def _phases(it):
             raise p.error("to", f"the phase {start:g} -> {end:g} deg is empty")
         p.done()
         raw.append((p, start % 360.0, length or 360.0, kind))
-    for (_, start, length, _), (nxt, start2, _, _) in zip(raw, raw[1:] + raw[:1]):
-        end = (start + length) % 360.0
-        if abs((start2 - end + 180.0) % 360.0 - 180.0) > JOIN_TOL:
-            gap = (start2 - end) % 360.0
-            what = (f"a gap of {gap:g} deg" if gap < 180.0 else
-                    f"an overlap of {360.0 - gap:g} deg")
-            raise nxt.error("from", f"the phases must join round the turn: this one starts at "
-                                    f"{start2:g} deg, the one before ends at {end:g} ({what})")
-    total = sum(r[2] for r in raw)
-    if abs(total - 360.0) > 1e-6:
-        raise it.error("phases", f"the phases span {total:g} deg; they must cover the turn "
-                                 "exactly once (360 deg)")
+    check_turn(it, [r[:3] for r in raw])
     return tuple(OrganPhase(kind, start, length) for _, start, length, kind in raw)
