@@ -125,7 +125,8 @@ def handed(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, u_cos, u
     Newton's first iteration makes, without its cos and sin; the unit
     vectors are the solution), else Newton runs from its angles.  Returns
     ``newton``'s tuple (the angles NaN when taken as handed: not needed, the
-    next position is handed over too).  Clears the hand-over flag."""
+    next position is handed over too) and the angles Newton started from
+    (NaN when it did not run).  Clears the hand-over flag."""
     state[g, S_HANDED] = 0.0
     ca = state[g, S_CA]
     sa = state[g, S_SA]
@@ -137,9 +138,12 @@ def handed(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, u_cos, u
                                                     l35, l46, l57, ca, sa, cb, sb, cc, sc)
     det = j11 * j22 - j12 * j21
     if max(abs(f1) / (2.0 * l46), abs(f2) / (2.0 * l57)) <= tol * max(l46, l57):
-        return CONVERGED, math.nan, math.nan, 0, det, trig
-    return newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435,
-                  math.atan2(sa, ca), math.atan2(sb, cb), tol, maxiter, max_step)
+        return CONVERGED, math.nan, math.nan, 0, det, trig, math.nan, math.nan
+    a0 = math.atan2(sa, ca)
+    b0 = math.atan2(sb, cb)
+    outcome, a, b, iters, det, trig = newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46,
+                                             l57, u435, a0, b0, tol, maxiter, max_step)
+    return outcome, a, b, iters, det, trig, a0, b0
 
 
 @njit(**JIT)
@@ -235,11 +239,14 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
         if not (u_cos == u_cos and u_sin == u_sin):
             u_cos = math.cos(u435)
             u_sin = math.sin(u435)
-        outcome, a, b, iters, det, trig = handed(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35,
-                                                 l46, l57, u435, u_cos, u_sin, state, g,
-                                                 tols[T_NEWTON_TOL],
-                                                 int(tols[T_NEWTON_MAXITER]),
-                                                 tols[T_NEWTON_STEP])
+        outcome, a, b, iters, det, trig, from_a, from_b = handed(
+            p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, u_cos, u_sin, state, g,
+            tols[T_NEWTON_TOL], int(tols[T_NEWTON_MAXITER]), tols[T_NEWTON_STEP])
+        if from_a == from_a:
+            # Newton ran from the handed angles: its move is checked like any other
+            moved = True
+            a0 = from_a
+            b0 = from_b
     state[g, S_ITERS] = iters
     scale = 4.0 * l23 * l46 * l57 * max(l34, l35)
     if outcome != CONVERGED:
