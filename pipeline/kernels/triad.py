@@ -117,16 +117,13 @@ def newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b,
 
 
 @njit(**JIT)
-def handed(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, u_cos, u_sin, state, g,
-           tol, maxiter, max_step):
+def handed(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u_cos, u_sin, state, g, tol):
     """The solution handed over in state row ``g`` as unit vectors e(a), e(b)
-    (the lane path's, ``S_CA`` .. ``S_SB``), confirmed: where its closure
-    residual is within Newton's tolerance it is taken as it is (the test
-    Newton's first iteration makes, without its cos and sin; the unit
-    vectors are the solution), else Newton runs from its angles.  Returns
-    ``newton``'s tuple (the angles NaN when taken as handed: not needed, the
-    next position is handed over too) and the angles Newton started from
-    (NaN when it did not run).  Clears the hand-over flag."""
+    (the lane path's, ``S_CA`` .. ``S_SB``): (taken, det J, the cos/sin of
+    a, b and b + U435).  Taken where its closure residual is within Newton's
+    tolerance (the test Newton's first iteration makes, without its cos and
+    sin: the unit vectors are the solution); else the caller runs Newton
+    from its angles.  Clears the hand-over flag."""
     state[g, S_HANDED] = 0.0
     ca = state[g, S_CA]
     sa = state[g, S_SA]
@@ -136,14 +133,8 @@ def handed(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, u_cos, u
     sc = sb * u_cos + cb * u_sin
     f1, f2, j11, j12, j21, j22, trig = closure_unit(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34,
                                                     l35, l46, l57, ca, sa, cb, sb, cc, sc)
-    det = j11 * j22 - j12 * j21
-    if max(abs(f1) / (2.0 * l46), abs(f2) / (2.0 * l57)) <= tol * max(l46, l57):
-        return CONVERGED, math.nan, math.nan, 0, det, trig, math.nan, math.nan
-    a0 = math.atan2(sa, ca)
-    b0 = math.atan2(sb, cb)
-    outcome, a, b, iters, det, trig = newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46,
-                                             l57, u435, a0, b0, tol, maxiter, max_step)
-    return outcome, a, b, iters, det, trig, a0, b0
+    taken = max(abs(f1) / (2.0 * l46), abs(f2) / (2.0 * l57)) <= tol * max(l46, l57)
+    return taken, j11 * j22 - j12 * j21, trig
 
 
 @njit(**JIT)
@@ -216,7 +207,7 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
     the Newton iterations; or, flagged ``S_HANDED``, the solution at this
     position as unit vectors (``handed``).  Returns (status, margin).
     """
-    moved = state[g, S_HANDED] == 0.0      # (a hand-over holds for one solve only)
+    handed_over = state[g, S_HANDED] != 0.0     # (a hand-over holds for one solve only)
     if not (math.isfinite(u435) and l23 > 0.0 and l46 > 0.0 and l57 > 0.0):
         state[g, S_HANDED] = 0.0
         _nan_joints(pos, d1, d2, i3, i4, i5, 0)
@@ -230,23 +221,23 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
     p7y = pos[i7, 1]
     a0 = state[g, S_A]
     b0 = state[g, S_B]
-    if moved:
+    taken = False
+    if handed_over:
+        if not (u_cos == u_cos and u_sin == u_sin):
+            u_cos = math.cos(u435)
+            u_sin = math.sin(u435)
+        taken, det, trig = handed(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u_cos,
+                                  u_sin, state, g, tols[T_NEWTON_TOL])
+        if taken:   # the angles are not needed: the next position is handed over too
+            outcome, a, b, iters = CONVERGED, math.nan, math.nan, 0
+        else:       # Newton from the handed angles, its move checked like any other
+            a0 = math.atan2(state[g, S_SA], state[g, S_CA])
+            b0 = math.atan2(state[g, S_SB], state[g, S_CB])
+    if not taken:   # (one call site of newton: compile time)
         outcome, a, b, iters, det, trig = newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35,
                                                  l46, l57, u435, a0, b0, tols[T_NEWTON_TOL],
                                                  int(tols[T_NEWTON_MAXITER]),
                                                  tols[T_NEWTON_STEP])
-    else:
-        if not (u_cos == u_cos and u_sin == u_sin):
-            u_cos = math.cos(u435)
-            u_sin = math.sin(u435)
-        outcome, a, b, iters, det, trig, from_a, from_b = handed(
-            p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, u_cos, u_sin, state, g,
-            tols[T_NEWTON_TOL], int(tols[T_NEWTON_MAXITER]), tols[T_NEWTON_STEP])
-        if from_a == from_a:
-            # Newton ran from the handed angles: its move is checked like any other
-            moved = True
-            a0 = from_a
-            b0 = from_b
     state[g, S_ITERS] = iters
     scale = 4.0 * l23 * l46 * l57 * max(l34, l35)
     if outcome != CONVERGED:
@@ -259,7 +250,7 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
         return NEWTON_MAXITER, 0.0
     margin = abs(det) / scale
     state[g, S_MARGIN] = margin
-    status = _accept(state, g, a, b, a0, b0, det, margin, tols, moved)
+    status = _accept(state, g, a, b, a0, b0, det, margin, tols, not taken)
     ca, sa, cb, sb, cc, sc = _place(pos, i2, i3, i4, i5, l23, l34, l35, trig)
     if order < 1:
         return status, margin
