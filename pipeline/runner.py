@@ -148,6 +148,8 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
     from .kernels import config as kc
     from .results.scene_file import write_scene
     res = solve_scene(study)
+    # the constant-speed forces the dynamics cases are compared with (once, not per case)
+    constant = constant_forces(res) if res.motion_forces else None
     write_scene(res, out)
     pics = []
     if pictures:
@@ -178,7 +180,7 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
             if (res.motion_forces or {}).get(case.name):
                 from .views.dynamics_plots import motion_forces_figure
                 figures.append((lambda case=case: motion_forces_figure(
-                    case.name, res.motion_forces[case.name], constant_forces(res)),
+                    case.name, res.motion_forces[case.name], constant),
                     out.with_name(f"{out.stem}_{name}_forces.png")))
         if res.reduced is not None:
             from .views.dynamics_plots import reduced_figure
@@ -206,7 +208,7 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
         for k, v in case.summary_lines().items():
             summary[f"{case.name} {k}"] = v
         summary.update(motion_force_summary(case.name, (res.motion_forces or {}).get(case.name),
-                                            constant_forces(res)))
+                                            constant))
     if res.reduced is not None:
         summary.update(res.reduced.summary())
     if res.flywheel is not None:
@@ -245,8 +247,7 @@ def motion_force_summary(name, records, constant) -> dict:
         jn, r, t, phi, _ = peaks[j]
         line = f"{r:.1f} N at {jn}, t = {t:.4f} s, phi1 = {phi:.1f} deg ({where})"
         if constant is not None:
-            cp = dict((p[0], p) for p in constant.peaks())
-            cj = max(cp.values(), key=lambda p: p[1])
+            cj = max(constant.peaks(), key=lambda p: p[1])
             line += f"; constant speed: {cj[1]:.1f} N at {cj[0]}, phi1 = {cj[2]:g} deg"
         out[f"{name} peak_reaction"] = line
     mb, t, phi = rec.peak_M_bal()
