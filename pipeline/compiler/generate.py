@@ -130,7 +130,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
           "analogs, 2 acceleration analogs) and margins[g]; the centres of mass only\n"
           "``with_com``.  Returns the first non-OK status (later groups still run\n"
           "and give NaN); margins[N_GROUPS] is the index of the group that gave it.",
-          body))
+          body, jit="**JIT_INNER"))
 
     # ---------------------------------------------------------------- start
     triads = [e for e in ems if e.continued]
@@ -141,7 +141,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
     w(_fn("start(K, state)",
           "Start every class III group from its declared guess; returns the crank\n"
           "angle where the guesses apply (NaN without class III groups: closed form).",
-          body))
+          body, jit="**JIT_INNER"))
 
     w(_spaced(part("advance_newton" if n_triads else "advance_closed")))
     w(force_kernel(plan, n))

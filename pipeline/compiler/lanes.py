@@ -314,7 +314,7 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
             "    step_change = tols[T_STEP_CHANGE]",
             "    close = tols[T_CLOSE]"]
     src += ["    " + x for x in closing] + ["", ""]
-    src += ["@njit(**JIT)",
+    src += ["@njit(**JIT_INNER)",
             "def lanes_apply(phis, tols):",
             '    """Whether the lane path applies to this crank grid (at least 3 positions, steps',
             '    no longer than the careful walk\'s largest)."""',

@@ -241,15 +241,23 @@ def _cache_files(folder):
 
 def test_a_second_run_compiles_nothing(tmp_path):
     """Two processes run a study (mechanism A's scene: one of the cheaper ones to
-    compile) with one, empty, cache folder (the generated modules and numba's
-    code): the first compiles (numba's cache
+    compile) with one cache folder (the generated modules and numba's code)
+    that holds no generated module: the first compiles (numba's cache
     misses), the second loads every kernel from the cache (hits only, no miss)
-    and leaves the folder exactly as it was (no file written or rewritten)."""
+    and leaves the folder exactly as it was (no file written or rewritten).
+    The folder starts with a copy of whatever library kernels (pipeline.kernels)
+    this session has compiled so far, so that the test does not compile the
+    whole library once more (half a minute); the generated module is new."""
     import json
     import os
+    import shutil
     import subprocess
     import sys
     cache = tmp_path / "cache"
+    session = Path(os.environ["NUMBA_CACHE_DIR"])
+    for lib in session.glob("kernels_*"):           # numba's folder for pipeline/kernels
+        shutil.copytree(lib, cache / "numba" / lib.name,
+                        ignore=shutil.ignore_patterns("*.tmp*"))
     env = dict(os.environ, PIPELINE_CACHE_DIR=str(cache / "modules"),
                NUMBA_CACHE_DIR=str(cache / "numba"))
     runs = []

@@ -6,8 +6,8 @@ The text below the marker line is pasted into the generated module
 for linters and readers, the names the generated module gives it."""
 
 
-from .header import (math, np, njit, JIT, JIT_ALLOC, OK, BRANCH_JUMP, S_ITERS, S_MARGIN,
-                     N_STATE, closes, copy2, work, force_work, dwell_error, law_error,
+from .header import (math, np, njit, JIT, JIT_ALLOC, JIT_INNER, OK, BRANCH_JUMP, S_ITERS,
+                     S_MARGIN, N_STATE, closes, copy2, work, force_work, dwell_error, law_error,
                      relative_angle, M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, M_PEAK_R,
                      M_PEAK_JOINT, M_PEAK_PHI, M_PEAK_MBAL, M_FAIL_PHI, M_NEWTON_MEAN,
                      M_FORCES_DONE, M_FAIL_GROUP, M_PEAK_ACC, M_PEAK_EPS, M_MIN_TRANS, M_LAW_RMS,
@@ -25,7 +25,7 @@ from ._mechanism import BODY_COM, BODY_TURN, BODY_MASS_OFF, CRANK_PIVOT
 from .watch import (locate, watch, watch_work)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
-@njit(**JIT)
+@njit(**JIT_INNER)
 def walk_angle(phis, k, phi_close):
     """Crank angle of step k of a watched walk: phis, then (a full revolution)
     phi_close and two more positions past it, so that the watch's windows
@@ -34,14 +34,14 @@ def walk_angle(phis, k, phi_close):
     return phis[k] if k < n else phi_close + (phis[k - n] - phis[0])
 
 
-@njit(**JIT)
+@njit(**JIT_INNER)
 def walk_steps(phis, phi_close):
     """Steps of a watched walk (see walk_angle)."""
     n = phis.shape[0]
     return n + 3 if (math.isfinite(phi_close) and n >= 3) else n
 
 
-@njit(**JIT)
+@njit(**JIT_INNER)
 def walk_start(K, phi0, state):
     """Crank angle where a walk to ``phi0`` starts."""
     s = start(K, state)
@@ -203,7 +203,7 @@ def evaluate_careful(par, phis, phi_close, tols, settings, loads, theta, trail, 
                   np.empty(phis.shape[0]), out)
 
 
-@njit(**JIT)
+@njit(**JIT)   # the GPU kernel calls it (under numba's simulator: from Python)
 def settle(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qmax, qmin,
            err, start_k, full, margin, wk, fw, ww, corr, out):
     """Metrics of one candidate into ``out`` (N_METRICS); returns its status.

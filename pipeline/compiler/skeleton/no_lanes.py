@@ -6,7 +6,7 @@ The text below the marker line is pasted into the generated module
 (``pipeline.compiler.generate``); the imports above it declare, for linters and
 readers, the names the generated module gives it."""
 
-from .header import (njit, JIT)
+from .header import (njit, JIT, JIT_INNER)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 @njit(**JIT)
@@ -20,6 +20,6 @@ def block_walk(S, theta, cph_tab, sph_tab, phis, tols, settings):
     return
 
 
-@njit(**JIT)
+@njit(**JIT_INNER)
 def lanes_apply(phis, tols):
     return False

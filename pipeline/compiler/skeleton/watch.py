@@ -7,10 +7,10 @@ The text below the marker line is pasted into the generated module
 declare, for linters and readers, the names the generated module gives it."""
 
 
-from .header import (math, np, njit, JIT, JIT_ALLOC, OK, SINGULAR, N_STATE, N_TOLS, T_MIN_STEP,
-                     T_NEWTON_TOL, T_WATCH, T_TOUCH, T_LOCATE, copy2, restore, FOLD_BACK,
-                     LOCATE_MIN_STEP, LOCATE_NEWTON_TOL, RESOLVED, SUB, cubic_bound, fold_distance,
-                     third_difference, uniform_hit, window_score, window_vertex)
+from .header import (math, np, njit, JIT_ALLOC, JIT_INNER, OK, SINGULAR, N_STATE, N_TOLS,
+                     T_MIN_STEP, T_NEWTON_TOL, T_WATCH, T_TOUCH, T_LOCATE, copy2, restore,
+                     FOLD_BACK, LOCATE_MIN_STEP, LOCATE_NEWTON_TOL, RESOLVED, SUB, cubic_bound,
+                     fold_distance, third_difference, uniform_hit, window_score, window_vertex)
 from ._mechanism import (N_GROUPS, N_TRIADS, N_WATCH, WATCH_G, advance)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
@@ -28,7 +28,7 @@ def watch_work():
             np.empty(3), np.empty(N_TOLS))
 
 
-@njit(**JIT)
+@njit(**JIT_INNER)
 def watched_values(margins, vals, col):
     """vals[w, col] = margin^2 of every watched group (D of pipeline.kernels.watch)."""
     for w in range(N_WATCH):
@@ -36,7 +36,7 @@ def watched_values(margins, vals, col):
         vals[w, col] = m * m
 
 
-@njit(**JIT)
+@njit(**JIT_INNER)
 def watched_min(margins):
     """The smallest margin^2 of the watched groups."""
     v = math.inf
@@ -45,7 +45,7 @@ def watched_min(margins):
     return v
 
 
-@njit(**JIT)
+@njit(**JIT_INNER)
 def worst_window(phis, vals, j0, j1, n):
     """The smallest window_score of the windows centred at j0 .. j1 - 1 of the n
     positions (phis[j], vals[:, j]), the cubic term from four positions; and
@@ -72,7 +72,7 @@ def worst_window(phis, vals, j0, j1, n):
     return best, best_j, best_w, best_f3
 
 
-@njit(**JIT)
+@njit(**JIT_INNER)
 def locate(K, good, bad, st_bad, g_bad, good_state, tols, state, pos, d1, d2, margins,
            ww):
     """Bisect between ``good`` (assembled: ``good_state`` is its solution) and
@@ -160,7 +160,7 @@ def locate(K, good, bad, st_bad, g_bad, good_state, tols, state, pos, d1, d2, ma
     return st_bad
 
 
-@njit(**JIT)
+@njit(**JIT_INNER)
 def refine(K, lo, hi, tols, state, pos, d1, d2, margins, ww):
     """The walk from ``lo`` (``state``: its solution) to ``hi`` looked at closely:
     SUB sub-positions under the same certificate, zooming in on the worst
@@ -252,7 +252,7 @@ def refine(K, lo, hi, tols, state, pos, d1, d2, margins, ww):
     return OK
 
 
-@njit(**JIT)
+@njit(**JIT_INNER)
 def watch(K, k, phi, tols, state, pos, d1, d2, margins, ww):
     """Position ``k`` of a walk is solved at ``phi`` (OK): into the watch's
     history (a ring of the last four positions), and the window it completes
