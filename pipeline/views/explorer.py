@@ -217,7 +217,8 @@ def explorer_html(path, data, ana, drawings=None) -> str:
     return render(
         "explorer.html.j2", columns=cols, objectives=objectives,
         x=data.objectives[0], y=data.objectives[1], n_points=len(payload["ids"]),
-        n_designs=len(payload["designs"]),
+        n_designs=len(payload["designs"]), has_knee=payload["knee"] >= 0,
+        has_reference=payload["reference"] is not None,
         feasible_note=(f" ({n['feasible_shown']:,} of {n['feasible']:,}, a seeded sample with "
                        "all of front 1)" if sampled else f" ({n['feasible']:,})"),
         all_note=(f" (with {n['infeasible_shown']:,} of the {n['infeasible']:,} infeasible "

@@ -488,7 +488,8 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
     """In a real headless Chromium (WebGL through SwiftShader), with real mouse and
     keyboard input: hovering a front-1 point shows Plotly's label with its number; a
     click shows that design's drawing, motion and reactions (drawn by plotly.js from
-    the embedded data) and the command that draws it; a drag zooms, the wheel zooms,
+    the embedded data) and the command that draws it, and so does the reference
+    design's button; a drag zooms, the wheel zooms,
     a double-click zooms back out; a box selection fills the table and the parallel
     coordinates; an objective's upper bound hides designs; a header click sorts a
     table.  No script error, no console error, nothing fetched but the page."""
@@ -543,6 +544,17 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
                         return d.data ? d.data.length : 0; }),
                     svg: panel.querySelectorAll('.ex-drawings .main-svg').length};
         })()""")
+
+        # the reference design, opened by its button: drawn too, named 'reference'
+        x, y = await page.centre("#ex-show-reference")
+        await page.click(x, y)
+        await page.until("document.getElementById('design-panel').dataset.drawn === 'true' && "
+                         "document.getElementById('design-panel').dataset.candidate === "
+                         "'reference'", "the reference design's drawing", 20)
+        seen["reference"] = await page.js(
+            "document.querySelector('#design-panel h3').textContent + '|' + "
+            "document.querySelector('#design-panel .ex-command').textContent + '|' + "
+            "document.querySelectorAll('#design-panel .ex-drawings .main-svg').length")
 
         # zoom: a drag in the plot narrows both axes; the wheel narrows x again;
         # a double-click gives the whole range back
@@ -600,6 +612,20 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
                                                                    for v in values))
         seen["count_text"] = await page.js("document.getElementById('ex-count').textContent")
 
+        # the colour and the axes take any column (a select's change, as a user's pick
+        # fires it): colour by a design variable, then a log x axis by its check box
+        seen["colour"] = await page.js("""new Promise(function (done) {
+            var gd = document.getElementById('ex-plot'), c = document.getElementById('ex-c');
+            c.value = 'L12';
+            c.dispatchEvent(new Event('change'));
+            var lg = document.getElementById('ex-xlog');
+            lg.click();
+            setTimeout(function () {
+                done([Array.isArray(gd._fullData[1].marker.color), gd._fullLayout.xaxis.type,
+                      !!gd.querySelector('.colorbar')]);
+            }, 300);
+        })""")
+
         # and the tables still sort
         seen["sorted"] = await page.js("""(function () {
             var t = document.querySelector('table.sortable'), th = t.tHead.rows[0].cells;
@@ -628,6 +654,9 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
                                f"--candidate {target}", panel["command"]
     # mechanism (links at 12 positions, paths, points), motion, reactions: drawn by plotly.js
     assert panel["plots"] == 3 and panel["svg"] >= 3 and min(panel["traces"]) >= 3, panel
+    head, command, svg = seen["reference"].split("|")
+    assert head.startswith("Reference design") and int(svg) >= 3, seen["reference"]
+    assert command.endswith(" --candidate reference"), command
     a, b, c, d = seen["ranges"]
     width = lambda r: abs(r[1] - r[0])                              # noqa: E731
     assert width(b["x"]) < 0.8 * width(a["x"]) and width(b["y"]) < 0.8 * width(a["y"]), (a, b)
@@ -640,6 +669,7 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
     shown, expected = seen["filtered"]
     assert 0 < shown == expected < seen["count0"], (seen["filtered"], seen["count0"])
     assert seen["count_text"].startswith(f"{shown:,} of "), seen["count_text"]
+    assert seen["colour"] == [True, "log", True], seen["colour"]
     assert seen["sorted"]
     bad = [e for e in events if e.get("method") == "Runtime.exceptionThrown" or (
         e.get("method") == "Runtime.consoleAPICalled" and e["params"].get("type") == "error")

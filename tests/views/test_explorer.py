@@ -45,7 +45,8 @@ def test_json_inside_a_script_never_closes_it():
 def test_templates_escape_the_study_text():
     col = SimpleNamespace(key="x", label="<b>L12</b>", unit="mm")
     html = render("explorer.html.j2", columns=[col], objectives=[], x="x", y="x", n_points=1,
-                  n_designs=0, feasible_note="", all_note="", data=script_json({}))
+                  n_designs=0, feasible_note="", all_note="", data=script_json({}),
+                  has_knee=False, has_reference=True)
     assert "<b>L12</b>" not in html and "&lt;b&gt;L12&lt;/b&gt;" in html
 
 

@@ -100,17 +100,19 @@
                 colorbar: {title: {text: plain(label(col[cs])), side: 'right'}, thickness: 14}};
     }
     traceRows = [grey, feas, front, knee, ref, shown];
+    // all WebGL: plotly.js draws its WebGL canvas over the SVG of the plot, so the
+    // front, the knee and the reference design are WebGL traces too, drawn last (on top)
     var data = [
       trace(TRACES[0], grey, xs, ys, {type: 'scattergl', marker: {size: 3, color: '#bbbbbb',
                                                                      opacity: 0.5}}),
       trace(TRACES[1], feas, xs, ys, {type: 'scattergl', marker: marker}),
-      trace(TRACES[2], front, xs, ys, {type: 'scatter', marker: {size: 8, color: '#c22222',
+      trace(TRACES[2], front, xs, ys, {type: 'scattergl', marker: {size: 8, color: '#c22222',
                                        line: {color: '#000', width: 0.6}}}),
-      trace(TRACES[3], knee, xs, ys, {type: 'scatter', marker: {size: 16, symbol: 'diamond-open',
+      trace(TRACES[3], knee, xs, ys, {type: 'scattergl', marker: {size: 16, symbol: 'diamond-open',
                                       color: '#000', line: {width: 2}}}),
-      trace(TRACES[4], ref, xs, ys, {type: 'scatter', marker: {size: 18, symbol: 'star',
+      trace(TRACES[4], ref, xs, ys, {type: 'scattergl', marker: {size: 18, symbol: 'star',
                                      color: 'gold', line: {color: '#000', width: 1}}}),
-      trace(TRACES[5], shown, xs, ys, {type: 'scatter', showlegend: false,
+      trace(TRACES[5], shown, xs, ys, {type: 'scattergl', showlegend: false,
                                        marker: {size: 20, symbol: 'circle-open', color: '#000',
                                                 line: {width: 2.5}}})
     ];
@@ -320,6 +322,9 @@
   ui.y.addEventListener('change', function () { ui.ylog.checked = !!col[ui.y.value].log; update(); });
   [ui.c, ui.xlog, ui.ylog, ui.feas].forEach(function (e) { e.addEventListener('change', update); });
   bounds.forEach(function (e) { e.addEventListener('input', update); });
+  var knee = $('ex-show-knee'), reference = $('ex-show-reference');
+  if (knee) { knee.addEventListener('click', function () { show(D.knee); }); }
+  if (reference) { reference.addEventListener('click', function () { show('reference'); }); }
   update().then(function () {
     plot.on('plotly_click', function (ev) {
       var p = ev && ev.points && ev.points[0];
@@ -329,6 +334,11 @@
     });
     plot.on('plotly_selected', function (ev) { showSelection(rowsOf(ev && ev.points)); });
     plot.on('plotly_deselect', function () { showSelection([]); });
+    // the page's width can change without the window's (a scroll bar appears as the
+    // pictures decode): the plot follows its box, not only the window
+    if (window.ResizeObserver) {
+      new ResizeObserver(function () { Plotly.Plots.resize(plot); }).observe(plot);
+    }
     document.body.dataset.explorer = 'ready';
   });
 })();
