@@ -280,9 +280,10 @@ def build_parser():
                     help="report file (default: next to the results file, <name>_report.html)")
     rp.add_argument("--top", type=int, default=20, metavar="N",
                     help="rows of the front-1 table (default 20)")
-    rp.add_argument("--drawings", type=int, default=12, metavar="N",
-                    help="front-1 designs whose drawing and curves the explorer embeds "
-                         "(default 12; about a second each)")
+    rp.add_argument("--drawings", type=int, default=None, metavar="N",
+                    help="front-1 designs whose cycle (drawing, motion, reactions) the "
+                         "explorer embeds, with the knee and the reference design (default: "
+                         "all of front 1 up to 50, about 40 ms each; 0: none)")
     rp.set_defaults(func=cmd_report)
 
     tl = sub.add_parser("tolerance", parents=[common], help=(

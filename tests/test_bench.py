@@ -87,3 +87,19 @@ def test_benchmark_smoke_modes_run(name, written, tmp_path, monkeypatch):
         assert res["builds"] == 256 and res["build_rate"] > 0 and res["sweep_rate"] > 0
     else:
         assert res["rows"] and all(n > 0 for n in res["fronts"].values())
+
+
+def test_report_benchmark_smoke_mode_runs(synthesis_sweep, tmp_path, monkeypatch):
+    """bench_report at tiny sizes, on a copy of the session's sweep (no sweep of its
+    own): the explorer and the whole report timed, the page measured."""
+    import importlib
+
+    from support.sweep_helpers import copy_of
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    mod = importlib.import_module("bench_report")
+    src = copy_of(synthesis_sweep, tmp_path / "sweep")
+    res = mod.run(smoke=True, out=tmp_path, echo=lambda *a: None, source=src)
+    text = (tmp_path / "report.md").read_text()
+    assert text.startswith("#") and "explorer, steady state" in text
+    assert res["explorer_s"] > 0 and res["report_s"] > 0 and res["designs"] >= 2
+    assert res["page_bytes"] > 4_000_000        # plotly.js is inline: one offline file

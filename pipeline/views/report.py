@@ -1,11 +1,15 @@
 """One self-contained HTML page about a sweep (`pipeline report`): the Pareto
-plot, the parameter importances, the representative designs drawn, front 1,
-the counts by status and the run's provenance.
+plot, the explorer of every feasible design (views/explorer.py), the parameter
+importances, the representative designs drawn, front 1, the counts by status
+and the run's provenance.
 
-Everything is inline: the pictures are PNG data URIs, the style sheet is in the
-page, and a few lines of script only record (in ``data-*`` attributes of
-<body>) whether every picture decoded, so that a headless browser can check
-the page.  Nothing is fetched from anywhere.
+The page is laid out by Jinja2 templates (views/templates/: the page's
+skeleton, the explorer's section, the style sheet and the scripts; page.py).
+Everything is inline: the pictures are PNG data URIs, the style sheet and the
+scripts (plotly.js among them) are in the page, and a few lines of script
+record (in ``data-*`` attributes of <body>) whether every picture decoded and
+whether a script failed, so that a headless browser can check the page.
+Nothing is fetched from anywhere.
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ import datetime as _dt
 import html
 import logging
 import math
+import time
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +29,8 @@ from ..analysis.fronts import analyze, has_analysis, read_analysis, read_sweep
 from ..analysis.candidate import rerun_candidate
 from ..base.files import write_text
 from ..analysis.ranking import design_table, ranking
-from .report_assets import CSS, SCRIPT
+from .explorer import EXPLORER_DRAWINGS, explorer_html
+from .page import markup, plotly_js, render
 from .report_figures import (_letters, _png, design_figure, importance_figure, pareto_figure,
                              search_figure)
 from ..results.storage import attr_text, open_results
@@ -107,80 +113,6 @@ def motion_html(path, ana) -> str:
             'animation.</p><div class="cards motion">'
             f'<img class="animation" src="{uri}" alt="animation of {html.escape(run.label)}">'
             f'{_img(cyc, "cyclogram of " + run.label)}</div>')
-
-
-EXPLORER_POINTS = 3000      # feasible designs in the interactive plot (front 1 always)
-EXPLORER_DRAWINGS = 12      # front-1 designs whose drawing and curves are embedded
-
-
-def explorer_html(path, data, ana, n_drawings=EXPLORER_DRAWINGS) -> str:
-    """The interactive front: an SVG of the feasible designs (front 1 in red)
-    over the first two objectives; hover shows a design's numbers, a click its
-    variables, metrics and (for the first ``n_drawings`` front-1 designs) its
-    drawing and curves.  Plain SVG and a few lines of script: one offline file."""
-    import json
-
-    from .show import candidate_figure
-    feas = np.nonzero(data.feasible & np.isfinite(data.F).all(axis=1))[0]
-    if data.F.shape[1] < 2:
-        return '<p class="note">The explorer plots two objectives; this study has one.</p>'
-    if feas.size == 0:
-        return '<p class="note">No feasible design to explore.</p>'
-    front1 = set(int(i) for i in ana.front1)
-    rest = np.array([i for i in feas if int(i) not in front1], np.int64)
-    rng = np.random.default_rng(data.seed)
-    if rest.size > EXPLORER_POINTS:
-        rest = np.sort(rng.choice(rest, EXPLORER_POINTS, replace=False))
-    idx = np.concatenate([rest, np.array(sorted(front1), np.int64)])
-    F = data.F[idx, :2]
-    lo, hi = F.min(axis=0), F.max(axis=0)
-    span = np.where(hi > lo, hi - lo, 1.0)
-    W, H, M = 620, 420, 56
-    X = M + (F[:, 0] - lo[0]) / span[0] * (W - 1.5 * M)
-    Y = H - M + (F[:, 1] - lo[1]) / span[1] * -(H - 1.5 * M)
-    points, circles = [], []
-    for k, (i, x, y) in enumerate(zip(idx, X, Y)):
-        f1 = int(i) in front1
-        points.append({"i": int(i), "f": int(ana.rank[i]), "m": [float(v) for v in data.F[i]],
-                       "v": [float(v) for v in data.params[i]]})
-        circles.append(f'<circle class="pt{" f1" if f1 else ""}" data-k="{k}" '
-                       f'cx="{x:.1f}" cy="{y:.1f}" r="{4.5 if f1 else 2.6}"/>')
-    ticks = []
-    for t in np.linspace(0.0, 1.0, 5):
-        x = M + t * (W - 1.5 * M)
-        y = H - M - t * (H - 1.5 * M)
-        ticks.append(f'<text x="{x:.0f}" y="{H - M + 16}" font-size="10" text-anchor="middle">'
-                     f"{lo[0] + t * span[0]:.4g}</text>")
-        ticks.append(f'<text x="{M - 6}" y="{y + 3:.0f}" font-size="10" text-anchor="end">'
-                     f"{lo[1] + t * span[1]:.4g}</text>")
-    o, u = data.objectives, data.objective_units
-    svg = (f'<svg width="{W}" height="{H}" viewBox="0 0 {W} {H}" role="img">'
-           f'<line x1="{M}" y1="{H - M}" x2="{W - M / 2}" y2="{H - M}" stroke="#444"/>'
-           f'<line x1="{M}" y1="{H - M}" x2="{M}" y2="{M / 2}" stroke="#444"/>'
-           + "".join(ticks) +
-           f'<text x="{W / 2:.0f}" y="{H - 14}" font-size="12" text-anchor="middle">'
-           f"{html.escape(o[0])} [{html.escape(u[0])}]</text>"
-           f'<text x="14" y="{H / 2:.0f}" font-size="12" text-anchor="middle" '
-           f'transform="rotate(-90 14 {H / 2:.0f})">{html.escape(o[1])} '
-           f"[{html.escape(u[1])}]</text>" + "".join(circles) + "</svg>")
-    drawings = {}
-    for i in list(ana.front1[np.argsort(data.F[ana.front1, 0])])[:n_drawings]:
-        try:
-            fig = candidate_figure(rerun_candidate(path, int(i)))
-        except Exception as e:   # a design the scene path cannot redraw: say so, go on
-            log.warning("report: candidate %d not drawn (%s)", int(i), e)
-            continue
-        drawings[str(int(i))] = _png(fig, dpi=60)
-    payload = {"points": points, "objectives": list(o), "objective_units": list(u),
-               "names": list(data.names), "units": list(data.units),
-               "file": Path(path).name, "drawings": drawings}
-    # inside <script>: no character that the HTML parser reads as markup
-    text = (json.dumps(payload).replace("&", "\\u0026").replace("<", "\\u003c")
-            .replace(">", "\\u003e"))
-    return (f'<div id="explorer">{svg}<div id="design-panel"><p class="note">Hover a point '
-            "for its objectives; click it for the design (front-1 designs with their drawing "
-            "and curves).</p></div></div><div id=\"tip\"></div>"
-            f'<script type="application/json" id="explorer-data">{text}</script>')
 
 
 # ----------------------------------------------------------------- page parts
@@ -298,8 +230,25 @@ def _metric_row(f, i, names):
     return out
 
 
-def build_html(path, top=20, drawings=EXPLORER_DRAWINGS) -> str:
-    """The report page of an analyzed sweep file."""
+class _Progress:
+    """A plain line per part of the report as it is built (logging: the CLI's
+    -q silences it), with the seconds the part took."""
+
+    def __init__(self):
+        self.t = time.perf_counter()
+
+    def __call__(self, what):
+        now = time.perf_counter()
+        log.info("report: %s (%.1f s)", what, now - self.t)
+        self.t = now
+
+
+def build_html(path, top=20, drawings=None) -> str:
+    """The report page of an analyzed sweep file.  ``drawings``: the front-1
+    designs whose cycle the explorer embeds (None: all of front 1 up to
+    EXPLORER_DRAWINGS; the knee and the reference design come with them)."""
+    drawings = EXPLORER_DRAWINGS if drawings is None else drawings
+    step = _Progress()
     data = read_sweep(path)
     with open_results(path, "sweep") as f:
         ana = read_analysis(f)
@@ -352,13 +301,17 @@ def build_html(path, top=20, drawings=EXPLORER_DRAWINGS) -> str:
         parts.append('<p class="note"><b>The sweep is unfinished</b>: only the evaluated '
                      "candidates are ranked.</p>")
 
+    step(f"read {data.n:,} candidates")
     parts += ["<h2>Pareto fronts</h2>",
               '<p class="note">Every feasible candidate coloured by its front (front 1 in red, '
               "joined by a line); grey: candidates that violate a constraint but have both "
               "objectives; diamond: the knee of front 1; star: the study's reference design; "
               "letters: the representative designs below.</p>",
-              _img(pareto_figure(data, ana), "Pareto plot"),
-              "<h3>Explore the designs</h3>", explorer_html(path, data, ana, drawings)]
+              _img(pareto_figure(data, ana), "Pareto plot")]
+    step("Pareto plot")
+    explorer = explorer_html(path, data, ana, drawings)
+    parts += ["<h3>Explore the designs</h3>", explorer]
+    step("explorer")
 
     parts += ["<h2>What drives each objective</h2>",
               '<p class="note">A gradient-boosted tree model of each objective on the design '
@@ -366,6 +319,7 @@ def build_html(path, top=20, drawings=EXPLORER_DRAWINGS) -> str:
               "permutation importance = how much the held-out R<sup>2</sup> drops when one "
               "variable is shuffled (mean &plusmn; std over the repeats).</p>",
               _img(importance_figure(data, ana), "parameter importances")]
+    step("importances")
 
     parts.append("<h2>Representative designs</h2>")
     parts.append('<p class="note">Front-1 members nearest the centroids of a k-means '
@@ -385,12 +339,14 @@ def build_html(path, top=20, drawings=EXPLORER_DRAWINGS) -> str:
     parts.append('<div class="cards">' + "".join(cards) + "</div>" if cards else
                  '<p class="note">No feasible design: nothing to draw.</p>')
 
+    step(f"{len(cards)} representative designs drawn")
     parts += ["<h2>How the designs hold up when made</h2>", tolerance_html(path, ana, data)]
-
+    step("tolerances")
     parts += ["<h2>Against the reference design</h2>",
               comparison_section_html(path, ana, data)]
-
+    step("comparison with the reference design")
     parts += ["<h2>A design in motion</h2>", motion_html(path, ana)]
+    step("animation")
 
     parts.append("<h2>Front 1</h2>")
     more = f" (first {len(front)} of {ana.front1.size})" if ana.front1.size > len(front) else ""
@@ -440,11 +396,12 @@ def build_html(path, top=20, drawings=EXPLORER_DRAWINGS) -> str:
     parts.append("<p>The study, as stored verbatim in the results file:</p>")
     parts.append(f"<pre>{html.escape(str(a.get('study_toml', '')))}</pre>")
 
-    return ("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-            "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
-            f"<title>{html.escape(str(title))}: sweep report</title>\n"
-            f"<style>{CSS}</style>\n</head>\n<body>\n" + "\n".join(parts)
-            + f"\n<script>{SCRIPT}</script>\n</body>\n</html>\n")
+    # the parts are HTML written above from escaped pieces; the explorer's section
+    # comes from its own template, its script and plotly.js only when it is there
+    page = render("report.html.j2", title=str(title), parts=[markup(p) for p in parts],
+                  plotly=plotly_js() if 'id="explorer-data"' in explorer else None)
+    step("page")
+    return page
 
 
 def _study_candidates(text):
@@ -461,13 +418,14 @@ def default_report_output(path) -> Path:
     return path.with_name(f"{path.stem}_report.html")
 
 
-def write_report(path, out=None, top=20, drawings=EXPLORER_DRAWINGS) -> dict:
+def write_report(path, out=None, top=20, drawings=None) -> dict:
     """Write the HTML report of a sweep file (running ``analyze`` first if the
     file has no analysis); returns a summary.  ``drawings``: front-1 designs
-    whose drawing the explorer embeds (about a second each)."""
+    whose cycle the explorer embeds (None: all of front 1 up to
+    EXPLORER_DRAWINGS; 0: none, nor the knee's and the reference design's)."""
     if top < 1:
         raise ValueError(f"--top must be at least 1, got {top}")
-    if drawings < 0:
+    if drawings is not None and drawings < 0:
         raise ValueError(f"--drawings must be at least 0, got {drawings}")
     with open_results(path, "sweep") as f:
         analyzed = has_analysis(f)

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from support.html_page import markup_only
 from support.naive_pareto import brute_force_rank, dominates_ref
 from pipeline.analysis.fronts import analyze
 from pipeline.views.browse import rerun_candidate
@@ -308,6 +309,11 @@ def test_bad_candidate_ids_exit_2(sweep_file, capsys):
 
 
 # ---------------------------------------------------------------- the report
+# WebGL (the explorer's scattergl and parcoords) without a GPU: SwiftShader, which
+# headless Chromium takes only when asked (its automatic fallback is deprecated)
+WEBGL = ["--disable-gpu", "--enable-unsafe-swiftshader"]
+
+
 def chromium():
     for name in ("/usr/bin/chromium", "chromium", "chromium-browser", "google-chrome"):
         path = shutil.which(name)
@@ -323,8 +329,10 @@ def test_report_is_self_contained(cli_run):
         assert f["analysis"].attrs["complete"]
     page = (cli_run["dir"] / "report.html").read_text()
     assert page.startswith("<!DOCTYPE html>")
-    assert not re.search(r"""(src|href)\s*=\s*["'](?!data:|#)""", page), "external resource"
-    assert "<link" not in page and "@import" not in page
+    tags = markup_only(page)     # the scripts' text aside (plotly.js names addresses)
+    assert not re.search(r"""(src|href)\s*=\s*["'](?!data:|#)""", tags), "external resource"
+    assert "<link" not in tags and "@import" not in page
+    assert not re.search(r"<script[^>]*\bsrc", tags)
     assert page.count('src="data:image/png;base64,') >= 4
     for words in ("Pareto fronts", "held-out", "Representative designs", "Front 1",
                   "Candidates by status", "Provenance", "[sweep]", "20261121", "sobol"):
@@ -336,7 +344,7 @@ def test_report_is_self_contained(cli_run):
 def test_report_renders_in_chromium(cli_run, tmp_path):
     exe = chromium()
     html_path = cli_run["dir"] / "report.html"
-    flags = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    flags = ["--headless", "--no-sandbox", *WEBGL, "--disable-quic", "--no-first-run",
              "--disable-background-networking", "--disable-component-update", "--disable-sync",
              f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=5000"]
     url = html_path.resolve().as_uri()
@@ -351,6 +359,7 @@ def test_report_renders_in_chromium(cli_run, tmp_path):
     total = int(re.search(r'data-images-total="(\d+)"', tag).group(1))
     assert total >= 4 and f'data-images-ok="{total}"' in tag
     assert "data-js-errors" not in tag
+    assert 'data-explorer="ready"' in tag, tag          # plotly.js drew the explorer
     shot = tmp_path / "report.png"
     r = subprocess.run([exe, *flags, "--window-size=1280,3000", f"--screenshot={shot}", url],
                        capture_output=True, text=True, timeout=120, env=env)
@@ -359,14 +368,11 @@ def test_report_renders_in_chromium(cli_run, tmp_path):
 
 def _devtools(exe, url, tmp_path):
     """A headless Chromium showing ``url``, driven over the DevTools protocol
-    (its own WebSocket: no extra driver).  Yields (call, events)."""
-    import asyncio
+    (its own WebSocket: no extra driver).  Returns (process, page WebSocket URL)."""
     import json as _json
     import urllib.request
 
-    from tornado.websocket import websocket_connect
-
-    flags = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+    flags = ["--headless", "--no-sandbox", *WEBGL, "--no-first-run",
              "--disable-background-networking", "--disable-component-update", "--disable-sync",
              f"--user-data-dir={tmp_path / 'cdp-profile'}", "--remote-debugging-port=0",
              "--window-size=1280,1800", url]
@@ -385,65 +391,243 @@ def _devtools(exe, url, tmp_path):
     return proc, ws_url
 
 
-def test_report_click_on_a_front_point_shows_that_design(cli_run, tmp_path):
-    """In a real headless Chromium: the page loads without console errors; a
-    mouse click on a front-1 point of the explorer shows that design; a header
-    click sorts a table."""
+class _Page:
+    """One page over the DevTools protocol: ``call`` a method, evaluate ``js``,
+    send real mouse and keyboard input; every event is kept in ``events``."""
+
+    def __init__(self, ws):
+        self.ws, self.seq, self.events = ws, 0, []
+
+    async def call(self, method, **params):
+        import json as _json
+        self.seq += 1
+        self.ws.write_message(_json.dumps({"id": self.seq, "method": method, "params": params}))
+        while True:
+            msg = _json.loads(await self.ws.read_message())
+            if msg.get("id") == self.seq:
+                assert "error" not in msg, (method, msg["error"])
+                return msg.get("result", {})
+            self.events.append(msg)
+
+    async def js(self, expr):
+        r = await self.call("Runtime.evaluate", expression=expr, returnByValue=True,
+                            awaitPromise=True)
+        assert "exceptionDetails" not in r, r["exceptionDetails"]
+        return r["result"].get("value")
+
+    async def until(self, expr, what, seconds=60):
+        import asyncio
+        for _ in range(int(seconds * 10)):
+            if await self.js(expr):
+                return
+            await asyncio.sleep(0.1)
+        raise AssertionError(f"{what} within {seconds} s")
+
+    async def mouse(self, kind, x, y, **kw):
+        await self.call("Input.dispatchMouseEvent", type=kind, x=x, y=y, **kw)
+
+    async def click(self, x, y, count=1):
+        for k in range(1, count + 1):
+            await self.mouse("mousePressed", x, y, button="left", buttons=1, clickCount=k)
+            await self.mouse("mouseReleased", x, y, button="left", buttons=0, clickCount=k)
+
+    async def drag(self, x0, y0, x1, y1, steps=8):
+        await self.mouse("mouseMoved", x0, y0)
+        await self.mouse("mousePressed", x0, y0, button="left", buttons=1, clickCount=1)
+        for k in range(1, steps + 1):
+            await self.mouse("mouseMoved", x0 + (x1 - x0) * k / steps,
+                             y0 + (y1 - y0) * k / steps, button="left", buttons=1)
+        await self.mouse("mouseReleased", x1, y1, button="left", buttons=0, clickCount=1)
+
+    async def centre(self, selector):
+        """Scroll ``selector`` into view; its centre in the viewport."""
+        r = await self.js(f"""(function () {{
+            var e = document.querySelector({selector!r});
+            e.scrollIntoView({{block: 'center'}});
+            var r = e.getBoundingClientRect();
+            return [r.left + r.width / 2, r.top + r.height / 2];
+        }})()""")
+        return r[0], r[1]
+
+
+# where a design of the explorer's plot is, in viewport pixels: trace ``t``'s point ``k``
+_POINT = """(function (t, k) {
+    var gd = document.getElementById('ex-plot'), fl = gd._fullLayout, r = gd.getBoundingClientRect();
+    var tr = gd._fullData[t], xa = fl.xaxis, ya = fl.yaxis;
+    return {x: r.left + xa._offset + xa.l2p(xa.d2l(tr.x[k])),
+            y: r.top + ya._offset + ya.l2p(ya.d2l(tr.y[k])), id: tr.text[k]};
+})"""
+# the front-1 design (trace 2) farthest, in pixels, from every other design drawn:
+# the one a hover must name (front 1 can be crowded)
+_ISOLATED = """(function () {
+    var gd = document.getElementById('ex-plot'), fl = gd._fullLayout, xa = fl.xaxis, ya = fl.yaxis;
+    function px(t, k) { return [xa.l2p(xa.d2l(t.x[k])), ya.l2p(ya.d2l(t.y[k]))]; }
+    var front = gd._fullData[2], best = -1, far = -1;
+    for (var k = 0; k < front.x.length; k++) {
+        var p = px(front, k), near = Infinity;
+        [0, 1, 2].forEach(function (t) {
+            var tr = gd._fullData[t];
+            for (var j = 0; j < tr.x.length; j++) {
+                if (tr.x[j] === null || tr.y[j] === null || (t === 2 && j === k)) continue;
+                var q = px(tr, j);
+                near = Math.min(near, Math.hypot(q[0] - p[0], q[1] - p[1]));
+            }
+        });
+        if (near > far) { far = near; best = k; }
+    }
+    return best;
+})()"""
+_PLOT_AREA = """(function () {
+    var gd = document.getElementById('ex-plot'), fl = gd._fullLayout, r = gd.getBoundingClientRect();
+    return {l: r.left + fl._size.l, t: r.top + fl._size.t, w: fl._size.w, h: fl._size.h,
+            x: fl.xaxis.range.slice(), y: fl.yaxis.range.slice()};
+})()"""
+
+
+def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
+    """In a real headless Chromium (WebGL through SwiftShader), with real mouse and
+    keyboard input: hovering a front-1 point shows Plotly's label with its number; a
+    click shows that design's drawing, motion and reactions (drawn by plotly.js from
+    the embedded data) and the command that draws it, and so does the reference
+    design's button; a drag zooms, the wheel zooms,
+    a double-click zooms back out; a box selection fills the table and the parallel
+    coordinates; an objective's upper bound hides designs; a header click sorts a
+    table.  No script error, no console error, nothing fetched but the page."""
     import asyncio
-    import json as _json
+    import shlex
 
     from tornado.websocket import websocket_connect
 
     exe = chromium()
     url = (cli_run["dir"] / "report.html").resolve().as_uri()
-    proc, ws_url = _devtools(exe, url, tmp_path)
+    proc, ws_url = _devtools(exe, "about:blank", tmp_path)
+    seen = {}
 
     async def drive():
         ws = await websocket_connect(ws_url, max_message_size=64 << 20)
-        seq, events = [0], []
+        page = _Page(ws)
+        for domain in ("Runtime", "Network", "Page", "Log"):
+            await page.call(f"{domain}.enable")
+        await page.call("Page.navigate", url=url)
+        # the page (several MB: plotly.js, pictures and an animation inline) is loaded
+        # and its explorer drawn; on a loaded 2-core machine this takes seconds
+        await page.until("document.readyState === 'complete' && "
+                         "document.body.dataset.explorer === 'ready'", "the explorer drew")
+        await page.centre("#ex-plot")
+        count0 = int(await page.js("document.getElementById('ex-count').dataset.shown"))
+        seen["count0"] = count0
 
-        async def call(method, **params):
-            seq[0] += 1
-            ws.write_message(_json.dumps({"id": seq[0], "method": method, "params": params}))
-            while True:
-                msg = _json.loads(await ws.read_message())
-                if msg.get("id") == seq[0]:
-                    return msg.get("result", {})
-                events.append(msg)
+        # hover: a front-1 design's label (trace 2 is front 1)
+        n_front = await page.js("document.getElementById('ex-plot')._fullData[2].x.length")
+        assert n_front >= 1
+        p = await page.js(f"{_POINT}(2, {await page.js(_ISOLATED)})")
+        await page.mouse("mouseMoved", p["x"] - 3, p["y"] - 3)
+        await page.mouse("mouseMoved", p["x"], p["y"])
+        await page.until("(document.querySelector('#ex-plot .hoverlayer') || {}).textContent"
+                         f".indexOf('#{p['id']}') >= 0", f"hover label of #{p['id']}", 10)
+        seen["hover"] = await page.js("document.querySelector('#ex-plot .hoverlayer')"
+                                      ".textContent")
+        seen["target"] = p["id"]
 
-        async def js(expr):
-            r = await call("Runtime.evaluate", expression=expr, returnByValue=True)
-            assert "exceptionDetails" not in r, r["exceptionDetails"]
-            return r["result"].get("value")
+        # click: the design panel shows it, drawn, with its command
+        await page.click(p["x"], p["y"])
+        await page.until("document.getElementById('design-panel').dataset.drawn === 'true' && "
+                         f"document.getElementById('design-panel').dataset.candidate === "
+                         f"'{p['id']}'", "the clicked design's drawing", 20)
+        seen["panel"] = await page.js("""(function () {
+            var panel = document.getElementById('design-panel');
+            var plots = panel.querySelectorAll('.ex-drawings > div');
+            return {text: panel.textContent,
+                    command: panel.querySelector('.ex-command').textContent,
+                    plots: plots.length,
+                    traces: Array.prototype.map.call(plots, function (d) {
+                        return d.data ? d.data.length : 0; }),
+                    svg: panel.querySelectorAll('.ex-drawings .main-svg').length};
+        })()""")
 
-        await call("Runtime.enable")
-        # the page (a few MB: pictures and an animation inline) is loaded and its
-        # explorer drawn; on a loaded 2-core machine this can take seconds
-        ready = ("document.readyState === 'complete' && "
-                 "!!document.querySelector('#explorer circle.f1')")
-        for _ in range(600):
-            if await js(ready):
-                break
-            await asyncio.sleep(0.1)
-        assert await js(ready), "the report did not load within 60 s"
-        target = _json.loads(await js("""(function () {
-            var c = document.querySelector('#explorer circle.f1');
-            c.scrollIntoView({block: 'center'});
-            var r = c.getBoundingClientRect(), k = Number(c.dataset.k);
+        # the reference design, opened by its button: drawn too, named 'reference'
+        x, y = await page.centre("#ex-show-reference")
+        await page.click(x, y)
+        await page.until("document.getElementById('design-panel').dataset.drawn === 'true' && "
+                         "document.getElementById('design-panel').dataset.candidate === "
+                         "'reference'", "the reference design's drawing", 20)
+        seen["reference"] = await page.js(
+            "document.querySelector('#design-panel h3').textContent + '|' + "
+            "document.querySelector('#design-panel .ex-command').textContent + '|' + "
+            "document.querySelectorAll('#design-panel .ex-drawings .main-svg').length")
+
+        # zoom: a drag in the plot narrows both axes; the wheel narrows x again;
+        # a double-click gives the whole range back
+        await page.centre("#ex-plot")
+        a = await page.js(_PLOT_AREA)
+        await page.drag(a["l"] + 0.05 * a["w"], a["t"] + 0.05 * a["h"],
+                        a["l"] + 0.6 * a["w"], a["t"] + 0.7 * a["h"])
+        await asyncio.sleep(0.3)
+        b = await page.js(_PLOT_AREA)
+        await page.mouse("mouseWheel", a["l"] + 0.3 * a["w"], a["t"] + 0.3 * a["h"],
+                         deltaX=0, deltaY=-240)
+        await asyncio.sleep(0.6)
+        c = await page.js(_PLOT_AREA)
+        await page.click(a["l"] + 0.5 * a["w"], a["t"] + 0.5 * a["h"], count=2)
+        await asyncio.sleep(0.6)
+        seen["ranges"] = (a, b, c, await page.js(_PLOT_AREA))
+
+        # box selection: the tool bar's box tool, then a box over the whole plot
+        await page.mouse("mouseMoved", a["l"] + 0.5 * a["w"], a["t"] + 0.5 * a["h"])
+        bx, by = await page.centre('#ex-plot .modebar-btn[data-val="select"]')
+        a = await page.js(_PLOT_AREA)
+        await page.mouse("mouseMoved", a["l"] + 0.5 * a["w"], a["t"] + 0.5 * a["h"])
+        await page.click(bx, by)
+        await page.until("document.getElementById('ex-plot')._fullLayout.dragmode === 'select'",
+                         "the box tool", 10)
+        # (1.5 % inside the plot's corners, where Plotly's axis-end drag handles are not)
+        await page.drag(a["l"] + 0.015 * a["w"], a["t"] + 0.015 * a["h"],
+                        a["l"] + 0.985 * a["w"], a["t"] + 0.985 * a["h"])
+        await page.until("Number(document.getElementById('ex-selection').dataset.parcoords) > 0",
+                         "the selection's parallel coordinates", 20)
+        seen["selection"] = await page.js("""(function () {
+            var s = document.getElementById('ex-selection');
+            return {hidden: s.classList.contains('hidden'), rows: Number(s.dataset.rows),
+                    table: document.querySelectorAll('#ex-sel-table tbody tr').length,
+                    first: (document.querySelector('#ex-sel-table tbody tr td') || {}).textContent,
+                    parcoords: document.querySelectorAll('#ex-parcoords .parcoords').length,
+                    dims: document.getElementById('ex-parcoords').data[0].dimensions.length,
+                    note: document.getElementById('ex-sel-count').textContent};
+        })()""")
+
+        # a filter: typing an upper bound of the second objective hides designs
+        values = await page.js("""(function () {
             var d = JSON.parse(document.getElementById('explorer-data').textContent);
-            return JSON.stringify({x: r.left + r.width / 2, y: r.top + r.height / 2,
-                                   i: d.points[k].i});
-        })()"""))
-        x, y = target["x"], target["y"]
-        await call("Input.dispatchMouseEvent", type="mouseMoved", x=x, y=y)
-        tip = await js("document.getElementById('tip').style.display + '|' + "
-                       "document.getElementById('tip').textContent")
-        for kind in ("mousePressed", "mouseReleased"):
-            await call("Input.dispatchMouseEvent", type=kind, x=x, y=y, button="left",
-                       clickCount=1)
-        shown = await js("document.getElementById('design-panel').dataset.candidate + '|' + "
-                         "document.getElementById('design-panel').textContent")
-        sorted_ok = await js("""(function () {
+            var c = d.columns.filter(function (c) { return c.key === d.objectives[1]; })[0];
+            return c.values.filter(function (v, k) { return v !== null && d.feasible[k]; });
+        })()""")
+        bound = float(np.median(values))
+        x, y = await page.centre("#ex-max-1")
+        await page.click(x, y)
+        await page.call("Input.insertText", text=f"{bound:.6g}")
+        await page.until(f"Number(document.getElementById('ex-count').dataset.shown) < {count0}",
+                         "the filtered count", 10)
+        seen["filtered"] = (int(await page.js(
+            "document.getElementById('ex-count').dataset.shown")), sum(v <= float(f"{bound:.6g}")
+                                                                   for v in values))
+        seen["count_text"] = await page.js("document.getElementById('ex-count').textContent")
+
+        # the colour and the axes take any column (a select's change, as a user's pick
+        # fires it): colour by a design variable, then a log x axis by its check box
+        seen["colour"] = await page.js("""new Promise(function (done) {
+            var gd = document.getElementById('ex-plot'), c = document.getElementById('ex-c');
+            c.value = 'L12';
+            c.dispatchEvent(new Event('change'));
+            var lg = document.getElementById('ex-xlog');
+            lg.click();
+            setTimeout(function () {
+                done([Array.isArray(gd._fullData[1].marker.color), gd._fullLayout.xaxis.type,
+                      !!gd.querySelector('.colorbar')]);
+            }, 300);
+        })""")
+
+        # and the tables still sort
+        seen["sorted"] = await page.js("""(function () {
             var t = document.querySelector('table.sortable'), th = t.tHead.rows[0].cells;
             var col = Array.prototype.findIndex.call(th, function (h) {
                 return h.textContent.indexOf('peak_reaction') === 0; });
@@ -453,19 +637,44 @@ def test_report_click_on_a_front_point_shows_that_design(cli_run, tmp_path):
             for (var j = 1; j < v.length; j++) { if (v[j] < v[j - 1]) return false; }
             return v.length > 1;
         })()""")
-        errors = await js("document.body.dataset.jsErrors || ''")
+        seen["errors"] = await page.js("document.body.dataset.jsErrors || ''")
         ws.close()
-        return target, tip, shown, sorted_ok, errors, events
+        return page.events
 
     try:
-        target, tip, shown, sorted_ok, errors, events = asyncio.run(drive())
+        events = asyncio.run(drive())
     finally:
         proc.kill()
         proc.wait()
-    assert tip.startswith("block|#" + str(target["i"])), tip
-    cid, text = shown.split("|", 1)
-    assert cid == str(target["i"]) and f"Candidate {target['i']}" in text, shown
-    assert sorted_ok
+    target = seen["target"]
+    assert f"#{target}" in seen["hover"], seen["hover"]
+    panel = seen["panel"]
+    assert f"Candidate {target}" in panel["text"], panel["text"][:300]
+    assert panel["command"] == f"pipeline show {shlex.quote(str(cli_run['fresh']))} " \
+                               f"--candidate {target}", panel["command"]
+    # mechanism (links at 12 positions, paths, points), motion, reactions: drawn by plotly.js
+    assert panel["plots"] == 3 and panel["svg"] >= 3 and min(panel["traces"]) >= 3, panel
+    head, command, svg = seen["reference"].split("|")
+    assert head.startswith("Reference design") and int(svg) >= 3, seen["reference"]
+    assert command.endswith(" --candidate reference"), command
+    a, b, c, d = seen["ranges"]
+    width = lambda r: abs(r[1] - r[0])                              # noqa: E731
+    assert width(b["x"]) < 0.8 * width(a["x"]) and width(b["y"]) < 0.8 * width(a["y"]), (a, b)
+    assert width(c["x"]) < width(b["x"]), (b, c)                    # the wheel zoomed in
+    assert d["x"] == pytest.approx(a["x"]) and d["y"] == pytest.approx(a["y"]), (a, d)
+    sel = seen["selection"]
+    assert not sel["hidden"] and sel["rows"] >= seen["count0"] - 1, sel
+    assert sel["table"] == min(sel["rows"], 200) and sel["first"].isdigit(), sel
+    assert sel["parcoords"] == 1 and sel["dims"] == 9 and "selected" in sel["note"], sel
+    shown, expected = seen["filtered"]
+    assert 0 < shown == expected < seen["count0"], (seen["filtered"], seen["count0"])
+    assert seen["count_text"].startswith(f"{shown:,} of "), seen["count_text"]
+    assert seen["colour"] == [True, "log", True], seen["colour"]
+    assert seen["sorted"]
     bad = [e for e in events if e.get("method") == "Runtime.exceptionThrown" or (
-        e.get("method") == "Runtime.consoleAPICalled" and e["params"].get("type") == "error")]
-    assert not bad and not errors, (bad, errors)
+        e.get("method") == "Runtime.consoleAPICalled" and e["params"].get("type") == "error")
+        or (e.get("method") == "Log.entryAdded" and e["params"]["entry"]["level"] == "error")]
+    assert not bad and not seen["errors"], (bad, seen["errors"])
+    fetched = {e["params"]["request"]["url"].split(":", 1)[0] for e in events
+               if e.get("method") == "Network.requestWillBeSent"}
+    assert fetched <= {"file", "data"}, fetched                    # one offline file
