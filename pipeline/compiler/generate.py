@@ -62,9 +62,13 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
     w(f"N_PARAMS = {len(plan.par_names)}")
     w(f"GRAVITY = {literal(plan.gravity)}")
     w("")
+    # np.int64: numba types a plain int global as a literal, and every call of a
+    # library kernel (rrr, class3, ...) with other literal indices compiled a
+    # version of that kernel of its own, for each group and each mechanism; as
+    # int64 values one compiled version serves them all (from numba's cache)
     w("# point indices in pos/d1/d2")
     for i, p in enumerate(plan.point_names):
-        w(f"{n.I(i)} = {i}   # {text(p)}")
+        w(f"{n.I(i)} = np.int64({i})   # {text(p)}")
     w("")
     w("# columns of a candidate's parameter row")
     for i, p in enumerate(plan.par_names):
