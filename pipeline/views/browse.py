@@ -18,7 +18,7 @@ import pandas as pd
 
 from ..analysis.fronts import read_analysis, sweep_objectives, variable_units
 from ..kernels import config as kc
-from ..results.storage import attr_text, candidate_ids, open_results, read_units
+from ..results.storage import attr_text, candidate_ids, open_results, read_units, variables
 from ..study.reader import stored_study
 from ..results.sweep_file import status_counts
 # the fronts, one design and its picture have modules of their own (ranking,
@@ -139,7 +139,7 @@ def candidate_details(path, cid) -> dict:
             g = f["reference"]
             x = g["params"][()]
             status = int(g["status"][0])
-            for m in f["metrics"]:
+            for m in variables(f["metrics"]):
                 if m in g:
                     metrics.append((m, float(g[m][0]), f["metrics"][m].attrs))
             out = {"candidate": "reference", "status": kc.STATUS_NAMES.get(status, status),
@@ -151,7 +151,7 @@ def candidate_details(path, cid) -> dict:
             fail = float(f["candidates/fail_phi"][i])
             cn = [str(attr_text(n)) for n in f["candidates/constraints"].attrs.get("names", [])]
             G = f["candidates/constraints"][i]
-            for m in f["metrics"]:
+            for m in variables(f["metrics"]):
                 metrics.append((m, float(f["metrics"][m][i]), f["metrics"][m].attrs))
             rk = ranking(f)
             group = None

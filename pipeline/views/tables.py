@@ -22,7 +22,8 @@ import pandas as pd
 from ..base.files import safe_name
 from ..kernels import config as kc
 from ..results.scene_file import peaks_table
-from ..results.storage import ResultsError, attr_text, candidate_ids, open_results, read_units
+from ..results.storage import (ResultsError, attr_text, candidate_ids, open_results, read_units,
+                               variables)
 
 
 def with_units(df: pd.DataFrame) -> pd.DataFrame:
@@ -72,7 +73,7 @@ def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
         for j, n in enumerate(names):
             cols[n] = X[:, j]
             units[n] = vunits[j]
-        for m in f["metrics"]:
+        for m in variables(f["metrics"]):
             cols[m] = f[f"metrics/{m}"][()]
             units[m] = str(attr_text(f[f"metrics/{m}"].attrs.get("units", "")))
         g = f["candidates/constraints"]

@@ -49,6 +49,20 @@ def test_the_file_holds_the_feasible_rows_and_the_counts(files):
         assert counts[-1] == keep.sum()
 
 
+def test_xarray_names_the_kept_rows_by_their_sweep_numbers(files):
+    """The groups' coordinates are the root's (hard links): the grown
+    ``candidate`` scale is the same in /candidates and /metrics."""
+    import xarray as xr
+    full, feas, keep = files
+    for g in ("candidates", "metrics"):
+        ds = xr.open_dataset(feas, group=g, engine="h5netcdf")
+        np.testing.assert_array_equal(ds["candidate"].values, np.flatnonzero(keep))
+    ds = xr.open_dataset(feas, group="candidates", engine="h5netcdf")
+    with h5py.File(full, "r") as a:
+        k = int(np.flatnonzero(keep)[0])
+        assert float(ds["params"].sel(candidate=k, variable="L12")) == a["candidates/params"][k, 0]
+
+
 def test_open_gives_the_rows_with_their_sweep_numbers(files):
     full, feas, keep = files
     a, b = pipeline.open(full), pipeline.open(feas)
