@@ -88,39 +88,55 @@ class _Ticker:
 
 
 @contextlib.contextmanager
-def ticking(what: str):
+def ticking(what: str, *, after: float = 0.0, say_done: bool = True):
     """A stage of unknown length: ``what`` and the seconds it has taken, live on
     a terminal (redrawn every REDRAW_S), a plain line every QUIET_S elsewhere,
-    and a line with its time at the end.  Yields an object whose ``set(text)``
-    changes what the line says."""
+    and (``say_done``) a line with its time at the end.  ``after``: nothing at
+    all unless the stage takes longer than that (a cache that may be warm).
+    Yields an object whose ``set(text)`` changes what the line says."""
     t = _Ticker(what)
     if not shown():
         yield t
         return
     t0 = time.perf_counter()
-    stop = threading.Event()
-    if on_terminal():
-        from tqdm import tqdm
-        from tqdm.contrib.logging import logging_redirect_tqdm
-        line = tqdm(total=None, bar_format="{desc}", leave=False, dynamic_ncols=True)
+    stop, started = threading.Event(), threading.Event()
+    term = on_terminal()
+    line = []
 
-        def redraw():
-            while not stop.wait(REDRAW_S):
-                line.set_description_str(f"{t.what}: {time.perf_counter() - t0:.0f} s")
+    def elapsed():
+        return time.perf_counter() - t0
+
+    def begin():
+        if term:
+            from tqdm import tqdm
+            bar_ = tqdm(total=None, bar_format="{desc}", leave=False, dynamic_ncols=True)
+            bar_.set_description_str(f"{t.what}: {elapsed():.0f} s")
+            line.append(bar_)
+        else:
+            log.info("%s ...", t.what)
+        started.set()
+
+    def tick():
+        if after and stop.wait(after):
+            return
+        if not started.is_set():
+            begin()
+        while not stop.wait(REDRAW_S if term else QUIET_S):
+            if term:
+                line[0].set_description_str(f"{t.what}: {elapsed():.0f} s")
+            else:
+                log.info("%s: still at work, %.0f s", t.what, elapsed())
+
+    if term:
+        from tqdm.contrib.logging import logging_redirect_tqdm
         ctx = logging_redirect_tqdm(loggers=[logging.getLogger()])
     else:
-        line = None
-        log.info("%s ...", what)
-
-        def redraw():
-            while not stop.wait(QUIET_S):
-                log.info("%s: still at work, %.0f s", t.what, time.perf_counter() - t0)
         ctx = contextlib.nullcontext()
-    th = threading.Thread(target=redraw, daemon=True, name="pipeline-progress")
     ok = False
     with ctx:
-        if line is not None:
-            line.set_description_str(f"{what}: 0 s")
+        if not after:
+            begin()
+        th = threading.Thread(target=tick, daemon=True, name="pipeline-progress")
         th.start()
         try:
             yield t
@@ -128,7 +144,7 @@ def ticking(what: str):
         finally:
             stop.set()
             th.join()
-            if line is not None:
-                line.close()
-    if ok:
-        log.info("%s: %.1f s", what, time.perf_counter() - t0)
+            for b in line:
+                b.close()
+    if ok and say_done and started.is_set():
+        log.info("%s: %.1f s", what, elapsed())
