@@ -19,12 +19,18 @@ def _user_errors():
     return (StudyError, ResultsError, ExpressionError, FileNotFoundError, ValueError)
 
 
+def _say(text):
+    """Print a command's output: every number as people read it (never -0)."""
+    from .base.numbers import unsigned_zero
+    print(unsigned_zero(str(text)))
+
+
 def _print(obj, fmt):
     if fmt == "json":
-        print(json.dumps(obj, indent=2, default=str))
+        _say(json.dumps(obj, indent=2, default=str))
     else:
         for k, v in obj.items():
-            print(f"{k:>24}: {v}")
+            _say(f"{k:>24}: {v}")
 
 
 def cmd_run(a):
@@ -84,7 +90,7 @@ def cmd_bench(a):
     out = run_benchmarks(quick=a.quick, echo=(lambda *x: None) if a.quiet else print,
                          out=a.output, benchmarks=a.benchmarks)
     if a.quiet:
-        print(out)
+        _say(out)
     return EXIT_OK
 
 
@@ -99,7 +105,7 @@ def cmd_analyze(a):
 
 def cmd_browse(a):
     from .views.browse import browse
-    print(browse(a.results, top=a.top, candidate=a.candidate, fmt=a.format, wide=a.wide))
+    _say(browse(a.results, top=a.top, candidate=a.candidate, fmt=a.format, wide=a.wide))
     return EXIT_OK
 
 
@@ -160,10 +166,10 @@ def cmd_compare(a):
     from .views.compare import comparison_records, comparison_text
     cmp, pics = run_compare(a.results, a.candidate, a.output, pictures=not a.no_pictures)
     if a.format == "json":
-        print(json.dumps(comparison_records(cmp) | {"pictures": [str(p) for p in pics]},
-                         indent=2))
+        _say(json.dumps(comparison_records(cmp) | {"pictures": [str(p) for p in pics]},
+                        indent=2))
     elif not a.quiet:
-        print(comparison_text(cmp))
+        _say(comparison_text(cmp))
         for p in pics:
             print(f"picture: {p}")
     return EXIT_OK

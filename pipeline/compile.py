@@ -71,5 +71,14 @@ def source(study) -> str:
 
 
 def compile_all(paths=()) -> list[Compiled]:
+    """Compile every study named (or found), saying which one it compiles and
+    for how long (a study new to the cache takes minutes)."""
+    from .base.progress import ticking
     from .study.reader import load_study
-    return [compile_study(load_study(p)) for p in study_files(paths)]
+    files = study_files(paths)
+    done = []
+    for k, p in enumerate(files, 1):
+        study = load_study(p)
+        with ticking(f"compile {k}/{len(files)}: {study.name} ({study.kind})"):
+            done.append(compile_study(study))
+    return done

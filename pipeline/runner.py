@@ -44,7 +44,9 @@ def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
         if candidates is not None or resume or scheduler or seed_from or device or store:
             raise ValueError(f"{path}: --candidates, --resume, --scheduler, --from, --device "
                              "and --store apply to sweeps; this study is a scene")
-        return run_scene_study(study, out, pictures=pictures, overwrite=overwrite)
+        from .base.progress import ticking
+        with ticking(f"run {study.name} (scene)"):      # a live line while it solves and draws
+            return run_scene_study(study, out, pictures=pictures, overwrite=overwrite)
     if study.search is not None:
         if candidates is not None or chunk_size is not None:
             raise ValueError(f"{path}: --candidates and --chunk-size size a Monte-Carlo sweep; "
@@ -299,6 +301,13 @@ def run_tolerance(source, candidate=None, out=None, *, samples=None, pictures=Tr
                   overwrite=False, n_jobs=None, metrics=None) -> RunOutcome:
     """The tolerance analysis of a design (``tolerance_setup``): its results
     file, pictures and summary."""
+    from .base.progress import ticking
+    with ticking("tolerance"):          # a live line while it builds, solves and draws
+        return _run_tolerance(source, candidate, out, samples=samples, pictures=pictures,
+                              overwrite=overwrite, n_jobs=n_jobs, metrics=metrics)
+
+
+def _run_tolerance(source, candidate, out, *, samples, pictures, overwrite, n_jobs, metrics):
     from .results.tolerance_file import write_tolerance
     from .runs.tolerance import analyse
     study, mech, label, sweep, origin, spec = tolerance_setup(source, candidate,

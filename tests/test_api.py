@@ -12,6 +12,7 @@ from pipeline.kernels import config as kc
 
 from support.sweep_helpers import SYNTHESIS_N as N
 from support.sweep_helpers import copy_of
+from pipeline.results.storage import variables
 
 
 @pytest.fixture(scope="module")
@@ -42,7 +43,7 @@ def test_open_a_sweep_gives_the_datasets_row_for_row(sweep):
         codes = f["candidates/status"][()]
         assert list(df["status"]) == [kc.STATUS_NAMES[c] for c in codes]
         np.testing.assert_array_equal(df["feasible"], f["candidates/feasible"][()])
-        for m in f["metrics"]:
+        for m in variables(f["metrics"]):
             np.testing.assert_array_equal(df[m], f[f"metrics/{m}"][()])
         np.testing.assert_array_equal(df["g_stroke_min"], f["candidates/constraints"][:, 0])
         # the failing group by name (the mechanism's groups), empty where none failed

@@ -452,11 +452,16 @@ def analyze(path, n_representatives=5, *, max_samples=MAX_MODEL_SAMPLES, n_jobs=
         raise ValueError(f"--max-samples must be at least {2 * MIN_MODEL_SAMPLES}")
     if n_jobs is None or n_jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {n_jobs}")
+    from ..base.progress import ticking
     t0 = time.perf_counter()
-    data = read_sweep(path)
-    res = compute(data, n_representatives, max_samples=max_samples, n_jobs=n_jobs)
-    elapsed = time.perf_counter() - t0
-    write(path, data, res, elapsed)
+    with ticking("analyze") as stage:
+        stage.set("reading the candidates")
+        data = read_sweep(path)
+        stage.set("fronts, parameter importances, representatives")
+        res = compute(data, n_representatives, max_samples=max_samples, n_jobs=n_jobs)
+        elapsed = time.perf_counter() - t0
+        stage.set("writing /analysis")
+        write(path, data, res, elapsed)
     log.debug("analysis of %s written in %.1f s", path, elapsed)
     return summary(data, res, elapsed)
 

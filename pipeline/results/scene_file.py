@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import h5py
 import numpy as np
 
 from ..kernels import config as kc
@@ -229,7 +230,9 @@ def _coordinates(f, plan, study):
     coordinate(f, "axis", ["x", "y"], "1", "component")
     coordinate(f, "link", list(study.output.link_labels), "1", "link")
     coordinate(f, "group", list(plan.group_names), "1", "structural group")
-    coordinate(f, "joint", list(plan.joint_names), "1", "joint")
+    j = coordinate(f, "joint", list(plan.joint_names), "1", "joint")
+    from ..solve.reactions import joint_where     # the bodies each joins and its point
+    j.attrs["where"] = np.array(joint_where(plan), dtype=h5py.string_dtype())
     coordinate(f, "slide", list(plan.slide_names), "1", "prismatic pair")
     coordinate(f, "input", list(plan.input_names), "1", "input besides the crank")
     coordinate(f, "body", list(plan.body_names), "1", "body")

@@ -103,6 +103,18 @@ def coordinate(group, name, values, units, long_name):
     return d
 
 
+def link_coordinates(group, names):
+    """Hard-link the dimension scales ``names`` of the file's root into
+    ``group`` (the same datasets, no copy): xarray reads the variables of one
+    group only, so a group opened alone (``open_dataset(path, group=...)``)
+    has its coordinates only if they are in it.  A scale that grows (the
+    ``candidate`` rows of store = feasible) grows in every group at once."""
+    root = group.file
+    for name in names:
+        if name not in group:
+            group[name] = root[name]
+
+
 def candidate_ids(f) -> np.ndarray:
     """The sweep's candidate index of every stored row: every candidate (the
     default), or the feasible ones of a sweep run with store = feasible."""

@@ -14,7 +14,7 @@ from ..kernels import sweep as ks
 from ..study.objectives import (bounded_finite, constraint_names, constraint_units, constraints,
                                 metric_values)
 from .storage import (COMPRESSION, STATUS_ENUM, ResultsError, attach, attr_text, coordinate,
-                      hdf5_image, put, room_for, status_table, units_attr,
+                      hdf5_image, link_coordinates, put, room_for, status_table, units_attr,
                       write_root_attrs)
 from ..study.sweep_spec import METRICS
 
@@ -74,6 +74,9 @@ class SweepFile:
             coordinate(f, "triangle", [t.label for t in spec.triangles], "1",
                        "triangle inequality checked before solving")
             c = f.create_group("candidates")
+            # each group holds its coordinates (links to the root's scales), so that
+            # xarray.open_dataset(path, group="candidates")["params"].sel(variable="L12")
+            link_coordinates(c, ("candidate", "variable", "constraint"))
             grow = {"maxshape": (None,)} if self.feasible_only else {}
             grow2 = {"maxshape": (None, None)} if self.feasible_only else {}
             d = c.create_dataset("params", (n, nv), "f8", chunks=(ch, nv), **COMPRESSION,
@@ -117,6 +120,7 @@ class SweepFile:
                            long_name="constraints g <= 0", names=gnames)
             attach(d, ("candidate", "constraint"))
             m = f.create_group("metrics")
+            link_coordinates(m, ("candidate",))
             for name in spec.metrics:
                 units, long = METRICS[name][:2]
                 d = m.create_dataset(name, (n,), "f8", chunks=(ch,), **COMPRESSION,
@@ -130,6 +134,7 @@ class SweepFile:
             d.attrs.update(units="1", long_name="chunk written")
             attach(d, ("chunk",))
             coordinate(f, "counted", list(COUNTED), "1", "a status, or the feasible candidates")
+            link_coordinates(p, ("chunk", "counted") + (("triangle",) if spec.triangles else ()))
             d = p.create_dataset("status_counts", (spec.n_chunks, len(COUNTED)), "i8")
             d.attrs.update(units="1", long_name="candidates of each status, and the feasible "
                                                 "ones, per chunk", columns=list(COUNTED))
@@ -156,6 +161,7 @@ class SweepFile:
         g = f.create_group("reference")
         g.attrs["long_name"] = "the study's reference design, evaluated like every candidate"
         coordinate(g, "design", ["reference"], "1", "the reference design")
+        link_coordinates(g, ("variable",))
         put(g, "params", x[0], [v.units for v in spec.variables], "design variables",
             dims=("variable",), names=[v.name for v in spec.variables])
         put(g, "status", st.astype(STATUS_ENUM), "1", "status", dims=("design",),

@@ -7,7 +7,6 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
-import threading
 import time
 from dataclasses import dataclass
 
@@ -137,16 +136,13 @@ def compile_notice():
     """Around the first evaluation of a run (the reference design), which compiles
     a new mechanism's kernels: a notice if it takes more than a second, and how
     long it took (the list it yields holds the seconds afterwards)."""
+    from ..base.progress import ticking
     t = time.perf_counter()
     took = [0.0]
-    notice = threading.Timer(1.0, log.info, ("compiling the kernels of this mechanism "
-                                             "(its first run only; about 15 s)...",))
-    notice.daemon = True
-    notice.start()
-    try:
+    # after a second: what it does and for how long (live on a terminal)
+    with ticking("compiling the kernels of this mechanism (its first run only; about 15 s)",
+                 after=1.0, say_done=False):
         yield took
-    finally:
-        notice.cancel()
     took[0] = time.perf_counter() - t
     if took[0] > 1.0:
         log.info("kernels ready after %.1f s", took[0])

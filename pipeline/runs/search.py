@@ -367,6 +367,7 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
 
 
 def _progress(search: SearchSpec, enabled):
-    from tqdm import tqdm
-    return tqdm(total=search.evaluations, unit="eval", unit_scale=True, disable=not enabled,
-                smoothing=0.1, desc=f"search {search.method}", dynamic_ncols=True)
+    """A bar on a terminal, plain lines elsewhere (base.progress)."""
+    from ..base.progress import bar
+    return bar(search.evaluations, unit="eval", desc=f"search {search.method}",
+               enabled=enabled, unit_scale=True, smoothing=0.1)

@@ -333,10 +333,10 @@ class SweepInterrupted(KeyboardInterrupt):
 
 
 def _progress(spec, done, enabled):
-    from tqdm import tqdm
-    return tqdm(total=spec.candidates, initial=done * spec.chunk_size if done else 0,
-                unit="cand", unit_scale=True, disable=not enabled, smoothing=0.1,
-                desc="sweep", dynamic_ncols=True)
+    """A bar on a terminal, plain lines elsewhere (base.progress)."""
+    from ..base.progress import bar
+    return bar(spec.candidates, initial=done * spec.chunk_size if done else 0, unit="cand",
+               desc="sweep", enabled=enabled, unit_scale=True, smoothing=0.1)
 
 
 def _chunks(problem, todo, client, n_jobs):

@@ -73,6 +73,16 @@ def sample_loads(mechanism, phi, t=None):
     return out
 
 
+def joint_where(plan) -> list[str]:
+    """Per reported joint, the bodies it joins and its point: 'crank 1-2 / lead
+    2-3 at P2' (the pictures' legend, the export's column headers)."""
+    out = []
+    for ip, (b0, b1) in zip(plan.joint_point, plan.joint_bodies):
+        what = " / ".join("ground" if b < 0 else plan.body_names[b] for b in (b0, b1))
+        out.append(f"{what} at {plan.point_names[int(ip)]}")
+    return out
+
+
 @dataclass
 class Reactions:
     phi: np.ndarray          # rad

@@ -326,6 +326,12 @@ def animate(path, candidate=None, out=None, frames=MAX_FRAMES) -> dict:
     """`pipeline show FILE --animate`: the mechanism of a scene results file,
     or one candidate of a sweep (``candidate``: an index, 'knee' or
     'reference'), over one revolution.  Returns a summary."""
+    from ..base.progress import ticking
+    with ticking("animate", after=1.0, say_done=False):  # a live line past a second
+        return _animate(path, candidate, out, frames)
+
+
+def _animate(path, candidate, out, frames):
     kind = results_kind(path)
     if kind == "scene":
         if candidate is not None:

@@ -18,7 +18,7 @@ import pandas as pd
 
 from ..analysis.fronts import read_analysis, sweep_objectives, variable_units
 from ..kernels import config as kc
-from ..results.storage import attr_text, candidate_ids, open_results, read_units
+from ..results.storage import attr_text, candidate_ids, open_results, read_units, variables
 from ..study.reader import stored_study
 from ..results.sweep_file import status_counts
 # the fronts, one design and its picture have modules of their own (ranking,
@@ -104,6 +104,8 @@ def overview(path, top=10) -> dict:
             for o, m in A.models.items():
                 ana[f"R2 {o}"] = float(m["r2_test"]) if m.get("fitted") else \
                     f"skipped: {attr_text(m.get('reason', ''))}"
+        info["objective_units"] = {o: str(attr_text(f[f"metrics/{o}"].attrs.get("units", "1")))
+                                   for o in info["objectives"]}
         ref = {}
         if "reference" in f:
             for o in info["objectives"]:
@@ -139,7 +141,7 @@ def candidate_details(path, cid) -> dict:
             g = f["reference"]
             x = g["params"][()]
             status = int(g["status"][0])
-            for m in f["metrics"]:
+            for m in variables(f["metrics"]):
                 if m in g:
                     metrics.append((m, float(g[m][0]), f["metrics"][m].attrs))
             out = {"candidate": "reference", "status": kc.STATUS_NAMES.get(status, status),
@@ -151,7 +153,8 @@ def candidate_details(path, cid) -> dict:
             fail = float(f["candidates/fail_phi"][i])
             cn = [str(attr_text(n)) for n in f["candidates/constraints"].attrs.get("names", [])]
             G = f["candidates/constraints"][i]
-            for m in f["metrics"]:
+            cu = read_units(f["candidates/constraints"], len(cn))
+            for m in variables(f["metrics"]):
                 metrics.append((m, float(f["metrics"][m][i]), f["metrics"][m].attrs))
             rk = ranking(f)
             group = None
@@ -168,6 +171,7 @@ def candidate_details(path, cid) -> dict:
                    "feasible": feas, "reason": reason,
                    "fail_phi_deg": fail, "cv": float(f["candidates/cv"][i]),
                    "constraints": {n: float(g) for n, g in zip(cn, G)},
+                   "constraint_units": dict(zip(cn, cu)),
                    "front": int(rk.rank[i]), "crowding": float(rk.crowding[i]),
                    "ranking": "stored analysis" if rk.stored else "ranked on the fly"}
         out["params"] = [{"name": n, "value": float(v), "units": u}
@@ -201,6 +205,24 @@ def _table(df: pd.DataFrame, width=None) -> str:
     return df.to_string(index=False, float_format=lambda v: _g(v), line_width=width)
 
 
+def _leading(df: pd.DataFrame, width: int) -> pd.DataFrame:
+    """The first columns of ``df`` that fit ``width`` characters side by side
+    (at least the first two): the compact table; the rest is --wide's."""
+    keep = list(df.columns[:2])
+    for c in df.columns[2:]:
+        text = _table(df[keep + [c]])
+        if max(map(len, text.splitlines())) > width:
+            break
+        keep.append(c)
+    return df[keep]
+
+
+def _with_unit(value, unit, digits=4) -> str:
+    """'1074 N', '0.07209' (a unit of 1 left out: a pure number)."""
+    text = _g(value, digits)
+    return text if unit in ("", "1") or text == "-" else f"{text} {unit}"
+
+
 def _short_units(units: list) -> str:
     """Units per column as "mm (all 9)" or "mm, deg, ..."."""
     if len(units) > 1 and len(set(units)) == 1:
@@ -219,7 +241,7 @@ def _tree_lines(rows) -> list[str]:
     return out
 
 
-WIDTH = 100     # columns of the text output unless --wide
+WIDTH = 80      # columns of the text output unless --wide (a terminal's)
 
 
 def _fit(lines):
@@ -260,17 +282,22 @@ def format_overview(ov: dict, fmt="table", wide=False) -> str:
         lines.append(f"  {k:>26}: {v['count']:>9}  ({v['percent']:.1f}%)")
     lines += ["", "Pareto fronts (objectives " + ", ".join(info["objectives"]) +
               ", all minimised):"]
+    ounits = info.get("objective_units", {})
     for k, v in ana.items():
         if k == "reference design":
-            v = ", ".join(f"{o} {_g(x)}" for o, x in v.items()) or "none"
+            v = ", ".join(f"{o} {_with_unit(x, ounits.get(o, ''))}"
+                          for o, x in v.items()) or "none"
         elif isinstance(v, float):
             v = _g(v, 3)
         lines.append(f"  {k:>26}: {v}")
     lines += ["", "Best designs:"]
+    if not wide:
+        lines += ["  (more columns: --wide; every value of one design: --candidate ID)"]
     for sel, df in ov["designs"].groupby("selection", sort=False):
+        # crowding distance: a pure number (unit 1, as the other columns say theirs)
+        df = df.drop(columns="selection").rename(columns={"crowding": "crowding [1]"})
         lines += ["", f"  {sel}:"]
-        lines += ["  " + s for s in _table(df.drop(columns="selection"),
-                                           None if wide else WIDTH - 2).splitlines()]
+        lines += ["  " + s for s in _table(df if wide else _leading(df, WIDTH - 2)).splitlines()]
     return "\n".join(lines if wide else _fit(lines))
 
 
@@ -290,8 +317,9 @@ def format_candidate(d: dict, fmt="table", wide=False) -> str:
         head.append(f"  front: {d['front']} ({d['ranking']}), crowding {_g(d['crowding'])}, "
                     f"summed constraint violation {_g(d['cv'])}")
         if d["constraints"]:
+            cu = d.get("constraint_units", {})
             head.append("  constraints g <= 0: " + ", ".join(
-                f"{k} {_g(v)}" for k, v in d["constraints"].items()))
+                f"{k} {_with_unit(v, cu.get(k, ''))}" for k, v in d["constraints"].items()))
     head += ["", "  design variables:"]
     head += [f"    {p['name']:>8} = {_g(p['value'], 6):>10} {p['units']}" for p in d["params"]]
     head += ["", "  metrics:"]
@@ -303,7 +331,7 @@ def format_candidate(d: dict, fmt="table", wide=False) -> str:
 
 
 def browse(path, top=10, candidate=None, fmt="table", wide=False) -> str:
-    """The text `pipeline browse` prints: at most 100 columns, unless ``wide``
+    """The text `pipeline browse` prints: at most 80 columns, unless ``wide``
     (which also lists the file's datasets)."""
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}; known: {', '.join(FORMATS)}")

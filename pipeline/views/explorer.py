@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..results.storage import attr_text, open_results
+from ..results.storage import attr_text, open_results, variables
 from .page import json_number, json_numbers, render, script_json
 
 log = logging.getLogger("pipeline")
@@ -112,7 +112,7 @@ def read_columns(path, rows, data, ana) -> list[Column]:
         g = f["metrics"]
         n = f["candidates/status"].shape[0]
         names = list(data.objectives) + sorted(
-            m for m in g if m not in data.objectives and g[m].shape == (n,))
+            m for m in variables(g) if m not in data.objectives and g[m].shape == (n,))
         for m in names:
             d = g[m]
             kind = "objective" if m in data.objectives else "metric"

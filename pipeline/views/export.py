@@ -15,6 +15,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..base.files import replacing
+from ..base.numbers import signless_zeros
 from ..results.storage import attr_text, open_results
 from .tables import candidates, scene_tables, with_units
 
@@ -56,5 +57,5 @@ def _write(df, path, parquet):
             df.to_parquet(tmp, index=False)
         return path
     with replacing(path) as tmp:
-        with_units(df).to_csv(tmp, index=False, float_format="%.12g")
+        with_units(signless_zeros(df)).to_csv(tmp, index=False, float_format="%.12g")
     return path

@@ -47,11 +47,8 @@ def joint_labels(plan) -> dict:
 
 def joint_descriptions(plan) -> list[str]:
     """One line per reported joint: 'R2: crank 1-2 / lead 2-3 at P2'."""
-    lines = []
-    for name, ip, (b0, b1) in zip(plan.joint_names, plan.joint_point, plan.joint_bodies):
-        what = " / ".join("ground" if b < 0 else plan.body_names[b] for b in (b0, b1))
-        lines.append(f"{name}: {what} at {plan.point_names[int(ip)]}")
-    return lines
+    from ..solve.reactions import joint_where
+    return [f"{name}: {where}" for name, where in zip(plan.joint_names, joint_where(plan))]
 
 
 def point_label(plan, i, joints=None) -> str:

@@ -434,7 +434,9 @@ def write_report(path, out=None, top=20, drawings=None) -> dict:
         log.info("%s has no analysis: running `pipeline analyze` first", path)
         info["analysis"] = "run now (stored in the results file)"
         analyze(path)
-    page = build_html(path, top=top, drawings=drawings)
+    from ..base.progress import ticking
+    with ticking("report"):         # a live line while the parts are built
+        page = build_html(path, top=top, drawings=drawings)
     out = Path(out) if out else default_report_output(path)
     write_text(out, page)
     info.update(report=str(out), size=f"{out.stat().st_size / 1024:.0f} KiB")

@@ -180,6 +180,12 @@ def default_show_output(path, index) -> Path:
 
 def show(path, cid, out=None) -> dict:
     """`pipeline show`: re-run a candidate and draw it; returns a summary."""
+    from ..base.progress import ticking
+    with ticking("show", after=1.0, say_done=False):     # a live line past a second
+        return _show(path, cid, out)
+
+
+def _show(path, cid, out):
     run = rerun_candidate(path, cid)
     out = Path(out) if out else default_show_output(path, run.index)
     with open_results(path, "sweep") as f:

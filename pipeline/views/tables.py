@@ -22,7 +22,8 @@ import pandas as pd
 from ..base.files import safe_name
 from ..kernels import config as kc
 from ..results.scene_file import peaks_table
-from ..results.storage import ResultsError, attr_text, candidate_ids, open_results, read_units
+from ..results.storage import (ResultsError, attr_text, candidate_ids, open_results, read_units,
+                               variables)
 
 
 def with_units(df: pd.DataFrame) -> pd.DataFrame:
@@ -72,7 +73,7 @@ def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
         for j, n in enumerate(names):
             cols[n] = X[:, j]
             units[n] = vunits[j]
-        for m in f["metrics"]:
+        for m in variables(f["metrics"]):
             cols[m] = f[f"metrics/{m}"][()]
             units[m] = str(attr_text(f[f"metrics/{m}"].attrs.get("units", "")))
         g = f["candidates/constraints"]
@@ -190,6 +191,21 @@ def scene_tables(path, every=1) -> dict:
     return out
 
 
+def joint_headers(f, joints) -> dict:
+    """{joint: its column header}: 'R2 (crank 1-2 / lead 2-3 at P2)', the
+    bodies it joins and its point as the pictures name them (ASCII); the bare
+    name for a file written before the scene files stored them."""
+    import unicodedata
+    out = {j: j for j in joints}
+    if "joint" in f and "where" in f["joint"].attrs:
+        names = [str(attr_text(x)) for x in f["joint"][()]]
+        for name, w in zip(names, f["joint"].attrs["where"]):
+            w = unicodedata.normalize("NFKD", str(attr_text(w))).encode("ascii", "ignore")
+            if name in out:
+                out[name] = f"{name} ({w.decode()})"
+    return out
+
+
 def reaction_columns(d, rows, cols, units):
     """The force columns of a group ``d`` holding a ``Reactions`` (a scene's
     dense curves, or a dynamics case's forces along the motion) at the rows
@@ -199,12 +215,14 @@ def reaction_columns(d, rows, cols, units):
     row, the joint names)."""
     R = d["reactions"][()]
     joints = [str(attr_text(x)) for x in d["reactions"].attrs["joints"]]
+    where = joint_headers(d.file, joints)
     mag = np.hypot(R[..., 0], R[..., 1])
     for j, name in enumerate(joints):
-        cols[f"{name}_x"] = R[rows, j, 0]
-        cols[f"{name}_y"] = R[rows, j, 1]
-        cols[name] = mag[rows, j]
-        units.update({f"{name}_x": "N", f"{name}_y": "N", name: "N"})
+        head = where[name]
+        cols[f"{head} x"] = R[rows, j, 0]
+        cols[f"{head} y"] = R[rows, j, 1]
+        cols[head] = mag[rows, j]
+        units.update({f"{head} x": "N", f"{head} y": "N", head: "N"})
     if "slide_reactions" in d:     # prismatic pairs: N, C and where N acts
         from ..solve.reactions import slide_action, slide_label
         S = d["slide_reactions"][rows]

@@ -21,6 +21,7 @@ from support.naive_pareto import brute_force_rank, dominates_ref
 from pipeline.analysis.fronts import analyze
 from pipeline.views.browse import rerun_candidate
 from pipeline.cli import main
+from pipeline.results.storage import attr_text, read_units, variables
 from support.sweep_helpers import SYNTHESIS_N as N
 from support.sweep_helpers import copy_of
 from support.tolerances import SWEEP_VS_SCENE_REL
@@ -63,6 +64,7 @@ def cli_run(sweep_file, tmp_path_factory):
     out["browse_before"] = run("browse", p, "--wide")
     out["analyze"] = run("analyze", p, "--format", "json")
     out["browse"] = run("browse", p, "--top", "4")
+    out["browse10"] = run("browse", p, "--top", "10")
     out["json"] = run("browse", p, "--format", "json", "--top", "3")
     out["csv"] = run("browse", p, "--format", "csv", "--top", "3")
     out["candidate"] = run("browse", p, "--candidate", "knee")
@@ -238,11 +240,42 @@ def test_commands_succeed_on_the_main_job_file(cli_run):
     info = json.loads(cli_run["analyze"][1])
     assert info["candidates"] == N and info["front 1"] >= 1
     assert "ranked on the fly" not in cli_run["browse"][1]
-    # without --wide everything fits 100 columns, and the dataset listing waits for --wide
-    for key in ("browse", "candidate"):
-        assert max(len(ln) for ln in cli_run[key][1].splitlines()) <= 100, key
+    # without --wide everything fits an 80-column terminal, and the dataset listing
+    # waits for --wide
+    for key in ("browse", "browse10", "candidate"):
+        assert max(len(ln) for ln in cli_run[key][1].splitlines()) <= 80, key
     assert "/candidates/params" not in cli_run["browse"][1] and "--wide" in cli_run["browse"][1]
     assert "representative" in cli_run["browse"][1]
+
+
+def test_browse_gives_every_value_its_unit_and_no_minus_zero(cli_run):
+    """Each number of a metric or a constraint is followed by its unit (unless
+    it is a pure number), each column of the compact tables names its unit in
+    its header (the candidate's number and its front are counts), and no
+    output prints -0."""
+    with h5py.File(cli_run["file"], "r") as f:
+        units = {m: attr_text(f["metrics"][m].attrs["units"]) for m in variables(f["metrics"])}
+        g = f["candidates/constraints"]
+        names = [n.decode() if isinstance(n, bytes) else n for n in g.attrs["names"]]
+        units.update(zip(names, read_units(g, len(names))))
+    number = r"-?(?:\d+(?:\.\d*)?(?:e[-+]?\d+)?|inf)"
+    for key in ("browse10", "candidate"):
+        text = cli_run[key][1]
+        seen = 0
+        for name, unit in units.items():
+            if unit == "1":
+                continue
+            for m in re.finditer(rf"(?<![\w\[])\b{name}(?: =)? +({number})( [^\s,;)]+)?", text):
+                seen += 1
+                assert m.group(2) == f" {unit}", (key, m.group(0))
+        assert seen >= 1, key
+        for ln in text.splitlines():
+            if ln.strip().startswith("candidate  "):
+                for col in re.split(r"\s{2,}", ln.strip())[2:]:
+                    assert re.fullmatch(r".+ \[.+\]", col), (key, col)
+    assert re.search(r"reference design: .*peak_reaction \S+ N\b", cli_run["browse10"][1])
+    for key, (_, out, _) in ((k, v) for k, v in cli_run.items() if isinstance(v, tuple)):
+        assert not re.search(r"(?<![\w.])-0(?:\.0*)?(?![\w.])", out), key
 
 
 def test_browse_formats_parse(cli_run):

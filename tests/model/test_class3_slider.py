@@ -417,4 +417,5 @@ def test_the_scene_runs_and_exports(studies, tmp_path):
     assert out.exists() and (tmp_path / "scene.png").exists()
     assert main(["export", str(out), "--csv", str(tmp_path / "tables"), "-q"]) == 0
     reactions = (tmp_path / "tables" / "reactions.csv").read_text()
-    assert "R6 [N]" in reactions and "M_bal" in reactions
+    head = reactions.splitlines()[0].split(",")
+    assert [c for c in head if c.startswith("R6 (") and c.endswith(") [N]")] and "M_bal" in reactions

@@ -47,8 +47,10 @@ def test_reactions_csv_has_every_slide_as_the_kernel_gives_it(yoke_run):
     datasets and the kinetostatics kernel on the dense curves."""
     study, out, csv = yoke_run
     r = pd.read_csv(csv / "reactions.csv")
-    assert list(r.columns) == ["phi1 [deg]", "R1_x [N]", "R1_y [N]", "R1 [N]", "R2_x [N]",
-                               "R2_y [N]", "R2 [N]", "N[block] [N]", "C[block] [N*m]",
+    assert list(r.columns) == ["phi1 [deg]", "R1 (ground / crank at P1) x [N]",
+                               "R1 (ground / crank at P1) y [N]", "R1 (ground / crank at P1) [N]",
+                               "R2 (crank / block at P2) x [N]", "R2 (crank / block at P2) y [N]",
+                               "R2 (crank / block at P2) [N]", "N[block] [N]", "C[block] [N*m]",
                                "e[block] [mm]", "N[yoke] [N]", "C[yoke] [N*m]",
                                "e[yoke] [mm]", "shaking_Fx [N]", "shaking_Fy [N]",
                                "shaking_F [N]", "shaking_M [N*m]", "equilibrium_residual [1]",

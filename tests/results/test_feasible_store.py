@@ -14,6 +14,7 @@ from pipeline.cli import main
 from pipeline.kernels import config as kc
 from support.naive_pareto import brute_force_rank
 from support.sweep_helpers import SYNTHESIS_CHUNK, SYNTHESIS_N, copy_of
+from pipeline.results.storage import variables
 
 
 @pytest.fixture(scope="module")
@@ -38,7 +39,7 @@ def test_the_file_holds_the_feasible_rows_and_the_counts(files):
         np.testing.assert_array_equal(b["candidate"][()], np.flatnonzero(keep))
         np.testing.assert_array_equal(b["candidates/params"][()], a["candidates/params"][()][keep])
         np.testing.assert_array_equal(b["candidates/status"][()], a["candidates/status"][()][keep])
-        for m in a["metrics"]:
+        for m in variables(a["metrics"]):
             np.testing.assert_array_equal(b[f"metrics/{m}"][()], a[f"metrics/{m}"][()][keep],
                                           err_msg=m)
         # every chunk's count of each status, then of the feasible ones
@@ -47,6 +48,20 @@ def test_the_file_holds_the_feasible_rows_and_the_counts(files):
         for code in range(len(kc.STATUS_NAMES)):
             assert counts[code] == (status == code).sum(), kc.STATUS_NAMES[code]
         assert counts[-1] == keep.sum()
+
+
+def test_xarray_names_the_kept_rows_by_their_sweep_numbers(files):
+    """The groups' coordinates are the root's (hard links): the grown
+    ``candidate`` scale is the same in /candidates and /metrics."""
+    import xarray as xr
+    full, feas, keep = files
+    for g in ("candidates", "metrics"):
+        ds = xr.open_dataset(feas, group=g, engine="h5netcdf")
+        np.testing.assert_array_equal(ds["candidate"].values, np.flatnonzero(keep))
+    ds = xr.open_dataset(feas, group="candidates", engine="h5netcdf")
+    with h5py.File(full, "r") as a:
+        k = int(np.flatnonzero(keep)[0])
+        assert float(ds["params"].sel(candidate=k, variable="L12")) == a["candidates/params"][k, 0]
 
 
 def test_open_gives_the_rows_with_their_sweep_numbers(files):

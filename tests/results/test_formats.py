@@ -65,6 +65,23 @@ def test_xarray_opens_every_group_with_named_dimensions(files):
             assert not [d for d in ds.sizes if str(d).startswith("phony")], (path, g)
     ds = xr.open_dataset(files[0], group="candidates", engine="h5netcdf")
     assert ds["params"].dims == ("candidate", "variable")
+    with h5py.File(files[0], "r") as f:
+        params, G = f["candidates/params"][()], f["candidates/constraints"][()]
+        names = list(f["candidates/constraints"].attrs["names"])
+        metrics = {m: f["metrics"][m][()] for m in ("stroke", "dwell_error")}
+    # the README's recipe: each group opened alone has its coordinates, and the
+    # values are the stored ones
+    np.testing.assert_array_equal(ds["params"].sel(variable="L12").values, params[:, 0])
+    np.testing.assert_array_equal(ds["constraints"].sel(constraint=names[-1]).values, G[:, -1])
+    np.testing.assert_array_equal(ds["candidate"].values, np.arange(len(params)))
+    m = xr.open_dataset(files[0], group="metrics", engine="h5netcdf")
+    assert "candidate" in m.coords and "candidate" not in m.data_vars
+    for k, v in metrics.items():
+        np.testing.assert_array_equal(m[k].sel(candidate=2).values, v[2])
+    ref = xr.open_dataset(files[0], group="reference", engine="h5netcdf")
+    assert list(ref["variable"].values) == list(ds["variable"].values)
+    prog = xr.open_dataset(files[0], group="progress", engine="h5netcdf")
+    assert int(prog["status_counts"].sel(counted="feasible").sum()) == int(ds["feasible"].sum())
     root = xr.open_dataset(files[0], engine="h5netcdf")
     assert list(root["variable"].values)[:2] == ["L12", "P6x"]
     dense = xr.open_dataset(files[1], group="dense", engine="h5netcdf")

@@ -19,6 +19,7 @@ from pipeline.runs.sweep import COLUMN, SweepInterrupted, build_problem, run_swe
 from pipeline.study.sweep_spec import parameter_rows
 from support.naive_pareto import hypervolume_2d_ref
 from support.sweep_helpers import assert_same_results, copy_of, kill_9_after_chunks
+from pipeline.results.storage import variables
 
 POP, GENS = 24, 5          # 24 + 5 x 24 = 144 evaluations
 SEARCH = f"""
@@ -177,7 +178,7 @@ def test_stored_metrics_equal_a_fresh_evaluation(baseline, small):
     with h5py.File(baseline, "r") as f:
         X = f["candidates/params"][()]
         st = f["candidates/status"][()]
-        m = {k: f[f"metrics/{k}"][()] for k in f["metrics"]}
+        m = {k: f[f"metrics/{k}"][()] for k in variables(f["metrics"])}
         forces = f["candidates/forces_evaluated"][()]
         feas = f["candidates/feasible"][()]
     pb = build_problem(small, small.sweep)

@@ -21,6 +21,7 @@ from pipeline.study.sweep_spec import apply_design, draw_candidates, parameter_r
 from support.sweep_helpers import (SYNTHESIS_CHUNK, SYNTHESIS_N, assert_same_results, copy_of,
                                    kill_9_after_chunks)
 from support.tolerances import DWELL_VS_NAIVE_REL, SWEEP_VS_SCENE_REL
+from pipeline.results.storage import variables
 
 N, CHUNK = SYNTHESIS_N, SYNTHESIS_CHUNK      # the session's sweep's
 
@@ -92,7 +93,7 @@ def test_sweep_metrics_match_scene_path(baseline, synthesis):
         x = f["candidates/params"][()]
         status = f["candidates/status"][()]
         forces = f["candidates/forces_evaluated"][()]
-        m = {k: f[f"metrics/{k}"][()] for k in f["metrics"]}
+        m = {k: f[f"metrics/{k}"][()] for k in variables(f["metrics"])}
     rng = np.random.default_rng(0)
     picked = list(rng.choice(np.flatnonzero(forces), 5, replace=False))
     picked += list(rng.choice(np.flatnonzero((status == kc.OK) & ~forces), 3, replace=False))

@@ -15,6 +15,7 @@ import pytest
 
 from pipeline.views import explorer as ex
 from pipeline.views.page import json_numbers, render, rounded, script_json
+from pipeline.results.storage import variables
 
 
 # ---------------------------------------------------------------- numbers and text
@@ -124,7 +125,7 @@ def test_every_feasible_design_and_column_is_there(page):
     assert sum(d["feasible"]) == d["counts"]["feasible_shown"] == n_feas
     assert len(d["ids"]) == len(d["feasible"]) == n_feas + d["counts"]["infeasible_shown"]
     with h5py.File(p, "r") as f:
-        metrics = set(f["metrics"])
+        metrics = set(variables(f["metrics"]))      # the metrics, not the coordinate
         cv = f["candidates/cv"][()]
     cols = {c["key"]: c for c in d["columns"]}
     assert metrics | {"front", "cv"} | set(data.names) == set(cols)

@@ -1,0 +1,150 @@
+"""Progress that never leaves a person waiting in silence.
+
+On a terminal a command shows a live line (a tqdm bar, or for work of unknown
+length the seconds it has taken, redrawn twice a second), and the log lines it
+writes meanwhile go above it.  Elsewhere (a pipe, a log file, CI) it writes
+plain lines: one when a stage starts, one every ``QUIET_S`` seconds while it
+runs, and one with its time when it ends; no carriage returns.  Both follow
+logging: ``-q`` (WARNING) silences them.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import sys
+import threading
+import time
+
+log = logging.getLogger("pipeline")
+
+QUIET_S = 10.0      # a plain line at least this often while a stage runs off a terminal
+REDRAW_S = 0.5      # a terminal's live line is redrawn this often
+
+
+def on_terminal() -> bool:
+    """Progress goes to stderr: is that a terminal a person watches?"""
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
+def shown() -> bool:
+    return log.isEnabledFor(logging.INFO)
+
+
+class _PlainBar:
+    """tqdm's update/set_postfix_str/close as plain log lines, at most one per
+    ``QUIET_S`` seconds (and one at the end)."""
+
+    def __init__(self, total, initial=0, desc="", unit="it"):
+        self.total, self.n, self.desc, self.unit = total, initial, desc, unit
+        self.t0 = self.last = time.perf_counter()
+        self.postfix = ""
+        self.closed = False
+
+    def _line(self):
+        el = time.perf_counter() - self.t0
+        of = f"/{self.total:,}" if self.total else ""
+        post = f", {self.postfix}" if self.postfix else ""
+        log.info("%s: %s%s %s, %.0f s%s", self.desc, f"{self.n:,}", of, self.unit, el, post)
+
+    def update(self, k=1):
+        self.n += k
+        now = time.perf_counter()
+        if now - self.last >= QUIET_S:
+            self.last = now
+            self._line()
+
+    def set_postfix_str(self, text, refresh=True):
+        self.postfix = text
+
+    def close(self):
+        if not self.closed:
+            self.closed = True
+            self._line()
+
+
+def bar(total=None, *, initial=0, desc="", unit="it", enabled=True, **tqdm_kw):
+    """A progress bar: tqdm on a terminal, plain log lines elsewhere (shown
+    where logging shows INFO), nothing when not ``enabled``."""
+    from tqdm import tqdm
+    if not enabled:
+        return tqdm(total=total, disable=True)
+    if not on_terminal():
+        return _PlainBar(total, initial, desc, unit)
+    return tqdm(total=total, initial=initial, desc=desc, unit=unit, dynamic_ncols=True,
+                **tqdm_kw)
+
+
+class _Ticker:
+    def __init__(self, what):
+        self.what = self.name = what
+
+    def set(self, detail):
+        """Say what the stage does now: 'NAME: DETAIL'."""
+        self.what = f"{self.name}: {detail}"
+
+
+@contextlib.contextmanager
+def ticking(what: str, *, after: float = 0.0, say_done: bool = True):
+    """A stage of unknown length: ``what`` and the seconds it has taken, live on
+    a terminal (redrawn every REDRAW_S), a plain line every QUIET_S elsewhere,
+    and (``say_done``) a line with its time at the end.  ``after``: nothing at
+    all unless the stage takes longer than that (a cache that may be warm).
+    Yields an object whose ``set(text)`` changes what the line says."""
+    t = _Ticker(what)
+    if not shown():
+        yield t
+        return
+    t0 = time.perf_counter()
+    stop, started = threading.Event(), threading.Event()
+    term = on_terminal()
+    line = []
+
+    def elapsed():
+        return time.perf_counter() - t0
+
+    def begin():
+        if term:
+            from tqdm import tqdm
+            bar_ = tqdm(total=None, bar_format="{desc}", leave=False, dynamic_ncols=True)
+            bar_.set_description_str(f"{t.what}: {elapsed():.0f} s")
+            line.append(bar_)
+        else:
+            log.info("%s ...", t.what)
+        started.set()
+
+    def tick():
+        if after and stop.wait(after):
+            return
+        if not started.is_set():
+            begin()
+        while not stop.wait(REDRAW_S if term else QUIET_S):
+            if term:
+                line[0].set_description_str(f"{t.what}: {elapsed():.0f} s")
+            else:
+                log.info("%s: still at work, %.0f s", t.what, elapsed())
+
+    if term:
+        from tqdm.contrib.logging import logging_redirect_tqdm
+        ctx = logging_redirect_tqdm(loggers=[logging.getLogger()])
+    else:
+        ctx = contextlib.nullcontext()
+    ok = False
+    with ctx:
+        if not after:
+            begin()
+        th = threading.Thread(target=tick, daemon=True, name="pipeline-progress")
+        th.start()
+        try:
+            yield t
+            ok = True
+        finally:
+            stop.set()
+            th.join()
+            for b in line:
+                b.close()
+    if ok and say_done and started.is_set():
+        log.info("%s: %.1f s", what, elapsed())
