@@ -19,7 +19,7 @@ study stored in a results file stops `pipeline show` and `pipeline report` with
 one line (exit code 2).
 
 The tests here read studies and generate source (no kernel runs), except one
-end-to-end run and one small sweep for the stored-study cases.
+end-to-end run; the stored-study cases copy the session's sweep of the main job.
 """
 
 import io
@@ -34,7 +34,7 @@ import pytest
 from pipeline.cli import main
 from pipeline.compile import source
 from pipeline.base.limits import MAX_NAME_LENGTH
-from pipeline.study.reader import StudyError, load_study, parse_study
+from pipeline.study.reader import StudyError, parse_study
 
 STUDIES = Path(__file__).resolve().parents[2] / "studies"
 CAM = (STUDIES / "cam_rocker_input.toml").read_text()
@@ -233,12 +233,9 @@ def test_a_payload_in_legal_names_never_runs(tmp_path, monkeypatch):
 
 
 @pytest.fixture(scope="module")
-def sweep_file(tmp_path_factory):
-    from pipeline.runs.sweep import run_sweep
-    out = tmp_path_factory.mktemp("stored") / "sweep.h5"
-    run_sweep(load_study(STUDIES / "ov7_synthesis.toml"), out, candidates=40, chunk_size=40,
-              progress=False)
-    return out
+def sweep_file(synthesis_sweep):
+    """The session's sweep of the main job (tests/conftest.py), copied by each test."""
+    return synthesis_sweep
 
 
 @pytest.mark.parametrize("command", [["show", "--candidate", "0"], ["report"]])
