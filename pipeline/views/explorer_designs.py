@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import logging
 import math
-import sys
 import time
 
 import numpy as np
 
 from ..analysis.candidate import STATUS_HELP, rerun_candidate
+from ..base.progress import on_terminal, shown
 from ..kernels import config as kc
 from .page import json_number, json_numbers
 from .plots import joint_descriptions
@@ -95,7 +95,7 @@ def design_cycle(run) -> dict:
 def _steps(items, desc):
     """``items`` with progress: a bar on a terminal, else nothing here (the
     caller logs a plain line when done)."""
-    if sys.stderr.isatty() and log.isEnabledFor(logging.INFO) and len(items) > 1:
+    if on_terminal() and shown() and len(items) > 1:
         from tqdm import tqdm
         return tqdm(items, desc=desc, unit="design", leave=False, dynamic_ncols=True)
     return items
