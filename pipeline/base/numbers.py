@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import re
 
-import numpy as np
-
 # a minus before a zero that is a whole number token: -0, -0.0, -0.000 (not
 # -0.5, -0.01, 1e-05, a name like "lead 2-0" or a range "10-0")
 _NEGATIVE_ZERO = re.compile(r"(?<![\w.])-(0(?:\.0*)?)(?![\w.])")
@@ -30,8 +28,3 @@ def signless_zeros(df):
         if out[c].dtype.kind == "f":
             out[c] = out[c].to_numpy() + 0.0
     return out
-
-
-def plain(v: float) -> float:
-    """A float with -0.0 made +0.0."""
-    return float(np.float64(v) + 0.0)
