@@ -5,9 +5,11 @@ cores of the same machine, same process, same drawn candidates.
   the device, results left there; CPU: ``SweepProblem.evaluate_rows`` on all
   cores), best of ``--repeat``;
 * end to end: ``run_sweep`` into an HDF5 file (drawing, transfers, journal,
-  HDF5), with --device gpu and --device cpu, for each ``--sizes`` (default
-  10^6 and 10^7 candidates; the CPU end to end only up to --cpu-max, its
-  throughput is flat in the size).
+  HDF5; ``--store feasible`` by default, as the README's 10^7 command), with
+  --device gpu and --device cpu, for each ``--sizes`` (default 10^6 and 10^7
+  candidates; the CPU end to end only up to --cpu-max, its throughput is flat
+  in the size; a size that the last rate says would take over --max-seconds
+  is left out, saying so).
 
 Compile time is reported apart (the first evaluation of each path).  Exits
 with a message, and status 0, where numba.cuda finds no usable GPU (see
@@ -41,6 +43,8 @@ def main(argv=None):
     ap.add_argument("--kernel-rows", type=int, default=65536)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--chunk-size", type=int, default=1_000_000)
+    ap.add_argument("--store", choices=("all", "feasible"), default="feasible")
+    ap.add_argument("--max-seconds", type=float, default=float("inf"))
     a = ap.parse_args(argv)
     from pipeline.runs import gpu
     p = gpu.probe()
@@ -66,27 +70,47 @@ def main(argv=None):
     g = gpu.GpuSweep(dev, batch=max(a.kernel_rows, 1))
     g.evaluate_rows(pars[:64])
     print(f"compile, CUDA kernel: {time.perf_counter() - t:.1f} s")
+    print(_occupancy(g.mod.sweep_kernel))
 
     best_c = min(_timed(lambda: cpu.evaluate_rows(pars)) for _ in range(a.repeat))
     best_g = g.kernel_only(pars, repeats=a.repeat)
     print(f"kernel only, {len(pars):,} candidates: CPU {len(pars) / best_c:,.0f}/s, "
-          f"GPU {len(pars) / best_g:,.0f}/s, ratio {best_c / best_g:.1f}x")
+          f"GPU {len(pars) / best_g:,.0f}/s, ratio {best_c / best_g:.1f}x", flush=True)
 
+    rate = {}
     with tempfile.TemporaryDirectory() as tmp:
         for n in a.sizes:
-            row = [f"end to end, {n:,} candidates:"]
+            row = [f"end to end, {n:,} candidates, store {a.store}:"]
             for device in ("gpu", "cpu"):
                 if device == "cpu" and n > a.cpu_max:
+                    continue
+                if device in rate and n / rate[device] > a.max_seconds:
+                    row.append(f"{device.upper()} left out (about {n / rate[device]:.0f} s "
+                               f"expected, over --max-seconds {a.max_seconds:g})")
                     continue
                 out = Path(tmp) / f"{device}{n}.h5"
                 t = time.perf_counter()
                 run_sweep(study, out, candidates=n, chunk_size=min(a.chunk_size, n),
-                          device=device, progress=False)
+                          device=device, progress=False, store=a.store)
                 s = time.perf_counter() - t
+                rate[device] = n / s
                 row.append(f"{device.upper()} {s:.1f} s ({n / s:,.0f}/s)")
                 out.unlink()
-            print(" ".join(row))
+            print(" ".join(row), flush=True)
     return 0
+
+
+def _occupancy(kernel):
+    """Registers and local memory per thread of the compiled kernel (what limits
+    how many threads a multiprocessor holds), where numba.cuda says."""
+    try:
+        regs, local = kernel.get_regs_per_thread(), kernel.get_local_mem_per_thread()
+        if isinstance(regs, dict):     # one entry per compiled signature
+            regs, local = max(regs.values()), max(local.values())
+        return (f"CUDA kernel: {regs} registers per thread, "
+                f"{local} bytes of local memory per thread")
+    except Exception as e:      # the simulator, or an older numba.cuda
+        return f"CUDA kernel: registers per thread not known here ({type(e).__name__})"
 
 
 def _draws(spec, n):

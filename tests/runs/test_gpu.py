@@ -23,7 +23,7 @@ import pytest
 from pipeline.kernels import sweep as ks
 from pipeline.study.reader import load_study
 from pipeline.runs.sweep import run_sweep
-from support.tolerances import GPU_AGREEMENT_REL
+from support.tolerances import GPU_AGREEMENT_REL, GPU_FAIL_PHI_STEPS as FAIL_PHI_STEPS
 from pipeline.results.storage import variables
 
 HERE = Path(__file__).resolve().parents[1]   # tests/
@@ -46,6 +46,9 @@ def _check_agreement(res):
     for case, v in res.items():
         if case == "simulator":
             continue
+        if "ulp" in v and not res["simulator"]:
+            _within_conditioning(case, v)
+            continue
         assert v["status_vs_cpu"] == 0, (case, "statuses differ from the CPU's")
         assert v["status_vs_careful"] == 0, case
         for c, (d, one) in v["vs_careful"].items():
@@ -57,6 +60,32 @@ def _check_agreement(res):
     syn = res["ov7_synthesis.toml"]
     assert syn["statuses"][0] > 0 and syn["forces_done"] > 0
     assert sum(res["near-singular triads"]["statuses"][1:]) > 0
+
+
+def _within_conditioning(case, v):
+    """The near-singular candidates on a real GPU.  NVVM contracts a*b + c into
+    FMA and libdevice rounds sin, cos and atan2 its own way: last-digit
+    differences, which candidates built within 1e-10..1e-1 of a singular
+    position magnify as much as any change of their input.  On an H100 (numba-cuda
+    0.30.4) 4 of 10,000 statuses differed from the CPU's and 4,478 failure
+    angles, by up to 1.0 rad; with every parameter one ulp up (down), the CPU's
+    own answers changed 6 (4) statuses and 4,587 (4,560) angles, by up to 1.0
+    (0.43) rad.  So the GPU may differ from the CPU by no more than the CPU
+    differs from itself under those two one-ulp changes: statuses and angles
+    counted (each step of FAIL_PHI_STEPS), metrics by their largest spread.  The
+    same group must fail.  Under the simulator (the CPU's arithmetic) the check
+    stays exact."""
+    u = v["ulp"]
+    assert v["status_vs_cpu"] <= sum(u["status"]), (case, "statuses", v["status_vs_cpu"],
+                                                    u["status"])
+    assert v["status_vs_careful"] <= sum(u["status"]), (case, "statuses vs careful")
+    assert v["fail_group_vs_cpu"] == 0, (case, "a different group fails")
+    for step, gpu, cpu in zip(FAIL_PHI_STEPS, v["fail_phi_over_vs_cpu"], u["fail_phi_over"]):
+        assert gpu <= cpu, (case, f"failure angles over {step} rad apart", gpu, cpu)
+    for c, (d, one) in v["vs_cpu"].items():
+        if int(c) in PATH_DEFINED | {ks.M_FAIL_PHI, ks.M_FAIL_GROUP}:
+            continue
+        assert one == 0 and d <= max(REL, u["metrics"][c]), (case, c, d, u["metrics"][c])
 
 
 @pytest.fixture(scope="module")

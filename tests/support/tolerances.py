@@ -63,6 +63,9 @@ LANE_AGREEMENT_REL = 1e-12
 LANE_MARGIN_REL = 7.2e-12
 # the GPU kernels (numba's CUDA simulator) against the CPU.  test_gpu
 GPU_AGREEMENT_REL = 1e-12
+# on a real GPU, the near-singular candidates' failure angles are counted apart by
+# each of these steps (rad) and held to the CPU's own counts under one-ulp input changes
+GPU_FAIL_PHI_STEPS = (1e-9, 1e-6, 1e-3)
 
 # the README's table: the start of each row's first cell -> the constants its
 # figure states, in the order written (numbers written as 1e-7, 5.1e-5, ...)
