@@ -150,15 +150,17 @@ def reference_values(path, columns, ana):
 def design_picks(ana, n) -> list[int]:
     """The front-1 rows whose cycle is embedded: all of front 1 when it holds at
     most ``n``, else ``n`` spread evenly along it (it is sorted by the first
-    objective); the knee always (when n > 0)."""
+    objective); the knee and the representative designs always (when n > 0:
+    the report draws them from these cycles)."""
     front = [int(i) for i in ana.front1]
     if n <= 0:
         return []
     if len(front) > n:
         at = np.unique(np.round(np.linspace(0, len(front) - 1, n)).astype(int))
         front = [front[k] for k in at]
-    if ana.knee >= 0 and int(ana.knee) not in front:
-        front.append(int(ana.knee))
+    for i in [ana.knee, *ana.representatives]:
+        if i >= 0 and int(i) not in front:
+            front.append(int(i))
     return front
 
 
@@ -200,10 +202,18 @@ def explorer_payload(path, data, ana, drawings=None) -> dict:
 
 def explorer_html(path, data, ana, drawings=None) -> str:
     """The explorer's section of the page (its script comes with the page)."""
+    return explorer_section(path, data, ana, drawings)[0]
+
+
+def explorer_section(path, data, ana, drawings=None) -> tuple[str, set]:
+    """The explorer's section of the page, and the keys (candidate numbers as
+    text, 'reference') of the designs whose cycle it embeds, which the rest of
+    the page may draw (explorer.js: elements of class design-drawing and
+    design-animation)."""
     if data.F.shape[1] < 2:
-        return '<p class="note">The explorer plots two objectives; this study has one.</p>'
+        return '<p class="note">The explorer plots two objectives; this study has one.</p>', set()
     if not (data.feasible & np.isfinite(data.F).all(axis=1)).any():
-        return '<p class="note">No feasible design to explore.</p>'
+        return '<p class="note">No feasible design to explore.</p>', set()
     payload, cols = explorer_payload(path, data, ana, drawings)
     n = payload["counts"]
     objectives = []
@@ -224,4 +234,4 @@ def explorer_html(path, data, ana, drawings=None) -> str:
         all_note=(f" (with {n['infeasible_shown']:,} of the {n['infeasible']:,} infeasible "
                   "designs" + (", a seeded sample" if n["infeasible_shown"] < n["infeasible"]
                                else "") + ")" if n["infeasible"] else ""),
-        data=script_json(payload))
+        data=script_json(payload)), set(payload["designs"])

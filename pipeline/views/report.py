@@ -29,9 +29,9 @@ from ..analysis.fronts import analyze, has_analysis, read_analysis, read_sweep
 from ..analysis.candidate import rerun_candidate
 from ..base.files import write_text
 from ..analysis.ranking import design_table, ranking
-from .explorer import EXPLORER_DRAWINGS, explorer_html
+from .explorer import EXPLORER_DRAWINGS, explorer_section
 from .page import markup, plotly_js, render
-from .report_figures import (_letters, _png, design_figure, importance_figure, pareto_figure,
+from .report_figures import (_letters, _png, importance_figure, pareto_figure,
                              search_figure)
 from ..results.storage import attr_text, open_results
 from ..results.sweep_file import status_counts
@@ -74,12 +74,13 @@ ANIMATION_FRAMES = 60       # the animated design: one revolution in 3 s (about 
 ANIMATION_DPI = 60
 
 
-def motion_html(path, ana) -> str:
+def motion_html(path, ana, data=None, drawn=()) -> str:
     """The knee design (else the first representative, else the reference
-    design) in motion: an animated GIF of one revolution, embedded like the
-    pictures, and its circular cyclogram against the cycle the study states
-    ([output.motion_law]), else the OV-7 cycle of DOMAIN.md section 9 that the
-    synthesis is for."""
+    design) in motion, and its circular cyclogram against the cycle the study
+    states ([output.motion_law]), else the OV-7 cycle of DOMAIN.md section 9
+    that the synthesis is for.  The motion: drawn by the page's script from the
+    explorer's cycle of the design when ``drawn`` (the keys of the designs the
+    explorer embeds) has it, else an animated GIF embedded like the pictures."""
     from .animate import gif_bytes, motion_of
     from .show import OV7_PHASES
     from .plots import cyclogram_figure, stated_cycle
@@ -89,10 +90,12 @@ def motion_html(path, ana) -> str:
         cid, why = int(ana.representatives[0]), "representative A"
     else:
         cid, why = "reference", "no feasible design: the study's reference design"
+    key = "reference" if cid == "reference" or data is None else str(data.id(cid))
     try:
         run = rerun_candidate(path, cid, forces=False)
-        gif = gif_bytes(motion_of(run.scene, f"{run.label} ({why})"), frames=ANIMATION_FRAMES,
-                        dpi=ANIMATION_DPI)
+        gif = None if key in drawn else gif_bytes(
+            motion_of(run.scene, f"{run.label} ({why})"), frames=ANIMATION_FRAMES,
+            dpi=ANIMATION_DPI)
         cycle, turn = stated_cycle(run.study)
         if cycle is not None:
             against, name = "the study's motion law", "required ([output.motion_law])"
@@ -102,17 +105,24 @@ def motion_html(path, ana) -> str:
     except Exception as e:   # a design the scene path cannot redraw: say so, go on
         log.warning("report: no animation of candidate %s (%s)", cid, e)
         return f'<p class="note">No animation: {html.escape(str(e))}</p>'
-    uri = "data:image/gif;base64," + base64.b64encode(gif).decode("ascii")
+    if gif is None:
+        motion = (f'<div class="design-animation" data-design="{html.escape(key)}" '
+                  f'data-frames-asked="{ANIMATION_FRAMES}"></div>')
+        how = f"about {ANIMATION_FRAMES} frames, drawn by the page (play and pause above it)"
+    else:
+        uri = "data:image/gif;base64," + base64.b64encode(gif).decode("ascii")
+        motion = (f'<img class="animation" src="{uri}" alt="animation of '
+                  f'{html.escape(run.label)}">')
+        how = (f"{ANIMATION_FRAMES} frames, {len(gif) / 1024:.0f} KiB; the working point's path "
+               "magnified when it is small")
     return (f'<p class="note">{html.escape(run.label)}, {html.escape(why)}, over one revolution '
-            f"({ANIMATION_FRAMES} frames, {len(gif) / 1024:.0f} KiB; the working point's path "
-            "magnified when it is small), and its cyclogram: the phases of its own output "
+            f"({how}), and its cyclogram: the phases of its own output "
             f"motion (inner ring) against {against} (outer ring), turned so that both dwells "
             "start together, as the crank's mounting phase would (unless the law is held "
             "fixed). <code>pipeline show FILE "
             f"--candidate {html.escape(str(run.index))} --animate</code> writes the full "
             'animation.</p><div class="cards motion">'
-            f'<img class="animation" src="{uri}" alt="animation of {html.escape(run.label)}">'
-            f'{_img(cyc, "cyclogram of " + run.label)}</div>')
+            f'{motion}{_img(cyc, "cyclogram of " + run.label)}</div>')
 
 
 # ----------------------------------------------------------------- page parts
@@ -129,8 +139,8 @@ def tolerance_html(path, ana, data) -> str:
     from ..analysis.candidate import tolerance_design
     from ..runs.tolerance import analyse
     from ..study.tolerance_spec import ToleranceSpec
-    from .tolerance_plots import histograms_figure
-    rows, knee_fig = [], None
+    from .charts import chart_html, tolerance_chart
+    rows, knee_chart = [], None
     designs = list(dict.fromkeys([i for i in [ana.knee] + list(ana.representatives) if i >= 0]))
     for i in designs + ["reference"]:
         cid = "reference" if i == "reference" else str(data.id(i))
@@ -139,7 +149,7 @@ def tolerance_html(path, ana, data) -> str:
                     sweep_spec=sweep, samples=TOLERANCE_BUILDS)
         if i == ana.knee:
             label += " (knee)"
-            knee_fig = _png(histograms_figure(a), dpi=72)
+            knee_chart = chart_html(*_titled(tolerance_chart(a), "the knee's builds"))
         p05, p95 = a.quantiles(0.05), a.quantiles(0.95)
         share = a.contributions()
         cells = [html.escape(label), f"{100 * a.yield_:.1f} %"]
@@ -160,8 +170,8 @@ def tolerance_html(path, ana, data) -> str:
            "assembles and meets the constraints. <code>pipeline tolerance FILE --candidate "
            "ID</code> writes the whole analysis (sensitivities, tornado chart).</p>",
            f'<div class="wide"><table><tr>{head}</tr>{"".join(rows)}</table></div>']
-    if knee_fig is not None:
-        out.append(_img(knee_fig, "the knee's builds"))
+    if knee_chart is not None:
+        out.append(knee_chart)
     return "".join(out)
 
 
@@ -170,7 +180,8 @@ def comparison_section_html(path, ana, data) -> str:
     both re-run as scenes (``analysis.compare.compare_candidate``): the table
     of ``pipeline compare FILE --candidate ID`` and its picture."""
     from ..analysis.compare import compare_candidate
-    from .compare import comparison_figure, comparison_html
+    from .charts import chart_html, comparison_chart
+    from .compare import comparison_html
     if ana.knee >= 0:
         i, why = int(ana.knee), "the knee of front 1"
     elif len(ana.representatives):
@@ -188,8 +199,14 @@ def comparison_section_html(path, ana, data) -> str:
             "peak with the crank angle where it happens, the change against the reference "
             f"design. <code>pipeline compare FILE --candidate {html.escape(cid)}</code> prints "
             "the same table.</p>" + comparison_html(cmp)
-            + _img(_png(comparison_figure(cmp), dpi=72), "the design against the reference "
-                                                         "design"))
+            + chart_html(*_titled(comparison_chart(cmp),
+                                  "the design against the reference design")))
+
+
+def _titled(chart, title):
+    """(figure, title, height) for ``chart_html`` from (figure, height)."""
+    figure, height = chart
+    return figure, title, height
 
 
 def _table_html(df, knee=None) -> str:
@@ -212,12 +229,15 @@ def _kv(pairs) -> str:
         f"<tr><td>{html.escape(str(k))}</td><td>{v}</td></tr>" for k, v in pairs) + "</table>"
 
 
-def _card(title, run, values, data) -> str:
+def _card(title, values, variables, data, key, drawn) -> str:
+    """A design's card: its drawing (by the page's script, from the explorer's
+    cycle of the design, where ``drawn`` has ``key``), its metrics and its
+    design variables."""
     rows = [(k, v) for k, v in values]
-    rows += [(f"{n} [{u}]", _fmt(x, 5)) for n, x, u in zip(data.names, run.x, data.units)]
-    pic = design_figure(run)
-    return (f'<div class="card"><h3>{html.escape(title)}</h3>{_img(pic, title)}'
-            f"{_kv(rows)}</div>")
+    rows += [(f"{n} [{u}]", _fmt(x, 5)) for n, x, u in zip(data.names, variables, data.units)]
+    pic = (f'<div class="design-drawing" data-design="{html.escape(key)}"></div>'
+           if key in drawn else "")
+    return f'<div class="card"><h3>{html.escape(title)}</h3>{pic}{_kv(rows)}</div>'
 
 
 def _metric_row(f, i, names):
@@ -269,6 +289,8 @@ def build_html(path, top=20, drawings=None) -> str:
                                     "singularity_margin", "dwell_start", "peak_M_bal")]
         rep_values = {i: _metric_row(f, i, show_metrics) for i in reps}
         ref_values = _metric_row(f, "reference", show_metrics) if "reference" in f else None
+        ref_variables = (f["reference/params"][()] if "reference/params" in f
+                         else None)
         ga = {k: attr_text(f["analysis"].attrs[k]) for k in f["analysis"].attrs}
         history = _search_history(f)
 
@@ -302,14 +324,14 @@ def build_html(path, top=20, drawings=None) -> str:
                      "candidates are ranked.</p>")
 
     step(f"read {data.n:,} candidates")
-    parts += ["<h2>Pareto fronts</h2>",
-              '<p class="note">Every feasible candidate coloured by its front (front 1 in red, '
-              "joined by a line); grey: candidates that violate a constraint but have both "
-              "objectives; diamond: the knee of front 1; star: the study's reference design; "
-              "letters: the representative designs below.</p>",
-              _img(pareto_figure(data, ana), "Pareto plot")]
-    step("Pareto plot")
-    explorer = explorer_html(path, data, ana, drawings)
+    explorer, drawn = explorer_section(path, data, ana, drawings)
+    parts.append("<h2>Pareto fronts</h2>")
+    if 'id="explorer-data"' not in explorer:    # no explorer: the fronts as a picture
+        parts += ['<p class="note">Every feasible candidate coloured by its front (front 1 '
+                  "in red, joined by a line); grey: candidates that violate a constraint but "
+                  "have both objectives; diamond: the knee of front 1; star: the study's "
+                  "reference design; letters: the representative designs below.</p>",
+                  _img(pareto_figure(data, ana), "Pareto plot")]
     parts += ["<h3>Explore the designs</h3>", explorer]
     step("explorer")
 
@@ -323,19 +345,19 @@ def build_html(path, top=20, drawings=None) -> str:
 
     parts.append("<h2>Representative designs</h2>")
     parts.append('<p class="note">Front-1 members nearest the centroids of a k-means '
-                 "clustering of the normalised front-1 objectives, each drawn at 12 crank "
-                 "positions (thick: phi1 = 0), with the study's reference design for "
+                 "clustering of the normalised front-1 objectives, each drawn at its table's crank "
+                 "positions (thick: the first) with the paths of its points (zoom by drag, "
+                 "double-click to reset), with the study's reference design for "
                  "comparison. <code>pipeline show FILE --candidate ID</code> draws one with "
                  "its motion and reactions.</p>")
     cards = []
     for i in reps:
-        run = rerun_candidate(path, int(i), forces=False)
         cards.append(_card(f"{letters[i]}: candidate #{data.id(i)}"
                            + (" (knee)" if i == knee else ""),
-                           run, rep_values[i], data))
-    if ref_values is not None:
-        run = rerun_candidate(path, "reference", forces=False)
-        cards.append(_card("reference design", run, ref_values, data))
+                           rep_values[i], data.params[i], data, str(data.id(i)), drawn))
+    if ref_values is not None and ref_variables is not None:
+        cards.append(_card("reference design", ref_values, ref_variables, data, "reference",
+                           drawn))
     parts.append('<div class="cards">' + "".join(cards) + "</div>" if cards else
                  '<p class="note">No feasible design: nothing to draw.</p>')
 
@@ -345,7 +367,7 @@ def build_html(path, top=20, drawings=None) -> str:
     parts += ["<h2>Against the reference design</h2>",
               comparison_section_html(path, ana, data)]
     step("comparison with the reference design")
-    parts += ["<h2>A design in motion</h2>", motion_html(path, ana)]
+    parts += ["<h2>A design in motion</h2>", motion_html(path, ana, data, drawn)]
     step("animation")
 
     parts.append("<h2>Front 1</h2>")
@@ -398,8 +420,10 @@ def build_html(path, top=20, drawings=None) -> str:
 
     # the parts are HTML written above from escaped pieces; the explorer's section
     # comes from its own template, its script and plotly.js only when it is there
+    live = 'id="explorer-data"' in explorer
+    charts = any('class="chart"' in p for p in parts)
     page = render("report.html.j2", title=str(title), parts=[markup(p) for p in parts],
-                  plotly=plotly_js() if 'id="explorer-data"' in explorer else None)
+                  plotly=plotly_js() if live or charts else None, explorer=live)
     step("page")
     return page
 

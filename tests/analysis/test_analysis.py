@@ -366,7 +366,12 @@ def test_report_is_self_contained(cli_run):
     assert not re.search(r"""(src|href)\s*=\s*["'](?!data:|#)""", tags), "external resource"
     assert "<link" not in tags and "@import" not in page
     assert not re.search(r"<script[^>]*\bsrc", tags)
-    assert page.count('src="data:image/png;base64,') >= 4
+    # pictures rendered here (importances, the cyclogram); the charts, the designs'
+    # drawings and the design in motion drawn by the page from their numbers
+    assert page.count('src="data:image/png;base64,') >= 2
+    assert page.count('<div class="chart"') == 2              # tolerances, comparison
+    assert page.count('class="design-drawing"') >= 2          # representatives, reference
+    assert page.count('class="design-animation"') == 1
     for words in ("Pareto fronts", "held-out", "Representative designs", "Front 1",
                   "Candidates by status", "Provenance", "[sweep]", "20261121", "sobol"):
         assert words in page, words
@@ -390,9 +395,18 @@ def test_report_renders_in_chromium(cli_run, tmp_path):
     tag = body.group(0)
     assert 'data-images-loaded="true"' in tag, tag
     total = int(re.search(r'data-images-total="(\d+)"', tag).group(1))
-    assert total >= 4 and f'data-images-ok="{total}"' in tag
+    assert total >= 2 and f'data-images-ok="{total}"' in tag
     assert "data-js-errors" not in tag
     assert 'data-explorer="ready"' in tag, tag          # plotly.js drew the explorer
+    assert 'data-charts="2"' in tag, tag                # and the two charts
+    # every design's drawing and the design in motion hold a drawn plot
+    cards = dom.stdout.count('class="design-drawing')
+    assert cards >= 2 and dom.stdout.count('class="design-drawing js-plotly-plot"') == cards, \
+        cards
+    frames = re.search(r'class="design-animation js-plotly-plot"[^>]*data-frames="(\d+)"',
+                       dom.stdout) or re.search(
+        r'data-frames="(\d+)"[^>]*class="design-animation js-plotly-plot"', dom.stdout)
+    assert frames and int(frames.group(1)) >= 30, frames
     shot = tmp_path / "report.png"
     r = subprocess.run([exe, *flags, "--window-size=1280,3000", f"--screenshot={shot}", url],
                        capture_output=True, text=True, timeout=120, env=env)

@@ -73,11 +73,13 @@ def test_the_command_names_the_file_from_the_current_folder(tmp_path, monkeypatc
 
 
 def test_which_front_1_designs_carry_their_cycle():
-    ana = SimpleNamespace(front1=np.arange(100, 110), knee=104)
+    ana = SimpleNamespace(front1=np.arange(100, 110), knee=104, representatives=[])
     assert ex.design_picks(ana, 50) == list(range(100, 110))         # all of a small front
     assert ex.design_picks(ana, 3) == [100, 104, 109]                # spread: both ends
     ana.knee = 103
     assert ex.design_picks(ana, 3) == [100, 104, 109, 103]           # and the knee
+    ana.representatives = [101, 109, 102]
+    assert ex.design_picks(ana, 3) == [100, 104, 109, 103, 101, 102]   # and the report's cards
     assert ex.design_picks(ana, 0) == []
 
 

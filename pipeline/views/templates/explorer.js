@@ -304,6 +304,87 @@
     });
   }
 
+  // ------------------------------------------------------------ the report's designs
+  // the representative designs' drawings and the design in motion, from the same
+  // cycles as the explorer's (report.py writes the divs, data-design = the key)
+  function where(m, i, k) {        // point i at path sample k (a fixed point stays)
+    var p = m.paths[i];
+    return p ? [p[0][k], p[1][k]] : [m.x[0][i], m.y[0][i]];
+  }
+  function linksAt(m, k) {
+    var x = [], y = [];
+    m.segments.forEach(function (s) {
+      var a = where(m, s[0], k), b = where(m, s[1], k);
+      x.push(a[0], b[0], null);
+      y.push(a[1], b[1], null);
+    });
+    return {x: x, y: y};
+  }
+  function pointsAt(m, k) {
+    return {x: m.names.map(function (_, i) { return where(m, i, k)[0]; }),
+            y: m.names.map(function (_, i) { return where(m, i, k)[1]; })};
+  }
+  function animateMechanism(div, m, frames) {
+    var keys = Object.keys(m.paths), n = keys.length ? m.paths[keys[0]][0].length : 1;
+    var xs = [], ys = [];
+    keys.forEach(function (i) { xs = xs.concat(m.paths[i][0]); ys = ys.concat(m.paths[i][1]); });
+    m.x[0].forEach(function (v) { xs.push(v); });
+    m.y[0].forEach(function (v) { ys.push(v); });
+    function range(v) {
+      var lo = Math.min.apply(null, v), hi = Math.max.apply(null, v), pad = 0.08 * (hi - lo || 1);
+      return [lo - pad, hi + pad];
+    }
+    var data = keys.map(function (i) {
+      return {x: m.paths[i][0], y: m.paths[i][1], mode: 'lines', hoverinfo: 'skip',
+              showlegend: false, line: {color: '#bbb', width: 1, dash: 'dot'}};
+    });
+    var l0 = linksAt(m, 0), p0 = pointsAt(m, 0), moving = [data.length, data.length + 1];
+    data.push({x: l0.x, y: l0.y, mode: 'lines', showlegend: false, hoverinfo: 'skip',
+               line: {color: '#1f4e99', width: 3}});
+    data.push({x: p0.x, y: p0.y, mode: 'markers', showlegend: false, hoverinfo: 'skip',
+               marker: {color: '#000', size: 6}});
+    var step = Math.max(1, Math.round(n / frames)), list = [];
+    for (var k = 0; k < n; k += step) {
+      var l = linksAt(m, k), p = pointsAt(m, k);
+      list.push({name: String(k), traces: moving,
+                 data: [{x: l.x, y: l.y}, {x: p.x, y: p.y}]});
+    }
+    var play = {frame: {duration: 50, redraw: false}, transition: {duration: 0},
+                fromcurrent: true, mode: 'immediate'};
+    return Plotly.newPlot(div, data, {
+      title: {text: 'one revolution, ' + list.length + ' frames (dotted: the paths)',
+              font: {size: 12}, x: 0.98, xanchor: 'right'},
+      margin: {l: 50, r: 10, t: 44, b: 40}, showlegend: false,
+      xaxis: {title: {text: 'x [mm]'}, range: range(xs)},
+      yaxis: {title: {text: 'y [mm]'}, range: range(ys), scaleanchor: 'x'},
+      updatemenus: [{type: 'buttons', direction: 'left', showactive: false, x: 0, y: 1.0,
+                     xanchor: 'left', yanchor: 'bottom', pad: {b: 4},
+                     buttons: [{label: 'play', method: 'animate', args: [null, play]},
+                               {label: 'pause', method: 'animate',
+                                args: [[null], {mode: 'immediate', frame: {duration: 0}}]}]}]
+    }, SMALL).then(function () {
+      return Plotly.addFrames(div, list);
+    }).then(function () {
+      div.dataset.frames = String(list.length);
+      // round and round: each time the revolution ends, from its first frame again
+      var again = Object.assign({}, play, {fromcurrent: false});
+      div.on('plotly_animated', function () { Plotly.animate(div, null, again); });
+      Plotly.animate(div, null, play);
+    });
+  }
+  function reportDesigns() {
+    var done = [];
+    Array.prototype.forEach.call(document.querySelectorAll('.design-drawing'), function (div) {
+      var d = D.designs[div.dataset.design];
+      if (d) { done.push(drawMechanism(div, d.mechanism)); }
+    });
+    Array.prototype.forEach.call(document.querySelectorAll('.design-animation'), function (div) {
+      var d = D.designs[div.dataset.design];
+      if (d) { done.push(animateMechanism(div, d.mechanism, Number(div.dataset.framesAsked || 60))); }
+    });
+    return Promise.all(done);
+  }
+
   // ------------------------------------------------------------ wiring
   function rowsOf(points) {
     var seen = {}, out = [];
@@ -339,6 +420,8 @@
     if (window.ResizeObserver) {
       new ResizeObserver(function () { Plotly.Plots.resize(plot); }).observe(plot);
     }
+    return reportDesigns();
+  }).then(function () {
     document.body.dataset.explorer = 'ready';
   });
 })();
