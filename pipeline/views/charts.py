@@ -220,3 +220,37 @@ def comparison_chart(cmp) -> tuple[dict, int]:
                   legend={"orientation": "h", "x": 0.5, "xanchor": "center", "y": -0.1,
                           "yanchor": "top"})
     return {"data": data, "layout": layout, "config": CONFIG}, 760
+
+
+def importance_chart(data, ana) -> tuple[dict, int]:
+    """The permutation importance of every design variable for each objective
+    (the gradient-boosted model of the analysis): bars with their spread over
+    the repeats, one panel per objective.  Returns (figure, height in pixels)."""
+    objs = list(data.objectives)
+    names = [plain(n) for n in data.names]
+    bars, layout, notes = [], {}, []
+    for k, ((x0, x1, y0, y1), o) in enumerate(zip(_grid(len(objs), len(objs), gap_x=0.12),
+                                                  objs)):
+        xa, ya, xkey, ykey = _axes(k)
+        m = ana.models.get(o, {})
+        layout[xkey] = {"domain": [x0, x1], "anchor": ya, "zeroline": True,
+                        "title": {"text": "drop of held-out R² when shuffled"}}
+        layout[ykey] = {"domain": [y0, y1], "anchor": xa, "autorange": "reversed",
+                        "automargin": True}
+        if not m.get("fitted"):
+            notes.append({"text": f"{plain(o)}: no model ({plain(m.get('reason', 'not fitted'))})",
+                          "xref": f"{xa} domain", "yref": f"{ya} domain", "x": 0.5, "y": 0.5,
+                          "showarrow": False})
+            continue
+        bars.append({"type": "bar", "orientation": "h", "x": json_numbers(np.asarray(m["mean"])),
+                     "y": names, "xaxis": xa, "yaxis": ya, "showlegend": False, "name": plain(o),
+                     "marker": {"color": COLOURS[0]},
+                     "error_x": {"type": "data", "array": json_numbers(np.asarray(m["std"])),
+                                 "thickness": 1, "width": 2}})
+        notes.append({"text": f"{plain(o)}: held-out R² = {float(m['r2_test']):.3f}<br>"
+                              f"({plain(m.get('target', ''))} target, {int(m.get('n_train', 0))} "
+                              f"train / {int(m.get('n_test', 0))} test)",
+                      "xref": f"{xa} domain", "yref": f"{ya} domain", "x": 0.5, "y": 1.0,
+                      "yanchor": "bottom", "showarrow": False, "font": {"size": 12}})
+    layout.update(annotations=notes, margin={"l": 70, "r": 20, "t": 60, "b": 50})
+    return {"data": bars, "layout": layout, "config": CONFIG}, 110 + 22 * len(names)

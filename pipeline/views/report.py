@@ -31,7 +31,8 @@ from ..base.files import write_text
 from ..analysis.ranking import design_table, ranking
 from .explorer import EXPLORER_DRAWINGS, explorer_section
 from .page import markup, plotly_js, render
-from .report_figures import (_letters, _png, importance_figure, pareto_figure,
+from .charts import chart_html, comparison_chart, importance_chart, tolerance_chart
+from .report_figures import (_letters, _png, pareto_figure,
                              search_figure)
 from ..results.storage import attr_text, open_results
 from ..results.sweep_file import status_counts
@@ -139,7 +140,6 @@ def tolerance_html(path, ana, data) -> str:
     from ..analysis.candidate import tolerance_design
     from ..runs.tolerance import analyse
     from ..study.tolerance_spec import ToleranceSpec
-    from .charts import chart_html, tolerance_chart
     rows, knee_chart = [], None
     designs = list(dict.fromkeys([i for i in [ana.knee] + list(ana.representatives) if i >= 0]))
     for i in designs + ["reference"]:
@@ -180,7 +180,6 @@ def comparison_section_html(path, ana, data) -> str:
     both re-run as scenes (``analysis.compare.compare_candidate``): the table
     of ``pipeline compare FILE --candidate ID`` and its picture."""
     from ..analysis.compare import compare_candidate
-    from .charts import chart_html, comparison_chart
     from .compare import comparison_html
     if ana.knee >= 0:
         i, why = int(ana.knee), "the knee of front 1"
@@ -340,7 +339,7 @@ def build_html(path, top=20, drawings=None) -> str:
               "variables, fitted on the feasible candidates (seeded subsample and split); "
               "permutation importance = how much the held-out R<sup>2</sup> drops when one "
               "variable is shuffled (mean &plusmn; std over the repeats).</p>",
-              _img(importance_figure(data, ana), "parameter importances")]
+              chart_html(*_titled(importance_chart(data, ana), "parameter importances"))]
     step("importances")
 
     parts.append("<h2>Representative designs</h2>")

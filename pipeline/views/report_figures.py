@@ -1,6 +1,6 @@
-"""The report's pictures, each a PNG data URI: the Pareto plot, the
-hypervolume of an adaptive search, the parameter importances and one design
-drawn small."""
+"""The report's pictures that are rendered here, each a PNG data URI: the Pareto
+plot (where the page has no explorer) and the hypervolume of an adaptive search.
+The page draws its other charts itself (``views.charts``)."""
 
 from __future__ import annotations
 
@@ -9,8 +9,6 @@ import io
 import math
 
 import numpy as np
-
-from ..results.storage import attr_text
 
 MAX_GREY = 60_000       # infeasible points drawn in the Pareto plot (seeded subsample)
 MAX_FRONT_POINTS = 200_000
@@ -125,40 +123,3 @@ def search_figure(h) -> str:
     ax.set_title(f"{h['method']}: {len(h['evaluations'])} generations", fontsize=10)
     return _png(fig)
 
-def importance_figure(data, ana) -> str:
-    import matplotlib.pyplot as plt
-    objs = list(data.objectives)
-    fig, axes = plt.subplots(1, len(objs), figsize=(5.2 * len(objs), 3.8), layout="constrained",
-                             squeeze=False)
-    names = data.names
-    ypos = np.arange(len(names))
-    for ax, o in zip(axes[0], objs):
-        m = ana.models.get(o, {})
-        if not m.get("fitted"):
-            ax.text(0.5, 0.5, f"no model:\n{attr_text(m.get('reason', 'not fitted'))}", ha="center",
-                    va="center", transform=ax.transAxes, wrap=True, fontsize=9)
-            ax.set_axis_off()
-            ax.set_title(o, fontsize=10)
-            continue
-        mean, std = np.asarray(m["mean"]), np.asarray(m["std"])
-        ax.barh(ypos, mean, xerr=std, color="C0", alpha=0.85, capsize=2)
-        ax.set_yticks(ypos, names)
-        ax.invert_yaxis()
-        ax.axvline(0, color="k", lw=0.6)
-        ax.set_xlabel("drop of held-out R$^2$ when shuffled")
-        ax.grid(alpha=0.3, axis="x")
-        ax.set_title(f"{o}: held-out R$^2$ = {float(m['r2_test']):.3f}\n"
-                     f"({attr_text(m.get('target', ''))} target, {int(m.get('n_train', 0))} train / "
-                     f"{int(m.get('n_test', 0))} test)", fontsize=10)
-    return _png(fig)
-
-
-def design_figure(run) -> str:
-    import matplotlib.pyplot as plt
-    from .plots import draw_positions
-    fig, ax = plt.subplots(figsize=(3.6, 4.4), layout="constrained")
-    draw_positions(ax, run.scene, run.table, highlight=0, key="horizontal", joint_key=False)
-    ax.set_xlabel("x [mm]", fontsize=8)
-    ax.set_ylabel("y [mm]", fontsize=8)
-    ax.tick_params(labelsize=7)
-    return _png(fig, dpi=90)
