@@ -35,7 +35,7 @@ from common import ROOT, STUDIES, best_of, first_call, hardware
 
 CANDIDATES = 250_000
 SMOKE_CANDIDATES = 2_000
-TARGET_S = 5.0          # issue 28: the explorer of a 250,000-candidate sweep within 5 s
+TARGET_S = 5.0          # issue 28: the explorer, and the report, of 250,000 candidates in 5 s
 
 
 def sweep_file(folder, candidates):
@@ -134,7 +134,8 @@ def run(smoke=False, out=None, echo=print, source=None):
              f"| before : now, per design | {before_s / now_s:.1f} |",
              f"| whole report, first call | {first_report:.1f} s |",
              "| whole report, steady state (best of 2) | " + (
-                 "not measured in a smoke run |" if smoke else f"{report_s:.1f} s |"),
+                 "not measured in a smoke run |" if smoke else
+                 f"{report_s:.1f} s (target {TARGET_S:g} s for {CANDIDATES:,} candidates) |"),
              f"| page | {size / 2 ** 20:.1f} MiB, of which plotly.js {bundle / 2 ** 20:.1f} MiB "
              f"and the explorer's section {len(page['explorer'].encode()) / 2 ** 20:.1f} MiB |",
              ""]
