@@ -31,8 +31,10 @@ def plain(text) -> str:
     return html.escape(str(text), quote=False)
 
 
-def chart_html(figure: dict, title: str, height: int = 420) -> str:
-    """The element the page's script draws ``figure`` into, with its data."""
+def chart_html(chart: tuple[dict, int], title: str) -> str:
+    """The element the page's script draws a chart into, with its data:
+    ``chart`` = (figure, height in pixels), as the functions below return it."""
+    figure, height = chart
     return (f'<div class="chart" role="img" aria-label="{html.escape(title)}" '
             f'style="height:{int(height)}px"><script type="application/json" '
             f'class="chart-data">{script_json(figure)}</script></div>')

@@ -32,8 +32,7 @@ from ..analysis.ranking import design_table, ranking
 from .explorer import EXPLORER_DRAWINGS, explorer_section
 from .page import markup, plotly_js, render
 from .charts import chart_html, comparison_chart, importance_chart, tolerance_chart
-from .report_figures import (_letters, _png, pareto_figure,
-                             search_figure)
+from .report_figures import _letters, _png, pareto_figure, search_figure
 from ..results.storage import attr_text, open_results
 from ..results.sweep_file import status_counts
 # the page's assets and pictures have modules of their own (report_assets,
@@ -149,7 +148,7 @@ def tolerance_html(path, ana, data) -> str:
                     sweep_spec=sweep, samples=TOLERANCE_BUILDS)
         if i == ana.knee:
             label += " (knee)"
-            knee_chart = chart_html(*_titled(tolerance_chart(a), "the knee's builds"))
+            knee_chart = chart_html(tolerance_chart(a), "the knee's builds")
         p05, p95 = a.quantiles(0.05), a.quantiles(0.95)
         share = a.contributions()
         cells = [html.escape(label), f"{100 * a.yield_:.1f} %"]
@@ -178,7 +177,7 @@ def tolerance_html(path, ana, data) -> str:
 def comparison_section_html(path, ana, data) -> str:
     """The knee (else representative A) against the study's reference design,
     both re-run as scenes (``analysis.compare.compare_candidate``): the table
-    of ``pipeline compare FILE --candidate ID`` and its picture."""
+    of ``pipeline compare FILE --candidate ID`` and its chart."""
     from ..analysis.compare import compare_candidate
     from .compare import comparison_html
     if ana.knee >= 0:
@@ -198,14 +197,7 @@ def comparison_section_html(path, ana, data) -> str:
             "peak with the crank angle where it happens, the change against the reference "
             f"design. <code>pipeline compare FILE --candidate {html.escape(cid)}</code> prints "
             "the same table.</p>" + comparison_html(cmp)
-            + chart_html(*_titled(comparison_chart(cmp),
-                                  "the design against the reference design")))
-
-
-def _titled(chart, title):
-    """(figure, title, height) for ``chart_html`` from (figure, height)."""
-    figure, height = chart
-    return figure, title, height
+            + chart_html(comparison_chart(cmp), "the design against the reference design"))
 
 
 def _table_html(df, knee=None) -> str:
@@ -339,7 +331,7 @@ def build_html(path, top=20, drawings=None) -> str:
               "variables, fitted on the feasible candidates (seeded subsample and split); "
               "permutation importance = how much the held-out R<sup>2</sup> drops when one "
               "variable is shuffled (mean &plusmn; std over the repeats).</p>",
-              chart_html(*_titled(importance_chart(data, ana), "parameter importances"))]
+              chart_html(importance_chart(data, ana), "parameter importances")]
     step("importances")
 
     parts.append("<h2>Representative designs</h2>")
