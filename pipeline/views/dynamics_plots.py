@@ -15,7 +15,7 @@ from ..kernels import config as kc
 from ..solve.crank_motion import TAIL_SECONDS
 from .labels import unit_text
 
-BAND_COLUMNS = 300      # time columns of a drawn band (a long series' min and max per column)
+BAND_WINDOW_S = 0.1     # s: the time window of a drawn band (a long series' min and max in it)
 
 
 def eps1_figure(case):
@@ -97,9 +97,9 @@ def dynamics_figure(case):
             # a fast rotation over many seconds: drawn sample by sample it is a solid
             # block (and the samples alias it); the band of its min and max per column
             # keeps every extreme and shows how the swing grows
-            _band(ax, case.t, y, "C0", f"every {c.sample_dt:g} s: min to max, and mean")
+            _band(ax, case.t, y, "C0", f"every {c.sample_dt:g} s: min to max, mean dashed")
             if fine.size:
-                _band(ax, case.tail_t, fine, "C3", "every step: min to max, and mean")
+                _band(ax, case.tail_t, fine, "C3", "every step: min to max, mean dashed")
             ax.legend(fontsize=8, loc="best")
         ax.set_xlabel("t [s]")
         ax.set_ylabel(label)
@@ -128,21 +128,26 @@ def dynamics_figure(case):
     return fig
 
 
-def _band(ax, t, y, colour, label, columns=BAND_COLUMNS):
-    """A long series drawn legibly: per column of equal time its minimum to
-    maximum shaded and its mean as a line (short series: the line itself)."""
+def _band(ax, t, y, colour, label, window=BAND_WINDOW_S):
+    """A long series drawn legibly: per ``window`` seconds (a few turns of a
+    fast crank) its minimum and maximum as the band's edges (every extreme
+    kept) and its mean as a line; a short series as the line itself."""
     t, y = np.asarray(t, float), np.asarray(y, float)
+    columns = max(1, int(np.ceil(np.ptp(t) / window))) if t.size else 1
     if t.size <= 4 * columns:
         ax.plot(t, y, lw=0.6, color=colour, label=label.split(":")[0])
         return
     edges = np.linspace(0, t.size, columns + 1).astype(int)
-    tc = np.array([t[a:b].mean() for a, b in zip(edges[:-1], edges[1:])])
+    spans = list(zip(edges[:-1], edges[1:]))
+    tc = np.array([t[a:b].mean() for a, b in spans])
     with np.errstate(all="ignore"):
-        lo = np.array([np.nanmin(y[a:b]) for a, b in zip(edges[:-1], edges[1:])])
-        hi = np.array([np.nanmax(y[a:b]) for a, b in zip(edges[:-1], edges[1:])])
-        mid = np.array([np.nanmean(y[a:b]) for a, b in zip(edges[:-1], edges[1:])])
-    ax.fill_between(tc, lo, hi, color=colour, alpha=0.35, lw=0, label=label)
-    ax.plot(tc, mid, lw=0.8, color=colour)
+        lo = np.array([np.nanmin(y[a:b]) for a, b in spans])
+        hi = np.array([np.nanmax(y[a:b]) for a, b in spans])
+        mid = np.array([np.nanmean(y[a:b]) for a, b in spans])
+    ax.fill_between(tc, lo, hi, color=colour, alpha=0.2, lw=0, label=label)
+    ax.plot(tc, lo, lw=0.7, color=colour)
+    ax.plot(tc, hi, lw=0.7, color=colour)
+    ax.plot(tc, mid, lw=0.9, color=colour, ls="--")
 
 
 def reduced_figure(red):
