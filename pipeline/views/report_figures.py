@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from ..results.storage import attr_text
+from .labels import unit_text
 
 MAX_GREY = 60_000       # infeasible points drawn in the Pareto plot (seeded subsample)
 MAX_FRONT_POINTS = 200_000
@@ -103,8 +104,8 @@ def pareto_figure(data, ana) -> str:
             setter("log")
             axis.set_major_formatter(_plain)
             axis.set_minor_formatter(_plain_2_5)
-    ax.set_xlabel(f"{o[0]} [{data.objective_units[0]}] (minimised)")
-    ax.set_ylabel(f"{o[1]} [{data.objective_units[1]}] (minimised)")
+    ax.set_xlabel(f"{o[0]} [{unit_text(data.objective_units[0])}] (minimised)")
+    ax.set_ylabel(f"{o[1]} [{unit_text(data.objective_units[1])}] (minimised)")
     ax.grid(alpha=0.3, which="both")
     if ax.get_legend_handles_labels()[0]:     # nothing to label when nothing is feasible
         ax.legend(fontsize=8, loc="upper right", markerscale=0.7, framealpha=0.9)
@@ -145,9 +146,9 @@ def importance_figure(data, ana) -> str:
         ax.set_yticks(ypos, names)
         ax.invert_yaxis()
         ax.axvline(0, color="k", lw=0.6)
-        ax.set_xlabel("drop of held-out R$^2$ when shuffled")
+        ax.set_xlabel("drop of held-out R² when shuffled")
         ax.grid(alpha=0.3, axis="x")
-        ax.set_title(f"{o}: held-out R$^2$ = {float(m['r2_test']):.3f}\n"
+        ax.set_title(f"{o}: held-out R² = {float(m['r2_test']):.3f}\n"
                      f"({attr_text(m.get('target', ''))} target, {int(m.get('n_train', 0))} train / "
                      f"{int(m.get('n_test', 0))} test)", fontsize=10)
     return _png(fig)
