@@ -316,7 +316,7 @@ def outside_legend(ax, **kw):
                      borderaxespad=0.0, **kw)
 
 
-def polar_marks(ax, phi, fx, fy, colour, first=True):
+def polar_marks(ax, phi, fx, fy, colour):
     """A hodograph's marks: dots every 30 deg of phi1 (every 90 deg labelled,
     where the label fits), its peak marked and labelled.  Returns the step
     between dots (samples)."""
@@ -328,7 +328,7 @@ def polar_marks(ax, phi, fx, fy, colour, first=True):
     c = np.array([np.nanmean(fx), np.nanmean(fy)])
     p = placer(ax)
     p.add(ax.annotate(f"max {mag[k]:.1f} N\nat {phi[k]:.0f} deg", (fx[k], fy[k]), fontsize=8,
-                      color=colour if not first else "k", textcoords="offset points",
+                      color=colour, textcoords="offset points",
                       xytext=(4, 4)), POINT_OFFSETS)
     for q in range(0, len(phi), step * 3):
         p.add(ax.annotate(f"{phi[q]:.0f}", (fx[q], fy[q]), fontsize=7, color="0.3",

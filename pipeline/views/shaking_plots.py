@@ -54,7 +54,7 @@ def shaking_figure(res):
     if cw is not None:
         _polar(axp, phi, cw.force_after, "C3",
                f"with {cw.mass_radius:.4g} {unit_text('kg*mm')} at {cw.angle:.1f} deg from the "
-               "crank", first=False)
+               "crank")
     axp.plot([0], [0], "k+")
     axp.set_aspect("equal", adjustable="datalim")
     axp.set_xlabel("Fx [N]")
@@ -68,9 +68,9 @@ def shaking_figure(res):
     return fig
 
 
-def _polar(ax, phi, F, color, label, first=True):
+def _polar(ax, phi, F, color, label):
     """One closed hodograph of the force F (n, 2), its peak marked."""
     fx, fy = F[:, 0], F[:, 1]
     ax.plot(np.append(fx, fx[0]), np.append(fy, fy[0]), "-", color=color, label=label)
     _travel_arrows(ax, F, color=color)
-    polar_marks(ax, phi, fx, fy, color, first=first)
+    polar_marks(ax, phi, fx, fy, color)

@@ -17,6 +17,7 @@ import matplotlib
 matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 from conftest import STUDIES  # noqa: E402
@@ -74,13 +75,55 @@ def test_every_scene_study_is_checked():
     assert len(SCENE_STUDIES) >= 10 and "ov7_base" in SCENE_STUDIES
 
 
+@pytest.fixture(scope="module")
+def solved():
+    """The module's scenes, each solved once when first asked for."""
+    cache = {}
+
+    def get(study):
+        if study not in cache:
+            cache[study] = solve_scene(load_study(STUDIES / f"{study}.toml"))
+        return cache[study]
+    return get
+
+
 @pytest.mark.parametrize("study", SCENE_STUDIES)
-def test_every_picture_of_a_scene_study_is_laid_out_clear(study):
-    res = solve_scene(load_study(STUDIES / f"{study}.toml"))
+def test_every_picture_of_a_scene_study_is_laid_out_clear(study, solved):
+    res = solved(study)
     problems = []
     for name, make in scene_pictures(res):
         problems += _check(f"{study}: {name}", make)
     assert not problems, "\n".join(problems)
+
+
+def test_a_constant_curve_has_no_peak_and_links_have_the_forces_names(solved):
+    """The uniform crank's omega and eps are constant: no 'peak 0 1/s² at 0.00
+    deg'; a link carried by a body is named as the forces name it."""
+    from pipeline.views.labels import PEAK_GID
+    fig = plots.kinematics_figure(solved("ppr_cross_slide"))
+    for what in ("omega", "eps"):
+        ax = next(a for a in fig.axes if a.get_label() == f"link 1_2 {what}")
+        assert not ax.texts and not [ln for ln in ax.get_lines()
+                                     if (ln.get_gid() or "").startswith(PEAK_GID)]
+    fig = plots.kinematics_figure(solved("ov7_class3"))
+    ax = next(a for a in fig.axes if a.get_label() == "link 2_3 omega")
+    assert ax.get_title("left").startswith("lead 2-3: omega [1/s]")
+    assert any(t.get_text().startswith("peak ") for t in ax.texts)
+    legend = [t.get_text() for t in plots.forces_figure(solved("ov7_class3")).axes[0]
+              .get_legend().get_texts()]
+    assert any("lead 2-3" in t for t in legend)
+
+
+def test_the_run_up_is_drawn_as_bands_with_every_extreme(solved):
+    from pipeline.views.dynamics_plots import dynamics_figure
+    case = next(c for c in solved("takeup_dynamics").dynamics if c.name == "runup")
+    fig = dynamics_figure(case)
+    ax = fig.axes[2]                      # eps1(t)
+    assert ax.get_ylabel() == "eps1 [rad/s²]"
+    edges = [ln.get_ydata() for ln in ax.get_lines()]
+    assert max(len(y) for y in edges) < len(case.t) / 5         # thinned
+    top = max(float(np.nanmax(y)) for y in edges)
+    assert top == max(float(np.nanmax(case.eps1)), float(np.nanmax(case.tail_eps1)))
 
 
 def test_the_pictures_of_show_compare_and_tolerance_are_laid_out_clear(synthesis_sweep,
