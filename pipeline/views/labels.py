@@ -1,6 +1,6 @@
 """What the pictures write and where: one style of units, one name per link, the
-markers of curves' peaks, labels placed clear of each other once the layout is
-known, and long time series thinned for drawing with their extremes kept.
+markers of curves' peaks, and labels placed clear of each other once the layout
+is known.
 Only drawing; no number is changed here."""
 
 from __future__ import annotations
@@ -50,26 +50,6 @@ def is_constant(y) -> bool:
 def mark_peak(ax, x, y, colour="C3", ms=3.5, what=""):
     """The marker of a curve's peak, with the gid the layout test knows."""
     return ax.plot([x], [y], "o", color=colour, ms=ms, gid=f"{PEAK_GID} {what}".strip())[0]
-
-
-def envelope(t, y, columns=1500):
-    """A long series thinned for drawing: per column of ``columns`` equal spans of
-    t its minimum and its maximum, in their order, so every extreme is kept and
-    the drawn line stays a line.  Short series come back as they are."""
-    t, y = np.asarray(t, float), np.asarray(y, float)
-    if t.size <= 2 * columns:
-        return t, y
-    edges = np.linspace(0, t.size, columns + 1).astype(int)
-    keep = []
-    for a, b in zip(edges[:-1], edges[1:]):
-        seg = y[a:b]
-        if not np.isfinite(seg).any():
-            keep.append(a)
-            continue
-        i, j = a + int(np.nanargmin(seg)), a + int(np.nanargmax(seg))
-        keep += sorted({i, j})
-    keep = np.asarray(keep)
-    return t[keep], y[keep]
 
 
 # ----------------------------------------------------------------- labels placed at draw time
