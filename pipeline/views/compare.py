@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from ..analysis.compare import Comparison
+from .labels import unit_text
 
 
 def _num(v, digits=5):
@@ -144,7 +145,7 @@ def comparison_figure(cmp: Comparison):
         else:
             k_pk = int(np.nanargmax(np.abs(d.M_bal)))
             ax_m.plot(d.phi, d.M_bal, "-", color=c, lw=1.4,
-                      label=f"{d.label}: peak |M_bal| {abs(d.M_bal[k_pk]):.2f} N*m at "
+                      label=f"{d.label}: peak |M_bal| {abs(d.M_bal[k_pk]):.2f} {unit_text('N*m')} at "
                             f"{d.phi[k_pk]:.0f} deg")
     ax_path.set_aspect("equal", adjustable="datalim")
     ax_path.set_xlabel("x - mean [mm]")
@@ -153,7 +154,7 @@ def comparison_figure(cmp: Comparison):
     ax_s.set_ylabel("displacement along the path [mm]")
     ax_s.set_title("Working point's motion: displacement along its path's main direction",
                    fontsize=10)
-    ax_m.set_ylabel("M_bal [N*m]")
+    ax_m.set_ylabel(f"M_bal [{unit_text('N*m')}]")
     ax_m.set_title("Balancing moment on the crank", fontsize=10)
     for ax in (ax_s, ax_m):
         ax.set_xlabel("crank angle phi1 [deg]")

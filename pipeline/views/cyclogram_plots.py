@@ -195,17 +195,15 @@ def cyclogram_figure(res, cycle=None, cycle_name="required cycle", turn=None):
     handles += [Patch(fc=PHASE_COLOURS.get(k, "0.85"), ec="k", lw=0.6, label=k) for k in kinds]
     if not dwells:
         handles.append(Patch(fc="0.85", ec="k", lw=0.6, label="slowest (the design: no dwell)"))
-    key = fig.add_subplot(gs[1])
-    key.set_label("cyclogram key")
-    key.set_axis_off()
-    key.legend(handles=handles, loc="upper left", fontsize=7, ncol=2, framealpha=0.9)
     unit = motion["unit"]
     stroke = (getattr(res, "motion", None) or {}).get("stroke")
     rings = ", ".join(["design (its output's phases)"] + [
         f"{ring.organ}" + (" (required)" if ring.output else "") for ring in cg.rings])
     info = [f"output: {motion['what']}",
-            f"range {hi - lo:.3g} {unit}; in the best {motion['dwell_deg']:g} deg window it "
-            f"moves {100 * motion['error']:.2g} % of that" + (
+            f"range {hi - lo:.3g} {unit}; " + (
+                f"in the best {motion['dwell_deg']:g} deg window it moves "
+                if dwells else f"its slowest {motion['dwell_deg']:g} deg move ")
+            + f"{100 * motion['error']:.2g} % of that" + (
                 f"; stroke {stroke:.3g} mm" if stroke else ""),
             f"rings, inside out: {rings}"]
     if cg.rings:
@@ -216,9 +214,24 @@ def cyclogram_figure(res, cycle=None, cycle_name="required cycle", turn=None):
             + table
     elif cg.why and cg.rings:
         info.append(f"phase errors {cg.why}")
-    key.text(1.0, 1.0, "\n".join(info), ha="right", va="top", fontsize=7, family="monospace",
-             transform=key.transAxes, multialignment="left",
-             bbox=dict(boxstyle="round", fc="white", ec="0.7", alpha=0.9))
+    # the key's two parts side by side, each as wide as its text (estimated at
+    # 0.6 em per character of the 7 pt font), so neither covers the other
+    labels = [h.get_label() for h in handles]
+    ncol = 2 if 2 * max(map(len, labels)) + 2 * 8 + max(map(len, info)) < figw * 72 / 4.4 else 1
+    wide_key = ncol * (max(map(len, labels)) * 0.55 + 6) * 7 / 72
+    wide_info = max(map(len, info)) * 0.62 * 7 / 72
+    parts = gs[1].subgridspec(1, 2, width_ratios=[wide_key, max(wide_info, 0.1)], wspace=0.0)
+    key = fig.add_subplot(parts[0])
+    key.set_label("cyclogram key")
+    key.set_axis_off()
+    key.legend(handles=handles, loc="upper left", fontsize=7, ncol=ncol, framealpha=0.9,
+               borderaxespad=0.0)
+    about = fig.add_subplot(parts[1])
+    about.set_label("cyclogram notes")
+    about.set_axis_off()
+    about.text(1.0, 1.0, "\n".join(info), ha="right", va="top", fontsize=7,
+               family="monospace", transform=about.transAxes, multialignment="left",
+               bbox=dict(boxstyle="round", fc="white", ec="0.7", alpha=0.9))
     dwell_phi = round(math.degrees(crank.phi0) + crank.rot * phases[0][1], 6)
     where = (f"the design dwells from phi1 = {dwell_phi:g} deg for {phases[0][2]:g} deg"
              if dwells else f"no dwell: its slowest {phases[0][2]:g} deg start at phi1 = "

@@ -13,6 +13,9 @@ import numpy as np
 
 from ..kernels import config as kc
 from ..solve.crank_motion import TAIL_SECONDS
+from .labels import unit_text
+
+BAND_WINDOW_S = 0.1     # s: the time window of a drawn band (a long series' min and max in it)
 
 
 def eps1_figure(case):
@@ -46,17 +49,17 @@ def eps1_figure(case):
                 label=f"last {min(TAIL_SECONDS, c.t_end):g} s (every step)")
     ax.axhline(0.0, color="0.5", lw=0.8)
     ax.set_xlabel("crank angle phi1 [deg]" + (" (mod 360)" if rotating else ""))
-    ax.set_ylabel("eps1 [rad/s$^2$]")
+    ax.set_ylabel("eps1 [rad/s²]")
     if rotating:
         ax.set_xlim(0, 360)
         ax.set_xticks(np.arange(0, 361, 45))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="upper right")
-    head = f"{case.name}: eps1 against phi1, M1 = {c.M1.text} N m, b = {c.damping:g} N m s"
+    head = f"{case.name}: eps1 against phi1, M1 = {c.M1.text} N·m, b = {c.damping:g} N·m·s"
     if s is not None:
         tail = case.tail_eps1
         head += (f"\nsteady rotation at {s['omega_mean']:.4g} rad/s: eps1 from "
-                 f"{np.min(tail):.4g} to {np.max(tail):.4g} rad/s$^2$ over the last "
+                 f"{np.min(tail):.4g} to {np.max(tail):.4g} rad/s² over the last "
                  f"{TAIL_SECONDS:g} s")
     else:
         o = case.oscillation()
@@ -73,7 +76,7 @@ def dynamics_figure(case):
     c = case.case
     s = case.steady()
     o = None if s is not None else case.oscillation()
-    head = f"{case.name}: M1 = {c.M1.text} N m, b = {c.damping:g} N m s, {case.method}"
+    head = f"{case.name}: M1 = {c.M1.text} N·m, b = {c.damping:g} N·m·s, {case.method}"
     if s is not None:
         head += (f"\nsteady rotation: omega_mean = {s['omega_mean']:.4g} rad/s "
                  f"({s['rpm']:.0f} rpm), coefficient of non-uniformity "
@@ -86,12 +89,17 @@ def dynamics_figure(case):
     fig, axs = plt.subplots(2, 2, figsize=(12, 7.5), layout="constrained")
     rows = [(np.rad2deg(case.phi1), None, "phi1 [deg]"),
             (case.omega1, case.tail_omega1, "omega1 [rad/s]"),
-            (case.eps1, case.tail_eps1, "eps1 [rad/s$^2$]")]
+            (case.eps1, case.tail_eps1, "eps1 [rad/s²]")]
     for ax, (y, fine, label) in zip((axs[0, 0], axs[0, 1], axs[1, 0]), rows):
-        ax.plot(case.t, y, lw=0.8, label=f"every {c.sample_dt:g} s")
-        if fine is not None and fine.size:
-            # the samples alias a fast rotation; the tail shows every step
-            ax.plot(case.tail_t, fine, lw=0.4, color="C3", label="every step")
+        if fine is None:
+            ax.plot(case.t, y, lw=0.8, label=f"every {c.sample_dt:g} s")
+        else:
+            # a fast rotation over many seconds: drawn sample by sample it is a solid
+            # block (and the samples alias it); the band of its min and max per column
+            # keeps every extreme and shows how the swing grows
+            _band(ax, case.t, y, "C0", f"every {c.sample_dt:g} s: min to max, mean dashed")
+            if fine.size:
+                _band(ax, case.tail_t, fine, "C3", "every step: min to max, mean dashed")
             ax.legend(fontsize=8, loc="best")
         ax.set_xlabel("t [s]")
         ax.set_ylabel(label)
@@ -101,9 +109,14 @@ def dynamics_figure(case):
     phi_s = np.rad2deg(case.phi1)
     phi_t = np.rad2deg(case.tail_phi1)
     if rotating:
-        ax.plot(np.mod(phi_s, 360.0), case.omega1, ".", ms=2, color="0.6", label="samples")
-        ax.plot(np.mod(phi_t, 360.0), case.tail_omega1, ",", color="C3",
-                label=f"last {TAIL_SECONDS:g} s (every step)")
+        # the steady rotation (every step of the last seconds) as a line per turn; the
+        # run-up's sparse samples mod 360 deg would be a cloud (omega1(t) shows them)
+        xt, yt = np.mod(phi_t, 360.0), np.asarray(case.tail_omega1, float)
+        cut = np.flatnonzero(np.abs(np.diff(xt)) > 180.0) + 1
+        ax.plot(np.insert(xt, cut, np.nan), np.insert(yt, cut, np.nan), "-", lw=0.6,
+                color="C3", label=f"last {TAIL_SECONDS:g} s (every step)")
+        ax.axhline(s["omega_mean"], color="0.3", lw=0.8, ls="--",
+                   label=f"omega_mean {s['omega_mean']:.4g} rad/s")
         ax.set_xlim(0, 360)
     else:
         ax.plot(phi_s, case.omega1, lw=0.6, label="samples")
@@ -115,13 +128,35 @@ def dynamics_figure(case):
     return fig
 
 
+def _band(ax, t, y, colour, label, window=BAND_WINDOW_S):
+    """A long series drawn legibly: per ``window`` seconds (a few turns of a
+    fast crank) its minimum and maximum as the band's edges (every extreme
+    kept) and its mean as a line; a short series as the line itself."""
+    t, y = np.asarray(t, float), np.asarray(y, float)
+    columns = max(1, int(np.ceil(np.ptp(t) / window))) if t.size else 1
+    if t.size <= 4 * columns:
+        ax.plot(t, y, lw=0.6, color=colour, label=label.split(":")[0])
+        return
+    edges = np.linspace(0, t.size, columns + 1).astype(int)
+    spans = list(zip(edges[:-1], edges[1:]))
+    tc = np.array([t[a:b].mean() for a, b in spans])
+    with np.errstate(all="ignore"):
+        lo = np.array([np.nanmin(y[a:b]) for a, b in spans])
+        hi = np.array([np.nanmax(y[a:b]) for a, b in spans])
+        mid = np.array([np.nanmean(y[a:b]) for a, b in spans])
+    ax.fill_between(tc, lo, hi, color=colour, alpha=0.2, lw=0, label=label)
+    ax.plot(tc, lo, lw=0.7, color=colour)
+    ax.plot(tc, hi, lw=0.7, color=colour)
+    ax.plot(tc, mid, lw=0.9, color=colour, ls="--")
+
+
 def reduced_figure(red):
     """J(phi), (1/2) dJ/dphi and Q(phi) against the crank angle, the equilibria
     marked.  Returns the Figure."""
     fig, axes = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True, layout="constrained")
     deg = np.degrees(red.phi)
     for ax, y, label in zip(axes, (red.J, red.half_dJ, red.Q),
-                            ("J [kg m^2]", "(1/2) dJ/dphi [kg m^2]", "Q [N m] (without M1)")):
+                            ("J [kg·m²]", "(1/2) dJ/dphi [kg·m²]", "Q [N·m] (without M1)")):
         ax.plot(deg, y, "k-", lw=1.2)
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
@@ -178,7 +213,7 @@ def motion_forces_figure(name, records, constant):
              None if constant is None else constant.magnitude[:, j],
              f"|{joints[j]}| [N]", f"reaction {joints[j]}"),
             (axs[2], rec.forces.M_bal, None if constant is None else constant.M_bal,
-             "M_bal [N*m]", "balancing moment")):
+             f"M_bal [{unit_text('N*m')}]", "balancing moment")):
         ax.set_label(what)
         ax.plot(angle(rec.phi1), y, ".", ms=1.5, color="C3",
                 label="along the motion" + (" (steady rotation)" if rotating else ""))

@@ -17,6 +17,7 @@ import numpy as np
 
 from .cyclogram_plots import cyclogram_figure  # noqa: F401 (a picture of plots, drawn there)
 from .dynamics_plots import eps1_figure  # noqa: F401 (a picture of plots, drawn there)
+from .labels import POINT_OFFSETS, around, is_constant, link_name, mark_peak, placer, unit_text
 from ..solve.scene import real_motion
 # what the cyclogram draws is computed one layer down; output_motion, design_phases,
 # stated_cycle and DWELL_RESIDUAL are this module's names too (the report and the tests use them)
@@ -107,16 +108,20 @@ def _travel_arrows(ax, path, count=ARROWS_PER_PATH, color="0.25"):
 
 def _angle_labels(ax, pts, phis, cols, spacing, centre):
     """Crank-angle labels at the marks of one path, those too close to an
-    already labelled one left out; each pushed outward from the path's centre."""
-    kept = []
+    already labelled one left out; each pushed outward from the path's centre
+    (where it covers no other label once the layout is known: else turned,
+    else left out).  Returns the annotations."""
+    kept, out = [], []
     for k, (p, phi) in enumerate(zip(pts, phis)):
         if not np.isfinite(p).all() or any(np.hypot(*(p - q)) < spacing for q in kept):
             continue
         kept.append(p)
         d = p - centre
         d = d / np.hypot(*d) if np.hypot(*d) > 0 else np.array([1.0, 0.0])
-        ax.annotate(_deg_text(phi), p, textcoords="offset points", xytext=tuple(9 * d),
-                    fontsize=6.5, color=cols[k], ha="center", va="center", weight="bold")
+        out.append((ax.annotate(_deg_text(phi), p, textcoords="offset points",
+                                xytext=tuple(9 * d), fontsize=6.5, color=cols[k], ha="center",
+                                va="center", weight="bold"), around(*d)))
+    return out
 
 
 def draw_positions(ax, res, curves, highlight=None, key="vertical", marks=True, joint_key=True):
@@ -144,6 +149,7 @@ def draw_positions(ax, res, curves, highlight=None, key="vertical", marks=True, 
     every = every[np.isfinite(every).all(axis=1)]
     span = float(np.ptp(every, axis=0).max()) if len(every) else 1.0
     labelled = {plan.point(study.mechanism.crank.tip), plan.point(study.output.working_point)}
+    angle_labels = []
     for i in range(nv):
         if i in fixed:
             continue
@@ -159,16 +165,19 @@ def draw_positions(ax, res, curves, highlight=None, key="vertical", marks=True, 
             _travel_arrows(ax, path)
         ax.scatter(curves.pos[:, i, 0], curves.pos[:, i, 1], c=cols, s=9, zorder=3, lw=0)
         if i in labelled and moved > 0.004 * span:
-            _angle_labels(ax, curves.pos[:, i], curves.phi, cols, LABEL_SPACING * span,
-                          path[good].mean(axis=0))
+            angle_labels += _angle_labels(ax, curves.pos[:, i], curves.phi, cols,
+                                          LABEL_SPACING * span, path[good].mean(axis=0))
     joints = joint_labels(plan)
     for i in range(nv):
         x, y = curves.pos[0, i]
         if not np.isfinite(x):
             continue
         ax.plot(x, y, "s" if i in fixed else "o", color="k", ms=5 if i in fixed else 3)
-        ax.annotate(point_label(plan, i, joints), (x, y), textcoords="offset points",
-                    xytext=(4, 4), fontsize=8)
+        placer(ax).add(ax.annotate(point_label(plan, i, joints), (x, y),
+                                   textcoords="offset points", xytext=(4, 4), fontsize=8),
+                       POINT_OFFSETS)
+    for ann, offsets in angle_labels:       # the points' names first, the angles where they fit
+        placer(ax).add(ann, offsets, optional=True)
     if joints and joint_key:
         ax.text(0.98, 0.02, "\n".join(joint_descriptions(plan)), transform=ax.transAxes,
                 fontsize=6.5, ha="right", va="bottom", family="monospace", multialignment="left",
@@ -202,7 +211,7 @@ def scene_figure(res):
     v, a, _, _ = real_motion(d, crank.omega1, crank.eps1)
     disp = d.pos[:, iwp] - d.pos[0, iwp]
     rows = [(disp, "displacement [mm]"), (v[:, iwp], "velocity [m/s]"),
-            (a[:, iwp], "acceleration [m/s$^2$]")]
+            (a[:, iwp], "acceleration [m/s²]")]
     for r, (data, label) in enumerate(rows):
         axr = fig.add_subplot(gs[r, 1])
         axr.plot(phi, data[:, 0], label="x")
@@ -237,14 +246,19 @@ def forces_figure(res):
     phi = np.rad2deg(res.dense.phi)
     rows = 3 if mech.loads else 2
     fig = plt.figure(figsize=(13, 5.5 if rows == 2 else 8.0), layout="constrained")
-    gs = fig.add_gridspec(rows, 2, width_ratios=[1.6, 1])
+    gs = fig.add_gridspec(rows, 2, width_ratios=[1.45, 1])
     ax = fig.add_subplot(gs[0, 0])
     mag = np.hypot(fr.R[:, :, 0], fr.R[:, :, 1])
     where = dict(zip(res.plan.joint_names, joint_descriptions(res.plan)))
+    ax.set_label("joint reactions")
     for j, name in enumerate(fr.joint_names):
-        ax.plot(phi, mag[:, j], label=where.get(name, name))
+        line, = ax.plot(phi, mag[:, j], label=where.get(name, name))
+        if np.isfinite(mag[:, j]).any() and not is_constant(mag[:, j]):
+            k = int(np.nanargmax(mag[:, j]))
+            mark_peak(ax, phi[k], mag[k, j], colour=line.get_color(), ms=3, what=f"|{name}|")
     ax.set_ylabel("|R| [N]")
-    ax.legend(fontsize=7, ncol=2 if len(fr.joint_names) > 4 else 1)
+    # beside the curves, never over their peaks
+    outside_legend(ax, ncol=2 if len(fr.joint_names) > 8 else 1)
     ax.grid(alpha=0.3)
     ax.set_title(f"Joint reactions at omega1 = {crank.omega1:g} rad/s", fontsize=10)
     ax2 = fig.add_subplot(gs[1, 0], sharex=ax)
@@ -252,8 +266,8 @@ def forces_figure(res):
     for k, name in enumerate(fr.input_names):      # inputs driven from the main shaft
         ax2.plot(phi, fr.drive[:, k, 1], "--", label=f"share of input {name!r} (drive x dq/dphi1)")
     if fr.input_names:
-        ax2.legend(fontsize=7)
-    ax2.set_ylabel("M_bal [N m]")
+        outside_legend(ax2)
+    ax2.set_ylabel("M_bal [N·m]")
     ax2.set_xlabel("crank angle phi1 [deg]")
     ax2.grid(alpha=0.3)
     if mech.loads:
@@ -263,15 +277,15 @@ def forces_figure(res):
         loads = sample_loads(mech, res.dense.phi)
         for k, ld in enumerate(mech.loads):
             for c, (e, what, unit) in enumerate(((ld.fx, "fx", "N"), (ld.fy, "fy", "N"),
-                                                 (ld.moment, "M", "N m"))):
+                                                 (ld.moment, "M", "N·m"))):
                 y = loads[:, k, c]
                 if np.any(y != 0.0):
                     ax3.plot(phi, y, label=f"{what} on {ld.body}"
                              + (f" at {ld.point}" if ld.point and c < 2 else "")
                              + f" = {getattr(e, 'text', e)} [{unit}]")
-        ax3.set_ylabel("load [N, N m]")
+        ax3.set_ylabel("load [N, N·m]")
         ax3.set_xlabel("crank angle phi1 [deg]")
-        ax3.legend(fontsize=7)
+        ax3.legend(fontsize=7, loc="best")     # no peaks marked here
         ax3.grid(alpha=0.3)
         ax3.set_title("External loads, as the study gives them", fontsize=9)
     if crank.rot < 0:
@@ -283,21 +297,44 @@ def forces_figure(res):
     axp.plot([0], [0], "k+")
     _travel_arrows(axp, np.stack([rx, ry], axis=1), color="C3")
     # crank-angle marks every 30 deg of the revolution (the first one labelled)
-    step = max(1, len(phi) // 12)
-    axp.plot(rx[::step], ry[::step], "o", ms=3, color="C3")
-    for q in range(0, len(phi), step * 3):
-        axp.annotate(f"{phi[q]:.0f}", (rx[q], ry[q]), fontsize=7, color="0.3",
-                     xytext=(3, 3), textcoords="offset points")
-    k = int(np.nanargmax(mag[:, j]))
-    axp.annotate(f"max {mag[k, j]:.1f} N\nat {phi[k]:.0f} deg", (rx[k], ry[k]), fontsize=8)
+    step = polar_marks(axp, phi, rx, ry, "C3")
     axp.set_aspect("equal", adjustable="datalim")
     axp.set_xlabel("Rx [N]")
     axp.set_ylabel("Ry [N]")
     axp.grid(alpha=0.3)
-    axp.set_title(f"Polar diagram of {where.get(fr.joint_names[j], fr.joint_names[j])} "
-                  "(most loaded joint; arrows: direction as the crank turns;\n"
-                  f"dots every {360 * step / len(phi):.0f} deg of phi1, labels in deg)", fontsize=9)
+    # short lines: a tall diagram is narrow, and its title must not pass the edge
+    axp.set_title(f"Polar diagram of {where.get(fr.joint_names[j], fr.joint_names[j])}\n"
+                  "(the most loaded joint)\narrows: direction as the crank turns;\n"
+                  f"dots every {360 * step / len(phi):.0f} deg of phi1, labels in deg", fontsize=9)
     return fig
+
+
+def outside_legend(ax, **kw):
+    """The axes' legend beside it, right of its frame: it covers no curve, peak
+    or label (the layout makes room for it)."""
+    return ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                     borderaxespad=0.0, **kw)
+
+
+def polar_marks(ax, phi, fx, fy, colour):
+    """A hodograph's marks: dots every 30 deg of phi1 (every 90 deg labelled,
+    where the label fits), its peak marked and labelled.  Returns the step
+    between dots (samples)."""
+    step = max(1, len(phi) // 12)
+    ax.plot(fx[::step], fy[::step], "o", ms=3, color=colour)
+    mag = np.hypot(fx, fy)
+    k = int(np.nanargmax(mag))
+    mark_peak(ax, fx[k], fy[k], colour=colour, ms=4, what="polar")
+    c = np.array([np.nanmean(fx), np.nanmean(fy)])
+    p = placer(ax)
+    p.add(ax.annotate(f"max {mag[k]:.1f} N\nat {phi[k]:.0f} deg", (fx[k], fy[k]), fontsize=8,
+                      color=colour, textcoords="offset points",
+                      xytext=(4, 4)), POINT_OFFSETS)
+    for q in range(0, len(phi), step * 3):
+        p.add(ax.annotate(f"{phi[q]:.0f}", (fx[q], fy[q]), fontsize=7, color="0.3",
+                          xytext=(3, 3), textcoords="offset points"),
+              around(fx[q] - c[0], fy[q] - c[1], 8.0), optional=True)
+    return step
 
 
 # ----------------------------------------------------------------- small multiples
@@ -353,16 +390,24 @@ def kinematics_figure(res):
     ticks = np.arange(-720, 721, 90)
     ticks = ticks[(ticks >= min(phi.min(), phi.max())) & (ticks <= max(phi.min(), phi.max()))]
 
-    def mark_peak(ax, peak, sign, unit):
-        """The refined peak: a red dot and its value, the text kept inside the panel."""
+    def peak_mark(ax, peak, sign, unit):
+        """The refined peak: a red dot and its value on a white ground (no curve
+        strikes it through), placed where it covers no other text."""
         frac = (peak.phi1 - phi[0]) / (phi[-1] - phi[0]) if phi[-1] != phi[0] else 0.0
         right = frac > 0.7
-        ax.plot([peak.phi1], [sign * peak.value], "o", color="C3", ms=3.5)
-        ax.annotate(f"peak {peak.value:.4g} {unit}\nat {peak.phi1:.2f} deg",
-                    (peak.phi1, sign * peak.value), textcoords="offset points",
-                    xytext=(-4 if right else 4, -3 if sign > 0 else 3), fontsize=6.5,
-                    color="C3", va="top" if sign > 0 else "bottom",
-                    ha="right" if right else "left")
+        mark_peak(ax, peak.phi1, sign * peak.value, what=ax.get_label())
+        ann = ax.annotate(f"peak {peak.value:.4g} {unit}\nat {peak.phi1:.2f} deg",
+                          (peak.phi1, sign * peak.value), textcoords="offset points",
+                          xytext=(0, 0), fontsize=6.5, color="C3",
+                          bbox=dict(boxstyle="square,pad=0.1", fc="white", ec="none", alpha=0.85))
+        inward = -1 if right else 1
+        down = -1 if sign > 0 else 1
+        placer(ax).add(ann, ((5 * inward, 4 * down, "right" if right else "left",
+                              "top" if sign > 0 else "bottom"),
+                             (-5 * inward, 4 * down, "left" if right else "right",
+                              "top" if sign > 0 else "bottom"),
+                             (5 * inward, -4 * down, "right" if right else "left",
+                              "bottom" if sign > 0 else "top")))
 
     def panel(ax, label, title, peak=None, unit="", signed=True):
         ax.set_label(label)
@@ -372,33 +417,36 @@ def kinematics_figure(res):
         ax.set_xticks(ticks)
         if crank.rot < 0 and not ax.xaxis_inverted():
             ax.invert_xaxis()
-        if peak is not None:
+        y = ax.get_lines()[0].get_ydata()
+        if peak is not None and not is_constant(np.hypot(*[ln.get_ydata() for ln in
+                                                           ax.get_lines()[:2]])
+                                                if not signed else y):
+            # (a constant curve, as the uniform crank's omega and eps, has no peak to show)
             k = int(np.argmin(np.abs(phi - peak.phi1)))
-            y = ax.get_lines()[0].get_ydata()
             sign = -1.0 if signed and np.isfinite(y[k]) and y[k] < 0 else 1.0
-            mark_peak(ax, peak, sign, unit)
+            peak_mark(ax, peak, sign, unit)
 
     if labels:
         axes = left.subplots(nrows, 3, sharex=True, squeeze=False)
         for j, lab in enumerate(labels):
             series = [(_angle_deg(d.links[:, j, 0]), "angle", "[deg]", None),
                       (om[:, j], "omega", "[1/s]", peaks.get(("omega", lab))),
-                      (ep[:, j], "eps", "[1/s$^2$]", peaks.get(("eps", lab)))]
+                      (ep[:, j], "eps", "[1/s²]", peaks.get(("eps", lab)))]
             for c, (y, what, unit, pk) in enumerate(series):
                 ax = axes[j, c]
                 ax.plot(phi, y, "k-", lw=1.0)
                 not_computed(ax, y, study)
-                panel(ax, f"link {lab} {what}", f"link {lab}: {what} {unit}", pk,
-                      unit.strip("[]").replace("$^2$", "^2"))
+                panel(ax, f"link {lab} {what}", f"{link_name(study, lab)}: {what} {unit}", pk,
+                      unit.strip("[]"))
         trim_rows(axes, len(labels))
         left.suptitle(f"Links: angle, omega, eps (omega1 = {crank.omega1:g} rad/s, "
-                      f"eps1 = {crank.eps1:g} rad/s$^2$)", fontsize=10)
+                      f"eps1 = {crank.eps1:g} rad/s²)", fontsize=10)
     if pts:
         axes = right.subplots(nrows, 2, sharex=True, squeeze=False)
         for r, i in enumerate(pts):
             name = plan.point_names[i]
             for c, (arr, what, unit) in enumerate(((v, "velocity", "m/s"),
-                                                    (a, "acceleration", "m/s^2"))):
+                                                    (a, "acceleration", "m/s²"))):
                 ax = axes[r, c]
                 ax.plot(phi, arr[:, i, 0], "-", color="C0", lw=0.7, label="x")
                 ax.plot(phi, arr[:, i, 1], "-", color="C1", lw=0.7, label="y")

@@ -10,6 +10,8 @@ import math
 
 import numpy as np
 
+from .labels import unit_text
+
 MAX_GREY = 60_000       # infeasible points drawn in the Pareto plot (seeded subsample)
 MAX_FRONT_POINTS = 200_000
 
@@ -101,8 +103,8 @@ def pareto_figure(data, ana) -> str:
             setter("log")
             axis.set_major_formatter(_plain)
             axis.set_minor_formatter(_plain_2_5)
-    ax.set_xlabel(f"{o[0]} [{data.objective_units[0]}] (minimised)")
-    ax.set_ylabel(f"{o[1]} [{data.objective_units[1]}] (minimised)")
+    ax.set_xlabel(f"{o[0]} [{unit_text(data.objective_units[0])}] (minimised)")
+    ax.set_ylabel(f"{o[1]} [{unit_text(data.objective_units[1])}] (minimised)")
     ax.grid(alpha=0.3, which="both")
     if ax.get_legend_handles_labels()[0]:     # nothing to label when nothing is feasible
         ax.legend(fontsize=8, loc="upper right", markerscale=0.7, framealpha=0.9)
@@ -122,4 +124,3 @@ def search_figure(h) -> str:
     ax.grid(alpha=0.3)
     ax.set_title(f"{h['method']}: {len(h['evaluations'])} generations", fontsize=10)
     return _png(fig)
-

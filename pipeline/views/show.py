@@ -60,9 +60,17 @@ def candidate_figure(run: CandidateRun, caption_extra=""):
                 f"{STATUS_HELP.get(run.status, '')}\nno position drawn past the failure",
                 transform=ax.transAxes, ha="center", va="top", fontsize=9, color="C3",
                 bbox=dict(boxstyle="round", fc="white", ec="C3", alpha=0.9))
-    params = "\n".join(f"{nm} = {v:.2f} {u}" for nm, v, u in zip(run.names, run.x, run.units))
-    ax.text(0.02, 0.02, params, transform=ax.transAxes, fontsize=8, family="monospace",
-            va="bottom", bbox=dict(boxstyle="round", fc="white", ec="0.7", alpha=0.9))
+    # the design's variables under the drawing, in columns (inside it they covered the
+    # crank's circle)
+    cells = [f"{nm} = {v:.2f} {u}" for nm, v, u in zip(run.names, run.x, run.units)]
+    ncol = 3
+    width = max(map(len, cells), default=0)
+    rows = [cells[r::math.ceil(len(cells) / ncol) or 1] for r in
+            range(math.ceil(len(cells) / ncol) or 1)]
+    params = "\n".join("   ".join(c.ljust(width) for c in row).rstrip() for row in rows)
+    ax.annotate(params, (0.5, 0.0), xycoords=ax.xaxis.label, xytext=(0, -6),
+                textcoords="offset points", fontsize=8, family="monospace", ha="center",
+                va="top", bbox=dict(boxstyle="round", fc="white", ec="0.7", alpha=0.9))
 
     ax1 = fig.add_subplot(gs[0, 1])
     ax2 = fig.add_subplot(gs[1, 1])

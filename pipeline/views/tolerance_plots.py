@@ -10,13 +10,14 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..kernels import config as kc
+from .labels import unit_text
 
 TORNADO_ROWS = 8        # dimensions per metric in the tornado chart
 BINS = 50
 
 
 def _label(metric, unit):
-    return f"{metric} [{unit}]" if unit not in ("1", "") else metric
+    return f"{metric} [{unit_text(unit)}]" if unit not in ("1", "") else metric
 
 
 def histograms_figure(a):

@@ -438,13 +438,33 @@ def test_show_animates_a_sweep_candidate(small_sweep, tmp_path, capsys):
 
 
 def test_report_embeds_the_animation_and_stays_offline(small_sweep, tmp_path, monkeypatch):
-    from pipeline.views import report
+    from pipeline.views import report, report_figures
+    from support.layout import layout_problems
     monkeypatch.setattr(report, "EXPLORER_DRAWINGS", 1)      # the test's time, not the page's
+    # every picture of the report is laid out clear (support.layout), checked as it is saved
+    problems, png = [], report_figures._png
+
+    checked_names = []
+
+    def checked(fig, dpi=100):
+        title = fig._suptitle.get_text() if fig._suptitle else ""
+        checked_names.append(title or fig.axes[0].get_title())
+        problems.extend(layout_problems(fig, f"report picture {checked_names[-1]!r}", dpi=dpi))
+        return png(fig, dpi)
+    monkeypatch.setattr(report_figures, "_png", checked)
+    monkeypatch.setattr(report, "_png", checked)
     p = tmp_path / "s.h5"
     shutil.copy(small_sweep, p)
     info = report.write_report(p, tmp_path / "r.html")
     page = (tmp_path / "r.html").read_text()
     assert info["report"].endswith("r.html") and "A design in motion" in page
+    # the Pareto picture, which a page without the explorer shows
+    from pipeline.analysis.fronts import read_analysis, read_sweep
+    from pipeline.results.storage import open_results
+    with open_results(p, "sweep") as f:
+        ana = read_analysis(f)
+    report_figures.pareto_figure(read_sweep(p), ana)
+    assert len(problems) == 0 and len(checked_names) >= 2, (checked_names, problems)
     # the comparison section: the knee against the reference design (pipeline compare)
     assert "<h2>Against the reference design</h2>" in page
     section = page.split("<h2>Against the reference design</h2>")[1].split("<h2>")[0]
