@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 from ..kernels import config as kc
+from .labels import unit_text
 from .page import json_number, json_numbers, script_json
 
 COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b")
@@ -86,7 +87,7 @@ def tolerance_chart(a) -> tuple[dict, int]:
         xa, ya, xkey, ykey = _axes(k)
         v = a.values[ok, k]
         v = v[np.isfinite(v)]
-        label = plain(metric) + (f" [{plain(unit)}]" if unit not in ("1", "") else "")
+        label = plain(metric) + (f" [{plain(unit_text(unit))}]" if unit not in ("1", "") else "")
         layout[xkey] = {"domain": [x0, x1], "anchor": ya, "title": {"text": label}}
         layout[ykey] = {"domain": [y0, y1], "anchor": xa, "showticklabels": False}
         if not len(v):
@@ -215,7 +216,7 @@ def comparison_chart(cmp) -> tuple[dict, int]:
         layout[key]["autorange"] = "reversed" if descending else True
     layout["yaxis2"]["title"] = {"text": "displacement [mm]"}
     layout["yaxis3"]["title"] = {"text": "peak |R| [N]"}
-    layout["yaxis4"]["title"] = {"text": "M_bal [N*m]"}
+    layout["yaxis4"]["title"] = {"text": f"M_bal [{unit_text('N*m')}]"}
     layout.update(title={"text": " vs ".join(plain(t) for t in cmp.labels), "font": {"size": 13}},
                   barmode="group", shapes=shapes, annotations=notes,
                   margin={"l": 60, "r": 20, "t": 70, "b": 50},
