@@ -37,6 +37,22 @@ def test_plain_lines_off_a_terminal(caplog, monkeypatch):
     assert "sweep: 10/10 cand" in text and "\r" not in text
 
 
+def test_a_bar_on_a_terminal_moves_between_updates(monkeypatch):
+    """A chunk that takes long still sees the bar's time redrawn (every
+    REDRAW_S), and closing the bar ends its redrawing thread."""
+    import io
+    import threading
+    monkeypatch.setattr(progress, "on_terminal", lambda: True)
+    monkeypatch.setattr(progress, "REDRAW_S", 0.05)
+    buf = io.StringIO()
+    b = progress.bar(10, desc="sweep", unit="cand", file=buf)
+    time.sleep(0.4)                      # no update meanwhile
+    drawn = buf.getvalue().count("\r")
+    b.close()
+    assert drawn >= 4, buf.getvalue()
+    assert not [t for t in threading.enumerate() if t.name == "pipeline-progress-bar"]
+
+
 def test_compile_estimate_is_the_last_compile_measured(caplog, monkeypatch, tmp_path):
     """No constant: the notice names the seconds the last compile took on this
     machine (none before the first), and keeps the time of this one."""
