@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.base.files import save_figure
+from pipeline.base.progress import ticking
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import ROOT, STUDIES, best_of, hardware  # noqa: E402
@@ -327,7 +328,8 @@ def run(quick=False, only=None, echo=print, out=None):
         if only and name not in only:
             continue
         t = time.perf_counter()
-        df = fn(quick, out)
+        with ticking(f"bench {name}", say_done=False):     # a live line; its time follows
+            df = fn(quick, out)
         df.to_csv(out / f"{name}.csv", index=False)
         tables[name] = df
         echo(f"\n{name} ({time.perf_counter() - t:.1f} s): {df.attrs.get('note', '')}")

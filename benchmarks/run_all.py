@@ -10,6 +10,7 @@ command line).  --quick shrinks every study so the whole run fits in CI
 from __future__ import annotations
 
 from pipeline.base.files import write_text
+from pipeline.base.progress import ticking
 
 import sys
 import time
@@ -46,7 +47,8 @@ def run(quick=False, echo=print, out=None):
     except ImportError:
         both("(throughput table: benchmarks/bench_throughput.py not available)")
     else:
-        df = bench_throughput.run(quick, csv=out / "throughput.csv")
+        with ticking("bench throughput"):
+            df = bench_throughput.run(quick, csv=out / "throughput.csv")
         echo("\nthroughput:\n" + df.to_string(index=False))
         lines += ["## throughput", "", "```", df.to_string(index=False), "```", ""]
     both(f"\nwritten to {out} in {time.perf_counter() - t0:.0f} s")

@@ -399,5 +399,18 @@ def _one_line(e) -> str:
     return " ".join(str(e).split())
 
 
+def script() -> int:
+    """The `pipeline` program (and `python -m pipeline.cli`): ``main``, then a
+    quick exit.  The interpreter's last garbage collection walks every object a
+    command made (numba's, matplotlib's: 0.3 million) and kept a finished
+    command silent for a second before the prompt came back; the objects are
+    frozen out of it (``gc.freeze``), the operating system takes the memory.
+    Not in ``main``, which tests and notebooks call in a process that goes on."""
+    code = main()
+    import gc
+    gc.freeze()
+    return code
+
+
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    sys.exit(script())

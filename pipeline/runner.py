@@ -412,6 +412,12 @@ def run_compare(paths, candidate=None, out_dir=None, *, pictures=True):
     `pipeline show`'s (written to a temporary name and renamed)."""
     if out_dir is not None and Path(out_dir).exists() and not Path(out_dir).is_dir():
         raise ResultsError(out_dir, "is a file; -o names the folder of the picture")
+    from .base.progress import ticking
+    with ticking("compare"):        # a live line while it re-runs the designs and draws
+        return _run_compare(paths, candidate, out_dir, pictures)
+
+
+def _run_compare(paths, candidate, out_dir, pictures):
     cmp = comparison(paths, candidate)
     pics = []
     if pictures:

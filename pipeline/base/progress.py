@@ -67,15 +67,35 @@ class _PlainBar:
 
 
 def bar(total=None, *, initial=0, desc="", unit="it", enabled=True, **tqdm_kw):
-    """A progress bar: tqdm on a terminal, plain log lines elsewhere (shown
-    where logging shows INFO), nothing when not ``enabled``."""
+    """A progress bar: tqdm on a terminal (redrawn every REDRAW_S while it
+    waits for an update), plain log lines elsewhere (shown where logging shows
+    INFO), nothing when not ``enabled``."""
     from tqdm import tqdm
     if not enabled:
         return tqdm(total=total, disable=True)
     if not on_terminal():
         return _PlainBar(total, initial, desc, unit)
-    return tqdm(total=total, initial=initial, desc=desc, unit=unit, dynamic_ncols=True,
-                **tqdm_kw)
+    b = tqdm(total=total, initial=initial, desc=desc, unit=unit, dynamic_ncols=True, **tqdm_kw)
+    # tqdm redraws only when told of progress: between updates (a long chunk, a
+    # module imported on the way) its time and rate are redrawn every REDRAW_S
+    stop = threading.Event()
+
+    def redraw():
+        while not stop.wait(REDRAW_S):
+            b.refresh()         # under the bar's own lock, as update() draws
+
+    th = threading.Thread(target=redraw, daemon=True, name="pipeline-progress-bar")
+    th.start()
+    close = b.close
+
+    def closing():
+        stop.set()
+        if th is not threading.current_thread():
+            th.join()
+        close()
+
+    b.close = closing
+    return b
 
 
 class _Ticker:

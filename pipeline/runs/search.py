@@ -351,6 +351,9 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
         raise SweepInterrupted(f"{out}: interrupted with {len(journal.done())} of "
                                f"{len(planned)} generations saved; run again with --resume "
                                "to continue") from None
+    except BaseException:
+        bar.close()        # its redrawing thread ends with it (base.progress.bar)
+        raise
     bar.close()
     wall = time.perf_counter() - t0
     if sizes != planned:

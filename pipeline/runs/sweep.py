@@ -292,6 +292,9 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
         done = len(journal.done())
         raise SweepInterrupted(f"{out}: interrupted with {done} of {spec.n_chunks} chunks "
                                "saved; run again with --resume to continue") from None
+    except BaseException:
+        bar.close()        # its redrawing thread ends with it (base.progress.bar)
+        raise
     bar.close()
     with hdf5_writing(work, expendable=False) as f:
         sf.sort_rows(f)

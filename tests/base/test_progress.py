@@ -1,19 +1,24 @@
-"""No silence over 2 s: on a terminal a command shows a live line while it
-works (analyze, compile, report), elsewhere plain lines with no carriage
-returns."""
+"""No silence over 2 s: on a terminal every command shows a live line while it
+works (a bar, or the seconds a stage has taken), elsewhere plain lines with no
+carriage returns; a new mechanism's compile notice estimates from the last
+compile measured here."""
 
 import logging
 import os
+import subprocess
 import sys
 import time
 
 import pytest
 
 from pipeline.base import progress
+from pipeline.cli import main
+from pipeline.runs import problem
 from support.sweep_helpers import copy_of
 from support.terminal import longest_silence, run_on_terminal
 
 SILENCE_S = 2.0
+on_linux = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a pseudo-terminal")
 
 
 def test_plain_lines_off_a_terminal(caplog, monkeypatch):
@@ -32,21 +37,120 @@ def test_plain_lines_off_a_terminal(caplog, monkeypatch):
     assert "sweep: 10/10 cand" in text and "\r" not in text
 
 
-@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a pseudo-terminal")
-def test_commands_on_a_terminal_never_fall_silent(synthesis_sweep, tmp_path, studies):
-    """analyze, and compile of a study whose kernels the session compiled:
-    the first output comes within 2 s of the interpreter's start (as long as
-    `pipeline --help` takes to print), and none is more than 2 s after the
-    one before."""
-    path = copy_of(synthesis_sweep, tmp_path, "s.h5")
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+def test_a_bar_on_a_terminal_moves_between_updates(monkeypatch):
+    """A chunk that takes long still sees the bar's time redrawn (every
+    REDRAW_S), and closing the bar ends its redrawing thread."""
+    import io
+    import threading
+    monkeypatch.setattr(progress, "on_terminal", lambda: True)
+    monkeypatch.setattr(progress, "REDRAW_S", 0.05)
+    buf = io.StringIO()
+    b = progress.bar(10, desc="sweep", unit="cand", file=buf)
+    time.sleep(0.4)                      # no update meanwhile
+    drawn = buf.getvalue().count("\r")
+    b.close()
+    assert drawn >= 4, buf.getvalue()
+    assert not [t for t in threading.enumerate() if t.name == "pipeline-progress-bar"]
+
+
+def test_compile_estimate_is_the_last_compile_measured(caplog, monkeypatch, tmp_path):
+    """No constant: the notice names the seconds the last compile took on this
+    machine (none before the first), and keeps the time of this one."""
+    record = tmp_path / "last_compile_s.txt"
+    monkeypatch.setattr(problem, "compile_record", lambda: record)
+    assert problem.last_compile_s() is None
+    record.write_text("37.4\n")
+    assert problem.last_compile_s() == 37.4
+    with caplog.at_level(logging.INFO, logger="pipeline"):
+        with problem.compile_notice() as took:
+            time.sleep(1.3)              # past the notice's one second, as a compile
+    assert "its first run only; the last one here took 37 s" in caplog.text
+    assert took[0] >= 1.3 and problem.last_compile_s() == pytest.approx(took[0], abs=0.05)
+    record.write_text("not a number")
+    assert problem.last_compile_s() is None
+
+
+# -- every command on a pseudo-terminal ------------------------------------------------
+
+def _cli_env(studies):
+    return dict(os.environ, PYTHONPATH=os.pathsep.join(
         [str(studies.parent)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
-    cli = [sys.executable, "-m", "pipeline.cli"]
-    code, times, _, _ = run_on_terminal(cli + ["--help"], env=env)
-    start = times[0]
-    for argv in (["analyze", str(path)], ["compile", str(studies / "ov7_synthesis.toml")]):
-        code, times, end, text = run_on_terminal(cli + argv, env=env)
-        assert code == 0, text
-        assert times and times[0] <= start + SILENCE_S, (argv, start, times)
-        assert longest_silence(times, end) <= SILENCE_S, (argv, times, end, text)
+
+
+CLI = [sys.executable, "-m", "pipeline.cli"]
+
+
+@pytest.fixture(scope="module")
+def help_time(studies):
+    """When `pipeline --help` first prints: the interpreter's start and the CLI's
+    imports, which every command pays before it can say anything."""
+    code, times, _, _ = run_on_terminal(CLI + ["--help"], env=_cli_env(studies))
+    assert code == 0
+    return times[0]
+
+
+@pytest.fixture(scope="module")
+def scenes(tmp_path_factory, studies):
+    """Two scene results files (no pictures: the commands below draw their own)."""
+    d = tmp_path_factory.mktemp("scenes")
+    for name in ("ov7_class3", "ov7_base"):
+        assert main(["run", str(studies / f"{name}.toml"), "-o", str(d / f"{name}.h5"),
+                     "--no-pictures", "-q"]) == 0
+    return d / "ov7_class3.h5", d / "ov7_base.h5"
+
+
+# each command with the smallest input that takes its real code path; {tmp}: the
+# case's own folder, {sweep}: the session's sweep (read only), {sweep_copy}: a copy of
+# it in {tmp}, {scene}/{scene2}: the scene results files, {studies}: studies/
+COMMANDS = {
+    "run-scene": "run {studies}/ov7_class3.toml -o {tmp}/scene.h5",
+    "run-sweep": "run {studies}/ov7_synthesis.toml -o {tmp}/sweep.h5 --candidates 300",
+    "export-scene": "export {scene} --csv {tmp}/csv",
+    "export-sweep": "export {sweep} --csv {tmp}/csv",
+    "compile": "compile {studies}/ov7_synthesis.toml",
+    "analyze": "analyze {sweep_copy}",
+    "browse": "browse {sweep}",
+    "show-animate": "show {scene} --animate --frames 4 -o {tmp}/a.gif",
+    "show-candidate": "show {sweep} --candidate reference -o {tmp}/c.png",
+    "report": "report {sweep_copy} --drawings 0 --top 5",
+    "tolerance": "tolerance {scene} --samples 8 --no-pictures -o {tmp}/t.h5",
+    "compare": "compare {scene} {scene2} -o {tmp}",
+    "doctor": "doctor",
+}
+# `pipeline bench --quick` (20 s) is held to the same limit in tests/test_bench.py
+
+
+def _argv(case, tmp, synthesis_sweep, scenes, studies):
+    sweep_copy = copy_of(synthesis_sweep, tmp, "s.h5") if "{sweep_copy}" in COMMANDS[case] \
+        else None
+    return [part.format(tmp=tmp, sweep=synthesis_sweep, sweep_copy=sweep_copy,
+                        scene=scenes[0], scene2=scenes[1], studies=studies)
+            for part in COMMANDS[case].split()]
+
+
+@on_linux
+@pytest.mark.parametrize("case", list(COMMANDS))
+def test_command_on_a_terminal_never_falls_silent(case, help_time, synthesis_sweep, scenes,
+                                                  studies, tmp_path):
+    """The first output comes within 2 s of when `pipeline --help` prints, none
+    more than 2 s after the one before, nor the exit more than 2 s after the last."""
+    argv = _argv(case, tmp_path, synthesis_sweep, scenes, studies)
+    code, times, end, text = run_on_terminal(CLI + argv, env=_cli_env(studies))
+    assert code == 0, text
+    assert times and times[0] <= help_time + SILENCE_S, (argv, help_time, times[:3], text)
+    assert longest_silence(times, end) <= SILENCE_S, (argv, times, end, text)
+    if case in ("analyze", "compile", "report"):
         assert f"{argv[0]}" in text and " s\r" in text, text      # the live line
+
+
+@pytest.mark.parametrize("case", ["run-sweep", "compare"])
+def test_no_carriage_returns_off_a_terminal(case, synthesis_sweep, scenes, studies, tmp_path):
+    """Through a pipe: plain progress lines (the stage and its time), no bars."""
+    argv = _argv(case, tmp_path, synthesis_sweep, scenes, studies)
+    p = subprocess.run(CLI + argv, env=_cli_env(studies), capture_output=True, text=True,
+                       timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert "\r" not in p.stdout + p.stderr, (p.stdout, p.stderr)
+    said = {"run-sweep": "sweep: 300/300 cand", "compare": "compare: "}[case]
+    assert said in p.stderr, p.stderr
+
