@@ -63,8 +63,10 @@ def cmd_export(a):
     from .views.export import export
     if (a.csv is None) == (a.parquet is None):
         raise ValueError("give the output folder with --csv DIR or --parquet DIR")
-    files = export(a.results, a.csv or a.parquet, every=a.every, feasible=a.feasible,
-                   front=a.front, parquet=a.parquet is not None)
+    from .base.progress import ticking
+    with ticking("export", after=0.5, say_done=False):    # a big sweep takes seconds
+        files = export(a.results, a.csv or a.parquet, every=a.every, feasible=a.feasible,
+                       front=a.front, parquet=a.parquet is not None)
     if not a.quiet:
         for f in files:
             print(f)

@@ -327,7 +327,7 @@ def animate(path, candidate=None, out=None, frames=MAX_FRAMES) -> dict:
     or one candidate of a sweep (``candidate``: an index, 'knee' or
     'reference'), over one revolution.  Returns a summary."""
     from ..base.progress import ticking
-    with ticking("animate", after=0.5, say_done=False):  # a live line past half a second
+    with ticking("animate", after=0.2, say_done=False):  # a live line, soon
         return _animate(path, candidate, out, frames)
 
 

@@ -189,7 +189,7 @@ def default_show_output(path, index) -> Path:
 def show(path, cid, out=None) -> dict:
     """`pipeline show`: re-run a candidate and draw it; returns a summary."""
     from ..base.progress import ticking
-    with ticking("show", after=0.5, say_done=False):     # a live line past half a second
+    with ticking("show", after=0.2, say_done=False):     # a live line, soon
         return _show(path, cid, out)
 
 
