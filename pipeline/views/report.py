@@ -126,7 +126,7 @@ def motion_html(path, ana, data=None, drawn=()) -> str:
 
 
 # ----------------------------------------------------------------- page parts
-TOLERANCE_BUILDS = 512      # builds per design in the report's tolerance section
+TOLERANCE_BUILDS = 256      # builds per design in the report's tolerance section (pipeline tolerance: more)
 TOLERANCE_METRICS = ("dwell_error", "stroke", "peak_reaction")
 
 
