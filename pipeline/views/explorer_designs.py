@@ -101,6 +101,12 @@ def _steps(items, desc):
     return items
 
 
+def design_key(data, row) -> str:
+    """A design's name as the commands (``--candidate``) and the page take it:
+    its candidate number as text, or 'reference'."""
+    return "reference" if row == "reference" else str(data.id(row))
+
+
 def design_cycles(path, rows, data, reference=True) -> dict:
     """{candidate number (text) or 'reference': its cycle} of the stored ``rows``
     (and the reference design): each re-run with its reactions.  A design the
@@ -112,7 +118,7 @@ def design_cycles(path, rows, data, reference=True) -> dict:
         log.info("report: re-running %d designs for the explorer (drawing, motion, "
                  "reactions)", len(todo))
     for r in _steps(todo, "explorer designs"):
-        key = "reference" if r == "reference" else str(data.id(r))
+        key = design_key(data, r)
         try:
             out[key] = design_cycle(rerun_candidate(path, r, forces=True))
         except Exception as e:   # a design the scene path cannot redo: say so, go on

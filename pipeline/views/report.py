@@ -30,6 +30,7 @@ from ..analysis.candidate import rerun_candidate
 from ..base.files import write_text
 from ..analysis.ranking import design_table, ranking
 from .explorer import EXPLORER_DRAWINGS, explorer_section
+from .explorer_designs import design_key
 from .page import markup, plotly_js, render
 from .charts import chart_html, comparison_chart, importance_chart, tolerance_chart
 from .report_figures import _letters, _png, pareto_figure, search_figure
@@ -74,7 +75,7 @@ ANIMATION_FRAMES = 60       # the animated design: one revolution in 3 s (about 
 ANIMATION_DPI = 60
 
 
-def motion_html(path, ana, data=None, drawn=()) -> str:
+def motion_html(path, ana, data, drawn=()) -> str:
     """The knee design (else the first representative, else the reference
     design) in motion, and its circular cyclogram against the cycle the study
     states ([output.motion_law]), else the OV-7 cycle of DOMAIN.md section 9
@@ -90,7 +91,7 @@ def motion_html(path, ana, data=None, drawn=()) -> str:
         cid, why = int(ana.representatives[0]), "representative A"
     else:
         cid, why = "reference", "no feasible design: the study's reference design"
-    key = "reference" if cid == "reference" or data is None else str(data.id(cid))
+    key = design_key(data, cid)
     try:
         run = rerun_candidate(path, cid, forces=False)
         gif = None if key in drawn else gif_bytes(
@@ -142,7 +143,7 @@ def tolerance_html(path, ana, data) -> str:
     rows, knee_chart = [], None
     designs = list(dict.fromkeys([i for i in [ana.knee] + list(ana.representatives) if i >= 0]))
     for i in designs + ["reference"]:
-        cid = "reference" if i == "reference" else str(data.id(i))
+        cid = design_key(data, i)
         study, mech, label, sweep, _ = tolerance_design(path, cid)
         a = analyse(study, mech, study.tolerance or ToleranceSpec(), label=label,
                     sweep_spec=sweep, samples=TOLERANCE_BUILDS)
@@ -186,7 +187,7 @@ def comparison_section_html(path, ana, data) -> str:
         i, why = int(ana.representatives[0]), "representative A"
     else:
         return '<p class="note">No feasible design to compare with the reference design.</p>'
-    cid = str(data.id(i))
+    cid = design_key(data, i)
     try:
         cmp = compare_candidate(path, cid)
     except Exception as e:   # a design the scene path cannot redo: say so, go on
@@ -345,7 +346,7 @@ def build_html(path, top=20, drawings=None) -> str:
     for i in reps:
         cards.append(_card(f"{letters[i]}: candidate #{data.id(i)}"
                            + (" (knee)" if i == knee else ""),
-                           rep_values[i], data.params[i], data, str(data.id(i)), drawn))
+                           rep_values[i], data.params[i], data, design_key(data, i), drawn))
     if ref_values is not None and ref_variables is not None:
         cards.append(_card("reference design", ref_values, ref_variables, data, "reference",
                            drawn))
