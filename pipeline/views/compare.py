@@ -145,8 +145,8 @@ def comparison_figure(cmp: Comparison):
         else:
             k_pk = int(np.nanargmax(np.abs(d.M_bal)))
             ax_m.plot(d.phi, d.M_bal, "-", color=c, lw=1.4,
-                      label=f"{d.label}: peak |M_bal| {abs(d.M_bal[k_pk]):.2f} {unit_text('N*m')} at "
-                            f"{d.phi[k_pk]:.0f} deg")
+                      label=f"{d.label}: peak |M_bal| {abs(d.M_bal[k_pk]):.2f} "
+                            f"{unit_text('N*m')} at {d.phi[k_pk]:.0f} deg")
     ax_path.set_aspect("equal", adjustable="datalim")
     ax_path.set_xlabel("x - mean [mm]")
     ax_path.set_ylabel("y - mean [mm]")

@@ -17,7 +17,7 @@ import numpy as np
 
 from .cyclogram_plots import cyclogram_figure  # noqa: F401 (a picture of plots, drawn there)
 from .dynamics_plots import eps1_figure  # noqa: F401 (a picture of plots, drawn there)
-from .labels import POINT_OFFSETS, around, is_constant, link_name, mark_peak, placer, unit_text
+from .labels import POINT_OFFSETS, around, is_constant, link_name, mark_peak, placer
 from ..solve.scene import real_motion
 # what the cyclogram draws is computed one layer down; output_motion, design_phases,
 # stated_cycle and DWELL_RESIDUAL are this module's names too (the report and the tests use them)
@@ -418,10 +418,10 @@ def kinematics_figure(res):
         if crank.rot < 0 and not ax.xaxis_inverted():
             ax.invert_xaxis()
         y = ax.get_lines()[0].get_ydata()
-        if peak is not None and not is_constant(np.hypot(*[ln.get_ydata() for ln in
-                                                           ax.get_lines()[:2]])
-                                                if not signed else y):
-            # (a constant curve, as the uniform crank's omega and eps, has no peak to show)
+        # what the peak is of: the curve, or the magnitude of an x, y pair; a constant
+        # one (the uniform crank's omega and eps) has no peak to show
+        shown = y if signed else np.hypot(*[ln.get_ydata() for ln in ax.get_lines()[:2]])
+        if peak is not None and not is_constant(shown):
             k = int(np.argmin(np.abs(phi - peak.phi1)))
             sign = -1.0 if signed and np.isfinite(y[k]) and y[k] < 0 else 1.0
             peak_mark(ax, peak, sign, unit)

@@ -63,10 +63,9 @@ def candidate_figure(run: CandidateRun, caption_extra=""):
     # the design's variables under the drawing, in columns (inside it they covered the
     # crank's circle)
     cells = [f"{nm} = {v:.2f} {u}" for nm, v, u in zip(run.names, run.x, run.units)]
-    ncol = 3
+    per_column = max(1, math.ceil(len(cells) / 3))          # three columns
     width = max(map(len, cells), default=0)
-    rows = [cells[r::math.ceil(len(cells) / ncol) or 1] for r in
-            range(math.ceil(len(cells) / ncol) or 1)]
+    rows = [cells[r::per_column] for r in range(per_column)]
     params = "\n".join("   ".join(c.ljust(width) for c in row).rstrip() for row in rows)
     ax.annotate(params, (0.5, 0.0), xycoords=ax.xaxis.label, xytext=(0, -6),
                 textcoords="offset points", fontsize=8, family="monospace", ha="center",
