@@ -40,6 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from ..base.files import RunLock
+from ..base.progress import ticking
 from ..kernels import sweep as ks
 from ..kernels.pareto import crowding_distance, nondominated_rank
 from ..model.metric_catalogue import ROBUST_OF
@@ -236,8 +237,12 @@ def _run_locked(study, out, seed_from, resume, overwrite, scheduler, client, n_j
                 on_generation, stop_after):
     search, spec = study.search, study.sweep
     journal = Journal(out)
+    # said at once: the first generation's draw and the kernels' load take a second or more
+    log.info("%s: an adaptive search, population %d, into %s", study.name, search.population,
+             out)
     seeds = front_seeds(seed_from, spec, search.population) if seed_from else None
-    x0 = initial_designs(spec, search, seeds)
+    with ticking("drawing the first generation", after=1.0, say_done=False):
+        x0 = initial_designs(spec, search, seeds)   # the sampler's import: a second or more
     n_seeded = 0 if seeds is None else len(seeds)
     want = manifest_for(study, search, x0, seed_from, n_seeded)
     _check_existing(out, journal, study, want, resume, overwrite)

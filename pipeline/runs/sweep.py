@@ -194,7 +194,9 @@ def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, 
     done = aside_or_done(out, journal, resume, overwrite, "chunk", summarize)
     if done is not None:
         return done
-
+    # said at once: what follows (the sampler's import, the kernels' load or
+    # compile) takes a second or more before the first chunk's bar
+    log.info("%s: a sweep of %s candidates into %s", study.name, f"{spec.candidates:,}", out)
     problem = build_problem(study, spec, device=_device(spec, scheduler or client))
     sf = SweepFile(out, study, problem)
     fresh = not journal.exists()
