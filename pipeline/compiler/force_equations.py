@@ -7,8 +7,9 @@ balance about its centre of mass.  The force-balance rows have coefficients
 +-1 in the joint columns (they are the body-joint incidence matrix, which is
 totally unimodular), so they are eliminated here, symbolically, with exact
 pivots +-1 chosen for the least fill-in.  What is left is a small dense system
-(mostly the moment rows) that the generated code fills and solves with partial
-pivoting at run time (``gauss_solve``); back substitution then gives every
+(mostly the moment rows) that the generated code solves with partial pivoting
+at run time (on locals, ``gauss_unrolled``, up to 6 x 6; in a work array by
+``kernels.forces.gauss_solve`` beyond); back substitution then gives every
 unknown.  Mechanism B: 15 unknowns, a 5 x 5 system at run time instead of
 15 x 15.  A plan whose system is not square keeps the general solver (it
 reports NaN, as before).
@@ -65,6 +66,49 @@ class _Sym:
         if self.is_num(a) and a == 0.0:
             return self.var(f"-{b}") if not self.is_num(b) else -b
         return self.var(f"{_s(a)} - {_s(b)}")
+
+
+# the run-time system up to this size is solved in straight-line code on locals
+# (gauss_unrolled); beyond it by the library's loop (kernels.forces.gauss_solve)
+UNROLLED_MAX = 6
+
+
+def gauss_unrolled(a, b) -> list:
+    """Lines that solve the m x m system ``a`` x = ``b`` (expressions) into the
+    locals gb0..gb{m-1}, and set ``ok`` False where it is singular: the same
+    operations in the same order as ``kernels.forces.gauss_solve`` (partial
+    pivoting, the same skipped zero multipliers), so the same bits, but on
+    locals the compiler keeps in registers instead of a work array it must
+    load and store (mechanism B's 4 x 4: 15 % of a tolerance build's time in
+    the loop, seen with perf).  Where the system is singular the lines go on
+    with infinities; ``ok`` then replaces every unknown by NaN, as the loop's
+    early return does."""
+    m = len(b)
+    out = ["# (kernels.forces.gauss_solve's operations, unrolled: compiler.force_equations."
+           "gauss_unrolled)"]
+    for i in range(m):
+        out += [f"ga{i}_{j} = {a[i][j]}" for j in range(m)] + [f"gb{i} = {b[i]}"]
+    for c in range(m):
+        out += [f"gp = {c}", f"gbest = abs(ga{c}_{c})"]
+        for r in range(c + 1, m):
+            out += [f"gv = abs(ga{r}_{c})", "if gv > gbest:", "    gbest = gv",
+                    f"    gp = {r}"]
+        out += ["if not (gbest > 0.0):", "    ok = False"]
+        for r in range(c + 1, m):
+            out.append(f"if gp == {r}:")
+            out += [f"    ga{c}_{k}, ga{r}_{k} = ga{r}_{k}, ga{c}_{k}" for k in range(c, m)]
+            out.append(f"    gb{c}, gb{r} = gb{r}, gb{c}")
+        if c + 1 < m:
+            out.append(f"ginv = 1.0 / ga{c}_{c}")
+        for r in range(c + 1, m):
+            out += [f"gf = ga{r}_{c} * ginv", "if gf != 0.0:"]
+            out += [f"    ga{r}_{k} -= gf * ga{c}_{k}" for k in range(c + 1, m)]
+            out.append(f"    gb{r} -= gf * gb{c}")
+    for c in range(m - 1, -1, -1):
+        out.append(f"gs = gb{c}")
+        out += [f"gs -= ga{c}_{k} * gb{k}" for k in range(c + 1, m)]
+        out.append(f"gb{c} = gs / ga{c}_{c}")
+    return out
 
 
 def _s(x):
@@ -254,17 +298,23 @@ def force_kernel(plan, names) -> str:
     body = list(L)
     body.append(f"# the remaining {m} x {m} system, partial pivoting at run time")
     body.append("ok = True")
-    if m:
+    x = {}
+    if 0 < m <= UNROLLED_MAX:
+        a = [[_s(A.get((r, c), 0.0)) for c in rem_c] for r in rem_r]
+        body += gauss_unrolled(a, [_s(b[r]) for r in rem_r])
+        for jj, c in enumerate(rem_c):
+            x[c] = f"x{c}"
+            body.append(f"x{c} = gb{jj}")
+    elif m:
         for i, r in enumerate(rem_r):
             for jj, c in enumerate(rem_c):
                 v = A.get((r, c), 0.0)
                 body.append(f"work_a[{i}, {jj}] = {_s(v)}")
             body.append(f"work_b[{i}] = {_s(b[r])}")
         body.append(f"ok = gauss_solve(work_a, work_b, {m})")
-    x = {}
-    for jj, c in enumerate(rem_c):
-        x[c] = f"x{c}"
-        body.append(f"x{c} = work_b[{jj}]")
+        for jj, c in enumerate(rem_c):
+            x[c] = f"x{c}"
+            body.append(f"x{c} = work_b[{jj}]")
     body.append("# back substitution through the eliminated rows")
     for r, c in reversed(pivots):
         piv = A[(r, c)]

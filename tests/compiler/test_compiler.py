@@ -11,13 +11,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from numba import njit
 
 from pipeline.cli import main
 from pipeline.compiler import kernels_for, module_name, source_for
 from pipeline.compiler.parallel import run_rows
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
-from pipeline.kernels.forces import force_work, kinetostatics
+from pipeline.kernels.config import JIT
+from pipeline.kernels.forces import force_work, gauss_solve, kinetostatics
 from pipeline.kernels.metrics import dwell_error, dwell_lanes
 from pipeline.solve.scene import revolution_angles, solve_curves
 from pipeline.study.reader import load_study
@@ -166,6 +168,54 @@ def test_the_lane_walk_is_vectorized(problem):
 
 
 # ----------------------------------------------------------------- generated force equations
+def _unrolled(m):
+    """The generated lines of an m x m solve as a Python function of (a, b)."""
+    from pipeline.compiler.force_equations import gauss_unrolled
+    lines = gauss_unrolled([[f"a[{i}][{j}]" for j in range(m)] for i in range(m)],
+                           [f"b[{i}]" for i in range(m)])
+    src = "def solve(a, b):\n    ok = True\n" + "".join(f"    {x}\n" for x in lines)
+    src += f"    return ok, ({', '.join(f'gb{i}' for i in range(m))},)\n"
+    env = {}
+    exec(compile(src, "<gauss_unrolled>", "exec"), env)
+    # compiled as the generated kernels are (strict IEEE, division by zero gives inf)
+    return njit(**dict(JIT, cache=False))(env["solve"])
+
+
+@pytest.mark.parametrize("m", [1, 2, 3, 4, 6])
+def test_unrolled_solve_gives_the_loops_bits(m):
+    """The straight-line solve the generator writes into forces_at does what
+    kernels.forces.gauss_solve does, operation for operation: the same bits
+    on systems that need row swaps, have exact zero multipliers (the skipped
+    update keeps a -0.0), signed zeros and infinities, and the same verdict
+    on singular ones; both compiled with the kernels' flags."""
+    solve = _unrolled(m)
+    rng = np.random.default_rng(m)
+    cases = []
+    for _ in range(300):
+        a = rng.normal(size=(m, m)) * 10.0 ** rng.integers(-3, 4, size=(m, m))
+        b = rng.normal(size=m)
+        mask = rng.random((m, m)) < 0.3          # exact zeros: pivots and skipped updates
+        a[mask] = rng.choice([0.0, -0.0], size=mask.sum())
+        cases.append((a, b))
+    cases.append((np.zeros((m, m)), np.ones(m)))                       # singular
+    if m > 1:
+        a = rng.normal(size=(m, m)); a[:, 0] = 0.0; cases.append((a, rng.normal(size=m)))
+        a = rng.normal(size=(m, m)); a[1] = a[0]; cases.append((a, rng.normal(size=m)))
+        a = np.eye(m)[::-1].copy(); a[0, -1] = -0.0 if m > 2 else 1.0      # swaps only
+        cases.append((a, -np.zeros(m)))
+        a = rng.normal(size=(m, m)); a[0, 1] = np.inf; cases.append((a, rng.normal(size=m)))
+    swapped = 0
+    for a, b in cases:
+        wa, wb = a.copy(), b.copy()
+        ok_loop = gauss_solve(wa, wb, m)
+        ok, x = solve(a.copy(), b.copy())
+        assert ok == ok_loop
+        if ok:
+            assert np.asarray(x).tobytes() == wb.tobytes(), (a, b, x, wb)
+        swapped += int(np.argmax(np.abs(a[:, 0])) != 0)
+    assert m == 1 or swapped > 50          # the pivoting branches were exercised
+
+
 @pytest.mark.parametrize("name", ["ov7_class3", "warp_feed_fourbar", "takeup_dynamics"])
 def test_force_equations_equal_the_dense_solve(name):
     study = load_study(STUDIES / f"{name}.toml")

@@ -19,7 +19,8 @@ from .header import M_EQUILIBRIUM, equilibrium_residual
 from .header import S_HANDED, S_CA, S_SA, S_CB, S_SB
 from .header import M_SHAKING_F, M_SHAKING_M, shaking, may_reach
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_WATCH, N_BODIES, N_JOINTS, N_SLIDES,
-                         N_INPUTS, constants, start, advance, forces_at, transmission,
+                         N_INPUTS, constants, position, start, advance, forces_at,
+                         transmission,
                          ROCKER_PIVOT, ROCKER_POINT, NEWTON_STEPS)
 from ._mechanism import BODY_COM, BODY_TURN, BODY_MASS_OFF, CRANK_PIVOT
 from .watch import (locate, watch, watch_work)
@@ -309,9 +310,14 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
                 state[j, S_SA] = trail[k, 4 * j + 1]
                 state[j, S_CB] = trail[k, 4 * j + 2]
                 state[j, S_SB] = trail[k, 4 * j + 3]
-            phi_prev = phis[k]
-        st = advance(K, phi_prev, phis[k], order, tols, state, pos, d1, d2, margins,
-                     want_f)
+            # (no continuation step to take: ``advance`` over a step of zero was
+            # its predictor and bookkeeping around this one solve, a tenth of a
+            # tolerance build's kernel time in perf, for nothing the solve reads:
+            # the same bits)
+            st = position(K, phis[k], order, tols, state, pos, d1, d2, margins, want_f)
+        else:
+            st = advance(K, phi_prev, phis[k], order, tols, state, pos, d1, d2, margins,
+                         want_f)
         phi_prev = phis[k]
         if st != OK:  # cannot happen after stage 1 unless the solver is not deterministic
             out[M_FAIL_PHI] = phis[k]
