@@ -39,7 +39,7 @@ with the project's floating-point flags (pipeline.kernels.config); to compare
 them under strict IEEE, run with PIPELINE_FASTMATH=strict and fresh
 NUMBA_CACHE_DIR and PIPELINE_CACHE_DIR (numba's cache key ignores the flags).
 
-    python benchmarks/agreement.py [--candidates N] [--out DIR]
+    python benchmarks/agreement.py [--candidates N] [--out DIR] [--smoke]
                                    [--positions 360] [--stress-candidates 100000]
 
 Writes DIR/agreement.md (default results/bench/) and prints the same table;
@@ -641,7 +641,13 @@ def main(argv=None):
     ap.add_argument("--stress-candidates", type=int, default=STRESS_N,
                     help="near-singular candidates of case 1 (default: the stress suite's 100000)")
     ap.add_argument("--out", default=str(ROOT / "results" / "bench"))
+    ap.add_argument("--smoke", action="store_true",
+                    help="that it runs (the test suite): 100 candidates per case, 36 "
+                         "positions, one scene study (mechanism B's: each scene compiles "
+                         "its own kernels, 25-30 s cold)")
     a = ap.parse_args(argv)
+    if a.smoke:
+        a.candidates, a.stress_candidates, a.positions = 100, 100, 36
     if a.candidates < 1:
         ap.error("--candidates must be at least 1")
     import numba
@@ -652,7 +658,7 @@ def main(argv=None):
     t0 = time.perf_counter()
     synthesis = load_study(STUDIES / "ov7_synthesis.toml")
     cases = [stress_case(synthesis, a.stress_candidates), montecarlo_case(synthesis, a.candidates)]
-    for s in SCENES:
+    for s in ("ov7_class3",) if a.smoke else SCENES:
         cases += scene_cases(s, a.candidates, a.positions)
     total = time.perf_counter() - t0
 

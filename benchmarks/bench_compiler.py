@@ -1,6 +1,10 @@
 """The mechanism compiler against the yardstick, the old interpreter and NumPy.
 
-    python benchmarks/bench_compiler.py [--quick] [-o DIR]
+    python benchmarks/bench_compiler.py [--quick | --smoke] [-o DIR]
+
+--smoke (the test suite: that it runs): 256 candidates, timed once, the
+whole process on 2,000; no yardstick and no compile times (each of those
+runs something else for seconds to minutes).
 
 Every figure is steady state (each kernel runs once before it is timed) in
 million candidate-positions per second, per core (1 thread) and on all cores,
@@ -138,7 +142,7 @@ def _rate(fn, n_cand, positions, repeat):
     return n_cand * positions / best_of(fn, repeat) / 1e6
 
 
-def measure(quick=False):
+def measure(quick=False, n=None):
     import numba
 
     from pipeline.compiler.parallel import default_jobs
@@ -146,8 +150,8 @@ def measure(quick=False):
     from pipeline.study.sweep_spec import draw_candidates, draw_unit, parameter_rows
     cores = default_jobs()
     numba.set_num_threads(cores)
-    n = 4096 if quick else 32768
-    rep = 2 if quick else 3
+    n = n or (4096 if quick else 32768)
+    rep = 1 if n < 1024 else 2 if quick else 3
     rows = []
 
     def row(job, yard_job, project_1, project_all, interp_1=None, numpy_1=None, note=""):
@@ -304,14 +308,15 @@ def compile_times(studies):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--smoke", action="store_true", help="that it runs, at tiny sizes")
     ap.add_argument("-o", "--out", default=str(ROOT / "results" / "bench"))
     a = ap.parse_args(argv)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     lines = ["# Mechanism compiler: speed against the yardstick", "",
              f"hardware: {hardware()}", ""]
-    yard = yardstick()
-    rows, full = measure(a.quick)
+    yard = {} if a.smoke else yardstick()
+    rows, full = measure(a.quick, 256 if a.smoke else None)
     cores = full["cores"]
     lines += ["M candidate-positions/s; ratios against the yardstick (hand-written SIMD C, "
               "run here first) and against the old interpreter and NumPy on the same "
@@ -319,27 +324,28 @@ def main(argv=None):
               "| job | project, 1 core | project, all cores | yardstick job, 1 core | "
               "project / yardstick | project / interpreter | project / NumPy | note |",
               "|---|---|---|---|---|---|---|---|"]
+    def ratio(a, b, digits):
+        return f"{a / b:.{digits}f}x" if b else ""
     for r in rows:
+        # (where the yardstick cannot run here, its columns stay empty, the rest not)
         y = yard.get(r["yard"], {}).get(1)
         lines.append(
             f"| {r['job']} | {r['p1']:.1f} | {r['pall']:.1f} | {r['yard']} "
-            f"{y if y else 'n/a'} | {r['p1'] / y:.2f}x | "
-            f"{(r['p1'] / r['interp1']) if r['interp1'] else float('nan'):.1f}x | "
-            f"{(r['p1'] / r['numpy1']) if r['numpy1'] else float('nan'):.1f}x | "
-            f"{r['note']} |" if y else f"| {r['job']} | {r['p1']:.1f} | {r['pall']:.1f} | "
-            f"{r['yard']} n/a | | | | {r['note']} |")
+            f"{y if y else 'n/a'} | {ratio(r['p1'], y, 2)} | "
+            f"{ratio(r['p1'], r['interp1'], 1)} | {ratio(r['p1'], r['numpy1'], 1)} | "
+            f"{r['note']} |")
     lines += ["", f"Default study, full metrics (kernels only): {full['full_1']:,.0f} "
               f"candidates/s on 1 core, {full['full_all']:,.0f} on {cores} cores; the "
               f"interpreter {full['full_interp_all']:,.0f} on {cores} cores "
               f"(x{full['full_all'] / full['full_interp_all']:.1f})."]
-    n_whole = 50_000 if a.quick else 1_000_000
+    n_whole = 2_000 if a.smoke else 50_000 if a.quick else 1_000_000
     rate, wall = whole_process(n_whole)
     lines += [f"Default study, whole process with HDF5 (`pipeline run`, {n_whole:,} "
               f"candidates, kernels cached): {rate:,.0f} candidates/s, {wall:.1f} s wall "
               "for the process.", ""]
     studies = [STUDIES / f"{s}.toml" for s in ("ov7_synthesis", "ov7_class3", "ov7_base",
                                                 "warp_feed_fourbar", "takeup_dynamics")]
-    ct = compile_times(studies[:2] if a.quick else studies)
+    ct = {} if a.smoke else compile_times(studies[:2] if a.quick else studies)
     lines += ["Compile time (fresh process each): a new mechanism / a cached one", "",
               "| study | new mechanism | cached |", "|---|---|---|"]
     lines += [f"| {k} | {v[0]:.1f} s | {v[1]:.2f} s |" for k, v in ct.items()]

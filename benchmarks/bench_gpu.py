@@ -45,13 +45,16 @@ def main(argv=None):
     ap.add_argument("--chunk-size", type=int, default=1_000_000)
     ap.add_argument("--store", choices=("all", "feasible"), default="feasible")
     ap.add_argument("--max-seconds", type=float, default=float("inf"))
+    ap.add_argument("--smoke", action="store_true",
+                    help="that it runs, at the simulator's tiny sizes (the test suite runs it "
+                         "under NUMBA_ENABLE_CUDASIM=1)")
     a = ap.parse_args(argv)
     from pipeline.runs import gpu
     p = gpu.probe()
     if p["missing"]:
         print(f"no usable GPU: missing {p['missing']}")
         return 0
-    if gpu.SIMULATOR:
+    if gpu.SIMULATOR or a.smoke:
         a.sizes, a.cpu_max, a.kernel_rows, a.repeat, a.chunk_size = [200], 200, 64, 1, 100
     print(hardware())
     print(f"device: {gpu.describe(p)}")

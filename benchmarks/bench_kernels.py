@@ -16,7 +16,6 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 
 from common import STUDIES, batch_runner, best_of, first_call, hardware, perturbed_rows
 
@@ -57,7 +56,12 @@ def main(argv=None):
     ap.add_argument("--candidates", type=int, default=100_000)
     ap.add_argument("--positions", type=int, default=360)
     ap.add_argument("--no-compile", action="store_true", help="skip the cold/warm compile timing")
+    ap.add_argument("--smoke", action="store_true",
+                    help="200 candidates x 36 positions, no compile timing: that it runs "
+                         "(the test suite)")
     a = ap.parse_args(argv)
+    if a.smoke:
+        a.candidates, a.positions, a.no_compile = 200, 36, True
     from pipeline.study.reader import load_study
     print(f"hardware: {hardware()}")
     print(f"{a.candidates:,} candidates x {a.positions} positions per revolution\n")

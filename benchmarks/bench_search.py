@@ -11,7 +11,7 @@ One normalisation for all (the search's own, stored in its file): each
 objective (dwell error, peak reaction) divided by the study's reference
 design's (mechanism B: 0.07209, 1073.8 N); reference point (1.1, 1.1).
 
-    python benchmarks/bench_search.py [--quick] [-o DIR]
+    python benchmarks/bench_search.py [--quick | --smoke] [-o DIR]
 
 Writes search.md (the table), search.csv (every curve) and search.png (the
 plot) into DIR (default results/bench/); the runs' own files go to a temporary
@@ -104,7 +104,10 @@ def run_search_timed(study, out):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true",
-                    help="a smoke run: sweep 20,000, search 4,000 evaluations")
+                    help="a short run: sweep 20,000, search 4,000 evaluations")
+    ap.add_argument("--smoke", action="store_true",
+                    help="that it runs (the test suite): sweep 2,000, search 400 "
+                         "evaluations, 2 seeds, no warm-up")
     ap.add_argument("-o", "--out", default=str(ROOT / "results" / "bench"))
     a = ap.parse_args(argv)
     import matplotlib
@@ -117,7 +120,9 @@ def main(argv=None):
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    n_sweep, n_search = (20_000, 4_000) if a.quick else (200_000, 20_000)
+    n_sweep, n_search = ((2_000, 400) if a.smoke else (20_000, 4_000) if a.quick
+                         else (200_000, 20_000))
+    seeds = SEEDS[:2] if a.smoke else SEEDS
     grid = sorted({g for g in SWEEP_GRID if g <= n_sweep} | {n_search, n_sweep})
     print(f"hardware: {hardware()}")
     curves = []     # (method, seed, evaluations, wall_s, hypervolume)
@@ -128,13 +133,13 @@ def main(argv=None):
         scale = hv_scale(build_problem(base, base.sweep))
         print(f"normalisation: {NORMALISATION}: scale {scale[0]:.6g}, {scale[1]:.6g} N")
         # warm-up (kernels, pymoo's numba code): not timed
-        run_sweep_timed(base, tmp / "warm.h5", 2000)
-        for method, _ in METHODS:
+        run_sweep_timed(base, tmp / "warm.h5", 500 if a.smoke else 2000)
+        for method, _ in () if a.smoke else METHODS:
             s = study_with(STUDIES / "ov7_search.toml", tmp, f"warm_{method}",
                            **{"search.method": method, "search.evaluations": 400})
             run_search_timed(s, tmp / f"warm_{method}.h5")
 
-        for seed in SEEDS:
+        for seed in seeds:
             s = study_with(STUDIES / "ov7_synthesis.toml", tmp, f"sweep_{seed}",
                            **{"sweep.seed": seed})
             path = tmp / f"sweep_{seed}.h5"
@@ -149,7 +154,7 @@ def main(argv=None):
             print(f"sweep seed {seed}: {n_sweep:,} in {secs[-1]:.1f} s, hypervolume "
                   f"{curves[-1][4]:.4f}", flush=True)
         for method, label in METHODS:
-            for seed in SEEDS:
+            for seed in seeds:
                 s = study_with(STUDIES / "ov7_search.toml", tmp, f"{method}_{seed}",
                                **{"search.method": method, "search.seed": seed,
                                   "search.evaluations": n_search})
@@ -177,7 +182,7 @@ def main(argv=None):
              f"Hardware: {hardware()}.", "",
              f"Hypervolume of the feasible front: {NORMALISATION} (scale "
              f"{scale[0]:.6g}, {scale[1]:.6g} N: mechanism B's dwell error and peak "
-             f"reaction). Seeds {', '.join(map(str, SEEDS))} for every method; "
+             f"reaction). Seeds {', '.join(map(str, seeds))} for every method; "
              "wall time of the real runner (HDF5 and journal written), kernels compiled "
              "beforehand.", "",
              "| method | evaluations | hypervolume (mean +- sd) | per seed | least feasible "
@@ -215,12 +220,12 @@ def main(argv=None):
     colours = {"sweep": "0.35", "nsga2": "C0", "smsemoa": "C1", "agemoea": "C2"}
     labels = {"sweep": "Monte-Carlo sweep (Sobol)", **{m: f"{lab} (pymoo)" for m, lab in METHODS}}
     for method in colours:
-        for seed in SEEDS:
+        for seed in seeds:
             c = np.array([r[2:] for r in curves if r[0] == method and r[1] == seed], float)
             if not len(c):
                 continue
             kw = dict(color=colours[method], lw=1.3, alpha=0.85,
-                      label=labels[method] if seed == SEEDS[0] else None)
+                      label=labels[method] if seed == seeds[0] else None)
             axes[0].plot(c[:, 0], c[:, 2], **kw)
             axes[1].plot(c[:, 1], c[:, 2], **kw)
     axes[0].set_xscale("log")
@@ -232,7 +237,7 @@ def main(argv=None):
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8)
     fig.suptitle("default study: objectives / mechanism B's, reference point (1.1, 1.1); "
-                 "3 seeds each", fontsize=10)
+                 f"{len(seeds)} seeds each", fontsize=10)
     save_figure(fig, out / "search.png", dpi=110)
     print()
     print(text)

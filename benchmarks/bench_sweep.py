@@ -37,7 +37,12 @@ def problem(study, full, n, staged=True):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--candidates", type=int, default=20_000)
+    ap.add_argument("--smoke", action="store_true",
+                    help="500 candidates, one timing each: that it runs (the test suite)")
     a = ap.parse_args(argv)
+    repeat = 1 if a.smoke else 2
+    if a.smoke:
+        a.candidates = 500
     from pipeline.study.reader import load_study
     study = load_study(STUDIES / "ov7_synthesis.toml")
     print(f"hardware: {hardware()}")
@@ -54,7 +59,7 @@ def main(argv=None):
             numba.set_num_threads(n_thr)
             for label, pb in (("full metrics", full_pb), ("dwell-only", dwell_pb),
                               ("no staging", unstaged_pb)):
-                secs = best_of(lambda: pb.evaluate_rows(pars, True), repeat=2)
+                secs = best_of(lambda: pb.evaluate_rows(pars, True), repeat=repeat)
                 res[(label, n_thr)] = a.candidates / secs
     finally:
         numba.set_num_threads(threads)

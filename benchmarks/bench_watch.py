@@ -64,7 +64,11 @@ def main(argv=None):
     ap.add_argument("--candidates", type=int, default=100_000)
     ap.add_argument("-j", "--jobs", type=int, default=None, help="threads (default: all cores)")
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--smoke", action="store_true",
+                    help="500 candidates, timed once: that it runs (the test suite)")
     args = ap.parse_args(argv)
+    if args.smoke:
+        args.candidates, args.repeat = 500, 1
     study = load_study(STUDIES / "ov7_synthesis.toml")
     pb = build_problem(study, study.sweep)
     pars = candidates(pb, args.candidates)
