@@ -120,4 +120,3 @@ def test_report_benchmark_smoke_mode_runs(synthesis_sweep, tmp_path, monkeypatch
     assert text.startswith("#") and "explorer, steady state" in text
     assert res["explorer_s"] > 0 and res["report_s"] > 0 and res["designs"] >= 2
     assert res["page_bytes"] > 4_000_000        # plotly.js is inline: one offline file
-

@@ -298,23 +298,22 @@ def force_kernel(plan, names) -> str:
     body = list(L)
     body.append(f"# the remaining {m} x {m} system, partial pivoting at run time")
     body.append("ok = True")
-    x = {}
-    if 0 < m <= UNROLLED_MAX:
+    if m <= UNROLLED_MAX:
         a = [[_s(A.get((r, c), 0.0)) for c in rem_c] for r in rem_r]
-        body += gauss_unrolled(a, [_s(b[r]) for r in rem_r])
-        for jj, c in enumerate(rem_c):
-            x[c] = f"x{c}"
-            body.append(f"x{c} = gb{jj}")
-    elif m:
+        body += gauss_unrolled(a, [_s(b[r]) for r in rem_r]) if m else []
+        solved = [f"gb{jj}" for jj in range(m)]
+    else:
         for i, r in enumerate(rem_r):
             for jj, c in enumerate(rem_c):
                 v = A.get((r, c), 0.0)
                 body.append(f"work_a[{i}, {jj}] = {_s(v)}")
             body.append(f"work_b[{i}] = {_s(b[r])}")
         body.append(f"ok = gauss_solve(work_a, work_b, {m})")
-        for jj, c in enumerate(rem_c):
-            x[c] = f"x{c}"
-            body.append(f"x{c} = work_b[{jj}]")
+        solved = [f"work_b[{jj}]" for jj in range(m)]
+    x = {}
+    for c, value in zip(rem_c, solved):
+        x[c] = f"x{c}"
+        body.append(f"x{c} = {value}")
     body.append("# back substitution through the eliminated rows")
     for r, c in reversed(pivots):
         piv = A[(r, c)]
