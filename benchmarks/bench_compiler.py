@@ -3,8 +3,9 @@
     python benchmarks/bench_compiler.py [--quick | --smoke] [-o DIR]
 
 --smoke (the test suite: that it runs): 256 candidates, timed once, the
-whole process on 2,000; no yardstick and no compile times (each of those
-runs something else for seconds to minutes).
+whole process on 2,000; no yardstick, no interpreter and no compile times
+(each of those compiles or runs something else for seconds to minutes; the
+suite runs the interpreter in agreement.py's smoke mode).
 
 Every figure is steady state (each kernel runs once before it is timed) in
 million candidate-positions per second, per core (1 thread) and on all cores,
@@ -142,7 +143,7 @@ def _rate(fn, n_cand, positions, repeat):
     return n_cand * positions / best_of(fn, repeat) / 1e6
 
 
-def measure(quick=False, n=None):
+def measure(quick=False, n=None, interpreter=True):
     import numba
 
     from pipeline.compiler.parallel import default_jobs
@@ -188,7 +189,8 @@ def measure(quick=False, n=None):
             ("B positions stage, assembled candidates", ok_b, "as the yardstick's candidates")):
         r1 = _rate(lambda: stage_b.run(pars, 1), len(pars), 360, rep)
         ra = _rate(lambda: stage_b.run(pars, cores), len(pars), 360, rep)
-        ri = _rate(lambda: stage_b.interpreter(pars, False), len(pars), 360, rep)
+        ri = _rate(lambda: stage_b.interpreter(pars, False), len(pars), 360, rep) \
+            if interpreter else None
         row(label, "triad_simd", r1, ra, ri, note=note)
 
     # ---- mechanism A positions stage and full kinematics
@@ -197,7 +199,7 @@ def measure(quick=False, n=None):
     pars_a = _perturbed(stage_a.plan, n, 0.05)
     r1 = _rate(lambda: stage_a.run(pars_a, 1), n, 360, rep)
     ra = _rate(lambda: stage_a.run(pars_a, cores), n, 360, rep)
-    ri = _rate(lambda: stage_a.interpreter(pars_a, False), n, 360, rep)
+    ri = _rate(lambda: stage_a.interpreter(pars_a, False), n, 360, rep) if interpreter else None
     row("A positions stage", "ov7_pos", r1, ra, ri)
     from pipeline.solve.scene import batch_revolutions
     nk = n // 4
@@ -214,7 +216,8 @@ def measure(quick=False, n=None):
     pars_f = _perturbed(stage_f.plan, 4 * n, 0.10)
     r1 = _rate(lambda: stage_f.run(pars_f, 1), 4 * n, 360, rep)
     ra = _rate(lambda: stage_f.run(pars_f, cores), 4 * n, 360, rep)
-    ri = _rate(lambda: stage_f.interpreter(pars_f, False), 4 * n, 360, rep)
+    ri = _rate(lambda: stage_f.interpreter(pars_f, False), 4 * n, 360, rep) \
+        if interpreter else None
     from baselines import fourbar_params, fourbar_positions_numpy
     fp = fourbar_params(stage_f.plan, pars_f[:n // 4])
 
@@ -235,7 +238,8 @@ def measure(quick=False, n=None):
     nf = len(pars_b)
     t1 = _rate(lambda: pb_full.evaluate_rows(pars_b, n_jobs=1), nf, 1, rep) * 1e6
     ta = _rate(lambda: pb_full.evaluate_rows(pars_b, n_jobs=cores), nf, 1, rep) * 1e6
-    ti = _rate(lambda: stage_b_full_interp(pb_full, pars_b), nf, 1, rep) * 1e6
+    ti = _rate(lambda: stage_b_full_interp(pb_full, pars_b), nf, 1, rep) * 1e6 \
+        if interpreter else math.nan
     return rows, dict(full_1=t1, full_all=ta, full_interp_all=ti, cores=cores)
 
 
@@ -316,7 +320,7 @@ def main(argv=None):
     lines = ["# Mechanism compiler: speed against the yardstick", "",
              f"hardware: {hardware()}", ""]
     yard = {} if a.smoke else yardstick()
-    rows, full = measure(a.quick, 256 if a.smoke else None)
+    rows, full = measure(a.quick, 256 if a.smoke else None, interpreter=not a.smoke)
     cores = full["cores"]
     lines += ["M candidate-positions/s; ratios against the yardstick (hand-written SIMD C, "
               "run here first) and against the old interpreter and NumPy on the same "
@@ -334,10 +338,11 @@ def main(argv=None):
             f"{y if y else 'n/a'} | {ratio(r['p1'], y, 2)} | "
             f"{ratio(r['p1'], r['interp1'], 1)} | {ratio(r['p1'], r['numpy1'], 1)} | "
             f"{r['note']} |")
+    interp = full["full_interp_all"]
     lines += ["", f"Default study, full metrics (kernels only): {full['full_1']:,.0f} "
-              f"candidates/s on 1 core, {full['full_all']:,.0f} on {cores} cores; the "
-              f"interpreter {full['full_interp_all']:,.0f} on {cores} cores "
-              f"(x{full['full_all'] / full['full_interp_all']:.1f})."]
+              f"candidates/s on 1 core, {full['full_all']:,.0f} on {cores} cores"
+              + (f"; the interpreter {interp:,.0f} on {cores} cores "
+                 f"(x{full['full_all'] / interp:.1f})." if math.isfinite(interp) else ".")]
     n_whole = 2_000 if a.smoke else 50_000 if a.quick else 1_000_000
     rate, wall = whole_process(n_whole)
     lines += [f"Default study, whole process with HDF5 (`pipeline run`, {n_whole:,} "
@@ -346,9 +351,10 @@ def main(argv=None):
     studies = [STUDIES / f"{s}.toml" for s in ("ov7_synthesis", "ov7_class3", "ov7_base",
                                                 "warp_feed_fourbar", "takeup_dynamics")]
     ct = {} if a.smoke else compile_times(studies[:2] if a.quick else studies)
-    lines += ["Compile time (fresh process each): a new mechanism / a cached one", "",
-              "| study | new mechanism | cached |", "|---|---|---|"]
-    lines += [f"| {k} | {v[0]:.1f} s | {v[1]:.2f} s |" for k, v in ct.items()]
+    if ct:
+        lines += ["Compile time (fresh process each): a new mechanism / a cached one", "",
+                  "| study | new mechanism | cached |", "|---|---|---|"]
+        lines += [f"| {k} | {v[0]:.1f} s | {v[1]:.2f} s |" for k, v in ct.items()]
     text = "\n".join(lines) + "\n"
     print(text)
     write_text(out / "compiler.md", text)
