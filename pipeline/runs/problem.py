@@ -156,7 +156,11 @@ def compile_notice():
     a new mechanism's kernels: a notice if it takes more than a second, and how
     long it took (the list it yields holds the seconds afterwards).  The notice's
     estimate is the last compile measured on this machine (a constant would be
-    wrong on every machine but one); the time it took is kept for the next."""
+    wrong on every machine but one); the time it took is kept for the next, only
+    where numba did compile (its "numba:compile" event: a slow first load from
+    numba's cache, a second or more under load, is no compile to estimate from)."""
+    from numba.core import event
+
     from ..base.progress import ticking
     last = last_compile_s()
     guess = (f"the last one here took {last:.0f} s" if last is not None else
@@ -164,12 +168,14 @@ def compile_notice():
     t = time.perf_counter()
     took = [0.0]
     # after a second: what it does and for how long (live on a terminal)
-    with ticking(f"compiling the kernels of this mechanism (its first run only; {guess})",
-                 after=1.0, say_done=False):
+    with event.install_recorder("numba:compile") as compiled, \
+            ticking(f"compiling the kernels of this mechanism (its first run only; {guess})",
+                    after=1.0, say_done=False):
         yield took
     took[0] = time.perf_counter() - t
     if took[0] > 1.0:
         log.info("kernels ready after %.1f s", took[0])
+    if took[0] > 1.0 and compiled.buffer:
         try:
             from ..base.files import write_text
             write_text(compile_record(), f"{took[0]:.1f}\n")
