@@ -317,8 +317,9 @@ def build_html(path, top=20, drawings=None) -> str:
 
     step(f"read {data.n:,} candidates")
     explorer, drawn = explorer_section(path, data, ana, drawings)
+    live = 'id="explorer-data"' in explorer     # else a note: no explorer on this page
     parts.append("<h2>Pareto fronts</h2>")
-    if 'id="explorer-data"' not in explorer:    # no explorer: the fronts as a picture
+    if not live:                                # the fronts as a picture instead
         parts += ['<p class="note">Every feasible candidate coloured by its front (front 1 '
                   "in red, joined by a line); grey: candidates that violate a constraint but "
                   "have both objectives; diamond: the knee of front 1; star: the study's "
@@ -412,7 +413,6 @@ def build_html(path, top=20, drawings=None) -> str:
 
     # the parts are HTML written above from escaped pieces; the explorer's section
     # comes from its own template, its script and plotly.js only when it is there
-    live = 'id="explorer-data"' in explorer
     charts = any('class="chart"' in p for p in parts)
     page = render("report.html.j2", title=str(title), parts=[markup(p) for p in parts],
                   plotly=plotly_js() if live or charts else None, explorer=live)
