@@ -4,7 +4,6 @@ README's figures (tests/support/tolerances.py), and the values it measures at
 12, 360 and 720 positions to naive.py's.  The test writes only under tmp_path,
 never into results/bench/."""
 
-import os
 import sys
 from pathlib import Path
 
@@ -13,18 +12,13 @@ import pytest
 
 from pipeline.cli import main
 from support import naive
+from support.checkout import BENCH_OUT, BENCHMARKS, child_env, snapshot
 from support.terminal import longest_silence, run_on_terminal
 from support.tolerances import (CLOSURE_MM, DWELL_360_ABS, DWELL_720_ABS, DWELL_VS_NAIVE_REL,
                                 FD_ACCELERATION_REL, FD_VELOCITY_REL, NEWTON_ITERATIONS,
                                 NEWTON_TOL, PEAK_12_REL, REACTION_FD_REL)
 
 SILENCE_S = 2.0        # tests/base/test_progress.py
-BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
-DEFAULT_OUT = BENCHMARKS.parent / "results" / "bench"
-
-
-def _snapshot(folder):
-    return {p: p.stat().st_mtime_ns for p in folder.rglob("*")} if folder.exists() else {}
 
 
 def test_bench_quick_writes_tables_and_plots(capsys, tmp_path):
@@ -32,20 +26,18 @@ def test_bench_quick_writes_tables_and_plots(capsys, tmp_path):
     says something at least every 2 s (tests/base/test_progress.py holds the other
     commands to that); elsewhere in this process, -q printing only the folder."""
     out = tmp_path / "bench"
-    before = _snapshot(DEFAULT_OUT)
+    before = snapshot(BENCH_OUT)
     argv = ["bench", "--quick", "-o", str(out), "--benchmarks", str(BENCHMARKS)]
     if sys.platform.startswith("linux"):
-        env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-            [str(BENCHMARKS.parent)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
         code, times, end, text = run_on_terminal([sys.executable, "-m", "pipeline.cli"] + argv,
-                                                 env=env)
+                                                 env=child_env())
         assert code == 0, text
         assert longest_silence(times, end) <= SILENCE_S, (times, end, text)
         assert f"written to {out} in" in text and "bench e_fastmath: " in text, text
     else:
         assert main(argv + ["-q"]) == 0
         assert Path(capsys.readouterr().out.strip().splitlines()[-1]) == out   # the folder
-    assert _snapshot(DEFAULT_OUT) == before      # a user's own benchmark output is left alone
+    assert snapshot(BENCH_OUT) == before      # a user's own benchmark output is left alone
     for name in ("a_positions", "b_newton", "c_analogs", "d_rk4", "e_fastmath", "throughput"):
         assert (out / f"{name}.csv").exists(), name
     assert (out / "summary.md").exists()

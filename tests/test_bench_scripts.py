@@ -6,19 +6,12 @@ end and writes its table where it was told.  (A file of its own: pytest-xdist
 deals out files, and these compile the frozen interpreter and the watch-free
 kernels, about two minutes cold.)"""
 
-import os
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
-BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
-DEFAULT_OUT = BENCHMARKS.parent / "results" / "bench"
-
-
-def _snapshot(folder):
-    return {p: p.stat().st_mtime_ns for p in folder.rglob("*")} if folder.exists() else {}
+from support.checkout import BENCH_OUT, BENCHMARKS, child_env, snapshot
 
 
 # ---- every script in benchmarks/ runs in the suite at smoke size, so none can rot
@@ -53,11 +46,8 @@ def test_benchmark_script_smoke_mode_runs(script, tmp_path):
     where the kernels disagree with the interpreter), no traceback, its table
     written where it was told (never into results/bench/)."""
     argv, written = SMOKE[script]
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-        [str(BENCHMARKS.parent)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
-    if script == "bench_gpu.py":
-        env["NUMBA_ENABLE_CUDASIM"] = "1"
-    before = _snapshot(DEFAULT_OUT)
+    env = child_env(**({"NUMBA_ENABLE_CUDASIM": "1"} if script == "bench_gpu.py" else {}))
+    before = snapshot(BENCH_OUT)
     r = subprocess.run([sys.executable, str(BENCHMARKS / script)]
                        + [a.format(tmp=tmp_path) for a in argv],
                        env=env, capture_output=True, text=True, timeout=600)
@@ -67,4 +57,4 @@ def test_benchmark_script_smoke_mode_runs(script, tmp_path):
         assert (tmp_path / written).read_text().startswith("#")
     if script == "bench_gpu.py":
         assert "end to end" in r.stdout, r.stdout     # it ran, not "no usable GPU"
-    assert _snapshot(DEFAULT_OUT) == before
+    assert snapshot(BENCH_OUT) == before

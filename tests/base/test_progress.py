@@ -4,7 +4,6 @@ carriage returns; a new mechanism's compile notice estimates from the last
 compile measured here."""
 
 import logging
-import os
 import subprocess
 import sys
 import time
@@ -14,6 +13,7 @@ import pytest
 from pipeline.base import progress
 from pipeline.cli import main
 from pipeline.runs import problem
+from support.checkout import child_env
 from support.sweep_helpers import copy_of
 from support.terminal import longest_silence, run_on_terminal
 
@@ -78,19 +78,14 @@ def test_compile_estimate_is_the_last_compile_measured(caplog, monkeypatch, tmp_
 
 # -- every command on a pseudo-terminal ------------------------------------------------
 
-def _cli_env(studies):
-    return dict(os.environ, PYTHONPATH=os.pathsep.join(
-        [str(studies.parent)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
-
-
 CLI = [sys.executable, "-m", "pipeline.cli"]
 
 
 @pytest.fixture(scope="module")
-def help_time(studies):
+def help_time():
     """When `pipeline --help` first prints: the interpreter's start and the CLI's
     imports, which every command pays before it can say anything."""
-    code, times, _, _ = run_on_terminal(CLI + ["--help"], env=_cli_env(studies))
+    code, times, _, _ = run_on_terminal(CLI + ["--help"], env=child_env())
     assert code == 0
     return times[0]
 
@@ -141,7 +136,7 @@ def test_command_on_a_terminal_never_falls_silent(case, help_time, synthesis_swe
     """The first output comes within 2 s of when `pipeline --help` prints, none
     more than 2 s after the one before, nor the exit more than 2 s after the last."""
     argv = _argv(case, tmp_path, synthesis_sweep, scenes, studies)
-    code, times, end, text = run_on_terminal(CLI + argv, env=_cli_env(studies))
+    code, times, end, text = run_on_terminal(CLI + argv, env=child_env())
     assert code == 0, text
     assert times and times[0] <= help_time + SILENCE_S, (argv, help_time, times[:3], text)
     assert longest_silence(times, end) <= SILENCE_S, (argv, times, end, text)
@@ -153,7 +148,7 @@ def test_command_on_a_terminal_never_falls_silent(case, help_time, synthesis_swe
 def test_no_carriage_returns_off_a_terminal(case, synthesis_sweep, scenes, studies, tmp_path):
     """Through a pipe: plain progress lines (the stage and its time), no bars."""
     argv = _argv(case, tmp_path, synthesis_sweep, scenes, studies)
-    p = subprocess.run(CLI + argv, env=_cli_env(studies), capture_output=True, text=True,
+    p = subprocess.run(CLI + argv, env=child_env(), capture_output=True, text=True,
                        timeout=300)
     assert p.returncode == 0, p.stderr
     assert "\r" not in p.stdout + p.stderr, (p.stdout, p.stderr)
