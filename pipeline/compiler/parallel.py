@@ -14,6 +14,8 @@ import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
 
+from ..kernels.config import LANE_WIDTH
+
 TASK_ROWS = 256          # candidates per task: small enough that threads rarely idle at
                          # the end of a chunk (the force stage falls unevenly)
 _POOLS: dict[int, ThreadPoolExecutor] = {}
@@ -38,11 +40,16 @@ def _pool(jobs):
 
 def run_rows(kernel, pars, *args, n_jobs=None, task_rows=TASK_ROWS):
     """``kernel(pars, lo, hi, *args)`` over all rows of ``pars`` in ranges of
-    ``task_rows``, on ``n_jobs`` threads (all cores by default; 1: this thread)."""
+    ``task_rows``, on ``n_jobs`` threads (all cores by default; 1: this thread).
+    A batch of fewer than ``task_rows`` rows per thread (a search's generation)
+    is shared out evenly, in whole lane blocks, so that every thread has some."""
     n = pars.shape[0]
     jobs = default_jobs() if n_jobs is None else int(n_jobs)
     if jobs < 1:
         raise ValueError(f"n_jobs must be at least 1, got {n_jobs}")
+    if jobs > 1 and n < jobs * task_rows:
+        share = -(-n // jobs)
+        task_rows = max(LANE_WIDTH, -(-share // LANE_WIDTH) * LANE_WIDTH)
     ranges = [(lo, min(lo + task_rows, n)) for lo in range(0, n, task_rows)]
     if jobs == 1 or len(ranges) <= 1:
         for lo, hi in ranges:

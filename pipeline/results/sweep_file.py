@@ -197,20 +197,40 @@ class SweepFile:
         """Write one chunk's rows into the datasets ``d`` (``datasets(f)``): all
         its candidates, or (store = feasible) the rows ``index`` kept, appended,
         with the chunk's ``counts``."""
-        room_for(self.path, 2 * (x.nbytes + metrics.nbytes) + status.nbytes)
-        cols, G, cv, feasible = self._rows(status, metrics)
         if index is None:
-            lo, hi = self.spec.chunk_bounds(chunk)
-            counts = _counts(status, feasible)
-        else:
-            lo = d["candidate"].shape[0]
-            hi = lo + len(index)
-            for name in self.row_names():
-                d[name].resize(hi, axis=0)
-            d["candidate"][lo:hi] = index
+            self.write_chunks(d, range(chunk, chunk + 1), x, status, metrics, [rejected])
+            return
+        room_for(self.path, 2 * (x.nbytes + metrics.nbytes) + status.nbytes)
+        lo = d["candidate"].shape[0]
+        hi = lo + len(index)
+        for name in self.row_names():
+            d[name].resize(hi, axis=0)
+        d["candidate"][lo:hi] = index
+        self._write_rows(d, lo, hi, x, status, metrics)
         if len(rejected):
             d["progress/rejected"][chunk] = rejected
         d["progress/status_counts"][chunk] = counts
+        d["progress/chunk_done"][chunk] = True
+
+    def write_chunks(self, d, chunks, x, status, metrics, rejected):
+        """Write the consecutive chunks ``chunks`` (a range) at once: their rows
+        one after the other in ``x``, ``status``, ``metrics``, and one row of
+        ``rejected`` per chunk (every candidate stored)."""
+        room_for(self.path, 2 * (x.nbytes + metrics.nbytes) + status.nbytes)
+        bounds = [self.spec.chunk_bounds(c) for c in chunks]
+        lo, hi = bounds[0][0], bounds[-1][1]
+        feasible = self._write_rows(d, lo, hi, x, status, metrics)
+        first, end = chunks[0], chunks[-1] + 1
+        rejected = np.asarray(rejected, np.int64).reshape(len(bounds), -1)
+        if rejected.shape[1]:
+            d["progress/rejected"][first:end] = rejected
+        d["progress/status_counts"][first:end] = np.stack(
+            [_counts(status[a - lo:b - lo], feasible[a - lo:b - lo]) for a, b in bounds])
+        d["progress/chunk_done"][first:end] = True
+
+    def _write_rows(self, d, lo, hi, x, status, metrics):
+        """Rows lo:hi of every per-candidate dataset; returns their feasibility."""
+        cols, G, cv, feasible = self._rows(status, metrics)
         d["candidates/params"][lo:hi] = x
         d["candidates/status"][lo:hi] = status
         d["candidates/fail_phi"][lo:hi] = np.rad2deg(metrics[:, ks.M_FAIL_PHI])
@@ -222,7 +242,7 @@ class SweepFile:
         d["candidates/constraints"][lo:hi] = G
         d["candidates/cv"][lo:hi] = cv
         d["candidates/feasible"][lo:hi] = feasible
-        d["progress/chunk_done"][chunk] = True
+        return feasible
 
     def row_names(self):
         """The datasets with a row per stored candidate."""

@@ -307,6 +307,17 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
             d = sfile.datasets(f)
             flushed = time.monotonic()
             writing = True
+            pending = []        # generations journalled, not yet in the file: written
+                                # together about once a second (and at the end)
+
+            def write_pending():
+                nonlocal flushed
+                if writing and pending:
+                    sfile.write_many(d, pending)
+                    f.flush()
+                pending.clear()
+                flushed = time.monotonic()
+
             for gen in range(len(planned)):
                 repair.count = 0
                 pop = algorithm.ask()
@@ -340,10 +351,9 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
                 history.append(row)
                 writing = writing and len(X) == planned[gen]
                 if writing:
-                    sfile.write(d, gen, X, status, metrics, row)
+                    pending.append((gen, X, status, metrics, row))
                     if time.monotonic() - flushed > 1.0:
-                        f.flush()
-                        flushed = time.monotonic()
+                        write_pending()
                 bar.update(len(X))
                 bar.set_postfix_str(f"generation {gen}/{len(planned) - 1}, "
                                     f"hypervolume {hv:.4f}", refresh=False)
@@ -351,6 +361,7 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
                     on_generation(row)
                 if stop_after is not None and evaluated >= stop_after:
                     raise KeyboardInterrupt  # test hook: an interruption between generations
+            write_pending()
     except KeyboardInterrupt:
         bar.close()
         raise SweepInterrupted(f"{out}: interrupted with {len(journal.done())} of "

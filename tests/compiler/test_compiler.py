@@ -274,6 +274,9 @@ def test_rows_run_in_ranges_on_threads():
         calls.append((lo, hi, tag))
     run_rows(kernel, np.zeros((1000, 1)), "x", n_jobs=2, task_rows=256)
     assert sorted(calls) == [(0, 256, "x"), (256, 512, "x"), (512, 768, "x"), (768, 1000, "x")]
+    calls.clear()       # a search's generation: shared out in whole lane blocks
+    run_rows(kernel, np.zeros((100, 1)), "y", n_jobs=2, task_rows=256)
+    assert sorted(calls) == [(0, 56, "y"), (56, 100, "y")]
     with pytest.raises(ValueError, match="n_jobs"):
         run_rows(kernel, np.zeros((10, 1)), "x", n_jobs=0)
 
