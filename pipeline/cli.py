@@ -80,7 +80,7 @@ def cmd_compile(a):
         for p in study_files(a.studies):
             print(source(load_study(p)))
         return EXIT_OK
-    done = compile_all(a.studies)
+    done = compile_all(a.studies, jobs=a.jobs)
     if not a.quiet:
         _print({c.study: f"{c.kind}: {c.seconds:.1f} s, kernels in {c.source}" for c in done},
                a.format)
@@ -230,6 +230,8 @@ def build_parser():
                    help="study files (default: every studies/*.toml of the current folder)")
     c.add_argument("--show", action="store_true",
                    help="print the generated source of each study's kernels instead")
+    c.add_argument("-j", "--jobs", type=int,
+                   help="processes compiling side by side (default: all cores)")
     c.set_defaults(func=cmd_compile)
 
     an = sub.add_parser("analyze", parents=[common], help=(

@@ -9,6 +9,7 @@ compiles nothing.  ``--show`` prints the generated source.
 from __future__ import annotations
 
 import dataclasses
+import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,6 +23,7 @@ class Compiled:
     kind: str
     source: Path          # the generated module's file
     seconds: float        # generation, import and compilation (a cached run: the load)
+    process: int = 0      # the process that compiled it (its id)
 
 
 def study_files(paths=()) -> list[Path]:
@@ -59,7 +61,8 @@ def compile_study(study) -> Compiled:
         if getattr(study, "dynamics", None) is not None and study.dynamics.cases:
             case = study.dynamics.cases[0]
             integrate(plan, mech, with_changes(case, t_end=case.sample_dt))
-    return Compiled(study.name, study.kind, Path(mod.SOURCE_PATH), time.perf_counter() - t)
+    return Compiled(study.name, study.kind, Path(mod.SOURCE_PATH), time.perf_counter() - t,
+                    os.getpid())
 
 
 def source(study) -> str:
@@ -70,15 +73,78 @@ def source(study) -> str:
     return source_for(plan, rocker)
 
 
-def compile_all(paths=()) -> list[Compiled]:
+def compile_all(paths=(), jobs=None) -> list[Compiled]:
     """Compile every study named (or found), saying which one it compiles and
-    for how long (a study new to the cache takes minutes)."""
-    from .base.progress import ticking
+    for how long (a study new to the cache takes half a minute or more).
+
+    numba compiles one function at a time in a process, so the studies whose
+    kernels differ are compiled side by side in ``jobs`` worker processes (all
+    cores by default), each filling the one on-disk cache; studies with the
+    same kernels (the same generated source and kind) go to the same worker,
+    one after the other, so that nothing is compiled twice at once."""
+    from .compiler.parallel import default_jobs
     from .study.reader import load_study
     files = study_files(paths)
+    studies = [load_study(p) for p in files]      # a bad study stops here, before any work
+    groups = same_kernels(studies)
+    jobs = default_jobs() if jobs is None else int(jobs)
+    if jobs < 1:
+        raise ValueError(f"--jobs must be at least 1, got {jobs}")
+    jobs = min(jobs, len(groups))
+    if jobs == 1:
+        return _in_this_process(studies)
+    return _in_processes(files, studies, groups, jobs)
+
+
+def same_kernels(studies) -> list[list[int]]:
+    """The studies' indices grouped by the kernels they compile: the generated
+    source of their mechanism and their kind (a scene's and a sweep's kernels
+    differ), in the order first met."""
+    groups: dict[tuple, list[int]] = {}
+    for k, study in enumerate(studies):
+        groups.setdefault((source(study), study.kind), []).append(k)
+    return list(groups.values())
+
+
+def _in_this_process(studies) -> list[Compiled]:
+    from .base.progress import ticking
     done = []
-    for k, p in enumerate(files, 1):
-        study = load_study(p)
-        with ticking(f"compile {k}/{len(files)}: {study.name} ({study.kind})"):
+    for k, study in enumerate(studies, 1):
+        with ticking(f"compile {k}/{len(studies)}: {study.name} ({study.kind})"):
             done.append(compile_study(study))
     return done
+
+
+def _compile_files(paths) -> list[Compiled]:
+    """Worker process: compile the studies ``paths`` one after the other."""
+    from .study.reader import load_study
+    return [compile_study(load_study(p)) for p in paths]
+
+
+def _in_processes(files, studies, groups, jobs) -> list[Compiled]:
+    import logging
+    import multiprocessing
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
+    from .base.progress import ticking
+    log = logging.getLogger("pipeline")
+    done: dict[int, Compiled] = {}
+    what = f"compile {len(studies)} studies ({len(groups)} sets of kernels) in {jobs} processes"
+    # spawn: a fresh interpreter per worker (no fork of this process's threads)
+    with ticking(what) as line, ProcessPoolExecutor(
+            jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+        running = {pool.submit(_compile_files, [str(files[k]) for k in g]): g for g in groups}
+        try:
+            while running:
+                finished, _ = wait(running, return_when=FIRST_COMPLETED)
+                for fut in finished:
+                    group = running.pop(fut)
+                    for k, c in zip(group, fut.result()):
+                        done[k] = c
+                        log.info("compiled %d/%d: %s (%s) in %.1f s", len(done), len(studies),
+                                 c.study, c.kind, c.seconds)
+                line.set(f"{len(done)}/{len(studies)} done")
+        except BaseException:
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+    return [done[k] for k in range(len(studies))]

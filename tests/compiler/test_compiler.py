@@ -101,6 +101,31 @@ def test_compile_show_prints_the_source(capsys):
     assert "def position(" in out and "rrr(pos, d1, d2" in out
 
 
+def test_studies_with_the_same_kernels_are_compiled_together():
+    from pipeline.compile import same_kernels
+    names = ["ov7_synthesis", "ov7_base", "ov7_search", "ov7_class3", "ov7_robust_search"]
+    groups = same_kernels([load_study(STUDIES / f"{n}.toml") for n in names])
+    # the three sweeps of mechanism B share their kernels; its scene (ov7_class3) and
+    # the four-bar's scene have their own
+    assert groups == [[0, 2, 4], [1], [3]]
+
+
+def test_compile_runs_different_kernels_in_worker_processes(caplog):
+    import logging
+    import os
+
+    from pipeline.compile import compile_all
+    files = [STUDIES / "ov7_base.toml", STUDIES / "ov7_class3.toml"]
+    with caplog.at_level(logging.INFO, logger="pipeline"):
+        done = compile_all(files, jobs=2)
+    assert [(c.study, c.kind) for c in done] == [("ov7_base", "scene"), ("ov7_class3", "scene")]
+    assert "compile 2 studies (2 sets of kernels) in 2 processes" in caplog.text
+    assert [c.process for c in done if c.process == os.getpid()] == []     # not this one
+    assert all(Path(c.source).exists() for c in done)
+    with pytest.raises(ValueError, match="--jobs must be at least 1"):
+        compile_all(files, jobs=0)
+
+
 # ----------------------------------------------------------------- lanes against the careful path
 def _careful(problem, pars):
     k = problem.kernels
