@@ -211,9 +211,61 @@ def _guide_words(e, j, link_j, angle_key):
             f"+ {angle_key}")
 
 
+def _hoisted_cos_sin(e, *keys):
+    """``derived`` entries: cos and sin of the angles ``keys``, once per candidate."""
+    out = []
+    for key in keys:
+        a = e.k(key)
+        out += [(f"{a}_cos", f"math.cos({a})"), (f"{a}_sin", f"math.sin({a})")]
+    return out
+
+
+def _lane_direction(e, u, angle_key, j):
+    """Lane lines of a guide's unit direction ``u``x, ``u``y (kernels.groups._direction
+    as a vector): e(angle) hoisted, or, for a guide turning with the link at gidx
+    columns j, j + 1, that link's vector normalised and turned by the hoisted
+    cos/sin of the angle (a link of no length: the careful path)."""
+    c, s = lane(f"{e.k(angle_key)}_cos"), lane(f"{e.k(angle_key)}_sin")
+    if e.ix[j] < 0:
+        return [f"{u}x = {c}", f"{u}y = {s}"]
+    a, b = e.xy(j), e.xy(j + 1)
+    return [f"vx = {b}x - {a}x", f"vy = {b}y - {a}y", "r2 = vx * vx + vy * vy",
+            "bad = bad | (not (r2 > 0.0))",
+            "f = 1.0 / math.sqrt(r2)",
+            f"{u}x = f * ({c} * vx - {s} * vy)",
+            f"{u}y = f * ({s} * vx + {c} * vy)"]
+
+
+def _lane_meet(G1, e1, G2, e2, B):
+    """Lane lines of ``B`` where two lines meet (kernels.groups._line_meet): line i
+    through G_i along u_i (locals u1x ... u2y) at the offset e_i along n_i = u_i
+    turned +90 deg; ``m`` the margin |sin| of the angle between them (near 0:
+    the careful path)."""
+    return ["n1x = -u1y", "n1y = u1x", "n2x = -u2y", "n2y = u2x",
+            "den = u1x * n2x + u1y * n2y",
+            "m = abs(den)",
+            "low = low | (not (m >= margin_safe))",
+            f"gx = {G1}x - {G2}x", f"gy = {G1}y - {G2}y",
+            f"s1 = ({e2} - {e1} * (n1x * n2x + n1y * n2y) - (gx * n2x + gy * n2y)) / den",
+            f"{B}x = {G1}x + {e1} * n1x + s1 * u1x",
+            f"{B}y = {G1}y + {e1} * n1y + s1 * u1y"]
+
+
 class PRPEmitter(Emitter):
     watched = True
     code = kc.G_PRP
+    fast = True
+
+    def derived(self):
+        # the lane form turns unit vectors by the guides' angles: their cos/sin, hoisted
+        return _hoisted_cos_sin(self, "guide1_angle", "guide2_angle")
+
+    def lanes(self):
+        return ([f"# {self.title()}: {self.xy(6)} where the two guide lines meet"]
+                + _lane_direction(self, "u1", "guide1_angle", 1)
+                + _lane_direction(self, "u2", "guide2_angle", 4)
+                + _lane_meet(self.xy(0), lane(self.k("guide1_offset")), self.xy(3),
+                             lane(self.k("guide2_offset")), self.xy(6)))
 
     def careful(self):
         a1, b1 = _guide_link(self, 1)
@@ -239,6 +291,22 @@ class PRPEmitter(Emitter):
 class RPPEmitter(Emitter):
     watched = True
     code = kc.G_RPP
+    fast = True
+
+    def derived(self):
+        return _hoisted_cos_sin(self, "guide_angle", "slot_angle")
+
+    def lanes(self):
+        # kernels.groups.rpp: the guide's line through G at guide_offset, and the
+        # slot's line through A (the guide's direction turned by slot_angle) at
+        # -slot_offset
+        cs, ss = lane(f"{self.k('slot_angle')}_cos"), lane(f"{self.k('slot_angle')}_sin")
+        return ([f"# {self.title()}: {self.xy(4)} where the guide and the slot through "
+                 f"{self.xy(0)} meet"]
+                + _lane_direction(self, "u1", "guide_angle", 2)
+                + [f"u2x = {cs} * u1x - {ss} * u1y", f"u2y = {ss} * u1x + {cs} * u1y"]
+                + _lane_meet(self.xy(1), lane(self.k("guide_offset")), self.xy(0),
+                             f"-{lane(self.k('slot_offset'))}", self.xy(4)))
 
     def careful(self):
         ga, gb = _guide_link(self, 2)

@@ -142,7 +142,39 @@ def _careful(problem, pars):
     return status, metrics
 
 
-def test_lanes_agree_with_the_careful_path(problem, candidates):
+def lanes_vouched(problem, pars):
+    """(lanes the walk vouched for, lanes walked) over the blocks of ``pars`` whose
+    every candidate starts in a lane: the generated setup_lane and block_walk
+    called as the sweep's evaluate calls them."""
+    from pipeline.kernels.continuation import work
+    k = problem.kernels
+    L, npos = k.LANES, len(problem.phis)
+    pos, d1, d2, m, state, _ = work(k.N_POINTS, k.N_GROUPS, k.N_TRIADS)
+    phis = np.asarray(problem.phis)
+    close = problem.phi_close if math.isfinite(problem.phi_close) else phis[0]
+    ext = np.concatenate([phis, close + (phis[:3] - phis[0])])    # the walk's angles
+    vouched = walked = 0
+    for b in range(len(pars) // L):
+        S = np.empty((k.N_LANE_ROWS, L))
+        theta = np.empty((npos + 3, L * k.THETA_COLS))
+        if any(k.setup_lane(pars, b * L + lane, lane, problem.phis, problem.tols, S, theta, pos,
+                            d1, d2, m, state) != kc.OK for lane in range(L)):
+            continue
+        k.block_walk(S, theta, np.cos(ext), np.sin(ext), problem.phis, problem.tols,
+                     problem.settings())
+        walked += L
+        vouched += int((S[k.R_flag] == 0.0).sum())
+    return vouched, walked
+
+
+def assert_lanes_agree(problem, candidates, class3=True):
+    """The lane path (evaluate_rows) against the careful path alone, candidate by
+    candidate: the same statuses and failure angles, the metrics to rounding;
+    and the lanes vouch for most candidates (a lane path that handed every lane
+    over would agree trivially)."""
+    assert problem.kernels.HAS_LANES
+    vouched, walked = lanes_vouched(problem, candidates[:400])
+    assert walked >= 200 and vouched >= 0.6 * walked, (vouched, walked)
     s_fast, m_fast = problem.evaluate_rows(candidates)
     s_ref, m_ref = _careful(problem, candidates)
     np.testing.assert_array_equal(s_fast, s_ref)
@@ -150,16 +182,61 @@ def test_lanes_agree_with_the_careful_path(problem, candidates):
     assert ok.sum() > 100
     # the README's figures: 1e-12 relative, the singularity margin 7.2e-12 (a small
     # difference of large products); what is counted or located is identical
-    for col, rel in ((ks.M_STROKE, LANE_AGREEMENT_REL), (ks.M_DWELL, LANE_AGREEMENT_REL),
-                     (ks.M_MARGIN, LANE_MARGIN_REL), (ks.M_PEAK_R, LANE_AGREEMENT_REL),
-                     (ks.M_PEAK_MBAL, LANE_AGREEMENT_REL), (ks.M_DWELL_START, 0.0),
-                     (ks.M_PEAK_PHI, 0.0), (ks.M_FORCES_DONE, 0.0)):
+    cols = ((ks.M_STROKE, LANE_AGREEMENT_REL), (ks.M_DWELL, LANE_AGREEMENT_REL),
+            (ks.M_PEAK_R, LANE_AGREEMENT_REL), (ks.M_PEAK_MBAL, LANE_AGREEMENT_REL),
+            (ks.M_DWELL_START, 0.0), (ks.M_PEAK_PHI, 0.0), (ks.M_FORCES_DONE, 0.0))
+    for col, rel in cols + (((ks.M_MARGIN, LANE_MARGIN_REL),) if class3 else ()):
         a, b = m_fast[ok, col], m_ref[ok, col]
         np.testing.assert_array_equal(np.isnan(a), np.isnan(b))
         f = np.isfinite(b)
         assert f.sum() > 100, col
         np.testing.assert_allclose(a[f], b[f], rtol=rel, atol=0, err_msg=f"metric column {col}")
     np.testing.assert_array_equal(m_fast[~ok, ks.M_FAIL_PHI], m_ref[~ok, ks.M_FAIL_PHI])
+    return s_ref
+
+
+def test_lanes_agree_with_the_careful_path(problem, candidates):
+    assert_lanes_agree(problem, candidates)
+
+
+def test_prp_lanes_agree_with_the_careful_path(tmp_path):
+    """The slotted rocker's PRP in the lanes: its guides from the rocker's link
+    vector and the hoisted angles, B where they meet.  Bounds widened so that a
+    third of the draws turn the frame's guide parallel to the slot somewhere in
+    the revolution: the lanes hand those over, and the careful path finds the
+    fold where it finds it alone.  The output measured is the pin B itself, seen
+    from the frame's guide point (the study's own rocker comes before the PRP),
+    so that the stroke and the dwell hold the lanes' B to the careful path's."""
+    text = (STUDIES / "slotted_rocker_prp_sweep.toml").read_text()
+    text = text.replace("min = -20.0, max = 20.0", "min = -90.0, max = 90.0") \
+               .replace("min = -5.0, max = 5.0", "min = -30.0, max = 30.0") \
+               .replace("min = -10.0, max = 10.0", "min = 5.0, max = 30.0") \
+               .replace('rocker = ["P4", "P3"]', 'rocker = ["P6", "P5"]')
+    assert text.count("max = 30.0") == 2 and 'rocker = ["P6", "P5"]' in text
+    (tmp_path / "wide.toml").write_text(text)
+    study = load_study(tmp_path / "wide.toml")
+    pb = build_problem(study, study.sweep)
+    spec = dataclasses.replace(study.sweep, candidates=2000, chunk_size=2000)
+    status = assert_lanes_agree(pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0)),
+                                class3=False)
+    assert (status == kc.SINGULAR).sum() > 300
+
+
+def test_ppr_lanes_agree_with_the_careful_path(tmp_path):
+    """The cross slide's PPR (solved as an RPP: the guide's line and the slot's,
+    turned from it by the hoisted slot angle) in the lanes, over slot angles from
+    1 to 179 deg.  The output measured is the carriage's point B seen from its
+    guide's point, so that the stroke and the dwell hold the lanes' B."""
+    text = (STUDIES / "ppr_cross_slide_sweep.toml").read_text()
+    text = text.replace("min = 45.0, max = 75.0", "min = 1.0, max = 179.0") \
+               .replace("min = -5.0, max = 5.0", "min = 5.0, max = 30.0") \
+               .replace('rocker = ["P4", "P3"]', 'rocker = ["P5", "P6"]')
+    assert "max = 179.0" in text and "max = 30.0" in text and '["P5", "P6"]' in text
+    (tmp_path / "wide.toml").write_text(text)
+    study = load_study(tmp_path / "wide.toml")
+    pb = build_problem(study, study.sweep)
+    spec = dataclasses.replace(study.sweep, candidates=2000, chunk_size=2000)
+    assert_lanes_agree(pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0)), class3=False)
 
 
 def test_a_candidate_gets_the_same_numbers_wherever_it_runs(problem, candidates):
