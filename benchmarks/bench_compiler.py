@@ -309,6 +309,37 @@ def compile_times(studies):
     return out
 
 
+# the sweeps issue 27 holds to half the default study's rate per candidate-position
+OTHER_SWEEPS = ("cam_rocker_input_sweep", "ov7_class3_slider_sweep",
+                "slotted_rocker_prp_sweep", "ppr_cross_slide_sweep")
+
+
+def other_sweeps(names, n, reference_rate, cores, rep):
+    """Table lines: each of the sweep studies ``names``' full evaluation (its own draws, metrics and
+    constraints) on all cores, per candidate-position against the default study's
+    ``reference_rate`` (candidates/s at its positions), whether its groups have
+    lane forms, and the share of its candidates that reach the force stage."""
+    from pipeline.kernels import sweep as ks
+    from pipeline.runs.sweep import build_problem
+    from pipeline.study.reader import load_study
+    from pipeline.study.sweep_spec import draw_candidates, parameter_rows
+    ref = load_study(STUDIES / "ov7_synthesis.toml").sweep.positions
+    lines = ["| sweep | candidates/s, all cores | positions | per candidate-position / "
+             "ov7_synthesis | lanes | force stage for |", "|---|---|---|---|---|---|"]
+    for name in names:
+        study = load_study(STUDIES / f"{name}.toml")
+        pb = build_problem(study, study.sweep)
+        spec = dataclasses.replace(study.sweep, candidates=n, chunk_size=n)
+        pars = np.ascontiguousarray(parameter_rows(pb.plan, spec, draw_candidates(spec, 0)))
+        _, met = pb.evaluate_rows(pars)      # compiles (or loads) the kernels; the shares
+        rate = _rate(lambda: pb.evaluate_rows(pars, n_jobs=cores), n, 1, rep) * 1e6
+        share = np.mean(met[:, ks.M_FORCES_DONE] == 1.0)
+        lines.append(f"| {name} | {rate:,.0f} | {spec.positions} | "
+                     f"{rate * spec.positions / (reference_rate * ref):.2f} | "
+                     f"{'yes' if pb.kernels.HAS_LANES else 'no'} | {100 * share:.0f} % |")
+    return lines
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
@@ -343,6 +374,15 @@ def main(argv=None):
               f"candidates/s on 1 core, {full['full_all']:,.0f} on {cores} cores"
               + (f"; the interpreter {interp:,.0f} on {cores} cores "
                  f"(x{full['full_all'] / interp:.1f})." if math.isfinite(interp) else ".")]
+    lines += ["", "The other sweeps against the default study's full metrics on "
+              f"{cores} cores (their own draws; the default study runs the force stage for "
+              "the candidates that meet its stroke and margin, these for every candidate "
+              "their constraints let through):", ""]
+    # (the smoke run: one of them, whose kernels the test suite compiles anyway)
+    lines += other_sweeps(OTHER_SWEEPS[:1] if a.smoke else OTHER_SWEEPS,
+                          256 if a.smoke else 4096 if a.quick else 16384, full["full_all"],
+                          cores, 1 if a.smoke else 2)
+    lines.append("")
     n_whole = 2_000 if a.smoke else 50_000 if a.quick else 1_000_000
     rate, wall = whole_process(n_whole)
     lines += [f"Default study, whole process with HDF5 (`pipeline run`, {n_whole:,} "
