@@ -64,7 +64,10 @@ def test_readme_commands_run_in_order(tmp_path, monkeypatch, capsys):
             argv = smaller(argv[1:])
             argv = [cluster.scheduler_address if a == "tcp://host:8786" else a for a in argv]
             if argv[0] == "compile" and "--show" not in argv:
-                argv += ["-q"]
+                # in this process: the suite's other worker has the second core, and two
+                # compile workers beside it slow the terminal tests there past their 2 s
+                # (tests/compiler/test_compiler.py runs compile in worker processes)
+                argv += ["-q", "-j", "1"]
             interrupt = "results/big_sweep.h5" in argv and "--resume" not in argv
             if interrupt:      # as if stopped after its first chunk: the next line resumes it
                 monkeypatch.setattr(sw, "run_sweep", lambda *a, **k: real_run_sweep(
