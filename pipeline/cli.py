@@ -106,8 +106,13 @@ def cmd_analyze(a):
 
 
 def cmd_browse(a):
+    from .base.progress import ticking
     from .views.browse import browse
-    _say(browse(a.results, top=a.top, candidate=a.candidate, fmt=a.format, wide=a.wide))
+    # a live line past half a second: the fronts' first kernel load from numba's cache
+    # refreshes its target context (a second, more under load) before anything prints
+    with ticking("browse", after=0.5, say_done=False):
+        text = browse(a.results, top=a.top, candidate=a.candidate, fmt=a.format, wide=a.wide)
+    _say(text)
     return EXIT_OK
 
 
