@@ -96,8 +96,7 @@ class CrankEmitter(Emitter):
                 f"{self.k('phiM0')}, phi, order)"]
 
     def derived(self):
-        return [(f"{self.k('phiM0')}_cos", f"math.cos({self.k('phiM0')})"),
-                (f"{self.k('phiM0')}_sin", f"math.sin({self.k('phiM0')})")]
+        return _hoisted_cos_sin(self, "phiM0")
 
     def lanes(self):
         # e(phi1 + phiM0) = e(phi1) rotated by phiM0: the table's cos/sin times
@@ -378,8 +377,7 @@ class AttachEmitter(Emitter):
         ]
 
     def derived(self):
-        return [(f"{self.k('angle')}_cos", f"math.cos({self.k('angle')})"),
-                (f"{self.k('angle')}_sin", f"math.sin({self.k('angle')})")]
+        return _hoisted_cos_sin(self, "angle")
 
     def lanes(self):
         base, a, b, out = (self.xy(j) for j in (0, 1, 2, 3))
@@ -418,8 +416,7 @@ class InputEmitter(Emitter):
     def derived(self):
         if self.kind != ik.SLIDER:
             return []
-        a = self.k("guide_angle")
-        return [(f"{a}_cos", f"math.cos({a})"), (f"{a}_sin", f"math.sin({a})")]
+        return _hoisted_cos_sin(self, "guide_angle")
 
     def careful(self):
         k = self.k
