@@ -148,7 +148,12 @@ def cmd_doctor(a):
 
 
 def cmd_report(a):
-    from .views.report import write_report
+    from .base.progress import ticking
+    # a live line past half a second while the report's modules load (plotting,
+    # the analysis, numba's target context: seconds under load), before the
+    # report's own stages show theirs
+    with ticking("report", after=0.5, say_done=False):
+        from .views.report import write_report
     info = write_report(a.results, a.output, top=a.top, drawings=a.drawings)
     if not a.quiet:
         _print(info, a.format)
