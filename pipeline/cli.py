@@ -34,8 +34,11 @@ def _print(obj, fmt):
 
 
 def cmd_run(a):
-    from .runner import run_study
-    res = run_study(a.study, a.output, candidates=a.candidates, resume=a.resume,
+    with _loading("run"):
+        from .runner import run_study
+        from .study.reader import load_study
+        study = load_study(a.study)
+    res = run_study(study, a.output, candidates=a.candidates, resume=a.resume,
                     overwrite=a.overwrite, scheduler=a.scheduler, n_jobs=a.jobs,
                     chunk_size=a.chunk_size, progress=not a.quiet, pictures=not a.no_pictures,
                     seed_from=a.seed_from, device=a.device, store=a.store)
@@ -57,6 +60,14 @@ def cmd_run(a):
 def _quote(path):
     import shlex
     return shlex.quote(str(path))
+
+
+def _loading(name):
+    """A live line past half a second while a command's modules load (numba, the
+    plotting and analysis libraries) and its input is read: seconds on a loaded
+    machine before the command's own progress shows."""
+    from .base.progress import ticking
+    return ticking(name, after=0.5, say_done=False)
 
 
 def cmd_export(a):
@@ -97,7 +108,8 @@ def cmd_bench(a):
 
 
 def cmd_analyze(a):
-    from .analysis.fronts import analyze
+    with _loading("analyze"):
+        from .analysis.fronts import analyze
     info = analyze(a.results, n_representatives=a.representatives, max_samples=a.max_samples,
                    n_jobs=a.jobs)
     if not a.quiet:
@@ -117,7 +129,8 @@ def cmd_browse(a):
 
 
 def cmd_show(a):
-    from .views.animate import animate, results_kind
+    with _loading("show"):
+        from .views.animate import animate, results_kind
     if a.animate:
         info = animate(a.results, a.candidate, a.output, frames=a.frames)
     elif results_kind(a.results) == "scene":
@@ -148,11 +161,7 @@ def cmd_doctor(a):
 
 
 def cmd_report(a):
-    from .base.progress import ticking
-    # a live line past half a second while the report's modules load (plotting,
-    # the analysis, numba's target context: seconds under load), before the
-    # report's own stages show theirs
-    with ticking("report", after=0.5, say_done=False):
+    with _loading("report"):
         from .views.report import write_report
     info = write_report(a.results, a.output, top=a.top, drawings=a.drawings)
     if not a.quiet:
@@ -161,7 +170,8 @@ def cmd_report(a):
 
 
 def cmd_tolerance(a):
-    from .runner import run_tolerance
+    with _loading("tolerance"):
+        from .runner import run_tolerance
     res = run_tolerance(a.results, a.candidate, a.output, samples=a.samples,
                         pictures=not a.no_pictures, overwrite=a.overwrite, n_jobs=a.jobs,
                         metrics=[m.strip() for m in a.metrics.split(",")] if a.metrics else None)
@@ -174,8 +184,9 @@ def cmd_tolerance(a):
 
 
 def cmd_compare(a):
-    from .runner import run_compare
-    from .views.compare import comparison_records, comparison_text
+    with _loading("compare"):
+        from .runner import run_compare
+        from .views.compare import comparison_records, comparison_text
     cmp, pics = run_compare(a.results, a.candidate, a.output, pictures=not a.no_pictures)
     if a.format == "json":
         _say(json.dumps(comparison_records(cmp) | {"pictures": [str(p) for p in pics]},

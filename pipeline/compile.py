@@ -66,11 +66,13 @@ def compile_study(study) -> Compiled:
 
 
 def source(study) -> str:
-    """The generated source of the kernels ``study`` uses."""
+    """The generated source of the kernels ``study`` uses: a scene's module; for
+    a sweep, its mechanism's module, then the sweep's own, which imports from it."""
     from .compiler import source_for
     plan = study.mechanism.compile()
-    rocker = tuple(study.output.rocker) if study.kind == "sweep" else None
-    return source_for(plan, rocker)
+    if study.kind != "sweep":
+        return source_for(plan)
+    return source_for(plan) + "\n\n" + source_for(plan, tuple(study.output.rocker))
 
 
 def compile_all(paths=(), jobs=None) -> list[Compiled]:
@@ -79,9 +81,10 @@ def compile_all(paths=(), jobs=None) -> list[Compiled]:
 
     numba compiles one function at a time in a process, so the studies whose
     kernels differ are compiled side by side in ``jobs`` worker processes (all
-    cores by default), each filling the one on-disk cache; studies with the
-    same kernels (the same generated source and kind) go to the same worker,
-    one after the other, so that nothing is compiled twice at once."""
+    cores by default), each filling the one on-disk cache; studies of the same
+    mechanism go to the same worker, one after the other, so that nothing is
+    compiled twice at once (a sweep's module imports the kernels the rocker
+    does not change from its mechanism's module, which a scene compiles)."""
     from .compiler.parallel import default_jobs
     from .study.reader import load_study
     files = study_files(paths)
@@ -97,12 +100,13 @@ def compile_all(paths=(), jobs=None) -> list[Compiled]:
 
 
 def same_kernels(studies) -> list[list[int]]:
-    """The studies' indices grouped by the kernels they compile: the generated
-    source of their mechanism and their kind (a scene's and a sweep's kernels
-    differ), in the order first met."""
-    groups: dict[tuple, list[int]] = {}
+    """The studies' indices grouped by the kernels they compile, in the order
+    first met: by their mechanism's module (``source_for(plan)``: a sweep's own
+    module imports from it everything its rocker does not change)."""
+    from .compiler import source_for
+    groups: dict[str, list[int]] = {}
     for k, study in enumerate(studies):
-        groups.setdefault((source(study), study.kind), []).append(k)
+        groups.setdefault(source_for(study.mechanism.compile()), []).append(k)
     return list(groups.values())
 
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 import hashlib
 import importlib
 import os
+import re
 import sys
 import threading
 from pathlib import Path
@@ -62,9 +63,15 @@ def library_digest() -> str:
 def source_for(plan, rocker=None, watch=True) -> str:
     """The generated source of ``plan``'s kernels (``rocker``: the output
     rocker's (pivot, point) names, for the sweep's positions stage; ``watch``:
-    False only for the benchmark of the watch's cost)."""
+    False only for the benchmark of the watch's cost).  With a rocker, the
+    sweep's module, which imports every kernel the rocker does not change from
+    the module of ``plan`` without one (``source_for(plan, None, watch)``)."""
+    shared = None
+    if rocker is not None:
+        base = source_for(plan, None, watch)
+        shared = (module_name(base), re.findall(r"^def (\w+)\(", base, re.M))
     return generate(plan, rocker=rocker, digest=library_digest(), lanes_width=LANES,
-                    watch=watch)
+                    watch=watch, shared=shared)
 
 
 def module_name(source: str) -> str:
@@ -96,6 +103,8 @@ def kernels_for(plan, rocker=None, watch=True):
     mod = _BY_STRUCTURE.get(key)
     if mod is not None:
         return mod
+    if rocker is not None:
+        kernels_for(plan, None, watch)      # the module the sweep's imports from: written
     src = source_for(plan, rocker, watch)
     mod = _imported(src, module_name(src))
     _BY_STRUCTURE[key] = mod

@@ -1,7 +1,9 @@
 """The generated module of one mechanism: the emitters' lines in plan order
 inside fixed loop skeletons (real Python files in pipeline/compiler/skeleton,
-pasted verbatim: header, advance_closed or advance_newton, careful, no_lanes,
-parallel).
+pasted verbatim: header, advance_closed or advance_newton, watch, careful,
+crank_dynamics, batch, sweep_stages, no_lanes, parallel).  A sweep's module
+(with an output rocker) has the header, sweep_stages, its lanes and parallel,
+and imports the rest from the module of its mechanism (no rocker).
 
 Kernels of a generated module (all close over the mechanism; their
 signatures carry candidates, crank angles, loads, settings and outputs):
@@ -20,6 +22,8 @@ signatures carry candidates, crank angles, loads, settings and outputs):
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from .emit import _wrap_line, constants_of, emitters_for, literal
@@ -36,11 +40,19 @@ def _array(name, a, dtype):
     return f"{name} = np.array({body}, dtype=np.{dtype}).reshape({shape})"
 
 
-def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
+def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=None) -> str:
     """Python source of the kernels of ``plan`` (``rocker``: the output
     rocker's (pivot, point) names, for the sweep's dwell and stroke).  Without
     ``watch`` no group is watched between positions (the benchmark's baseline
-    of the watch's cost; never for results)."""
+    of the watch's cost; never for results).
+
+    ``shared`` (with a rocker): (module name, function names) of the module of
+    ``plan`` without a rocker, whose kernels do not depend on the rocker
+    (positions, the continuation, the watch, forces, the scene's revolution and
+    batch, crank dynamics).  The sweep's module then imports them from it and
+    defines only what the rocker changes (its careful stages, lanes and
+    ``evaluate``): a scene and a sweep of one mechanism share those kernels'
+    compiled code (numba's cache), instead of compiling them once each."""
     n = Names(plan)
     ems = emitters_for(plan, n)
     n_triads = sum(e.continued for e in ems)
@@ -101,6 +113,15 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
         for line in e.module_constants():
             w(line)
 
+    if shared is not None:
+        sweep = _sweep_parts(plan, n, ems, rocker, lanes_width, watch)
+        own = set(re.findall(r"^def (\w+)\(", sweep, re.M))
+        names = [f for f in shared[1] if f not in own]
+        w("# ---- the kernels the rocker does not change: the mechanism's own module ----")
+        w(_wrap_line(f"from {shared[0]} import " + _tuple(names)))
+        w(sweep)
+        return _checked("\n".join(out))
+
     # ---------------------------------------------------------------- constants(par)
     consts = constants_of(plan, n, ems)
     names_k = [c[0] for c in consts]
@@ -159,13 +180,20 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True) -> str:
           "where the mechanism has none, or where every angle is certainly above the\n"
           "smallest so far, whose cos and sin are best_cos, best_sin (NaN: none yet).",
           body))
-    w(_spaced(part("watch") + part("careful") + part("crank_dynamics")))
-    if rocker is not None:
-        w(lane_kernel(plan, n, ems, rocker, lanes_width, watch))
-    else:
-        w(_spaced(no_rocker_kernel()))
-    w(_spaced(part("parallel")))
-    src = "\n".join(out)     # ends with the blank line after the last part
+    w(_spaced(part("watch") + part("careful") + part("crank_dynamics") + part("batch")))
+    w(_sweep_parts(plan, n, ems, rocker, lanes_width, watch))
+    return _checked("\n".join(out))     # ends with the blank line after the last part
+
+
+def _sweep_parts(plan, n, ems, rocker, lanes_width, watch) -> str:
+    """What the output rocker changes: the sweep's careful stages, its lanes
+    (or the skeleton without them) and ``evaluate``."""
+    lanes = (lane_kernel(plan, n, ems, rocker, lanes_width, watch) if rocker is not None
+             else _spaced(no_rocker_kernel()))
+    return _spaced(part("sweep_stages")) + "\n" + lanes + "\n" + _spaced(part("parallel"))
+
+
+def _checked(src: str) -> str:
     if not src.isascii():   # a name pasted without names.text: never write it
         raise ValueError("generated source holds a non-ASCII character: a name was not "
                          "written by pipeline.compiler.names.text")

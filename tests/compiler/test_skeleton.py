@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from pipeline.compiler import source_for
+from pipeline.compiler import module_name, source_for
 from pipeline.compiler.skeleton import END, MARKER, part
 from pipeline.study.reader import load_study
 
@@ -61,8 +61,8 @@ def _top_level(tree):
 
 
 def test_every_skeleton_part_is_there():
-    assert PARTS == ["advance_closed", "advance_newton", "careful", "crank_dynamics", "header",
-                     "no_lanes", "parallel", "watch"]
+    assert PARTS == ["advance_closed", "advance_newton", "batch", "careful", "crank_dynamics",
+                     "header", "no_lanes", "parallel", "sweep_stages", "watch"]
 
 
 @pytest.mark.parametrize("name", PARTS)
@@ -116,12 +116,17 @@ def test_pyflakes_finds_nothing_in_the_skeleton():
 def sources():
     """Generated sources that use every part: a scene of a closed-form mechanism
     (no rocker), a sweep with class III groups and lanes, a sweep of a group
-    without a lane form."""
+    without a lane form; each sweep's module and the module of its mechanism
+    (no rocker: everything the rocker does not change), which it imports from."""
     out = {}
     for name in ("ov7_base", "ov7_synthesis", "cam_rocker_input_sweep"):
         study = load_study(STUDIES / f"{name}.toml")
-        rocker = tuple(study.output.rocker) if study.kind == "sweep" else None
-        out[name] = source_for(study.mechanism.compile(), rocker)
+        plan = study.mechanism.compile()
+        if study.kind == "sweep":
+            out[name] = source_for(plan, tuple(study.output.rocker))
+            out[name + " mechanism"] = source_for(plan)
+        else:
+            out[name] = source_for(plan)
     return out
 
 
@@ -138,6 +143,11 @@ def test_the_generated_source_holds_every_part_verbatim(sources):
             assert text in sources["cam_rocker_input_sweep"]
         assert text in everything, name
     assert part("advance_closed") in sources["ov7_base"]
-    assert part("advance_newton") in sources["ov7_synthesis"]
+    assert part("advance_newton") in sources["ov7_synthesis mechanism"]
+    for sweep in ("ov7_synthesis", "cam_rocker_input_sweep"):
+        # the sweep's module defines what the rocker changes, imports the rest
+        assert part("advance_newton") not in sources[sweep] and "def position(" not in sources[sweep]
+        assert part("sweep_stages") in sources[sweep] and part("parallel") in sources[sweep]
+        assert f"from {module_name(sources[sweep + ' mechanism'])} import (" in sources[sweep]
     assert "def walk(" in sources["ov7_synthesis"]       # the lane path, not no_lanes
     assert "every candidate takes the careful path" not in sources["ov7_synthesis"]

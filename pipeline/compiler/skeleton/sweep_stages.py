@@ -1,0 +1,293 @@
+"""The sweep's careful stages of a generated module: one candidate's revolution
+on the careful path (``careful_positions``), its metrics (``settle``,
+``evaluate_careful``) and the force stage.  They depend on the output rocker,
+so a sweep's module defines them and imports everything else from the
+mechanism's own module (``pipeline.compiler.generate``).
+
+The text below the marker line is pasted into the generated module
+(``pipeline.compiler.generate``, after ``careful``); the imports above it declare,
+for linters and readers, the names the generated module gives it."""
+
+from .header import (math, np, njit, JIT, JIT_ALLOC, OK, BRANCH_JUMP, S_ITERS,
+                     S_MARGIN, closes, copy2, work, force_work, dwell_error, law_error,
+                     relative_angle, M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, M_PEAK_R,
+                     M_PEAK_JOINT, M_PEAK_PHI, M_PEAK_MBAL, M_FAIL_PHI, M_NEWTON_MEAN,
+                     M_FORCES_DONE, M_FAIL_GROUP, M_PEAK_ACC, M_PEAK_EPS, M_MIN_TRANS, M_LAW_RMS,
+                     M_LAW_MAX, M_LAW_SHIFT, N_METRICS, SET_STROKE_RADIUS, SET_DWELL_W,
+                     SET_WANT_FORCES, SET_STROKE_LO, SET_STROKE_HI, SET_MARGIN_MIN, SET_OMEGA1,
+                     SET_EPS1, SET_WANT_PEAKS, SET_WORK_POINT, SET_WANT_TRANSMISSION, SET_WANT_LAW,
+                     SET_LAW0, LAW_BEST, SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING)
+from .header import M_EQUILIBRIUM, equilibrium_residual
+from .header import S_HANDED, S_CA, S_SA, S_CB, S_SB
+from .header import M_SHAKING_F, M_SHAKING_M, shaking, may_reach
+from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
+                         N_INPUTS, constants, position, advance, forces_at, transmission,
+                         ROCKER_PIVOT, ROCKER_POINT, NEWTON_STEPS)
+from ._mechanism import BODY_COM, BODY_TURN, BODY_MASS_OFF, CRANK_PIVOT
+from .careful import walk_angle, walk_start, walk_steps
+from .watch import (locate, watch, watch_work)
+
+# ---- the skeleton: from here on, pasted into the generated module ----
+# inline='always': one call site in the sweep; as its own function numba would
+# build and link a library of everything it calls once more (compile time)
+@njit(inline='always', **JIT)
+def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww):
+    """Stage 1 of the sweep for one candidate on the careful path: assembly
+    over the revolution (triangle, Newton, branch, closure) and between its
+    positions (the watch), the rocker angles ``theta`` from the first
+    position, the singularity margin and the Newton iterations.  Returns
+    (status, margin, iterations); a failure writes its crank angle (located
+    between positions) and its group to out[M_FAIL_PHI], out[M_FAIL_GROUP].
+    Always from the start: a walk resumed midway decides its steps near a fold
+    from another history, and may name a failure differently.  wk, ww: the
+    walk's and the watch's work arrays (work, watch_work)."""
+    n = phis.shape[0]
+    pos, d1, d2, margins, state, start_state = wk
+    found = ww[7]
+    phi_prev = walk_start(K, phis[0], state)
+    margin = math.inf
+    iters = 0.0
+    x0 = 0.0
+    y0 = 0.0
+    for k in range(walk_steps(phis, phi_close)):
+        phi = walk_angle(phis, k, phi_close)   # k >= n: the closing position and past it
+        st = advance(K, phi_prev, phi, np.int64(0), tols, state, pos, d1, d2, margins,
+                     np.bool_(False))
+        if st != OK:
+            if k > 0:    # located between the last good position and this one
+                st = locate(K, phi_prev, phi, st, margins[N_GROUPS], ww[2][(k - 1) & 3],
+                            tols, state, pos, d1, d2, margins, ww)
+            else:
+                found[1] = phi
+                found[2] = margins[N_GROUPS]
+            out[M_FAIL_PHI] = found[1]
+            out[M_FAIL_GROUP] = found[2]
+            return st, margin, iters
+        phi_prev = phi
+        if k == n and N_TRIADS > 0 and not closes(state, start_state, tols):
+            out[M_FAIL_PHI] = phi_close
+            out[M_FAIL_GROUP] = -1.0
+            return BRANCH_JUMP, margin, iters
+        if k < n:
+            rx = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]
+            ry = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]
+            if k == 0:
+                copy2(state, start_state)
+                x0 = rx
+                y0 = ry
+            for j in range(N_TRIADS):
+                margin = min(margin, state[j, S_MARGIN])
+                iters += state[j, S_ITERS]
+            theta[k] = relative_angle(x0, y0, rx, ry)
+        st = watch(K, k, phi, tols, state, pos, d1, d2, margins, ww)
+        if st != OK:
+            out[M_FAIL_PHI] = found[1]
+            out[M_FAIL_GROUP] = found[2]
+            return st, margin, iters
+    return OK, margin, iters
+
+
+@njit(**JIT_ALLOC)
+def evaluate_careful(par, phis, phi_close, tols, settings, loads, theta, trail, qmax, qmin,
+                     out):
+    """The sweep's stages for one candidate on the careful path; writes
+    ``out`` (N_METRICS) and returns its status.  theta, trail, qmax, qmin:
+    work arrays (n, (n + 1, 4 N_TRIADS), and n + w + 1 integers twice).
+    One candidate alone (tests, tools); ``evaluate`` calls ``settle``."""
+    return settle(par, np.int64(-1), phis, phi_close, tols, settings, loads, theta,
+                  trail, qmax, qmin, 0.0, np.int64(-1), 0.0, 0.0,
+                  work(N_POINTS, N_GROUPS, N_TRIADS),
+                  force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS), watch_work(),
+                  np.empty(phis.shape[0]), out)
+
+
+@njit(**JIT)   # the GPU kernel calls it (under numba's simulator: from Python)
+def settle(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qmax, qmin,
+           err, start_k, full, margin, wk, fw, ww, corr, out):
+    """Metrics of one candidate into ``out`` (N_METRICS); returns its status.
+    Where ``vouched`` (> 0) the lane path's dwell (err, start_k, full),
+    margin and class III solutions ``trail`` are taken (and its rocker
+    angles in ``col`` where the law error is asked for); otherwise the
+    careful path walks the revolution first.  Then stroke, dwell and margin
+    metrics, the law error where asked, and the force stage where it
+    applies.  col, trail, qmax, qmin, wk (work), fw (force_work), corr (n):
+    work arrays of the caller, so nothing is allocated per candidate."""
+    for c in range(N_METRICS):
+        out[c] = math.nan
+    out[M_FORCES_DONE] = 0.0
+    n = phis.shape[0]
+    K = constants(par)
+    iters = float(NEWTON_STEPS * N_TRIADS * n)
+    if vouched <= 0:
+        st, margin, iters = careful_positions(K, phis, phi_close, tols, col, out, wk, ww)
+        if st != OK:
+            return st
+        err, start_k, full = dwell_error(col, int(settings[SET_DWELL_W]), qmax, qmin)
+    out[M_STROKE] = settings[SET_STROKE_RADIUS] * full
+    out[M_DWELL] = err
+    out[M_DWELL_START] = phis[start_k] if start_k >= 0 else math.nan
+    out[M_MARGIN] = margin if N_TRIADS > 0 else math.nan
+    out[M_NEWTON_MEAN] = iters / n
+    if settings[SET_WANT_LAW] != 0.0:
+        # the rocker angles against the required law (settings[SET_LAW0:], two turns)
+        rms, top, sh = law_error(col, settings, SET_LAW0,
+                                 settings[SET_WANT_LAW] == LAW_BEST, corr)
+        out[M_LAW_RMS] = rms
+        out[M_LAW_MAX] = top
+        out[M_LAW_SHIFT] = sh * (2.0 * math.pi / n) if sh >= 0 else math.nan
+    if (settings[SET_WANT_FORCES] == 0.0 and settings[SET_WANT_PEAKS] == 0.0
+            and settings[SET_WANT_TRANSMISSION] == 0.0):
+        return OK
+    if not (out[M_STROKE] >= settings[SET_STROKE_LO]
+            and out[M_STROKE] <= settings[SET_STROKE_HI]):
+        return OK
+    if N_TRIADS > 0 and not (margin >= settings[SET_MARGIN_MIN]):
+        return OK
+    st = OK
+    for attempt in range(2):
+        # with the lane path's solutions first; if a direct solve refuses, the
+        # careful walk (one call site: numba inlines per call site)
+        trail_ok = vouched > 0 and attempt == 0
+        st = force_stage(par, K, phis, tols, settings, loads, out, trail, trail_ok, wk, fw)
+        if st == OK or not trail_ok:
+            break
+    return st
+
+
+# inline='always': one call site in the sweep; as its own function numba would
+# build and link a library of everything it calls once more (compile time)
+@njit(inline='always', **JIT)
+def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, fw):
+    """Stage 2 at every position of the grid, what the settings ask for:
+    kinetostatics (SET_WANT_FORCES: the peak reaction, its joint and angle,
+    the peak |balancing moment|, the worst relative virtual-power residual:
+    kernels.forces.equilibrium_residual; the peak |shaking force| and |shaking
+    moment| about the crank's pivot: kernels.forces.shaking), the working
+    point's peak |a| and the output rocker's peak |eps| (SET_WANT_PEAKS), the
+    smallest transmission angle (SET_WANT_TRANSMISSION); maxima (minima) over
+    the grid's positions.  With ``use_trail`` every position is solved directly from
+    the class III solution the lane path found there (trail[k] = e(a), e(b)
+    per group, handed over as unit vectors: its closure residual confirms it,
+    Newton runs only where that is above the tolerance, the branch check on
+    det J still applies);
+    otherwise by the careful continuation.  wk, fw: work arrays (work,
+    force_work)."""
+    omega1 = settings[SET_OMEGA1]
+    eps1 = settings[SET_EPS1]
+    want_f = settings[SET_WANT_FORCES] != 0.0
+    want_p = settings[SET_WANT_PEAKS] != 0.0
+    want_t = settings[SET_WANT_TRANSMISSION] != 0.0
+    want_eq = settings[SET_WANT_EQUILIBRIUM] != 0.0
+    want_sh = settings[SET_WANT_SHAKING] != 0.0
+    order = 2 if (want_f or want_p) else 0
+    iw = int(settings[SET_WORK_POINT])
+    pos, d1, d2, margins, state, _ = wk
+    work_a, work_b, loads_out, r_out, slide_out = fw
+    phi_prev = walk_start(K, phis[0], state)
+    peak = -1.0
+    peak_j = -1
+    peak_phi = math.nan
+    peak_m = 0.0
+    worst_eq = 0.0
+    peak_sf = 0.0
+    peak_sm = 0.0
+    peak_a = 0.0
+    peak_e = 0.0
+    trans = math.inf
+    trans_cos = math.nan
+    trans_sin = math.nan
+    for k in range(phis.shape[0]):
+        if use_trail:
+            # a walk of length zero at phis[k], the lane's solution handed over as
+            # unit vectors: the class III solve confirms it by its residual (Newton
+            # from its angles only where that is above the tolerance)
+            for j in range(N_TRIADS):
+                state[j, S_HANDED] = 1.0
+                state[j, S_CA] = trail[k, 4 * j]
+                state[j, S_SA] = trail[k, 4 * j + 1]
+                state[j, S_CB] = trail[k, 4 * j + 2]
+                state[j, S_SB] = trail[k, 4 * j + 3]
+            # (no continuation step to take: ``advance`` over a step of zero was
+            # its predictor and bookkeeping around this one solve, a tenth of a
+            # tolerance build's kernel time in perf, for nothing the solve reads:
+            # the same bits)
+            st = position(K, phis[k], order, tols, state, pos, d1, d2, margins, want_f)
+        else:
+            st = advance(K, phi_prev, phis[k], order, tols, state, pos, d1, d2, margins,
+                         want_f)
+        phi_prev = phis[k]
+        if st != OK:  # cannot happen after stage 1 unless the solver is not deterministic
+            out[M_FAIL_PHI] = phis[k]
+            return st
+        if want_f:
+            mb = forces_at(par, pos, d1, d2, omega1, eps1, loads[k], work_a, work_b,
+                           loads_out, r_out, slide_out)
+            if abs(mb) > abs(peak_m) or not math.isfinite(mb):
+                peak_m = mb
+            if want_eq:
+                eq = equilibrium_residual(pos, d1, d2, mb, loads_out, BODY_COM, BODY_TURN)
+                if eq > worst_eq or not math.isfinite(eq):
+                    worst_eq = eq
+            if want_sh:
+                sfx, sfy, sm = shaking(pos, d1, d2, omega1, eps1, par, BODY_COM, BODY_TURN,
+                                       BODY_MASS_OFF, CRANK_PIVOT)
+                if may_reach(sfx, sfy, peak_sf):
+                    sf = math.hypot(sfx, sfy)
+                    if sf > peak_sf or not math.isfinite(sf):
+                        peak_sf = sf
+                if abs(sm) > peak_sm or not math.isfinite(sm):
+                    peak_sm = abs(sm)
+            for j in range(N_JOINTS):
+                if not may_reach(r_out[j, 0], r_out[j, 1], peak):
+                    continue        # (the same peak to the bit, without the hypot)
+                r = math.hypot(r_out[j, 0], r_out[j, 1])
+                if r > peak or not math.isfinite(r):
+                    peak = r
+                    peak_j = j
+                    peak_phi = phis[k]
+        if want_p:
+            # |a| = |r'' omega1^2 + r' eps1| of the working point (mm/s^2)
+            ax = d2[iw, 0] * omega1 ** 2 + d1[iw, 0] * eps1
+            ay = d2[iw, 1] * omega1 ** 2 + d1[iw, 1] * eps1
+            if may_reach(ax, ay, peak_a):
+                a = math.hypot(ax, ay)
+                if a > peak_a or not math.isfinite(a):
+                    peak_a = a
+            # the rocker's angle analogs (geometry.angle_analogs), eps = theta'' w^2 + theta' eps1
+            dx = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]
+            dy = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]
+            d1x = d1[ROCKER_POINT, 0] - d1[ROCKER_PIVOT, 0]
+            d1y = d1[ROCKER_POINT, 1] - d1[ROCKER_PIVOT, 1]
+            d2x = d2[ROCKER_POINT, 0] - d2[ROCKER_PIVOT, 0]
+            d2y = d2[ROCKER_POINT, 1] - d2[ROCKER_PIVOT, 1]
+            r2 = dx * dx + dy * dy
+            c1 = dx * d1y - dy * d1x
+            th1 = c1 / r2
+            th2 = (dx * d2y - dy * d2x) / r2 - 2.0 * (dx * d1x + dy * d1y) * c1 / (r2 * r2)
+            e = abs(th2 * omega1 ** 2 + th1 * eps1)
+            if e > peak_e or not math.isfinite(e):
+                peak_e = e
+        if want_t:
+            # (angles certainly above the smallest so far need no atan2: the same minimum)
+            t = transmission(K, pos, trans_cos, trans_sin)
+            if t < trans or (not math.isfinite(t) and t != math.inf):
+                trans = t
+                trans_cos = math.cos(t)
+                trans_sin = math.sin(t)
+    if want_f:
+        out[M_PEAK_R] = peak
+        out[M_PEAK_JOINT] = peak_j
+        out[M_PEAK_PHI] = peak_phi
+        out[M_PEAK_MBAL] = abs(peak_m)
+        out[M_EQUILIBRIUM] = worst_eq if want_eq else math.nan
+        out[M_SHAKING_F] = peak_sf if want_sh else math.nan
+        out[M_SHAKING_M] = peak_sm if want_sh else math.nan
+    if want_p:
+        out[M_PEAK_ACC] = peak_a / 1000.0        # m/s^2
+        out[M_PEAK_EPS] = peak_e
+    if want_t:
+        out[M_MIN_TRANS] = trans if trans <= 0.5 * math.pi else math.nan
+    out[M_FORCES_DONE] = 1.0
+    return OK
+
+
