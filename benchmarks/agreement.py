@@ -75,12 +75,14 @@ from common import STUDIES, hardware  # noqa: E402
 # tells the smoke nothing; its wall times then mean nothing either.
 INTERPRETED = "--smoke" in sys.argv[1:]
 if INTERPRETED:
+    import importlib
+    import pkgutil
+
     import numba
 
-    import pipeline.kernels.config  # noqa: F401,E402
-    for _m in ("continuation", "dynamics", "forces", "geometry", "groups", "inputs", "metrics",
-               "pareto", "sweep", "triad", "watch"):
-        __import__(f"pipeline.kernels.{_m}")
+    import pipeline.kernels  # noqa: E402
+    for _m in pkgutil.iter_modules(pipeline.kernels.__path__):
+        importlib.import_module(f"pipeline.kernels.{_m.name}")
     numba.config.DISABLE_JIT = True
 from interpreter.assembly import solve_revolution  # noqa: E402
 

@@ -80,18 +80,14 @@ class BaselineMismatch(RuntimeError):
 
 
 # ----------------------------------------------------------------- helpers
-# the full run strips the bodies (below); --quick, the suite's smoke run, keeps them,
-# so that its kernels are the shipped studies' own, which the suite compiles anyway
-# (two modules of their own cost 25-30 s of a cold suite), at the price of timings
-# that include the hidden centres of mass
-STRIP_BODIES = [True]
-
-
-def _kinematic_study(study):
+def _kinematic_study(study, strip=True):
     """The study with its mechanism stripped of bodies and loads: the points a
-    baseline computes, nothing more (no hidden centres of mass); unchanged in
-    the smoke run (STRIP_BODIES)."""
-    if not STRIP_BODIES[0]:
+    baseline computes, nothing more (no hidden centres of mass).  ``strip``
+    False (--quick, the suite's smoke run): the study as it is, so that its
+    kernels are the shipped study's own, which the suite compiles anyway (two
+    modules of their own cost 25-30 s of a cold suite), at the price of timings
+    that include the hidden centres of mass."""
+    if not strip:
         return study
     mech = dataclasses.replace(study.mechanism, bodies=(), loads=(), slides=())
     return dataclasses.replace(study, mechanism=mech)
@@ -160,12 +156,12 @@ def _relative(x, ref, axis):
 
 
 # ----------------------------------------------------------------- case 1: four-bar
-def four_bar_case(sizes, repeat, rows):
+def four_bar_case(sizes, repeat, rows, strip=True):
     from pipeline.compiler import kernels_for
     from pipeline.solve.scene import batch_revolutions, revolution_angles, solve_curves
     from pipeline.study.reader import load_study
     n_proj, n_np, n_py = sizes
-    study = _kinematic_study(load_study(STUDIES / "warp_feed_fourbar.toml"))
+    study = _kinematic_study(load_study(STUDIES / "warp_feed_fourbar.toml"), strip)
     plan = study.mechanism.compile()
     phis = revolution_angles(study.mechanism.crank, POSITIONS)
     pars = perturbed_rows(plan, D_VARS, n_proj, spread=0.02, seed=1)
@@ -200,7 +196,7 @@ def four_bar_case(sizes, repeat, rows):
     _check(case, "pure Python vs NumPy (timed set) [mm]",
            np.max(np.abs(out_py - out_np[:n_py])), TOL_POS)
     unit = "candidate-positions/s"
-    note = (f"positions of B, C, E ({'bodies stripped' if STRIP_BODIES[0] else 'bodies kept'}); "
+    note = (f"positions of B, C, E ({'bodies stripped' if strip else 'bodies kept'}); "
             "NumPy/Python keep every position, the "
             "kernel reduces per candidate")
     rows += [(case, f"project (numba, {_threads()} threads)", n_proj, secs, unit, first, how, note),
@@ -220,13 +216,13 @@ def _draw(study, n, seed_chunk=0):
     return pb, parameter_rows(pb.plan, spec, draw_candidates(spec, seed_chunk))
 
 
-def kinematics_case(sizes, repeat, rows):
+def kinematics_case(sizes, repeat, rows, strip=True):
     from pipeline.compiler import kernels_for
     from pipeline.solve.scene import batch_revolutions, revolution_angles, solve_curves
     from pipeline.study.reader import load_study
     n_proj, n_np, n_py = sizes
     full = load_study(STUDIES / "ov7_synthesis.toml")
-    study = _kinematic_study(full)
+    study = _kinematic_study(full, strip)
     plan = study.mechanism.compile()
     phis = revolution_angles(study.mechanism.crank, POSITIONS)
     run = lambda p: batch_revolutions(study, p, POSITIONS, 2, False)
@@ -403,11 +399,10 @@ def run(quick: bool = False, csv=CSV, cold: bool = False) -> pd.DataFrame:
     compile time with an empty numba cache in a fresh process.  Raises
     BaselineMismatch if a baseline disagrees with the project."""
     sizes = SIZES[bool(quick)]
-    STRIP_BODIES[0] = not quick
     rows = []
     CHECKS.clear()
-    four_bar_case(sizes["four-bar"], sizes["repeat"], rows)
-    kinematics_case(sizes["kinematics"], sizes["repeat"], rows)
+    four_bar_case(sizes["four-bar"], sizes["repeat"], rows, strip=not quick)
+    kinematics_case(sizes["kinematics"], sizes["repeat"], rows, strip=not quick)
     sweep_case(sizes["sweep"], sizes["repeat"], rows)
     df = pd.DataFrame(rows, columns=["case", "implementation", "candidates", "seconds", "unit",
                                      "first_call_s", "first_call", "notes"])

@@ -21,14 +21,13 @@ from __future__ import annotations
 import hashlib
 import importlib
 import os
-import re
 import sys
 import threading
 from pathlib import Path
 
 from ..base.files import write_text
 from ..kernels.config import LANE_WIDTH as LANES   # candidates per block of the lane path
-from .generate import generate
+from .generate import defined_functions, generate
 
 _LOCK = threading.Lock()
 _MODULES: dict[str, object] = {}
@@ -69,7 +68,7 @@ def source_for(plan, rocker=None, watch=True) -> str:
     shared = None
     if rocker is not None:
         base = source_for(plan, None, watch)
-        shared = (module_name(base), re.findall(r"^def (\w+)\(", base, re.M))
+        shared = (module_name(base), defined_functions(base))
     return generate(plan, rocker=rocker, digest=library_digest(), lanes_width=LANES,
                     watch=watch, shared=shared)
 

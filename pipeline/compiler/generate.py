@@ -115,7 +115,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
 
     if shared is not None:
         sweep = _sweep_parts(plan, n, ems, rocker, lanes_width, watch)
-        own = set(re.findall(r"^def (\w+)\(", sweep, re.M))
+        own = set(defined_functions(sweep))
         names = [f for f in shared[1] if f not in own]
         w("# ---- the kernels the rocker does not change: the mechanism's own module ----")
         w(_wrap_line(f"from {shared[0]} import " + _tuple(names)))
@@ -183,6 +183,11 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
     w(_spaced(part("watch") + part("careful") + part("crank_dynamics") + part("batch")))
     w(_sweep_parts(plan, n, ems, rocker, lanes_width, watch))
     return _checked("\n".join(out))     # ends with the blank line after the last part
+
+
+def defined_functions(src: str) -> list[str]:
+    """The names of the functions a generated source defines at module level."""
+    return re.findall(r"^def (\w+)\(", src, re.M)
 
 
 def _sweep_parts(plan, n, ems, rocker, lanes_width, watch) -> str:
