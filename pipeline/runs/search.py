@@ -19,7 +19,9 @@ so far (objectives divided by the study's reference design's, reference point
 1.1 in every objective).
 
 Never losing work: every generation's designs and results are saved in the
-journal ``OUT.h5.parts`` before they go into the file.  ``--resume`` re-runs
+journal ``OUT.h5.parts`` before they go into the file, the generations
+finished within a quarter of a second in one block (one atomic write, as a
+sweep's chunk; an interruption saves what is finished).  ``--resume`` re-runs
 the algorithm from its seed and answers its asks from the journal instead of
 evaluating (checking that the asked designs are the journalled ones, bit for
 bit), then goes on: the file is identical to an uninterrupted run's.  The
@@ -29,6 +31,7 @@ numbers do not depend on the thread count or the engine.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import io
 import logging
@@ -65,6 +68,8 @@ log = logging.getLogger("pipeline")
 
 JOURNAL_KIND = "search"
 JOURNAL_VERSION = 1
+JOURNAL_EVERY_S = 0.25    # generations finished within this are journalled together (one
+                          # atomic write; a generation of 100 takes a few milliseconds)
 
 # ----------------------------------------------------------------- the first generation
 def initial_designs(spec: SweepSpec, search: SearchSpec, seeds=None) -> np.ndarray:
@@ -122,14 +127,48 @@ def front_seeds(path, spec: SweepSpec, n: int) -> np.ndarray:
 
 
 # ----------------------------------------------------------------- the algorithm
-def make_algorithm(search: SearchSpec, x0: np.ndarray, repair: TriangleRepair):
-    """The pymoo algorithm of ``search.method``, its first population ``x0``,
-    pymoo's default operators for that method."""
-    import importlib
-    module, name = METHODS[search.method]
-    cls = getattr(importlib.import_module(module), name)
-    return cls(pop_size=search.population, n_offsprings=search.offspring, sampling=x0,
-               repair=repair)
+def make_algorithm(search: SearchSpec, x0: np.ndarray, repair: TriangleRepair, box):
+    """The optimizer of ``search.method`` seeded with ``search.seed``, its
+    first population ``x0``, pymoo's default operators for that method, as an
+    ask (designs) and tell (designs, F, G) pair on arrays.  NSGA-II runs on
+    arrays (``nsga2.ArrayNSGA2``: pymoo's NSGA2 bit for bit, without pymoo's
+    20 ms a generation of per-design objects); the others in pymoo itself."""
+    if search.method == "nsga2":
+        from .nsga2 import ArrayNSGA2
+        return ArrayNSGA2(search.population, search.offspring, x0, box.xl, box.xu,
+                          search.seed, repair=lambda X: repair._do(box, X))
+    return _InPymoo(search, x0, repair, box)
+
+
+class _InPymoo:
+    """A pymoo algorithm (``METHODS``) driven by ask and tell on arrays."""
+
+    def __init__(self, search: SearchSpec, x0, repair, box):
+        import importlib
+        from pymoo.core.termination import NoTermination
+        module, name = METHODS[search.method]
+        cls = getattr(importlib.import_module(module), name)
+        self.box = box
+        self.algorithm = cls(pop_size=search.population, n_offsprings=search.offspring,
+                             sampling=x0, repair=repair)
+        self.algorithm.setup(box, termination=NoTermination(), seed=search.seed, verbose=False,
+                             progress=False)
+        self._pop = None
+
+    def ask(self) -> np.ndarray:
+        self._pop = self.algorithm.ask()
+        if self._pop is None:
+            return np.zeros((0, self.box.n_var))
+        return self._pop.get("X")
+
+    def tell(self, X, F, G):
+        """The designs asked (or the first of them) with their F and G."""
+        from pymoo.problems.static import StaticProblem
+        pop = self._pop[:len(X)]
+        # pymoo's Evaluator.eval method (not Python's eval): hands the computed F, G to the
+        # population and counts the evaluations
+        self.algorithm.evaluator.eval(StaticProblem(self.box, F=F, G=G), pop)
+        self.algorithm.tell(infills=pop)
 
 
 # ----------------------------------------------------------------- evaluation engines
@@ -278,8 +317,6 @@ def _run_locked(study, out, seed_from, resume, overwrite, scheduler, client, n_j
 
 def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_generation,
                  stop_after, attrs):
-    from pymoo.core.termination import NoTermination
-    from pymoo.problems.static import StaticProblem
     search = study.search
     planned = search.sizes()
     box = SweepBlackBox(problem)
@@ -294,24 +331,34 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
         log.info("resuming: %d of %d generations already done", len(done), len(planned))
     evaluate = _Dask(problem, client) if client is not None else _Local(problem, n_jobs)
     repair = TriangleRepair(problem.spec)
-    algorithm = make_algorithm(search, x0, repair)
-    algorithm.setup(box, termination=NoTermination(), seed=search.seed, verbose=False,
-                    progress=False)
+    algorithm = make_algorithm(search, x0, repair, box)
     tracker = FrontTracker(scale)
     sizes, history = [], []
     computed = evaluated = 0
     bar = _progress(search, progress)
     t0 = time.perf_counter()
+    unsaved = []                # generations evaluated, not yet journalled
+    journalled = time.monotonic()
+
+    def save_unsaved():
+        """The evaluated generations not yet journalled, in one atomic write."""
+        nonlocal journalled
+        if unsaved:
+            journal.save_block(unsaved)
+            unsaved.clear()
+        journalled = time.monotonic()
+
     try:
         with hdf5_writing(work, expendable=False) as f:
             d = sfile.datasets(f)
             flushed = time.monotonic()
             writing = True
-            pending = []        # generations journalled, not yet in the file: written
+            pending = []        # generations evaluated, not yet in the file: written
                                 # together about once a second (and at the end)
 
             def write_pending():
                 nonlocal flushed
+                save_unsaved()          # the journal first: it is the source of truth
                 if writing and pending:
                     sfile.write_many(d, pending)
                     f.flush()
@@ -320,13 +367,13 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
 
             for gen in range(len(planned)):
                 repair.count = 0
-                pop = algorithm.ask()
-                if pop is None or len(pop) == 0:
+                X = algorithm.ask()
+                if len(X) == 0:
                     log.info("generation %d: the algorithm proposes nothing new; the search "
                              "ends here", gen)
                     break
-                X = pop.get("X")
                 if gen in done:     # answered from the journal: nothing is evaluated again
+                    save_unsaved()      # a block holds consecutive generations
                     x, status, metrics, _ = journal.load(gen)
                     if x.shape != X.shape or not np.array_equal(x, X):
                         raise ResultsError(journal.dir, f"generation {gen}: the algorithm asks "
@@ -335,14 +382,12 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
                                            "file")
                 else:
                     status, metrics = evaluate(parameter_rows(problem.plan, problem.spec, X))
-                    journal.save(gen, X, status, metrics, np.array([repair.count], np.int64))
+                    unsaved.append((gen, X, status, metrics,
+                                    np.array([repair.count], np.int64)))
                     computed += len(X)
                     evaluated += 1
                 F, G = box.view(status, metrics)
-                # pymoo's Evaluator.eval method (not Python's eval): hands the computed
-                # F, G to the population and counts the evaluations the termination reads
-                algorithm.evaluator.eval(StaticProblem(box, F=F, G=G), pop)
-                algorithm.tell(infills=pop)
+                algorithm.tell(X, F, G)
                 hv = tracker.add(F, (G <= 0).all(axis=1))
                 sizes.append(len(X))
                 row = {"generation": gen, "evaluations": sum(sizes), "hypervolume": hv,
@@ -354,6 +399,8 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
                     pending.append((gen, X, status, metrics, row))
                     if time.monotonic() - flushed > 1.0:
                         write_pending()
+                if time.monotonic() - journalled > JOURNAL_EVERY_S:
+                    save_unsaved()
                 bar.update(len(X))
                 bar.set_postfix_str(f"generation {gen}/{len(planned) - 1}, "
                                     f"hypervolume {hv:.4f}", refresh=False)
@@ -364,11 +411,14 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
             write_pending()
     except KeyboardInterrupt:
         bar.close()
+        save_unsaved()          # every finished generation is kept
         raise SweepInterrupted(f"{out}: interrupted with {len(journal.done())} of "
                                f"{len(planned)} generations saved; run again with --resume "
                                "to continue") from None
     except BaseException:
         bar.close()        # its redrawing thread ends with it (base.progress.bar)
+        with contextlib.suppress(Exception):
+            save_unsaved()      # what was finished is kept where the failure allows
         raise
     bar.close()
     wall = time.perf_counter() - t0

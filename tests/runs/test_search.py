@@ -255,13 +255,13 @@ def test_interrupted_then_resumed_equals_uninterrupted(baseline, small, tmp_path
 
 
 def test_kill_9_then_resume_equals_uninterrupted(studies, tmp_path):
-    """A real kill -9 of a running search (held after its 8th journalled
-    generation, so the kill always lands mid-run), then --resume."""
+    """A real kill -9 of a running search (held after its 2nd journalled
+    block of generations, so the kill always lands mid-run), then --resume."""
     p = tmp_path / "long.toml"
     p.write_text(search_toml(studies).replace(f"generations = {GENS}", "generations = 150"))
     out = tmp_path / "k.h5"
-    left = kill_9_after_chunks(["run", p, "-o", out, "-q"], tmp_path / "k.h5.parts", 8)
-    assert left == 8
+    left = kill_9_after_chunks(["run", p, "-o", out, "-q"], tmp_path / "k.h5.parts", 2)
+    assert left == 2
     s = load_study(p)
     run_search(s, out, progress=False, resume=True)
     ref = tmp_path / "ref.h5"
@@ -276,10 +276,10 @@ def test_a_journal_that_does_not_replay_is_refused(small, tmp_path):
         run_search(small, out, progress=False, stop_after_generations=2)
     parts = out.with_name(out.name + ".parts")
     import io
-    p = parts / "chunk_0000001.npz"
+    p = parts / "block_0000000_0000001.npz"    # generations 0 and 1, saved at the interruption
     with np.load(p) as z:
         d = dict(z)
-    d["x"][0, 0] += 1e-9
+    d["x_1"][0, 0] += 1e-9
     buf = io.BytesIO()
     np.savez(buf, **d)
     p.write_bytes(buf.getvalue())

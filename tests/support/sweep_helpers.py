@@ -82,7 +82,7 @@ from pipeline.cli import main
 real, seen, k = os.replace, [0], int(sys.argv[1])
 def replace(src, dst, *a, **kw):
     real(src, dst, *a, **kw)
-    if re.search(r"chunk_\d+\.npz$", str(dst)):
+    if re.search(r"(chunk|block)_[\d_]+\.npz$", str(dst)):
         seen[0] += 1
         if seen[0] >= k:
             threading.Event().wait()        # hold here, mid-run, until killed
@@ -93,7 +93,7 @@ sys.exit(main(sys.argv[2:]))
 
 def kill_9_after_chunks(argv, parts, chunks, hang_guard_s=900):
     """Run `pipeline *argv` in a child process, wait until its journal folder
-    ``parts`` holds ``chunks`` entries (the child then holds), kill -9 it and
+    ``parts`` holds ``chunks`` entries, chunks or blocks (the child then holds), kill -9 it and
     return the number of entries left.  ``hang_guard_s`` only stops a child
     that never gets there from hanging the suite (no timing is asserted)."""
     import os
@@ -105,7 +105,7 @@ def kill_9_after_chunks(argv, parts, chunks, hang_guard_s=900):
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     guard = time.monotonic() + hang_guard_s
     try:
-        while len(list(parts.glob("chunk_*.npz"))) < chunks:
+        while _entries(parts) < chunks:
             assert proc.poll() is None, proc.stderr.read().decode()[-3000:]
             assert time.monotonic() < guard, "the child run never saved its chunks"
             time.sleep(0.05)
@@ -113,4 +113,9 @@ def kill_9_after_chunks(argv, parts, chunks, hang_guard_s=900):
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait()
     assert proc.returncode == -signal.SIGKILL
-    return len(list(parts.glob("chunk_*.npz")))
+    return _entries(parts)
+
+
+def _entries(parts):
+    """Files of a journal: a sweep's chunks, a search's blocks of generations."""
+    return len(list(parts.glob("chunk_*.npz"))) + len(list(parts.glob("block_*.npz")))

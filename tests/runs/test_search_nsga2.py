@@ -1,0 +1,157 @@
+"""ArrayNSGA2 against pymoo's NSGA2, driven side by side by ask and tell: the
+same seed must give the same designs, generation for generation, bit for bit.
+
+The test problem is made to reach every branch of the algorithm: infeasible
+designs (ties in constraint violation among the 'failed' ones), objectives on a
+coarse grid (ties in domination and crowding, infinite crowding at the ends of
+fronts), a repair, duplicates (a variable whose bounds are equal, so that
+crossover and mutation often leave a design unchanged), odd and uneven
+offspring counts and a population smaller than the offspring."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from pymoo.algorithms.moo.nsga2 import NSGA2
+from pymoo.core.problem import Problem
+from pymoo.core.repair import Repair
+from pymoo.core.termination import NoTermination
+from pymoo.problems.static import StaticProblem
+
+from pipeline.runs.nsga2 import ArrayNSGA2, violation
+
+XL = np.array([0.0, 0.0, 0.5, 2.0, -1.0])
+XU = np.array([1.0, 1.0, 0.5, 5.0, 1.0])    # x2: equal bounds
+
+
+def evaluate(X):
+    """Two objectives rounded to a grid, three constraints, failures."""
+    f1 = X[:, 0] + 0.1 * X[:, 4] ** 2
+    g = 1.0 + 9.0 * X[:, 1] / 1.0 + (X[:, 3] - 3.5) ** 2
+    f2 = g * (1.0 - np.sqrt(np.clip(f1 / g, 0, None)))
+    F = np.round(np.stack([f1, f2], axis=1), 1)
+    failed = X[:, 4] > 0.7
+    G = np.stack([X[:, 0] + X[:, 1] - 1.6,                      # a real constraint
+                  np.round(0.3 - X[:, 3] / 10, 2),               # ties in violation
+                  np.where(failed, 1e12, 0.0)], axis=1)          # 'evaluable'
+    F[failed] = 1e12
+    return F, G
+
+
+def repair(X):
+    X = np.array(X, float)
+    bad = X[:, 0] + X[:, 1] > 1.8
+    X[bad, :2] = 0.5 + 0.9 * (X[bad, :2] - 0.5)
+    return X
+
+
+class _Repair(Repair):
+    def _do(self, problem, X, **kwargs):
+        return repair(X)
+
+
+class _Box(Problem):
+    def __init__(self):
+        super().__init__(n_var=len(XL), n_obj=2, n_ieq_constr=3, xl=XL, xu=XU)
+
+
+def first_generation(n, seed):
+    rng = np.random.default_rng(seed + 100)
+    x = XL + rng.random((n, len(XL))) * (XU - XL)
+    x[::7] = x[1::7][: len(x[::7])] if n > 7 else x[::7]     # duplicates in the first one
+    return x
+
+
+def pymoo_run(pop, off, seed, generations, x0):
+    alg = NSGA2(pop_size=pop, n_offsprings=off, sampling=x0, repair=_Repair())
+    box = _Box()
+    alg.setup(box, termination=NoTermination(), seed=seed, verbose=False, progress=False)
+    out = []
+    for _ in range(generations):
+        p = alg.ask()
+        if p is None or len(p) == 0:
+            break
+        X = p.get("X")
+        F, G = evaluate(X)
+        alg.evaluator.eval(StaticProblem(box, F=F, G=G), p)
+        alg.tell(infills=p)
+        out.append((X, alg.pop.get("X")))
+    return out
+
+
+def array_run(pop, off, seed, generations, x0):
+    alg = ArrayNSGA2(pop, off, x0, XL, XU, seed, repair=repair)
+    out = []
+    for _ in range(generations):
+        X = alg.ask()
+        if len(X) == 0:
+            break
+        alg.tell(X, *evaluate(X))
+        out.append((X, alg.X))
+    return out
+
+
+@pytest.mark.parametrize("pop, off, seed", [(20, 20, 1), (30, 7, 2), (12, 40, 3), (25, 25, 9)])
+def test_the_same_designs_as_pymoo_generation_for_generation(pop, off, seed):
+    x0 = first_generation(pop, seed)
+    want = pymoo_run(pop, off, seed, 40, x0)
+    got = array_run(pop, off, seed, 40, x0)
+    assert len(got) == len(want) == 40
+    for gen, ((xw, pw), (xg, pg)) in enumerate(zip(want, got)):
+        assert xw.shape == xg.shape and np.array_equal(xw, xg), f"generation {gen}: asked"
+        assert np.array_equal(pw, pg), f"generation {gen}: survivors"
+
+
+class _Counting:
+    """A random generator that counts which draws are made."""
+
+    def __init__(self, rng):
+        self.rng, self.calls = rng, {}
+
+    def __getattr__(self, name):
+        f = getattr(self.rng, name)
+
+        def counted(*a, **k):
+            self.calls[name] = self.calls.get(name, 0) + 1
+            return f(*a, **k)
+        return counted
+
+
+def test_the_test_problem_reaches_every_branch(monkeypatch):
+    """Ties drawn at random (tournaments), fronts split by randomized crowding
+    order, infeasible and failed designs among the survivors and duplicates
+    removed all occur in such a run (or the comparison above would prove less)."""
+    pop, off = 30, 7
+    alg = ArrayNSGA2(pop, off, first_generation(pop, 2), XL, XU, 2, repair=repair)
+    alg.random_state = rng = _Counting(alg.random_state)
+    real, removed = alg.duplicates.do, []
+
+    def counting(x, *others):
+        kept = real(x, *others)
+        removed.append(len(x) - len(kept))
+        return kept
+    alg.duplicates.do = counting
+    import pipeline.runs.nsga2 as mod
+    splits = []
+    real_sort = mod.randomized_argsort
+    monkeypatch.setattr(mod, "randomized_argsort",
+                        lambda *a, **k: splits.append(1) or real_sort(*a, **k))
+    infeasible_survivors = 0
+    for _ in range(40):
+        X = alg.ask()
+        alg.tell(X, *evaluate(X))
+        infeasible_survivors += int((alg.CV > 0).sum())
+    assert rng.calls["choice"] > 20                 # ties in violation, domination, crowding
+    assert len(splits) > 20                         # a front cut by crowding order
+    assert infeasible_survivors > 0 and sum(removed) > 0
+    assert removed[0] > 0                           # duplicates in the first generation
+
+
+@pytest.mark.parametrize("width", [0, 1, 3, 4, 8, 9, 17])
+def test_violation_is_pymoo_s(width):
+    """Bit for bit, over magnitudes from 1e-5 to 1e12 (the sum's rounding
+    depends on its order: numpy's pairwise sum of a row)."""
+    from pymoo.core.individual import calc_cv
+    rng = np.random.default_rng(width)
+    G = rng.normal(size=(500, width)) * 10.0 ** rng.integers(-5, 13, size=(500, width))
+    assert np.array_equal(violation(G), np.array([calc_cv(G=g) for g in G]).ravel())
