@@ -136,7 +136,7 @@ def make_algorithm(search: SearchSpec, x0: np.ndarray, repair: TriangleRepair, b
     if search.method == "nsga2":
         from .nsga2 import ArrayNSGA2
         return ArrayNSGA2(search.population, search.offspring, x0, box.xl, box.xu,
-                          search.seed, repair=lambda X: repair._do(box, X))
+                          search.seed, repair=repair.inside)
     return _InPymoo(search, x0, repair, box)
 
 

@@ -146,6 +146,10 @@ class TriangleRepair(Repair):
         self.count = 0
 
     def _do(self, problem, X, **kwargs):
+        return self.inside(X)
+
+    def inside(self, X):
+        """X with its broken designs moved inside (counted in ``count``)."""
         if not self.triangles:
             return X
         X, n = repair_triangles(self.triangles, self.centre, X, self.lo, self.hi)
