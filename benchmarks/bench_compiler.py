@@ -390,10 +390,18 @@ def main(argv=None):
                           cores, 1 if a.smoke else 2)
     lines.append("")
     n_whole = 2_000 if a.smoke else 50_000 if a.quick else 1_000_000
+    # the yardstick again just before: the machine's speed drifts over minutes
+    yard_now = {} if a.smoke else yardstick()
     rate, wall = whole_process(n_whole)
+    from pipeline.study.reader import load_study
+    positions = load_study(STUDIES / "ov7_synthesis.toml").sweep.positions
+    y2 = yard_now.get("triad_simd", {}).get(cores)
+    against = (f"; {rate * positions / 1e6:.1f} M candidate-positions/s, "
+               f"{rate * positions / 1e6 / y2:.3f}x triad_simd on {cores} cores "
+               f"({y2} M, run just before)" if y2 else "")
     lines += [f"Default study, whole process with HDF5 (`pipeline run`, {n_whole:,} "
               f"candidates, kernels cached): {rate:,.0f} candidates/s, {wall:.1f} s wall "
-              "for the process.", ""]
+              f"for the process{against}.", ""]
     studies = [STUDIES / f"{s}.toml" for s in ("ov7_synthesis", "ov7_class3", "ov7_base",
                                                 "warp_feed_fourbar", "takeup_dynamics")]
     ct = {} if a.smoke else compile_times(studies[:2] if a.quick else studies)
