@@ -116,6 +116,7 @@ class Journal:
                 if first <= chunk <= last:
                     p, what = b, "block"
                     keys = tuple(f"{k}_{chunk}" for k in keys)
+                    break
         try:
             with np.load(p) as z:
                 rows = tuple(z[k] for k in keys)

@@ -256,12 +256,14 @@ def test_interrupted_then_resumed_equals_uninterrupted(baseline, small, tmp_path
 
 def test_kill_9_then_resume_equals_uninterrupted(studies, tmp_path):
     """A real kill -9 of a running search (held after its 2nd journalled
-    block of generations, so the kill always lands mid-run), then --resume."""
+    block of generations, about half a second in: mid-run), then --resume."""
     p = tmp_path / "long.toml"
-    p.write_text(search_toml(studies).replace(f"generations = {GENS}", "generations = 150"))
+    p.write_text(search_toml(studies).replace(f"generations = {GENS}", "generations = 600"))
     out = tmp_path / "k.h5"
     left = kill_9_after_chunks(["run", p, "-o", out, "-q"], tmp_path / "k.h5.parts", 2)
     assert left == 2
+    from pipeline.results.journal import Journal
+    assert 0 < len(Journal(out).done()) < 601        # killed mid-run: work left to resume
     s = load_study(p)
     run_search(s, out, progress=False, resume=True)
     ref = tmp_path / "ref.h5"
@@ -276,7 +278,9 @@ def test_a_journal_that_does_not_replay_is_refused(small, tmp_path):
         run_search(small, out, progress=False, stop_after_generations=2)
     parts = out.with_name(out.name + ".parts")
     import io
-    p = parts / "block_0000000_0000001.npz"    # generations 0 and 1, saved at the interruption
+    from pipeline.results.journal import Journal
+    # the block that holds generation 1 (with 0, or alone where 0 took over 0.25 s)
+    p = next(b for (first, last), b in Journal(out)._blocks().items() if first <= 1 <= last)
     with np.load(p) as z:
         d = dict(z)
     d["x_1"][0, 0] += 1e-9

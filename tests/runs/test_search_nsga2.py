@@ -24,8 +24,9 @@ XL = np.array([0.0, 0.0, 0.5, 2.0, -1.0])
 XU = np.array([1.0, 1.0, 0.5, 5.0, 1.0])    # x2: equal bounds
 
 
-def evaluate(X):
-    """Two objectives rounded to a grid, three constraints, failures."""
+def evaluate(X, infeasible=False):
+    """Two objectives rounded to a grid, three constraints, failures (with
+    ``infeasible``: no design meets the constraints, violations tied often)."""
     f1 = X[:, 0] + 0.1 * X[:, 4] ** 2
     g = 1.0 + 9.0 * X[:, 1] / 1.0 + (X[:, 3] - 3.5) ** 2
     f2 = g * (1.0 - np.sqrt(np.clip(f1 / g, 0, None)))
@@ -35,6 +36,8 @@ def evaluate(X):
                   np.round(0.3 - X[:, 3] / 10, 2),               # ties in violation
                   np.where(failed, 1e12, 0.0)], axis=1)          # 'evaluable'
     F[failed] = 1e12
+    if infeasible:
+        G[:, 1] = np.round(X[:, 3], 0)
     return F, G
 
 
@@ -51,8 +54,8 @@ class _Repair(Repair):
 
 
 class _Box(Problem):
-    def __init__(self):
-        super().__init__(n_var=len(XL), n_obj=2, n_ieq_constr=3, xl=XL, xu=XU)
+    def __init__(self, xl=XL, xu=XU):
+        super().__init__(n_var=len(xl), n_obj=2, n_ieq_constr=3, xl=xl, xu=xu)
 
 
 def first_generation(n, seed):
@@ -62,9 +65,9 @@ def first_generation(n, seed):
     return x
 
 
-def pymoo_run(pop, off, seed, generations, x0):
+def pymoo_run(pop, off, seed, generations, x0, infeasible=False, xl=XL, xu=XU):
     alg = NSGA2(pop_size=pop, n_offsprings=off, sampling=x0, repair=_Repair())
-    box = _Box()
+    box = _Box(xl, xu)
     alg.setup(box, termination=NoTermination(), seed=seed, verbose=False, progress=False)
     out = []
     for _ in range(generations):
@@ -72,21 +75,21 @@ def pymoo_run(pop, off, seed, generations, x0):
         if p is None or len(p) == 0:
             break
         X = p.get("X")
-        F, G = evaluate(X)
+        F, G = evaluate(X, infeasible)
         alg.evaluator.eval(StaticProblem(box, F=F, G=G), p)
         alg.tell(infills=p)
         out.append((X, alg.pop.get("X")))
     return out
 
 
-def array_run(pop, off, seed, generations, x0):
-    alg = ArrayNSGA2(pop, off, x0, XL, XU, seed, repair=repair)
+def array_run(pop, off, seed, generations, x0, infeasible=False, xl=XL, xu=XU):
+    alg = ArrayNSGA2(pop, off, x0, xl, xu, seed, repair=repair)
     out = []
     for _ in range(generations):
         X = alg.ask()
         if len(X) == 0:
             break
-        alg.tell(X, *evaluate(X))
+        alg.tell(X, *evaluate(X, infeasible))
         out.append((X, alg.X))
     return out
 
@@ -115,6 +118,29 @@ class _Counting:
             self.calls[name] = self.calls.get(name, 0) + 1
             return f(*a, **k)
         return counted
+
+
+def test_no_feasible_design_at_all_as_pymoo():
+    """Survival of infeasible designs only (sorted by violation, ties in it)."""
+    x0 = first_generation(20, 4)
+    want = pymoo_run(20, 20, 4, 15, x0, infeasible=True)
+    got = array_run(20, 20, 4, 15, x0, infeasible=True)
+    assert len(got) == len(want) == 15
+    for (xw, pw), (xg, pg) in zip(want, got):
+        assert np.array_equal(xw, xg) and np.array_equal(pw, pg)
+    assert (violation(evaluate(got[-1][1], True)[1]) > 0).all()
+
+
+def test_a_mating_that_finds_nothing_new_ends_as_pymoo():
+    """A box of no width: every offspring is a duplicate, the mating gives up
+    after pymoo's 100 tries and the algorithm asks for nothing, at the same
+    generation in both."""
+    lo = np.array([0.5, 0.25, 0.5, 3.0, 0.0])
+    x0 = np.repeat(lo[None, :], 6, axis=0)
+    want = pymoo_run(6, 6, 5, 5, x0, xl=lo, xu=lo)
+    got = array_run(6, 6, 5, 5, x0, xl=lo, xu=lo)
+    assert len(got) == len(want) == 1           # the first generation (one design), then none
+    assert np.array_equal(got[0][0], want[0][0]) and len(got[0][0]) == 1
 
 
 def test_the_test_problem_reaches_every_branch(monkeypatch):
