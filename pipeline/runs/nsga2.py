@@ -35,6 +35,7 @@ from pymoo.util.misc import random_permutations
 from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 from pymoo.util.randomized_argsort import randomized_argsort
 
+
 class _Bounds:
     """What pymoo's operators read of a problem: the bounds and the number of
     variables."""
@@ -66,6 +67,9 @@ class ArrayNSGA2:
         if reference.tournament_type != "comp_by_dom_and_crowding":   # pragma: no cover
             raise RuntimeError(f"pymoo's NSGA2 tournament is {reference.tournament_type!r}; "
                                "ArrayNSGA2 follows 'comp_by_dom_and_crowding'")
+        if reference.mating.crossover.n_offsprings != reference.mating.crossover.n_parents:
+            raise RuntimeError("ArrayNSGA2 follows a crossover with as many children as "
+                               "parents (pymoo's SBX: 2 and 2)")   # pragma: no cover
         self.crossover = reference.mating.crossover
         self.mutation = reference.mating.mutation
         self.n_max = reference.mating.n_max_iterations
@@ -77,16 +81,15 @@ class ArrayNSGA2:
         self.crowding = get_crowding_function("cd")
         self.duplicates = DefaultDuplicateElimination(func=lambda X: X)
         self.x0 = np.asarray(x0, float)
-        self.X = self.F = self.G = self.CV = self.crowd = None
+        # the population: designs, objectives, constraint violations, crowding distances
+        self.X = self.F = self.CV = self.crowd = None
 
     # ---------------------------------------------------------------- ask
     def ask(self) -> np.ndarray:
         """The next designs to evaluate (empty: the mating found nothing new)."""
         if self.X is None:      # Initialization: the sampling repaired, duplicates removed
-            X = self.duplicates.do(self.repair(np.array(self.x0)))
-        else:
-            X = self._mating()
-        return X
+            return self.duplicates.do(self.repair(np.array(self.x0)))
+        return self._mating()
 
     def _mating(self):
         off = np.zeros((0, self.problem.n_var))
@@ -116,10 +119,7 @@ class ArrayNSGA2:
         if np.any(cross):
             Q = cx._do(self.problem, X, random_state=rs)
             Xp[:, cross] = Q[:, cross]
-        if cx.n_offsprings != cx.n_parents:      # pragma: no cover - SBX: 2 and 2
-            raise RuntimeError("ArrayNSGA2 follows a crossover with as many children as parents")
-        for k in np.flatnonzero(~cross):
-            Xp[:, k] = np.copy(X[np.arange(cx.n_parents), k])
+        Xp[:, ~cross] = X[:, ~cross]     # no crossover: the parents themselves
         off = Xp.reshape(-1, X.shape[-1])
         # Mutation.do
         mu = self.mutation
@@ -159,31 +159,27 @@ class ArrayNSGA2:
     def tell(self, X, F, G):
         """The evaluated designs X with their objectives F and constraints G
         (g <= 0)."""
-        X, F, G = np.asarray(X, float), np.asarray(F, float), np.asarray(G, float)
+        X, F, CV = np.asarray(X, float), np.asarray(F, float), violation(G)
         if self.X is None:      # the first generation: all of it ranked, none dropped
-            self._survive(X, F, G, len(X))
+            self._survive(X, F, CV, len(X))
         else:
             self._survive(np.concatenate([self.X, X]), np.concatenate([self.F, F]),
-                          np.concatenate([self.G, G]), self.pop_size)
+                          np.concatenate([self.CV, CV]), self.pop_size)
 
-    def _survive(self, X, F, G, n_survive):
+    def _survive(self, X, F, CV, n_survive):
         """Survival.do (split by feasibility) with RankAndCrowding."""
         n_survive = min(n_survive, len(X))
-        CV = violation(G)
         feasible = np.where(CV <= 0.0)[0]
         infeasible = np.where(~(CV <= 0.0))[0]
         infeasible = infeasible[np.argsort(CV[infeasible])]
         crowd = np.full(len(X), np.nan)
-        keep = []
+        keep = np.zeros(0, np.int64)
         if len(feasible):
             keep = feasible[self._rank_and_crowding(F[feasible], min(len(feasible), n_survive),
                                                     crowd, feasible)]
-        n_remaining = n_survive - len(keep)
-        if n_remaining > 0:
-            keep = np.concatenate([keep, infeasible[:n_remaining]]).astype(np.int64)
-        keep = np.asarray(keep, np.int64)
-        self.X, self.F, self.G, self.CV, self.crowd = X[keep], F[keep], G[keep], CV[keep], \
-            crowd[keep]
+        # the places left: the least violating infeasible designs
+        keep = np.concatenate([keep, infeasible[:max(n_survive - len(keep), 0)]])
+        self.X, self.F, self.CV, self.crowd = X[keep], F[keep], CV[keep], crowd[keep]
 
     def _rank_and_crowding(self, F, n_survive, crowd, where):
         survivors = []
