@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import re
 
+from ..kernels.continuation import FOLD_SHARE
 from ..kernels.watch import ERR_FACTOR
 from .emit import ClassIIIEmitter, _wrap_line, constant_names, lane
 from .names import text
@@ -329,6 +330,14 @@ def _watch_lines(i, e):
     division-free; a window that may come within the watch threshold of zero
     flags the lane (the careful path looks closely)."""
     r = {x: f"S[R_w{i}_{x}, l]" for x in ("k3", "k2", "k1")}
+    fold = []
+    if e.continued:
+        fold = ["# (class III: margin^2 exists only where the group assembles, and the",
+                "# solutions may resume past a short range where it does not; where the",
+                "# line through the centre and a neighbour falls to zero within",
+                "# 1 / FOLD_SHARE steps the careful walk slows down into a possible fold:",
+                "# continuation.step_limit)",
+                f"hit = hit | ({1.0 + FOLD_SHARE!r} * g1 - max(g2, v) <= lim)"]
     return [
         f"# {e.title()}: the watch's window of margin^2 at k - 2, k - 1, k",
         f"g3 = {r['k3']}", f"g2 = {r['k2']}", f"g1 = {r['k1']}", "v = m * m",
@@ -336,6 +345,7 @@ def _watch_lines(i, e):
         "bq = 0.5 * (v - g2)", "cq = 0.5 * (v - 2.0 * g1 + g2)",
         "hit = (min(g2, min(g1, v)) <= lim) | ((cq > 0.0) & (abs(bq) < 2.0 * cq)"
         " & (4.0 * cq * g1 - bq * bq <= 4.0 * cq * lim))",
+    ] + fold + [
         "big = big | (armed & hit)",
         f"{r['k3']} = g2", f"{r['k2']} = g1", f"{r['k1']} = v",
     ]

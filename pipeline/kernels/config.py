@@ -101,7 +101,10 @@ T_CLOSE = 6           # revolution must close on its start to this, rad
 T_ASSEMBLY_SLACK = 7  # cosine-law argument in [1, 1+slack] is clamped to a toggle
 T_STEP_CHANGE = 8     # continuation steps change a class III angle by at most this, rad
 T_MIN_STEP = 9        # a rejected step is halved down to this fraction of T_SUBSTEP
-T_FIRST_STEP = 10     # first step of a walk (no slope known yet), fraction of T_SUBSTEP
+T_FIRST_STEP = 10     # first step of a walk (no slope known yet), fraction of T_SUBSTEP:
+                      # by default the smallest step (T_MIN_STEP): a class III fold may lie
+                      # just ahead of the start, and its margin's slope is not known yet
+                      # (continuation.step_limit)
 T_WATCH = 11          # between-sample watch: a margin^2 that may dip this low between two
                       # positions (by the quadratic through three, allowing for the cubic
                       # term) is looked at closely (pipeline.kernels.watch)
@@ -127,13 +130,17 @@ S_CA = 12         # e(a) = (cos a, sin a) and e(b) handed over (the lane path's 
 S_SA = 13         # ``triad.class3`` confirms it by its residual, without a cos or sin)
 S_CB = 14
 S_SB = 15
-N_STATE = 16
+S_MAY_STOP = 16  # 1.0: this solve's Newton may stop where it does not contract (a
+                 # failure is retried at half the step: ``continuation.may_stop``)
+S_MARGIN_OLD = 17  # the margin before the step being tried
+S_D_RATE = 18    # d(margin^2) per rad travelled over the last accepted step (0: unknown)
+N_STATE = 19
 
 
 def default_tolerances(newton_tol=1e-12, newton_maxiter=50, newton_step=0.5,
                        singular=1e-9, jump=0.1, substep_deg=2.0, close=1e-7,
                        assembly_slack=1e-12, step_change=0.05, min_step=1e-5,
-                       first_step=1.0 / 256.0, watch=1e-6, touch=1e-12, locate=1e-10):
+                       first_step=1e-5, watch=1e-6, touch=1e-12, locate=1e-10):
     """The tolerance vector the kernels take, with the product's defaults."""
     t = np.empty(N_TOLS)
     t[T_NEWTON_TOL] = newton_tol

@@ -15,11 +15,13 @@ import numpy as np
 from numba import njit
 
 from .config import (JIT, JIT_ALLOC, N_STATE, S_A, S_B, S_DET_SIGN, S_HAS_SLOPE, S_MARGIN, S_SLOPE_A,
-                     S_SLOPE_B, S_A_OLD, S_B_OLD, S_SIGN_OLD, T_CLOSE, T_FIRST_STEP,
+                     S_MAY_STOP, S_MARGIN_OLD, S_D_RATE,
+                     S_SLOPE_B, S_A_OLD, S_B_OLD, S_SIGN_OLD, T_CLOSE, T_FIRST_STEP, T_LOCATE,
                      T_STEP_CHANGE, T_SUBSTEP)
 
 
 MARGIN_SLOTS = 3     # after the groups' margins: failing group, angle reached, angle failed
+FOLD_SHARE = 0.5     # a step goes at most this share of the way to where margin^2 reaches 0
 
 
 @njit(**JIT)
@@ -78,15 +80,45 @@ def step_limit(state, tols):
 
 
 @njit(**JIT)
+def fold_limit(state, tols):
+    """Largest crank step towards a fold: where a group's margin^2 fell over
+    the last step, FOLD_SHARE of the way to where its line reaches zero (and
+    no less than tols[T_LOCATE]); inf where none falls.  margin^2 falls
+    linearly into a fold, and a class III group whose range ends there may
+    resume a little further on; a step over that gap would land on the
+    solutions beyond it (the same sign of det J, a small correction: nothing
+    to see), so the walk slows down into the fold, below the smallest retried
+    step if need be, until a step lands in the gap (``pipeline.kernels.watch``:
+    the margin^2 of a class III group is known only where it assembles, so the
+    watch cannot see such a gap)."""
+    h = math.inf
+    for g in range(state.shape[0]):
+        rate = state[g, S_D_RATE]
+        if rate < 0.0:
+            h = min(h, FOLD_SHARE * state[g, S_MARGIN] * state[g, S_MARGIN] / -rate)
+    return max(h, tols[T_LOCATE])
+
+
+@njit(**JIT)
 def predict(state, dphi):
     """Keep the current state and move (a, b) along the secant (predictor)."""
     for g in range(state.shape[0]):
         state[g, S_A_OLD] = state[g, S_A]
         state[g, S_B_OLD] = state[g, S_B]
         state[g, S_SIGN_OLD] = state[g, S_DET_SIGN]
+        state[g, S_MARGIN_OLD] = state[g, S_MARGIN]
         if state[g, S_HAS_SLOPE] != 0.0:
             state[g, S_A] += state[g, S_SLOPE_A] * dphi
             state[g, S_B] += state[g, S_SLOPE_B] * dphi
+
+
+@njit(**JIT)
+def may_stop(state, flag):
+    """Whether the next solve's Newton may stop where its steps do not contract
+    (``triad._give_up``): 1.0 where the continuation retries a failure at half
+    the step; 0.0 (the default) where this try decides: Newton runs to its cap."""
+    for g in range(state.shape[0]):
+        state[g, S_MAY_STOP] = flag
 
 
 @njit(**JIT)
@@ -96,6 +128,7 @@ def restore(state):
         state[g, S_A] = state[g, S_A_OLD]
         state[g, S_B] = state[g, S_B_OLD]
         state[g, S_DET_SIGN] = state[g, S_SIGN_OLD]
+        state[g, S_MARGIN] = state[g, S_MARGIN_OLD]
 
 
 @njit(**JIT)
@@ -104,6 +137,10 @@ def accept(state, dphi):
     if dphi == 0.0:
         return
     for g in range(state.shape[0]):
+        if state[g, S_SIGN_OLD] != 0.0:     # (the margin before the step is a solve's)
+            m0 = state[g, S_MARGIN_OLD]
+            m1 = state[g, S_MARGIN]
+            state[g, S_D_RATE] = (m1 * m1 - m0 * m0) / abs(dphi)
         state[g, S_SLOPE_A] = wrap(state[g, S_A] - state[g, S_A_OLD]) / dphi
         state[g, S_SLOPE_B] = wrap(state[g, S_B] - state[g, S_B_OLD]) / dphi
         state[g, S_HAS_SLOPE] = 1.0

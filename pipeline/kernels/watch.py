@@ -23,6 +23,15 @@ boundary is bisected to ``tols[T_LOCATE]``), or the minimum is resolved (at
 or below ``tols[T_TOUCH]``: a toggle between positions, SINGULAR).  The
 refinement is generated per mechanism (``pipeline.compiler.generate``); these
 are its numbers.
+
+A class III group's D is that of its solution, which exists only where the
+group assembles: across a short range where it does not, the walk may land
+on the solutions beyond it, and D at the positions on either side knows
+nothing of the range.  The continuation sees it coming instead: D falls
+linearly into the fold where the range begins, and no step goes more than
+FOLD_SHARE of the way to where D's line reaches zero
+(``pipeline.kernels.continuation.step_limit``); the lanes hand such a window
+to the careful path.
 """
 
 import math

@@ -29,6 +29,8 @@ from pipeline.kernels import sweep as ks
 from pipeline.solve.scene import run_scene, solve_curves
 from pipeline.study.reader import load_study, parse_study
 from pipeline.runs.sweep import build_problem
+from pipeline.solve.scene import revolution_angles
+from pipeline.study.sweep_spec import apply_design, parameter_rows
 from support.stress_cases import near_singular_triads
 from support.tolerances import FAIL_ANGLE_RAD, FAIL_ANGLE_TRIAD_RAD
 
@@ -399,3 +401,55 @@ def test_stress_candidates_unchanged_by_finer_steps(studies):
                      for j in np.flatnonzero(~(diff <= limit))]
     assert not problems, (f"{len(problems)} differences over {len(ok)} OK candidates:\n  "
                           + "\n  ".join(problems[:15]))
+
+
+# --------------------------------------------------------------------------- narrow locks
+# Draws of the default synthesis sweep (its variables L12, P6x, P6y, L23, L34, L45,
+# L35, L46, L57, as the results file stores them) whose class III group cannot pass
+# a range about 2e-4 deg wide, and the crank angle (deg) where it stops, found among
+# 250,000 draws.  The continuation's 1-deg step reached across the range; Newton,
+# started beyond it, wandered and came to rest on the branch past it, and the
+# revolution went on (OK, or a failure tens of degrees later); it now stops where
+# its steps do not contract, the step is halved, and the walk meets the lock.
+NARROW_LOCKS = (
+    ([59.50354674831033, 218.98051945120096, 183.3898434571922, 259.7605049777776,
+      90.34447852447629, 109.5420001335442, 143.28425632864236, 94.25385529585182,
+      218.96407869905235], -57.6294),       # reported at -62.987 before
+    ([55.91866023602426, 216.67917536979843, 196.46674861386174, 314.28462306637294,
+      94.82781982598611, 115.0526470576219, 148.65549059694752, 92.65736408674803,
+      213.0081735879157], -6.7655),         # reported at -21.181 before
+    ([53.65790182724595, 221.60855200141668, 245.4104097932577, 234.93837672472,
+      74.12875990122556, 114.53340200856329, 187.70708377584816, 96.37331424485892,
+      289.5538468826562], -60.8626),        # reported OK before
+)
+FINE_STEP_DEG = 1e-5
+
+
+@pytest.mark.parametrize("x, lock_deg", NARROW_LOCKS)
+def test_sweep_stops_at_a_narrow_class3_lock(studies, x, lock_deg):
+    """The default sweep (360 positions, lanes, then the careful path) reports a
+    failure of the class III group at the edge of a range about 2e-4 deg wide
+    that it cannot pass, where a walk at 1e-5 deg steps over the range finds
+    its last assembled position (within that step and the README's figure for
+    a class III failure angle)."""
+    study = load_study(studies / "ov7_synthesis.toml")
+    pb = build_problem(study, study.sweep)
+    status, m = pb.evaluate_rows(parameter_rows(pb.plan, study.sweep, np.array([x])))
+    triad = pb.plan.group_names.index("triad")
+    # the fine walk: 0.01 deg steps to near the lock, then 1e-5 deg steps over it
+    mech = apply_design(study.mechanism, study.sweep, np.array(x))
+    crank = mech.crank
+    to = abs(lock_deg) - 0.02
+    ahead = np.arange(0.0, to, 0.01)
+    over = to + FINE_STEP_DEG * np.arange(4001)
+    phis = crank.phi0 + crank.rot * np.radians(np.concatenate([ahead, over]))
+    c = solve_curves(mech.compile(), phis, kc.POSITIONS)
+    bad = np.flatnonzero(c.status != kc.OK)
+    assert bad.size and bad[0] > len(ahead), "the fine walk finds no lock in its window"
+    last_ok = math.degrees(phis[bad[0] - 1])
+    assert abs(last_ok - lock_deg) < 1e-3     # the lock the case was found for
+    assert status[0] in (kc.SINGULAR, kc.NEWTON_MAXITER), _name(status[0])
+    assert m[0, ks.M_FAIL_GROUP] == triad
+    got = math.degrees(m[0, ks.M_FAIL_PHI])
+    assert abs(got - last_ok) <= FINE_STEP_DEG + math.degrees(FAIL_ANGLE_TRIAD_RAD), \
+        f"reported at {got!r} deg, the fine walk's last assembled position {last_ok!r} deg"

@@ -29,6 +29,7 @@ from hypothesis import strategies as st
 
 from pipeline.kernels import config as kc
 from pipeline.kernels.groups import attach, crank, rpr, rrp, rrr
+from pipeline.kernels import triad as triad_kernels
 from pipeline.kernels.triad import class3, ternary_angle
 from pipeline.model.mechanism import ClassIII, Crank, Mechanism, RRR
 from pipeline.solve.scene import solve_curves
@@ -934,6 +935,77 @@ def test_class3_impossible(case, which, extra, direction, guess_a, guess_b, orde
         assert_nan_point(i, pos, d1, d2)
     assert margin == 0.0
     assert_no_silent_nan(pos, status, *computed(pos, d1, d2, order)[1:])
+
+
+def _newton_steps(tri, p2, p6, p7, a, b, strikes_max):
+    """(outcome, a, b, the Newton steps taken) of the class III Newton from (a, b)
+    (its Python source, counting the 2x2 solves)."""
+    u435 = ternary_angle(tri.l34, tri.l45, tri.l35, tri.orientation)
+    taken = []
+    solve2 = triad_kernels.solve2
+
+    def counted(*args):
+        taken.append(1)
+        return solve2(*args)
+    triad_kernels.solve2 = counted
+    try:
+        outcome, a, b, _, _, _ = triad_kernels.newton.py_func(
+            *p2, *p6, *p7, tri.l23, tri.l34, tri.l35, tri.l46, tri.l57, u435, a, b,
+            TOLS[kc.T_NEWTON_TOL], int(TOLS[kc.T_NEWTON_MAXITER]), TOLS[kc.T_NEWTON_STEP],
+            strikes_max)
+    finally:
+        triad_kernels.solve2 = solve2
+    return outcome, a, b, len(taken)
+
+
+@settings(max_examples=60, **FAST)
+@given(case=triads(), which=st.sampled_from(["P6", "P7"]), extra=real(1.0, 300.0),
+       direction=angle, guess_a=angle, guess_b=angle, sign=st.sampled_from([1.0, -1.0]))
+def test_class3_newton_gives_up_where_it_does_not_contract(case, which, extra, direction,
+                                                           guess_a, guess_b, sign):
+    """A pivot beyond reach on the continuation (det J's sign known from the
+    position before): Newton stops after two steps no shorter than the ones
+    before (kernels.triad.STALL_STRIKES), well short of the cap, with the
+    status it reports at the cap; from the declared guesses (no sign yet) it
+    runs to the cap."""
+    tri, p2, p6, p7, _, _ = case
+    if which == "P6":
+        p6 = p2 + (tri.l23 + tri.l34 + tri.l46 + extra) * e(direction)
+    else:
+        p7 = p2 + (tri.l23 + tri.l35 + tri.l57 + extra) * e(direction)
+    fixed = lambda p: Path(p, np.zeros(2), np.zeros(2))      # noqa: E731
+    moving = Path(p2, np.ones(2), np.zeros(2))
+    first = call_class3(tri, moving, fixed(p6), fixed(p7), guess_a, guess_b, 0)
+    later = call_class3(tri, moving, fixed(p6), fixed(p7), guess_a, guess_b, 0, det_sign=sign)
+    assert first[0] in (kc.NEWTON_MAXITER, kc.SINGULAR)
+    assert later[0] == first[0] or first[0] == kc.NEWTON_MAXITER and later[0] == kc.SINGULAR
+    cap = int(TOLS[kc.T_NEWTON_MAXITER])
+    out_first = _newton_steps(tri, p2, p6, p7, guess_a, guess_b, cap + 1)
+    out_later = _newton_steps(tri, p2, p6, p7, guess_a, guess_b, triad_kernels.STALL_STRIKES)
+    note(f"steps: {out_first[3]} from the guesses, {out_later[3]} on the continuation")
+    if out_first[0] == 1:        # (MAXITER; a singular Jacobian stops it sooner)
+        assert out_first[3] == cap
+    assert out_later[0] == out_first[0] or out_later[0] == 1
+    assert out_later[3] <= out_first[3]
+    if out_later[0] == 1 and out_first[0] == 1:
+        event("stopped early")
+        assert out_later[3] < cap
+
+
+@settings(max_examples=200, **FAST)
+@given(case=triads(), da=real(-1.0, 1.0), db=real(-1.0, 1.0), size=real(0.0, 0.05))
+def test_class3_newton_on_the_continuation_unchanged_near_a_root(case, da, db, size):
+    """From a guess as close as the continuation's predictor (within 0.05 rad)
+    to a root with a clear margin, Newton's steps contract: the stopping rule
+    never acts, and the root is the one the cap alone gives, to the bit."""
+    tri, p2, p6, p7, a0, b0 = case
+    assume(tri.margin(p2, p6, p7, a0, b0) > 0.1)
+    a, b = a0 + size * da, b0 + size * db
+    cap = int(TOLS[kc.T_NEWTON_MAXITER])
+    plain = _newton_steps(tri, p2, p6, p7, a, b, cap + 1)
+    ruled = _newton_steps(tri, p2, p6, p7, a, b, triad_kernels.STALL_STRIKES)
+    assert plain[0] == 0, "no convergence from close by"
+    assert ruled == plain
 
 
 @settings(max_examples=40, **FAST)

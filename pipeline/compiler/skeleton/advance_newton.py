@@ -6,7 +6,7 @@ The text below the marker line is pasted into the generated module
 readers, the names the generated module gives it."""
 
 from .header import (njit, JIT_INNER, OK, BRANCH_JUMP, NEWTON_MAXITER, T_SUBSTEP, T_MIN_STEP,
-                     accept, predict, restore, step_limit)
+                     accept, fold_limit, may_stop, predict, restore, step_limit)
 from ._mechanism import (N_GROUPS, position)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
@@ -14,7 +14,8 @@ from ._mechanism import (N_GROUPS, position)
 def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, with_com):
     """Continuation from ``phi_from`` to ``phi_to``, then the solve at
     ``phi_to`` to ``order``: secant predictor, Newton corrector, steps bounded
-    by ``step_limit``; a step whose Newton fails or jumps branch (det J
+    by ``step_limit`` and, towards a fold, ``fold_limit``; a step whose Newton
+    fails or jumps branch (det J
     changes sign, or the correction exceeds tols[T_JUMP]) is retried at half
     the size, down to tols[T_MIN_STEP] of the full step, and only then
     reported.  Returns the first non-OK status met on the way
@@ -39,13 +40,18 @@ def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, with_
             target = phi_to
             h = 0.0
         else:
-            h = max(min(step_limit(state, tols), h_cap), h_min)
+            # (towards a fold below the smallest retried step if need be)
+            h = min(max(min(step_limit(state, tols), h_cap), h_min), fold_limit(state, tols))
             final = abs(phi_to - phi) <= h
             target = phi_to if final else phi + direction * h
             predict(state, target - phi)
         dphi = target - phi
+        # a Newton whose steps do not contract may stop early where a failure is
+        # retried at half the step; the try that decides runs to the cap
+        may_stop(state, 1.0 if (not straight and min(h, abs(dphi)) > h_min) else 0.0)
         st = position(K, target, order if final else 0, tols, state, pos, d1, d2, margins,
                       with_com and final)
+        may_stop(state, 0.0)
         if straight:
             margins[N_GROUPS] = group      # the group of the failure reported
             return status

@@ -24,8 +24,8 @@ from pipeline.kernels.config import (JIT, JIT_ALLOC, JIT_INNER, JIT_LANES, OK, B
                                      T_ASSEMBLY_SLACK, T_SUBSTEP,
                                      T_MIN_STEP, T_NEWTON_TOL, T_JUMP, T_STEP_CHANGE, T_CLOSE,
                                      T_WATCH, T_TOUCH, T_LOCATE)
-from pipeline.kernels.continuation import (accept, closes, copy2, predict, restore, start_triad,
-                                           step_limit, work, wrap)
+from pipeline.kernels.continuation import (accept, closes, copy2, fold_limit, may_stop, predict,
+                                           restore, start_triad, step_limit, work, wrap)
 from pipeline.kernels.dynamics import drive, lagrange_terms, potential
 from pipeline.kernels.forces import (applied_loads, equilibrium_residual, force_work, gauss_solve,
                                      kinetostatics, shaking)
@@ -57,7 +57,7 @@ __all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_INNER', 'JIT_LANES', '
            'S_DET_SIGN', 'S_ITERS', 'S_MARGIN', 'S_HANDED', 'S_CA', 'S_SA', 'S_CB', 'S_SB',
            'N_STATE', 'N_TOLS', 'T_SINGULAR',
            'T_ASSEMBLY_SLACK', 'T_SUBSTEP', 'T_MIN_STEP', 'T_NEWTON_TOL', 'T_JUMP',
-           'T_STEP_CHANGE', 'T_CLOSE', 'T_WATCH', 'T_TOUCH', 'T_LOCATE', 'accept',
+           'T_STEP_CHANGE', 'T_CLOSE', 'T_WATCH', 'T_TOUCH', 'T_LOCATE', 'accept', 'fold_limit', 'may_stop',
            'closes', 'copy2', 'predict', 'restore', 'start_triad', 'step_limit', 'work',
            'wrap', 'drive', 'lagrange_terms', 'potential', 'applied_loads',
            'equilibrium_residual', 'force_work',
