@@ -425,16 +425,18 @@ NARROW_LOCKS = (
 FINE_STEP_DEG = 1e-5
 
 
+@pytest.mark.parametrize("positions", [360, 3600])
 @pytest.mark.parametrize("x, lock_deg", NARROW_LOCKS)
-def test_sweep_stops_at_a_narrow_class3_lock(studies, x, lock_deg):
-    """The default sweep (360 positions, lanes, then the careful path) reports a
-    failure of the class III group at the edge of a range about 2e-4 deg wide
-    that it cannot pass, where a walk at 1e-5 deg steps over the range finds
-    its last assembled position (within that step and the README's figure for
-    a class III failure angle)."""
+def test_sweep_stops_at_a_narrow_class3_lock(studies, x, lock_deg, positions):
+    """The default sweep (lanes, then the careful path), at 360 and at 3,600
+    positions, reports a failure of the class III group at the edge of a range
+    about 2e-4 deg wide that it cannot pass, where a walk at 1e-5 deg steps
+    over the range finds its last assembled position (within that step and
+    the README's figure for a class III failure angle)."""
     study = load_study(studies / "ov7_synthesis.toml")
-    pb = build_problem(study, study.sweep)
-    status, m = pb.evaluate_rows(parameter_rows(pb.plan, study.sweep, np.array([x])))
+    spec = dataclasses.replace(study.sweep, positions=positions)
+    pb = build_problem(study, spec)
+    status, m = pb.evaluate_rows(parameter_rows(pb.plan, spec, np.array([x])))
     triad = pb.plan.group_names.index("triad")
     # the fine walk: 0.01 deg steps to near the lock, then 1e-5 deg steps over it
     mech = apply_design(study.mechanism, study.sweep, np.array(x))
