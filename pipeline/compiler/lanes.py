@@ -336,7 +336,7 @@ def _watch_lines(i, e):
                 "# solutions may resume past a short range where it does not; where the",
                 "# line through the centre and a neighbour falls to zero within",
                 "# 1 / FOLD_SHARE steps the careful walk slows down into a possible fold:",
-                "# continuation.step_limit)",
+                "# continuation.fold_limit)",
                 f"hit = hit | ({1.0 + FOLD_SHARE!r} * g1 - max(g2, v) <= lim)"]
     return [
         f"# {e.title()}: the watch's window of margin^2 at k - 2, k - 1, k",

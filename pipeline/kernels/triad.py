@@ -126,8 +126,8 @@ def newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b,
     (the last residual's: ``_place`` does not compute them again).  Converged means both closure residuals, expressed as
     distances (|F| / 2L, mm), are at most ``tol`` times the longer lead
     (a relative tolerance: the same digits at 1e-3 mm and at 1e4 mm).
-    Gives up (MAXITER) before ``maxiter`` after ``strikes_max`` steps that
-    did not contract (``_stalls``).
+    Gives up (MAXITER, with the iterations taken) before ``maxiter`` after
+    ``strikes_max`` steps that did not contract (``_stalls``).
     """
     det = math.nan
     trig = (math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
@@ -151,7 +151,7 @@ def newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b,
             return SINGULAR_JACOBIAN, a, b, it, det, trig
         strikes = _stalls(step, last, strikes)
         if strikes >= strikes_max:
-            break
+            return MAXITER, a, b, it, det, trig
         last = step
         if step > max_step:
             da *= max_step / step
@@ -394,7 +394,7 @@ def slider_newton(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, u435, 
             return SINGULAR_JACOBIAN, a, b, it, det, trig
         strikes = _stalls(step, last, strikes)
         if strikes >= strikes_max:
-            break
+            return MAXITER, a, b, it, det, trig
         last = step
         if step > max_step:
             da *= max_step / step

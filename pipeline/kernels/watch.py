@@ -30,7 +30,7 @@ on the solutions beyond it, and D at the positions on either side knows
 nothing of the range.  The continuation sees it coming instead: D falls
 linearly into the fold where the range begins, and no step goes more than
 FOLD_SHARE of the way to where D's line reaches zero
-(``pipeline.kernels.continuation.step_limit``); the lanes hand such a window
+(``pipeline.kernels.continuation.fold_limit``); the lanes hand such a window
 to the careful path.
 """
 

@@ -195,8 +195,11 @@ def scene_peaks(res) -> list[Peak]:
                 v = mags[key][0]
                 return -v if st == 0 and math.isfinite(v) else math.inf
 
-            r = minimize_scalar(neg, bounds=(min(lo, hi), max(lo, hi)), method="bounded",
-                                options={"xatol": XATOL})
+            # (an angle whose walk fails scores inf; the bounded search's parabola
+            # through it is NaN, which sends it to a golden-section step: no warning)
+            with np.errstate(invalid="ignore", over="ignore"):
+                r = minimize_scalar(neg, bounds=(min(lo, hi), max(lo, hi)),
+                                    method="bounded", options={"xatol": XATOL})
             if r.success and -r.fun > best:
                 best_phi, best = float(r.x), float(-r.fun)
         if key[0] == "transmission_deviation":     # stored as what designers read

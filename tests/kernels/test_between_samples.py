@@ -29,7 +29,6 @@ from pipeline.kernels import sweep as ks
 from pipeline.solve.scene import run_scene, solve_curves
 from pipeline.study.reader import load_study, parse_study
 from pipeline.runs.sweep import build_problem
-from pipeline.solve.scene import revolution_angles
 from pipeline.study.sweep_spec import apply_design, parameter_rows
 from support.stress_cases import near_singular_triads
 from support.tolerances import FAIL_ANGLE_RAD, FAIL_ANGLE_TRIAD_RAD

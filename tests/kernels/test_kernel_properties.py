@@ -804,9 +804,11 @@ class Triad:
         return a, b
 
 
-def call_class3(tri, P2, P6, P7, a_guess, b_guess, order, det_sign=0.0, tols=TOLS):
+def call_class3(tri, P2, P6, P7, a_guess, b_guess, order, det_sign=0.0, tols=TOLS,
+                may_stop=0.0):
     pos, d1, d2 = kernel_arrays([P2, P6, P7], 3)
     state = np.zeros((1, kc.N_STATE))
+    state[0, kc.S_MAY_STOP] = may_stop
     state[0, kc.S_A] = a_guess
     state[0, kc.S_B] = b_guess
     state[0, kc.S_DET_SIGN] = det_sign
@@ -914,17 +916,66 @@ def test_class3_newton_and_analogs(case, P2v, P2a, p67_move, v6, v7, a6, a7, da,
         assert_fd(name + "''", d2[3 + row], f.d2[row], k * s2, f.noise2)
 
 
+def test_continuation_slows_into_a_fold():
+    """continuation.fold_limit from the margins of the last accepted step: half
+    the way to where margin^2's line reaches zero in the direction of travel,
+    no limit the other way, nor before that slope is known (then the first
+    step's size), never below its floor; a step tried and retried (restore)
+    brings the margin back with the angles."""
+    from pipeline.kernels.continuation import (FOLD_FLOOR, accept, fold_limit, predict,
+                                               restore, start_triad, step_limit)
+    state = np.zeros((1, kc.N_STATE))
+    start_triad(state, 0, 0.1, 0.2)
+    first = TOLS[kc.T_SUBSTEP] * TOLS[kc.T_FIRST_STEP]
+    assert fold_limit(state, TOLS, 1.0) == math.inf
+    assert step_limit(state, TOLS) == first
+    state[0, kc.S_DET_SIGN] = 1.0          # solved at the start, margin 0.3
+    state[0, kc.S_MARGIN] = 0.3
+    predict(state, 0.01)
+    state[0, kc.S_MARGIN] = 0.2            # solved 0.01 rad on
+    accept(state, 0.01)
+    # margin^2 0.09 -> 0.04 over 0.01 rad: -5 per rad, zero 0.008 rad ahead
+    assert state[0, kc.S_D_RATE] == pytest.approx(-5.0)
+    assert fold_limit(state, TOLS, 1.0) == pytest.approx(0.004)
+    assert fold_limit(state, TOLS, -1.0) == math.inf
+    assert step_limit(state, TOLS) == TOLS[kc.T_SUBSTEP]     # (the angles did not move)
+    predict(state, 0.004)
+    state[0, kc.S_MARGIN] = 0.0            # the try failed
+    restore(state)
+    assert state[0, kc.S_MARGIN] == 0.2
+    state[0, kc.S_MARGIN] = 1e-9           # at the fold: no shorter than the floor
+    assert fold_limit(state, TOLS, 1.0) == (FOLD_FLOOR * TOLS[kc.T_SUBSTEP]
+                                            * TOLS[kc.T_MIN_STEP])
+    # the same step walked the other way (the crank turning back): the same rate
+    state2 = np.zeros((1, kc.N_STATE))
+    start_triad(state2, 0, 0.1, 0.2)
+    state2[0, kc.S_DET_SIGN] = 1.0
+    state2[0, kc.S_MARGIN] = 0.3
+    predict(state2, -0.01)
+    state2[0, kc.S_MARGIN] = 0.2
+    accept(state2, -0.01)
+    assert fold_limit(state2, TOLS, -1.0) == pytest.approx(0.004)
+    assert fold_limit(state2, TOLS, 1.0) == math.inf
+
+
+def _out_of_reach(case, which, extra, direction):
+    """The triad of ``case`` with P6 (or P7) moved ``extra`` beyond the reach of
+    its chain from P2, in ``direction``: (tri, p2, p6, p7)."""
+    tri, p2, p6, p7, _, _ = case
+    if which == "P6":
+        p6 = p2 + (tri.l23 + tri.l34 + tri.l46 + extra) * e(direction)
+    else:
+        p7 = p2 + (tri.l23 + tri.l35 + tri.l57 + extra) * e(direction)
+    return tri, p2, p6, p7
+
+
 @settings(max_examples=60, **FAST)
 @given(case=triads(), which=st.sampled_from(["P6", "P7"]), extra=real(1.0, 300.0),
        direction=angle, guess_a=angle, guess_b=angle, order=orders)
 def test_class3_impossible(case, which, extra, direction, guess_a, guess_b, order):
     """A pivot placed beyond reach (|P6 - P2| > L23 + L34 + L46, or the same for
     P7): a non-OK status and NaN P3, P4, P5; no exception."""
-    tri, p2, p6, p7, _, _ = case
-    if which == "P6":
-        p6 = p2 + (tri.l23 + tri.l34 + tri.l46 + extra) * e(direction)
-    else:
-        p7 = p2 + (tri.l23 + tri.l35 + tri.l57 + extra) * e(direction)
+    tri, p2, p6, p7 = _out_of_reach(case, which, extra, direction)
     fixed = lambda p: Path(p, np.zeros(2), np.zeros(2))      # noqa: E731
     status, margin, pos, d1, d2, state = call_class3(tri, Path(p2, np.ones(2), np.zeros(2)),
                                                      fixed(p6), fixed(p7), guess_a, guess_b,
@@ -963,33 +1014,30 @@ def _newton_steps(tri, p2, p6, p7, a, b, strikes_max):
        direction=angle, guess_a=angle, guess_b=angle, sign=st.sampled_from([1.0, -1.0]))
 def test_class3_newton_gives_up_where_it_does_not_contract(case, which, extra, direction,
                                                            guess_a, guess_b, sign):
-    """A pivot beyond reach on the continuation (det J's sign known from the
-    position before): Newton stops after two steps no shorter than the ones
-    before (kernels.triad.STALL_STRIKES), well short of the cap, with the
-    status it reports at the cap; from the declared guesses (no sign yet) it
-    runs to the cap."""
-    tri, p2, p6, p7, _, _ = case
-    if which == "P6":
-        p6 = p2 + (tri.l23 + tri.l34 + tri.l46 + extra) * e(direction)
-    else:
-        p7 = p2 + (tri.l23 + tri.l35 + tri.l57 + extra) * e(direction)
+    """A pivot beyond reach, solved where the continuation could retry at half
+    the step (``continuation.may_stop``) after a solution (det J's sign known):
+    Newton stops once two steps were no shorter than the one before, well short
+    of the cap, with the status it has at the cap.  Where the try decides (no
+    may_stop) or no solution came before (no sign), it runs to the cap."""
+    tri, p2, p6, p7 = _out_of_reach(case, which, extra, direction)
     fixed = lambda p: Path(p, np.zeros(2), np.zeros(2))      # noqa: E731
     moving = Path(p2, np.ones(2), np.zeros(2))
-    first = call_class3(tri, moving, fixed(p6), fixed(p7), guess_a, guess_b, 0)
-    later = call_class3(tri, moving, fixed(p6), fixed(p7), guess_a, guess_b, 0, det_sign=sign)
-    assert first[0] in (kc.NEWTON_MAXITER, kc.SINGULAR)
-    assert later[0] == first[0] or first[0] == kc.NEWTON_MAXITER and later[0] == kc.SINGULAR
     cap = int(TOLS[kc.T_NEWTON_MAXITER])
-    out_first = _newton_steps(tri, p2, p6, p7, guess_a, guess_b, cap + 1)
-    out_later = _newton_steps(tri, p2, p6, p7, guess_a, guess_b, triad_kernels.STALL_STRIKES)
-    note(f"steps: {out_first[3]} from the guesses, {out_later[3]} on the continuation")
-    if out_first[0] == 1:        # (MAXITER; a singular Jacobian stops it sooner)
-        assert out_first[3] == cap
-    assert out_later[0] == out_first[0] or out_later[0] == 1
-    assert out_later[3] <= out_first[3]
-    if out_later[0] == 1 and out_first[0] == 1:
+    runs = {(s, m): call_class3(tri, moving, fixed(p6), fixed(p7), guess_a, guess_b, 0,
+                                det_sign=s, may_stop=m)
+            for s in (0.0, sign) for m in (0.0, 1.0)}
+    iters = {k: r[5][0, kc.S_ITERS] for k, r in runs.items()}
+    note(f"statuses {[kc.STATUS_NAMES[r[0]] for r in runs.values()]}, iterations {iters}")
+    at_cap = runs[(sign, 0.0)]
+    assert at_cap[0] in (kc.NEWTON_MAXITER, kc.SINGULAR)
+    for (s, m), r in runs.items():
+        assert r[0] == at_cap[0] or at_cap[0] == kc.NEWTON_MAXITER and r[0] == kc.SINGULAR
+        assert r[1] == 0.0
+        if at_cap[0] == kc.NEWTON_MAXITER and not (s != 0.0 and m != 0.0):
+            assert iters[(s, m)] == cap            # the try that decides: the cap
+    if at_cap[0] == kc.NEWTON_MAXITER and runs[(sign, 1.0)][0] == kc.NEWTON_MAXITER:
         event("stopped early")
-        assert out_later[3] < cap
+        assert iters[(sign, 1.0)] < cap
 
 
 @settings(max_examples=200, **FAST)

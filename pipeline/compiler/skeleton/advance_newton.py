@@ -18,7 +18,8 @@ def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, with_
     fails or jumps branch (det J
     changes sign, or the correction exceeds tols[T_JUMP]) is retried at half
     the size, down to tols[T_MIN_STEP] of the full step, and only then
-    reported.  Returns the first non-OK status met on the way
+    reported (a step that ``fold_limit`` makes shorter still is not retried:
+    a failure there is the fold's).  Returns the first non-OK status met on the way
     (margins[N_GROUPS]: its group; margins[N_GROUPS + 1]: the last angle
     reached, margins[N_GROUPS + 2]: the angle of the failing step).  (One call
     site of ``position``: numba inlines per call site, and compile time grows
@@ -41,7 +42,8 @@ def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, with_
             h = 0.0
         else:
             # (towards a fold below the smallest retried step if need be)
-            h = min(max(min(step_limit(state, tols), h_cap), h_min), fold_limit(state, tols))
+            h = min(max(min(step_limit(state, tols), h_cap), h_min),
+                    fold_limit(state, tols, direction))
             final = abs(phi_to - phi) <= h
             target = phi_to if final else phi + direction * h
             predict(state, target - phi)
