@@ -133,7 +133,7 @@ S_SB = 15
 S_MAY_STOP = 16  # 1.0: this solve's Newton may stop where it does not contract (a
                  # failure is retried at half the step: ``continuation.may_stop``)
 S_MARGIN_OLD = 17  # the margin before the step being tried
-S_D_RATE = 18    # d(margin^2) per rad travelled over the last accepted step (0: unknown)
+S_D_RATE = 18    # d(margin^2)/d(phi1) over the last accepted step (NaN: not known yet)
 N_STATE = 19
 
 

@@ -15,9 +15,8 @@ import numpy as np
 from numba import njit
 
 from .config import (JIT, JIT_ALLOC, N_STATE, S_A, S_B, S_DET_SIGN, S_HAS_SLOPE, S_MARGIN, S_SLOPE_A,
-                     S_MAY_STOP, S_MARGIN_OLD, S_D_RATE,
-                     S_SLOPE_B, S_A_OLD, S_B_OLD, S_SIGN_OLD, T_CLOSE, T_FIRST_STEP, T_LOCATE, T_MIN_STEP,
-                     T_STEP_CHANGE, T_SUBSTEP)
+                     S_MAY_STOP, S_MARGIN_OLD, S_D_RATE, S_SLOPE_B, S_A_OLD, S_B_OLD, S_SIGN_OLD,
+                     T_CLOSE, T_FIRST_STEP, T_LOCATE, T_MIN_STEP, T_STEP_CHANGE, T_SUBSTEP)
 
 
 MARGIN_SLOTS = 3     # after the groups' margins: failing group, angle reached, angle failed
@@ -91,14 +90,13 @@ def fold_limit(state, tols, direction):
     a group's margin^2 falls that way (its slope over the last step),
     FOLD_SHARE of the way to where its line reaches zero (and no less than
     FOLD_FLOOR of the smallest retried step, nor tols[T_LOCATE]); inf where
-    none falls.  margin^2 falls
-    linearly into a fold, and a class III group whose range ends there may
-    resume a little further on; a step over that gap would land on the
-    solutions beyond it (the same sign of det J, a small correction: nothing
-    to see), so the walk slows down into the fold, below the smallest retried
-    step if need be, until a step lands in the gap (``pipeline.kernels.watch``:
-    the margin^2 of a class III group is known only where it assembles, so the
-    watch cannot see such a gap)."""
+    none falls.  margin^2 falls linearly into a fold, and a class III group
+    whose range ends there may resume a little further on; a step over that
+    gap would land on the solutions beyond it (the same sign of det J, a small
+    correction: nothing to see), so the walk slows down into the fold, below
+    the smallest retried step if need be, until a step lands in the gap
+    (``pipeline.kernels.watch``: the margin^2 of a class III group is known
+    only where it assembles, so the watch cannot see such a gap)."""
     h = math.inf
     for g in range(state.shape[0]):
         rate = state[g, S_D_RATE] * direction     # (NaN: not known yet)

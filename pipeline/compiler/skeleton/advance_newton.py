@@ -15,15 +15,14 @@ def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, with_
     """Continuation from ``phi_from`` to ``phi_to``, then the solve at
     ``phi_to`` to ``order``: secant predictor, Newton corrector, steps bounded
     by ``step_limit`` and, towards a fold, ``fold_limit``; a step whose Newton
-    fails or jumps branch (det J
-    changes sign, or the correction exceeds tols[T_JUMP]) is retried at half
-    the size, down to tols[T_MIN_STEP] of the full step, and only then
-    reported (a step that ``fold_limit`` makes shorter still is not retried:
-    a failure there is the fold's).  Returns the first non-OK status met on the way
-    (margins[N_GROUPS]: its group; margins[N_GROUPS + 1]: the last angle
-    reached, margins[N_GROUPS + 2]: the angle of the failing step).  (One call
-    site of ``position``: numba inlines per call site, and compile time grows
-    with every copy.)"""
+    fails or jumps branch (det J changes sign, or the correction exceeds
+    tols[T_JUMP]) is retried at half the size, down to tols[T_MIN_STEP] of the
+    full step, and only then reported (a step that ``fold_limit`` makes shorter
+    still is not retried: a failure there is the fold's).  Returns the first
+    non-OK status met on the way (margins[N_GROUPS]: its group;
+    margins[N_GROUPS + 1]: the last angle reached, margins[N_GROUPS + 2]: the
+    angle of the failing step).  (One call site of ``position``: numba inlines
+    per call site, and compile time grows with every copy.)"""
     status = OK
     group = -1.0
     margins[N_GROUPS + 1] = phi_from
