@@ -70,12 +70,13 @@ def step_limit(state, tols):
     slope of the last step.  Near a fold of the solution curve the slope grows
     without bound, so the walk slows down into the fold instead of stepping
     over it onto another solution.  The first step of a walk (slope unknown)
-    is tols[T_FIRST_STEP] of the full step, and so is every step until the
-    slope of the margin^2 is known (``fold_limit``: a walk from declared
-    guesses away from its first position learns it one step later)."""
+    is tols[T_FIRST_STEP] of the full step (``accept`` takes no slope from a
+    step that began at the declared guesses, so a walk from guesses away from
+    its first position takes two such steps: after the second the slope of
+    the margin^2 is known to ``fold_limit`` too)."""
     h = tols[T_SUBSTEP]
     for g in range(state.shape[0]):
-        if state[g, S_HAS_SLOPE] == 0.0 or math.isnan(state[g, S_D_RATE]):
+        if state[g, S_HAS_SLOPE] == 0.0:
             h = min(h, tols[T_SUBSTEP] * tols[T_FIRST_STEP])
         else:
             s = max(abs(state[g, S_SLOPE_A]), abs(state[g, S_SLOPE_B]))
