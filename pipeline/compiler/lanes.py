@@ -139,7 +139,7 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
         t = f"t{e.triad_row}"
         rows += [f"{t}_{x}" for x in ("ca", "sa", "cb", "sb", "dca", "dsa", "dcb", "dsb",
                                       "sign", "a0c", "a0s", "b0c", "b0s")]
-    rows += ["rock_x", "rock_y", "theta", "margin", "flag"]
+    rows += ["rock_x", "rock_y", "theta", "margin", "flag", "first_flag"]
     watched = [e for e in kin if e.watched and watch]
     for i, e in enumerate(watched):
         rows += [f"w{i}_{x}" for x in ("k3", "k2", "k1")]    # margin^2 at k-3, k-2, k-1
@@ -223,6 +223,7 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
     a("    S[R_rock_x, l] = 1.0")
     a("    S[R_rock_y, l] = 0.0")
     a("S[R_flag, l] = 0.0")
+    a("S[R_first_flag, l] = -1.0   # the first position the lane flagged (-1: none)")
     for i, e in enumerate(watched):
         a(f"# {e.title()}: the watch's history starts with margin^2 at phis[0]")
         for x in ("k3", "k2", "k1"):
@@ -274,7 +275,10 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
         "S[R_rock_x, l] = ux", "S[R_rock_y, l] = uy", "S[R_theta, l] = th",
         "theta[k, l] = th",
         "S[R_margin, l] = margin",
-        "S[R_flag, l] = max(S[R_flag, l], 1.0 if (bad | low | big) else 0.0)",
+        "flagged = bad | low | big",
+        "S[R_flag, l] = max(S[R_flag, l], 1.0 if flagged else 0.0)",
+        "S[R_first_flag, l] = k if (flagged & (S[R_first_flag, l] < 0.0)) else "
+        "S[R_first_flag, l]",
     ]
     # the walk sees S flat, rows LANES apart (a constant stride: rows provably
     # apart, so no run-time overlap checks), while the lane count stays a
@@ -290,7 +294,9 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
                      f"    eb = S[R_{t}_b0c, l] * S[R_{t}_sb, l] - S[R_{t}_b0s, l] * S[R_{t}_cb, l]",
                      f"    dot = S[R_{t}_a0c, l] * S[R_{t}_ca, l] + S[R_{t}_a0s, l] * S[R_{t}_sa, l]",
                      "    if not (abs(ea) <= close and abs(eb) <= close and dot > 0.0):",
-                     "        S[R_flag, l] = 1.0"]
+                     "        S[R_flag, l] = 1.0",
+                     "        if S[R_first_flag, l] < 0.0:",
+                     "            S[R_first_flag, l] = k"]
         walk += ["        if k == k_close:"] + ["            " + flat(x) for x in shut]
     src += [""] + walk + ["", ""]
     src += ["# inline='always': one call site in the sweep; as its own function numba would", '# build and link a library of everything it calls once more (compile time)',
@@ -357,7 +363,8 @@ def _split(line, width=90):
 
 # the lane path's constants where there is no output rocker (not a sweep)
 NO_ROCKER = ("ROCKER_PIVOT = 0", "ROCKER_POINT = 0", "LANES = 1", "HAS_LANES = False",
-             "N_LANE_ROWS = 2", "THETA_COLS = 1", "R_margin = 0", "R_flag = 1",
+             "N_LANE_ROWS = 3", "THETA_COLS = 1", "R_margin = 0", "R_flag = 1",
+             "R_first_flag = 2",
              "NEWTON_STEPS = 0")
 
 

@@ -25,7 +25,7 @@ from pipeline.solve.scene import revolution_angles, solve_curves
 from pipeline.study.reader import load_study
 from pipeline.runs.sweep import build_problem
 from pipeline.study.sweep_spec import draw_candidates, parameter_rows
-from support.tolerances import LANE_AGREEMENT_REL, LANE_MARGIN_REL
+from support.tolerances import FAIL_ANGLE_TRIAD_RAD, LANE_AGREEMENT_REL, LANE_MARGIN_REL
 
 STUDIES = Path(__file__).resolve().parents[2] / "studies"
 
@@ -191,9 +191,11 @@ def kinematic_only(text):
 
 def assert_lanes_agree(problem, candidates, class3=True):
     """The lane path (evaluate_rows) against the careful path alone, candidate by
-    candidate: the same statuses and failure angles, the metrics to rounding;
-    and the lanes vouch for most candidates (a lane path that handed every lane
-    over would agree trivially)."""
+    candidate: the same statuses and failing groups, the failure angles within
+    the location figures (a lane that flagged itself is walked from two positions
+    before its flag: ``careful_tail``), the metrics to rounding; and the lanes
+    vouch for most candidates (a lane path that handed every lane over would
+    agree trivially)."""
     assert problem.kernels.HAS_LANES
     vouched, walked = lanes_vouched(problem, candidates[:400])
     assert walked >= 200 and vouched >= 0.6 * walked, (vouched, walked)
@@ -215,7 +217,12 @@ def assert_lanes_agree(problem, candidates, class3=True):
         f = np.isfinite(b)
         assert f.sum() > 100, col
         np.testing.assert_allclose(a[f], b[f], rtol=rel, atol=0, err_msg=f"metric column {col}")
-    np.testing.assert_array_equal(m_fast[~ok, ks.M_FAIL_PHI], m_ref[~ok, ks.M_FAIL_PHI])
+    # a failure the lane's careful walk located from two positions before the lane's
+    # flag, against the walk from the start: the same group, the same boundary
+    # located twice (each within FAIL_ANGLE_TRIAD_RAD of the exact one)
+    np.testing.assert_array_equal(m_fast[~ok, ks.M_FAIL_GROUP], m_ref[~ok, ks.M_FAIL_GROUP])
+    np.testing.assert_allclose(m_fast[~ok, ks.M_FAIL_PHI], m_ref[~ok, ks.M_FAIL_PHI], rtol=0,
+                               atol=2 * FAIL_ANGLE_TRIAD_RAD)
     return s_ref
 
 

@@ -23,7 +23,8 @@ import pytest
 from pipeline.kernels import sweep as ks
 from pipeline.study.reader import load_study
 from pipeline.runs.sweep import run_sweep
-from support.tolerances import GPU_AGREEMENT_REL, GPU_FAIL_PHI_STEPS as FAIL_PHI_STEPS
+from support.tolerances import (FAIL_ANGLE_TRIAD_RAD, GPU_AGREEMENT_REL,
+                                GPU_FAIL_PHI_STEPS as FAIL_PHI_STEPS)
 from pipeline.results.storage import variables
 
 HERE = Path(__file__).resolve().parents[1]   # tests/
@@ -132,7 +133,10 @@ def test_generated_cuda_module_is_imported_not_executed():
 
 def test_sweep_on_the_simulated_gpu_writes_the_cpu_file(tmp_path):
     """`pipeline run --device gpu` end to end (chunks, journal, HDF5) gives the
-    CPU run's file: statuses and failure angles identical, metrics 1e-12."""
+    CPU run's file: statuses identical, metrics 1e-12; failure angles within the
+    location figures (a CPU lane that flags itself is walked on the careful path
+    from two positions before its flag, a GPU thread from the start: the same
+    boundary located twice)."""
     cpu, gpu = tmp_path / "cpu.h5", tmp_path / "gpu.h5"
     args = ["run", "studies/ov7_synthesis.toml", "--candidates", "120", "--chunk-size", "50",
             "-q"]
@@ -144,7 +148,10 @@ def test_sweep_on_the_simulated_gpu_writes_the_cpu_file(tmp_path):
     with h5py.File(cpu) as a, h5py.File(gpu) as b:
         assert a.attrs["device"] == "cpu" and "simulator" in b.attrs["device"]
         np.testing.assert_array_equal(a["candidates/status"][()], b["candidates/status"][()])
-        np.testing.assert_array_equal(a["candidates/fail_phi"][()], b["candidates/fail_phi"][()])
+        np.testing.assert_allclose(a["candidates/fail_phi"][()], b["candidates/fail_phi"][()],
+                                   rtol=0, atol=2 * FAIL_ANGLE_TRIAD_RAD)
+        np.testing.assert_array_equal(a["candidates/fail_group"][()],
+                                      b["candidates/fail_group"][()])
         np.testing.assert_array_equal(a["candidates/feasible"][()], b["candidates/feasible"][()])
         np.testing.assert_array_equal(a["progress/status_counts"][()],
                                       b["progress/status_counts"][()])

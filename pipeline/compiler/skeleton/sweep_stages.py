@@ -18,7 +18,7 @@ from .header import (math, np, njit, JIT, JIT_ALLOC, OK, BRANCH_JUMP, S_ITERS,
                      SET_EPS1, SET_WANT_PEAKS, SET_WORK_POINT, SET_WANT_TRANSMISSION, SET_WANT_LAW,
                      SET_LAW0, LAW_BEST, SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING)
 from .header import M_EQUILIBRIUM, equilibrium_residual
-from .header import S_HANDED, S_CA, S_SA, S_CB, S_SB
+from .header import S_HANDED, S_CA, S_SA, S_CB, S_SB, start_triad
 from .header import M_SHAKING_F, M_SHAKING_M, shaking, may_reach
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, constants, position, advance, forces_at, transmission,
@@ -28,6 +28,25 @@ from .careful import walk_angle, walk_start, walk_steps
 from .watch import (locate, watch, watch_work)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
+@njit(inline='always', **JIT)
+def failed(K, k, phi_prev, phi, st, tols, out, wk, ww):
+    """Position ``k`` of a careful walk failed (status ``st``) on the step from
+    phi_prev to phi: the failure located between them (at the walk's first
+    position, phi itself), its angle and group into out[M_FAIL_PHI],
+    out[M_FAIL_GROUP]; returns its status."""
+    pos, d1, d2, margins, state, _ = wk
+    found = ww[7]
+    if k > 0:    # located between the last good position and this one
+        st = locate(K, phi_prev, phi, st, margins[N_GROUPS], ww[2][(k - 1) & 3], tols,
+                    state, pos, d1, d2, margins, ww)
+    else:
+        found[1] = phi
+        found[2] = margins[N_GROUPS]
+    out[M_FAIL_PHI] = found[1]
+    out[M_FAIL_GROUP] = found[2]
+    return st
+
+
 # inline='always': one call site in the sweep; as its own function numba would
 # build and link a library of everything it calls once more (compile time)
 @njit(inline='always', **JIT)
@@ -38,9 +57,11 @@ def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww):
     position, the singularity margin and the Newton iterations.  Returns
     (status, margin, iterations); a failure writes its crank angle (located
     between positions) and its group to out[M_FAIL_PHI], out[M_FAIL_GROUP].
-    Always from the start: a walk resumed midway decides its steps near a fold
-    from another history, and may name a failure differently.  wk, ww: the
-    walk's and the watch's work arrays (work, watch_work)."""
+    Always from the start, where the numbers are kept: a walk resumed midway
+    decides its steps near a fold from another history (``careful_tail``, which
+    only looks for a lane's failure, locates it the same to the location
+    figures).  wk, ww: the walk's and the watch's work arrays (work,
+    watch_work)."""
     n = phis.shape[0]
     pos, d1, d2, margins, state, start_state = wk
     found = ww[7]
@@ -54,15 +75,7 @@ def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww):
         st = advance(K, phi_prev, phi, np.int64(0), tols, state, pos, d1, d2, margins,
                      np.bool_(False))
         if st != OK:
-            if k > 0:    # located between the last good position and this one
-                st = locate(K, phi_prev, phi, st, margins[N_GROUPS], ww[2][(k - 1) & 3],
-                            tols, state, pos, d1, d2, margins, ww)
-            else:
-                found[1] = phi
-                found[2] = margins[N_GROUPS]
-            out[M_FAIL_PHI] = found[1]
-            out[M_FAIL_GROUP] = found[2]
-            return st, margin, iters
+            return failed(K, k, phi_prev, phi, st, tols, out, wk, ww), margin, iters
         phi_prev = phi
         if k == n and N_TRIADS > 0 and not closes(state, start_state, tols):
             out[M_FAIL_PHI] = phi_close
@@ -85,6 +98,59 @@ def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww):
             out[M_FAIL_GROUP] = found[2]
             return st, margin, iters
     return OK, margin, iters
+
+
+# inline='always': one call site in the sweep (see careful_positions)
+@njit(inline='always', **JIT)
+def careful_tail(K, phis, phi_close, k0, trail, tols, out, wk, ww):
+    """The careful walk of a lane that flagged itself, where the lane could not
+    vouch: the first window, then from position ``k0`` (3 < k0 < n), where the
+    lane still vouched for its revolution (``evaluate``: two positions before its
+    first flag).  The first window: the careful walk's positions 0 .. 3, which
+    certify phis[0] .. phis[2] (the lanes certify the interval phis[0] ..
+    phis[1] only round the close, at the end of their walk).  From k0: the class
+    III groups start from the lane's solutions there (trail[k0]: e(a), e(b) per
+    group) as a walk starts from its guesses, and positions k0 + 1 .. n - 1 are
+    walked as careful_positions walks them, the watch between them included.
+    Returns the first failure met (status; its angle and group in
+    out[M_FAIL_PHI], out[M_FAIL_GROUP]), or OK where it meets none before the
+    closing position or cannot start: the caller then walks the whole
+    revolution (careful_positions, which also checks that it closes).  A
+    failing lane so costs a few positions of the careful walk, not every
+    position before its failure."""
+    n = phis.shape[0]
+    pos, d1, d2, margins, state, _ = wk
+    found = ww[7]
+    phi_prev = walk_start(K, phis[0], state)
+    for k in range(4):     # the careful walk's own first steps: the same numbers
+        st = advance(K, phi_prev, phis[k], np.int64(0), tols, state, pos, d1, d2, margins,
+                     np.bool_(False))
+        if st != OK:
+            return failed(K, k, phi_prev, phis[k], st, tols, out, wk, ww)
+        phi_prev = phis[k]
+        st = watch(K, k, phis[k], tols, state, pos, d1, d2, margins, ww)
+        if st != OK:
+            out[M_FAIL_PHI] = found[1]
+            out[M_FAIL_GROUP] = found[2]
+            return st
+    for j in range(N_TRIADS):
+        start_triad(state, j, math.atan2(trail[k0, 4 * j + 1], trail[k0, 4 * j]),
+                    math.atan2(trail[k0, 4 * j + 3], trail[k0, 4 * j + 2]))
+    phi_prev = phis[k0]
+    for k in range(k0, n):
+        # (k = k0: the lane's solutions confirmed by a solve there, a step of zero)
+        st = advance(K, phi_prev, phis[k], np.int64(0), tols, state, pos, d1, d2, margins,
+                     np.bool_(False))
+        if st != OK:
+            return OK if k == k0 else failed(K, k - k0, phi_prev, phis[k], st, tols, out,
+                                             wk, ww)
+        phi_prev = phis[k]
+        st = watch(K, k - k0, phis[k], tols, state, pos, d1, d2, margins, ww)
+        if st != OK:
+            out[M_FAIL_PHI] = found[1]
+            out[M_FAIL_GROUP] = found[2]
+            return st
+    return OK
 
 
 @njit(**JIT_ALLOC)
