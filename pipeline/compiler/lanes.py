@@ -139,7 +139,7 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
         t = f"t{e.triad_row}"
         rows += [f"{t}_{x}" for x in ("ca", "sa", "cb", "sb", "dca", "dsa", "dcb", "dsb",
                                       "sign", "a0c", "a0s", "b0c", "b0s")]
-    rows += ["rock_x", "rock_y", "theta", "margin", "flag", "first_flag"]
+    rows += ["rock_x", "rock_y", "theta", "margin", "flag", "first_flag", "last_flag"]
     watched = [e for e in kin if e.watched and watch]
     for i, e in enumerate(watched):
         rows += [f"w{i}_{x}" for x in ("k3", "k2", "k1")]    # margin^2 at k-3, k-2, k-1
@@ -224,6 +224,7 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
     a("    S[R_rock_y, l] = 0.0")
     a("S[R_flag, l] = 0.0")
     a("S[R_first_flag, l] = -1.0   # the first position the lane flagged (-1: none)")
+    a("S[R_last_flag, l] = -1.0    # and the last")
     for i, e in enumerate(watched):
         a(f"# {e.title()}: the watch's history starts with margin^2 at phis[0]")
         for x in ("k3", "k2", "k1"):
@@ -279,6 +280,7 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
         "S[R_flag, l] = max(S[R_flag, l], 1.0 if flagged else 0.0)",
         "S[R_first_flag, l] = k if (flagged & (S[R_first_flag, l] < 0.0)) else "
         "S[R_first_flag, l]",
+        "S[R_last_flag, l] = k if flagged else S[R_last_flag, l]",
     ]
     # the walk sees S flat, rows LANES apart (a constant stride: rows provably
     # apart, so no run-time overlap checks), while the lane count stays a
@@ -296,7 +298,8 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
                      "    if not (abs(ea) <= close and abs(eb) <= close and dot > 0.0):",
                      "        S[R_flag, l] = 1.0",
                      "        if S[R_first_flag, l] < 0.0:",
-                     "            S[R_first_flag, l] = k"]
+                     "            S[R_first_flag, l] = k",
+                     "        S[R_last_flag, l] = max(S[R_last_flag, l], k)"]
         walk += ["        if k == k_close:"] + ["            " + flat(x) for x in shut]
     src += [""] + walk + ["", ""]
     src += ["# inline='always': one call site in the sweep; as its own function numba would", '# build and link a library of everything it calls once more (compile time)',
@@ -363,8 +366,8 @@ def _split(line, width=90):
 
 # the lane path's constants where there is no output rocker (not a sweep)
 NO_ROCKER = ("ROCKER_PIVOT = 0", "ROCKER_POINT = 0", "LANES = 1", "HAS_LANES = False",
-             "N_LANE_ROWS = 3", "THETA_COLS = 1", "R_margin = 0", "R_flag = 1",
-             "R_first_flag = 2",
+             "N_LANE_ROWS = 4", "THETA_COLS = 1", "R_margin = 0", "R_flag = 1",
+             "R_first_flag = 2", "R_last_flag = 3",
              "NEWTON_STEPS = 0")
 
 

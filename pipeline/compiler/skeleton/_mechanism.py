@@ -14,7 +14,7 @@ N_WATCH = 0
 
 # the lane path's constants (lanes: a sweep's output rocker and lane rows)
 ROCKER_PIVOT = ROCKER_POINT = LANES = NEWTON_STEPS = N_LANE_ROWS = THETA_COLS = 0
-R_margin = R_flag = R_first_flag = 0
+R_margin = R_flag = R_first_flag = R_last_flag = 0
 
 # kernels written from the plan
 constants = position = start = transmission = None     # generate

@@ -10,7 +10,8 @@ from .header import (math, np, njit, JIT_ALLOC, OK, work, force_work, dwell_lane
                      SET_WANT_LAW)
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, LANES, N_LANE_ROWS,
-                         THETA_COLS, R_margin, R_flag, R_first_flag, setup_lane, block_walk,
+                         THETA_COLS, R_margin, R_flag, R_first_flag, R_last_flag, setup_lane,
+                         block_walk,
                          lanes_apply, constants)
 from .careful import walk_angle
 from .sweep_stages import careful_tail, settle
@@ -97,15 +98,17 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                 if vouched == 0:
                     # a lane that flagged itself: first the careful walk from two
                     # positions before its first flag (the lane vouched for the
-                    # revolution up to there) to the failure it most likely meets
+                    # revolution up to there) to the failure it most likely meets,
+                    # at most to two positions past its last flag
                     k0 = np.int64(S[R_first_flag, l]) - 2
+                    k1 = min(np.int64(S[R_last_flag, l]) + 3, npos)
                     if k0 > 3 and k0 < npos:
                         out = metrics[idx[l]]
                         for c in range(N_METRICS):
                             out[c] = math.nan
                         out[M_FORCES_DONE] = 0.0
-                        st = careful_tail(constants(pars[idx[l]]), phis, phi_close, k0, trail,
-                                          tols, out, wk, ww)
+                        st = careful_tail(constants(pars[idx[l]]), phis, k0, k1, trail, tols,
+                                          out, wk, ww)
                         if st != OK:
                             status[idx[l]] = st
                             continue

@@ -102,23 +102,23 @@ def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww):
 
 # inline='always': one call site in the sweep (see careful_positions)
 @njit(inline='always', **JIT)
-def careful_tail(K, phis, phi_close, k0, trail, tols, out, wk, ww):
+def careful_tail(K, phis, k0, k1, trail, tols, out, wk, ww):
     """The careful walk of a lane that flagged itself, where the lane could not
-    vouch: the first window, then from position ``k0`` (3 < k0 < n), where the
-    lane still vouched for its revolution (``evaluate``: two positions before its
-    first flag).  The first window: the careful walk's positions 0 .. 3, which
+    vouch: the first window, then positions ``k0`` .. k1 - 1 (3 < k0 < n, k1 <= n):
+    from where the lane still vouched for its revolution to past the last
+    position it flagged (``evaluate``: two positions before its first flag, two
+    past its last).  The first window: the careful walk's positions 0 .. 3, which
     certify phis[0] .. phis[2] (the lanes certify the interval phis[0] ..
     phis[1] only round the close, at the end of their walk).  From k0: the class
     III groups start from the lane's solutions there (trail[k0]: e(a), e(b) per
-    group) as a walk starts from its guesses, and positions k0 + 1 .. n - 1 are
+    group) as a walk starts from its guesses, and positions k0 + 1 .. k1 - 1 are
     walked as careful_positions walks them, the watch between them included.
     Returns the first failure met (status; its angle and group in
-    out[M_FAIL_PHI], out[M_FAIL_GROUP]), or OK where it meets none before the
-    closing position or cannot start: the caller then walks the whole
-    revolution (careful_positions, which also checks that it closes).  A
+    out[M_FAIL_PHI], out[M_FAIL_GROUP]), or OK where it meets none or cannot
+    start: the caller then walks the whole revolution (careful_positions, which
+    also checks that it closes).  A
     failing lane so costs a few positions of the careful walk, not every
     position before its failure."""
-    n = phis.shape[0]
     pos, d1, d2, margins, state, _ = wk
     found = ww[7]
     phi_prev = walk_start(K, phis[0], state)
@@ -137,7 +137,7 @@ def careful_tail(K, phis, phi_close, k0, trail, tols, out, wk, ww):
         start_triad(state, j, math.atan2(trail[k0, 4 * j + 1], trail[k0, 4 * j]),
                     math.atan2(trail[k0, 4 * j + 3], trail[k0, 4 * j + 2]))
     phi_prev = phis[k0]
-    for k in range(k0, n):
+    for k in range(k0, k1):
         # (k = k0: the lane's solutions confirmed by a solve there, a step of zero)
         st = advance(K, phi_prev, phis[k], np.int64(0), tols, state, pos, d1, d2, margins,
                      np.bool_(False))
