@@ -11,8 +11,7 @@ from .header import (math, np, njit, JIT_ALLOC, OK, work, force_work, dwell_lane
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, LANES, N_LANE_ROWS,
                          THETA_COLS, R_margin, R_flag, R_first_flag, R_last_flag, setup_lane,
-                         block_walk,
-                         lanes_apply, constants)
+                         block_walk, lanes_apply, constants)
 from .careful import walk_angle
 from .sweep_stages import careful_tail, settle
 from .watch import watch_work

@@ -116,9 +116,8 @@ def careful_tail(K, phis, k0, k1, trail, tols, out, wk, ww):
     Returns the first failure met (status; its angle and group in
     out[M_FAIL_PHI], out[M_FAIL_GROUP]), or OK where it meets none or cannot
     start: the caller then walks the whole revolution (careful_positions, which
-    also checks that it closes).  A
-    failing lane so costs a few positions of the careful walk, not every
-    position before its failure."""
+    also checks that it closes).  A failing lane so costs a few positions of the
+    careful walk, not every position before its failure."""
     pos, d1, d2, margins, state, _ = wk
     found = ww[7]
     phi_prev = walk_start(K, phis[0], state)
