@@ -5,8 +5,11 @@ on 10^5 candidates per study)."""
 
 import collections
 import dataclasses
+import json
 import math
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +28,7 @@ from pipeline.solve.scene import revolution_angles, solve_curves
 from pipeline.study.reader import load_study
 from pipeline.runs.sweep import build_problem
 from pipeline.study.sweep_spec import draw_candidates, parameter_rows
+from support.checkout import child_env
 from support.tolerances import FAIL_ANGLE_TRIAD_RAD, LANE_AGREEMENT_REL, LANE_MARGIN_REL
 
 STUDIES = Path(__file__).resolve().parents[2] / "studies"
@@ -228,6 +232,64 @@ def assert_lanes_agree(problem, candidates, class3=True):
 
 def test_lanes_agree_with_the_careful_path(problem, candidates):
     assert_lanes_agree(problem, candidates)
+
+
+# the short careful walk of a failing lane, counted in numba's Python mode (where the
+# generated module's functions are looked up by name at each call)
+TAIL_COUNT = r"""
+import dataclasses, json, sys
+import numpy as np
+from pipeline.kernels import sweep as ks
+from pipeline.runs.sweep import build_problem
+from pipeline.study.reader import load_study
+s = load_study(sys.argv[1])
+pb = build_problem(s, dataclasses.replace(s.sweep, positions=int(sys.argv[3]))); m = pb.kernels
+pars = np.load(sys.argv[2])
+calls = {"careful_tail": [], "careful_positions": 0}
+tail, whole = m.careful_tail, m.careful_positions
+def counted_tail(*a):
+    st = tail(*a)
+    calls["careful_tail"].append(int(st))
+    return st
+def counted_whole(*a):
+    calls["careful_positions"] += 1
+    return whole(*a)
+m.careful_tail, m.careful_positions = counted_tail, counted_whole
+n = pars.shape[0]
+status = np.zeros(n, np.int8); met = np.full((n, ks.N_METRICS), np.nan)
+m.evaluate(pars, 0, n, pb.phis, pb.phi_close, pb.tols, pb.settings(), pb.loads, status, met)
+print(json.dumps({"calls": calls, "status": status.tolist(),
+                  "fail_phi": met[:, ks.M_FAIL_PHI].tolist()}))
+"""
+
+
+def test_a_failing_lane_is_walked_from_just_before_its_flag(synthesis, candidates, tmp_path):
+    """A lane that fails a few positions after its flag is walked on the careful
+    path from two positions before the flag (careful_tail), which finds the
+    failure, and never from the start (careful_positions): one block of lanes
+    whose candidates fail past position 10 of 180, run in numba's Python mode, each
+    call counted; the statuses and failure angles are the compiled run's."""
+    positions = 180       # (lanes take steps up to 2 deg; Python mode walks each line: seconds)
+    pb = build_problem(synthesis, dataclasses.replace(synthesis.sweep, positions=positions))
+    status, metrics = pb.evaluate_rows(candidates)
+    step = pb.phis[1] - pb.phis[0]
+    k_fail = (metrics[:, ks.M_FAIL_PHI] - pb.phis[0]) / step      # positions walked
+    lanes = pb.kernels.LANES
+    rows = np.flatnonzero((status != kc.OK) & (k_fail > 10) & (k_fail < positions - 5))[:lanes]
+    assert len(rows) == lanes
+    np.save(tmp_path / "pars.npy", candidates[rows])
+    r = subprocess.run([sys.executable, "-c", TAIL_COUNT, str(STUDIES / "ov7_synthesis.toml"),
+                        str(tmp_path / "pars.npy"), str(positions)],
+                       env=child_env(NUMBA_DISABLE_JIT="1"), capture_output=True, text=True,
+                       timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    out = json.loads(r.stdout.strip().splitlines()[-1])
+    assert len(out["calls"]["careful_tail"]) == len(rows)
+    assert all(st != kc.OK for st in out["calls"]["careful_tail"])    # each found its failure
+    assert out["calls"]["careful_positions"] == 0
+    np.testing.assert_array_equal(out["status"], status[rows])
+    np.testing.assert_allclose(out["fail_phi"], metrics[rows, ks.M_FAIL_PHI], rtol=0,
+                               atol=2 * FAIL_ANGLE_TRIAD_RAD)
 
 
 def test_prp_lanes_agree_with_the_careful_path(tmp_path):
