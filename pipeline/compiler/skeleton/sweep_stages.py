@@ -47,6 +47,25 @@ def failed(K, k, phi_prev, phi, st, tols, out, wk, ww):
     return st
 
 
+@njit(inline='always', **JIT)
+def careful_step(K, k, phi_prev, phi, tols, out, wk, ww):
+    """Position ``k`` of a careful walk at ``phi``, from the last one at
+    phi_prev: the step (a failure on it located, ``failed``), then the watch
+    between the positions.  Returns OK or the failure met (its angle and group
+    in out[M_FAIL_PHI], out[M_FAIL_GROUP])."""
+    pos, d1, d2, margins, state, _ = wk
+    found = ww[7]
+    st = advance(K, phi_prev, phi, np.int64(0), tols, state, pos, d1, d2, margins,
+                 np.bool_(False))
+    if st != OK:
+        return failed(K, k, phi_prev, phi, st, tols, out, wk, ww)
+    st = watch(K, k, phi, tols, state, pos, d1, d2, margins, ww)
+    if st != OK:
+        out[M_FAIL_PHI] = found[1]
+        out[M_FAIL_GROUP] = found[2]
+    return st
+
+
 # inline='always': one call site in the sweep; as its own function numba would
 # build and link a library of everything it calls once more (compile time)
 @njit(inline='always', **JIT)
@@ -119,35 +138,23 @@ def careful_tail(K, phis, k0, k1, trail, tols, out, wk, ww):
     also checks that it closes).  A failing lane so costs a few positions of the
     careful walk, not every position before its failure."""
     pos, d1, d2, margins, state, _ = wk
-    found = ww[7]
     phi_prev = walk_start(K, phis[0], state)
     for k in range(4):     # the careful walk's own first steps: the same numbers
-        st = advance(K, phi_prev, phis[k], np.int64(0), tols, state, pos, d1, d2, margins,
-                     np.bool_(False))
+        st = careful_step(K, k, phi_prev, phis[k], tols, out, wk, ww)
         if st != OK:
-            return failed(K, k, phi_prev, phis[k], st, tols, out, wk, ww)
-        phi_prev = phis[k]
-        st = watch(K, k, phis[k], tols, state, pos, d1, d2, margins, ww)
-        if st != OK:
-            out[M_FAIL_PHI] = found[1]
-            out[M_FAIL_GROUP] = found[2]
             return st
+        phi_prev = phis[k]
     for j in range(N_TRIADS):
         start_triad(state, j, math.atan2(trail[k0, 4 * j + 1], trail[k0, 4 * j]),
                     math.atan2(trail[k0, 4 * j + 3], trail[k0, 4 * j + 2]))
-    phi_prev = phis[k0]
-    for k in range(k0, k1):
-        # (k = k0: the lane's solutions confirmed by a solve there, a step of zero)
-        st = advance(K, phi_prev, phis[k], np.int64(0), tols, state, pos, d1, d2, margins,
-                     np.bool_(False))
+    # the lane's solutions at k0 confirmed by a solve there (a step of zero)
+    if advance(K, phis[k0], phis[k0], np.int64(0), tols, state, pos, d1, d2, margins,
+               np.bool_(False)) != OK:
+        return OK
+    watch(K, 0, phis[k0], tols, state, pos, d1, d2, margins, ww)   # (its history)
+    for k in range(k0 + 1, k1):
+        st = careful_step(K, k - k0, phis[k - 1], phis[k], tols, out, wk, ww)
         if st != OK:
-            return OK if k == k0 else failed(K, k - k0, phi_prev, phis[k], st, tols, out,
-                                             wk, ww)
-        phi_prev = phis[k]
-        st = watch(K, k - k0, phis[k], tols, state, pos, d1, d2, margins, ww)
-        if st != OK:
-            out[M_FAIL_PHI] = found[1]
-            out[M_FAIL_GROUP] = found[2]
             return st
     return OK
 
