@@ -6,14 +6,14 @@ The text below the marker line is pasted into the generated module
 readers, the names the generated module gives it."""
 
 from .header import (math, np, njit, JIT_ALLOC, OK, work, force_work, dwell_lanes,
-                     M_FAIL_PHI, M_FORCES_DONE, M_FAIL_GROUP, N_METRICS, SET_DWELL_W,
+                     M_FAIL_PHI, M_FAIL_GROUP, SET_DWELL_W,
                      SET_WANT_LAW)
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, LANES, N_LANE_ROWS,
                          THETA_COLS, R_margin, R_flag, R_first_flag, R_last_flag, setup_lane,
                          block_walk, lanes_apply, constants)
 from .careful import walk_angle
-from .sweep_stages import careful_tail, settle
+from .sweep_stages import careful_tail, no_metrics, settle
 from .watch import watch_work
 
 # ---- the skeleton: from here on, pasted into the generated module ----
@@ -70,9 +70,7 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                 filled += 1
             elif code > 0:
                 # it fails at phis[0], the careful path's first step: that is its report
-                for c in range(N_METRICS):
-                    metrics[i, c] = math.nan
-                metrics[i, M_FORCES_DONE] = 0.0
+                no_metrics(metrics[i])
                 metrics[i, M_FAIL_PHI] = phis[0]
                 metrics[i, M_FAIL_GROUP] = margins[N_GROUPS]
                 status[i] = code
@@ -102,12 +100,9 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                     k0 = np.int64(S[R_first_flag, l]) - 2
                     k1 = min(np.int64(S[R_last_flag, l]) + 3, npos)
                     if k0 > 3 and k0 < npos:
-                        out = metrics[idx[l]]
-                        for c in range(N_METRICS):
-                            out[c] = math.nan
-                        out[M_FORCES_DONE] = 0.0
+                        no_metrics(metrics[idx[l]])
                         st = careful_tail(constants(pars[idx[l]]), phis, k0, k1, trail, tols,
-                                          out, wk, ww)
+                                          metrics[idx[l]], wk, ww)
                         if st != OK:
                             status[idx[l]] = st
                             continue

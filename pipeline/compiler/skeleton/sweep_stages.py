@@ -29,6 +29,14 @@ from .watch import (locate, watch, watch_work)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 @njit(inline='always', **JIT)
+def no_metrics(out):
+    """A candidate's metrics row before anything is known: NaN, no force stage."""
+    for c in range(N_METRICS):
+        out[c] = math.nan
+    out[M_FORCES_DONE] = 0.0
+
+
+@njit(inline='always', **JIT)
 def failed(K, k, phi_prev, phi, st, tols, out, wk, ww):
     """Position ``k`` of a careful walk failed (status ``st``) on the step from
     phi_prev to phi: the failure located between them (at the walk's first
@@ -184,9 +192,7 @@ def settle(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qma
     metrics, the law error where asked, and the force stage where it
     applies.  col, trail, qmax, qmin, wk (work), fw (force_work), corr (n):
     work arrays of the caller, so nothing is allocated per candidate."""
-    for c in range(N_METRICS):
-        out[c] = math.nan
-    out[M_FORCES_DONE] = 0.0
+    no_metrics(out)
     n = phis.shape[0]
     K = constants(par)
     iters = float(NEWTON_STEPS * N_TRIADS * n)
