@@ -59,10 +59,11 @@ def library_digest() -> str:
     return _DIGEST[0]
 
 
-def source_for(plan, rocker=None, watch=True) -> str:
+def source_for(plan, rocker=None, watch=True, force_lanes=True) -> str:
     """The generated source of ``plan``'s kernels (``rocker``: the output
     rocker's (pivot, point) names, for the sweep's positions stage; ``watch``:
-    False only for the benchmark of the watch's cost).  With a rocker, the
+    False only for the benchmark of the watch's cost; ``force_lanes``: False
+    only for the baseline of the force lanes, tests and benchmark).  With a rocker, the
     sweep's module, which imports every kernel the rocker does not change from
     the module of ``plan`` without one (``source_for(plan, None, watch)``)."""
     shared = None
@@ -70,14 +71,14 @@ def source_for(plan, rocker=None, watch=True) -> str:
         base = source_for(plan, None, watch)
         shared = (module_name(base), defined_functions(base))
     return generate(plan, rocker=rocker, digest=library_digest(), lanes_width=LANES,
-                    watch=watch, shared=shared)
+                    watch=watch, shared=shared, force_lanes=force_lanes)
 
 
 def module_name(source: str) -> str:
     return "pipeline_mech_" + hashlib.sha256(source.encode()).hexdigest()[:20]
 
 
-def structure_key(plan, rocker=None, watch=True) -> tuple:
+def structure_key(plan, rocker=None, watch=True, force_lanes=True) -> tuple:
     """What the generated source depends on: the plan's structure (not its
     parameter values) and the rocker; a cheap key for the modules in memory."""
     arrays = (plan.codes, plan.gidx, plan.goff, plan.fixed_idx, plan.fixed_off, plan.link_a,
@@ -90,21 +91,22 @@ def structure_key(plan, rocker=None, watch=True) -> tuple:
                    for t in plan.input_tables)
     return (tuple(a.tobytes() for a in arrays), tables, plan.point_names, plan.par_names,
             plan.group_names, plan.n_visible, plan.n_kinematic, plan.crank_body, plan.gravity,
-            tuple(rocker) if rocker is not None else None, bool(watch), str(cache_dir()))
+            tuple(rocker) if rocker is not None else None, bool(watch), bool(force_lanes),
+            str(cache_dir()))
 
 
 _BY_STRUCTURE: dict[tuple, object] = {}
 
 
-def kernels_for(plan, rocker=None, watch=True):
+def kernels_for(plan, rocker=None, watch=True, force_lanes=True):
     """The generated kernels of ``plan``, imported (written first if new)."""
-    key = structure_key(plan, rocker, watch)
+    key = structure_key(plan, rocker, watch, force_lanes)
     mod = _BY_STRUCTURE.get(key)
     if mod is not None:
         return mod
     if rocker is not None:
         kernels_for(plan, None, watch)      # the module the sweep's imports from: written
-    src = source_for(plan, rocker, watch)
+    src = source_for(plan, rocker, watch, force_lanes)
     mod = _imported(src, module_name(src))
     _BY_STRUCTURE[key] = mod
     return mod

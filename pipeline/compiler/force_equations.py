@@ -126,12 +126,8 @@ def force_kernel(plan, names) -> str:
     returned M_bal is the moment the main shaft delivers, the crank's own
     plus every input's drive times dq/dphi1 (the inputs are driven from the
     main shaft: by virtual power, sum of drive * q' = M_bal on phi1)."""
-    nb, nj, ns = len(plan.body_names), len(plan.joint_names), len(plan.slide_names)
     ni = plan.n_inputs
-    n = 3 * nb
-    col_m = 2 * nj + 2 * ns
-    has_crank = plan.crank_body >= 0
-    col_in = col_m + int(has_crank)            # first input's drive
+    n = 3 * len(plan.body_names)
     sig = ("def forces_at(par, pos, d1, d2, omega1, eps1, loads_k, work_a, work_b, loads_out, "
            "r_out, slide_out):")
     general = ["@njit(**JIT)", sig,
@@ -143,7 +139,7 @@ def force_kernel(plan, names) -> str:
                "SLIDE_DIR,",
                "                         SLIDE_ANGLE, CRANK_BODY, LOAD_BODY, LOAD_POINT, loads_k, "
                "work_a,", "                         work_b, loads_out, r_out, slide_out)", ""]
-    square = nb > 0 and col_in + ni == n and (has_crank or ni > 0)
+    square = is_square(plan)
     if not square and ni > 0:
         # the general solver knows no inputs: nothing to solve (NaN, as it gives)
         return "\n".join(
@@ -158,6 +154,39 @@ def force_kernel(plan, names) -> str:
     if not square:
         return "\n".join(general) + "\n"
 
+    body, m = eliminated(plan, names)
+    src = ["# inline='always': one call site in the sweep; as its own function numba would", '# build and link a library of everything it calls once more (compile time)',
+           "@njit(inline='always', **JIT)", sig,
+           '    """Kinetostatics at one position: reactions r_out (n_joints, 2) [N], slides',
+           "    (N [N], C [N*m]), loads at the centres of mass; returns M_bal [N*m] (NaN",
+           "    everywhere when the system is singular or the kinematics is NaN).  The",
+           "    force equations of every body, with the force-balance rows eliminated",
+           f'    at generation time ({n} unknowns, {m} solved at run time)."""']
+    src += ["    " + line for line in body]
+    return "\n".join(src) + "\n\n"
+
+
+def is_square(plan) -> bool:
+    """Whether the plan's kinetostatic system is square (as many unknowns as
+    the bodies' 3 equations each), so that ``eliminated`` solves it."""
+    nb, nj, ns = len(plan.body_names), len(plan.joint_names), len(plan.slide_names)
+    ni = plan.n_inputs
+    has_crank = plan.crank_body >= 0
+    return nb > 0 and 2 * nj + 2 * ns + int(has_crank) + ni == 3 * nb and (has_crank or ni > 0)
+
+
+def eliminated(plan, names):
+    """(lines, m) of a square plan's kinetostatics at one position (the body of
+    ``forces_at``): the applied loads (``applied_loads`` into loads_out), the
+    force-balance rows eliminated here, the m x m system left solved at run
+    time, the reactions into r_out (slides and inputs into slide_out) and the
+    returned M_bal."""
+    nb, nj, ns = len(plan.body_names), len(plan.joint_names), len(plan.slide_names)
+    ni = plan.n_inputs
+    n = 3 * nb
+    col_m = 2 * nj + 2 * ns
+    has_crank = plan.crank_body >= 0
+    col_in = col_m + int(has_crank)            # first input's drive
     sym = _Sym()
     L = sym.lines
     P = [names.I(i) for i in range(len(plan.point_names))]
@@ -339,12 +368,4 @@ def force_kernel(plan, names) -> str:
         body.append(f"return {total}")
     else:
         body.append(f"return x{col_m}")
-    src = ["# inline='always': one call site in the sweep; as its own function numba would", '# build and link a library of everything it calls once more (compile time)',
-           "@njit(inline='always', **JIT)", sig,
-           '    """Kinetostatics at one position: reactions r_out (n_joints, 2) [N], slides',
-           "    (N [N], C [N*m]), loads at the centres of mass; returns M_bal [N*m] (NaN",
-           "    everywhere when the system is singular or the kinematics is NaN).  The",
-           "    force equations of every body, with the force-balance rows eliminated",
-           f'    at generation time ({n} unknowns, {m} solved at run time)."""']
-    src += ["    " + line for line in body]
-    return "\n".join(src) + "\n\n"
+    return body, m

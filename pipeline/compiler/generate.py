@@ -28,6 +28,7 @@ import numpy as np
 
 from .emit import _wrap_line, constants_of, emitters_for, literal
 from .force_equations import force_kernel
+from .lane_forces import lane_force_kernel
 from .lanes import lane_kernel, no_rocker_kernel
 from .names import Names, text
 from .skeleton import part
@@ -40,7 +41,8 @@ def _array(name, a, dtype):
     return f"{name} = np.array({body}, dtype=np.{dtype}).reshape({shape})"
 
 
-def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=None) -> str:
+def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=None,
+             force_lanes=True) -> str:
     """Python source of the kernels of ``plan`` (``rocker``: the output
     rocker's (pivot, point) names, for the sweep's dwell and stroke).  Without
     ``watch`` no group is watched between positions (the benchmark's baseline
@@ -52,7 +54,9 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
     batch, crank dynamics).  The sweep's module then imports them from it and
     defines only what the rocker changes (its careful stages, lanes and
     ``evaluate``): a scene and a sweep of one mechanism share those kernels'
-    compiled code (numba's cache), instead of compiling them once each."""
+    compiled code (numba's cache), instead of compiling them once each.
+    Without ``force_lanes`` the force stage has no lane form (the baseline of
+    its tests and benchmark; never for results)."""
     n = Names(plan)
     ems = emitters_for(plan, n)
     n_triads = sum(e.continued for e in ems)
@@ -114,7 +118,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
             w(line)
 
     if shared is not None:
-        sweep = _sweep_parts(plan, n, ems, rocker, lanes_width, watch)
+        sweep = _sweep_parts(plan, n, ems, rocker, lanes_width, watch, force_lanes)
         own = set(defined_functions(sweep))
         names = [f for f in shared[1] if f not in own]
         w("# ---- the kernels the rocker does not change: the mechanism's own module ----")
@@ -181,7 +185,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
           "smallest so far, whose cos and sin are best_cos, best_sin (NaN: none yet).",
           body))
     w(_spaced(part("watch") + part("careful") + part("crank_dynamics") + part("batch")))
-    w(_sweep_parts(plan, n, ems, rocker, lanes_width, watch))
+    w(_sweep_parts(plan, n, ems, rocker, lanes_width, watch, force_lanes))
     return _checked("\n".join(out))     # ends with the blank line after the last part
 
 
@@ -190,12 +194,18 @@ def defined_functions(src: str) -> list[str]:
     return re.findall(r"^def (\w+)\(", src, re.M)
 
 
-def _sweep_parts(plan, n, ems, rocker, lanes_width, watch) -> str:
+def _sweep_parts(plan, n, ems, rocker, lanes_width, watch, force_lanes=True) -> str:
     """What the output rocker changes: the sweep's careful stages, its lanes
     (or the skeleton without them) and ``evaluate``."""
-    lanes = (lane_kernel(plan, n, ems, rocker, lanes_width, watch) if rocker is not None
-             else _spaced(no_rocker_kernel()))
-    return _spaced(part("sweep_stages")) + "\n" + lanes + "\n" + _spaced(part("parallel"))
+    if rocker is not None:
+        lanes = lane_kernel(plan, n, ems, rocker, lanes_width, watch)
+        forces = (lane_force_kernel(plan, n, ems) if force_lanes else
+                  part("no_lane_forces").format(why="left out: the baseline of their tests"))
+    else:
+        lanes = _spaced(no_rocker_kernel())
+        forces = part("no_lane_forces").format(why="no output rocker declared")
+    return (_spaced(part("sweep_stages")) + "\n" + lanes + "\n" + _spaced(forces) + "\n"
+            + _spaced(part("parallel")))
 
 
 def _checked(src: str) -> str:

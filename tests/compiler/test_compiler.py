@@ -363,6 +363,140 @@ def test_the_lane_walk_is_vectorized(problem):
     assert sum(ops.values()) > 50, ops
 
 
+# ----------------------------------------------------------------- the force lanes
+def _without_force_lanes(problem):
+    """The problem's kernels with the scalar force stage for every candidate."""
+    return kernels_for(problem.plan, problem.rocker, force_lanes=False)
+
+
+def _rows(kernels, problem, pars, settings=None):
+    n = pars.shape[0]
+    status = np.zeros(n, np.int8)
+    metrics = np.full((n, ks.N_METRICS), np.nan)
+    run_rows(kernels.evaluate, np.ascontiguousarray(pars), problem.phis, problem.phi_close,
+             problem.tols, problem.settings() if settings is None else settings,
+             problem.loads, status, metrics)
+    return status, metrics
+
+
+def test_the_force_lanes_give_the_scalar_force_stage_s_bits(problem, candidates):
+    """Every candidate's metrics with the force stage in lanes and without it
+    (the same module but for the force lanes): the same statuses and the same
+    metrics, bit for bit; many candidates reach the force stage; a phiM0 that
+    changes from candidate to candidate (the crank's cos/sin table made again)
+    changes nothing either."""
+    assert problem.kernels.HAS_LANE_FORCES and problem.settings()[ks.SET_WANT_FORCES]
+    s1, m1 = problem.evaluate_rows(candidates)
+    s0, m0 = _rows(_without_force_lanes(problem), problem, candidates)
+    assert not _without_force_lanes(problem).HAS_LANE_FORCES
+    np.testing.assert_array_equal(s1, s0)
+    assert m1.tobytes() == m0.tobytes()
+    assert (m1[:, ks.M_FORCES_DONE] == 1.0).sum() > 500
+    pars = candidates.copy()
+    col = problem.plan.par_names.index("crank.phiM0")
+    pars[:, col] += np.deg2rad(np.arange(len(pars)) % 3)
+    s1, m1 = problem.evaluate_rows(pars)
+    s0, m0 = _rows(_without_force_lanes(problem), problem, pars)
+    np.testing.assert_array_equal(s1, s0)
+    assert m1.tobytes() == m0.tobytes()
+
+
+def test_force_lanes_apply_only_where_they_compute_what_is_asked(problem, candidates):
+    """Settings that ask for more than the kinetostatics' peaks (the transmission
+    angle, the working point's acceleration, the virtual-power residual, the
+    shaking) take the scalar force stage: the same bits as without force lanes."""
+    k = problem.kernels
+    for flag in (ks.SET_WANT_TRANSMISSION, ks.SET_WANT_PEAKS, ks.SET_WANT_EQUILIBRIUM,
+                 ks.SET_WANT_SHAKING):
+        settings = problem.settings().copy()
+        settings[flag] = 1.0
+        assert not k.lane_forces_apply(settings)
+        s1, m1 = _rows(k, problem, candidates[:300], settings)
+        s0, m0 = _rows(_without_force_lanes(problem), problem, candidates[:300], settings)
+        np.testing.assert_array_equal(s1, s0)
+        assert m1.tobytes() == m0.tobytes()
+    assert k.lane_forces_apply(problem.settings())
+
+
+def test_the_force_lanes_are_vectorized(problem):
+    """Packed (SIMD) floating-point instructions in the force lanes' machine code
+    (indexing FT and RB flat kept the loop scalar: this test failed then)."""
+    k = problem.kernels
+    f = njit(**dict(kc.JIT, cache=False))(k.force_lanes.py_func)
+    npos = 4
+    FS = np.ones(k.N_FROWS * k.LANES)
+    FT = np.ones((npos, k.FT_COLS * k.LANES))
+    RB = np.zeros((npos, k.N_RCOLS * k.LANES))
+    f(FS, FT, RB, k.LANES, npos, 1e-12, 1e-6, 1.0, 0.0, problem.loads)
+    asm = next(iter(f.inspect_asm().values()))
+    ops = collections.Counter(re.findall(r"\b(v?(?:mul|add|sub|div|sqrt)pd)\b", asm))
+    assert sum(ops.values()) > 300, ops
+
+
+# a lane the force lanes cannot vouch for, made so in numba's Python mode: every
+# other lane's verdict set after the force lanes ran, and the fallbacks counted
+FORCE_FALLBACK = r"""
+import dataclasses, json, sys
+import numpy as np
+from pipeline.kernels import sweep as ks
+from pipeline.runs.sweep import build_problem
+from pipeline.study.reader import load_study
+s = load_study(sys.argv[1])
+pb = build_problem(s, dataclasses.replace(s.sweep, positions=int(sys.argv[3]))); m = pb.kernels
+pars = np.load(sys.argv[2])
+real, calls = m.force_lanes, {"force_lanes": 0, "fallback": 0}
+def refusing(FS, FT, RB, n_lanes, *a):
+    real(FS, FT, RB, n_lanes, *a)
+    calls["force_lanes"] += 1
+    for l in range(0, n_lanes, 2):
+        FS[m.F_bad * m.LANES + l] = 1.0
+m.force_lanes = refusing
+settle = m.settle
+def counted(par, how, *a):
+    calls["fallback"] += int(how == m.LANE_FORCES)
+    return settle(par, how, *a)
+m.settle = counted
+from pipeline.compiler import kernels_for
+base = kernels_for(pb.plan, pb.rocker, force_lanes=False)
+n = pars.shape[0]
+out = {}
+for label, mod in (("refused", m), ("scalar", base)):
+    status = np.zeros(n, np.int8); met = np.full((n, ks.N_METRICS), np.nan)
+    mod.evaluate(pars, 0, n, pb.phis, pb.phi_close, pb.tols, pb.settings(), pb.loads, status,
+                 met)
+    np.save(sys.argv[4] + label + ".npy", met)
+    out[label] = status.tolist()
+print(json.dumps({"calls": calls, **out}))
+"""
+
+
+def test_a_force_lane_refused_takes_the_scalar_force_stage(synthesis, candidates, tmp_path):
+    """Where a force lane says it cannot vouch for its candidate, the scalar
+    force stage gives its metrics: half the lanes of two force blocks refused,
+    in numba's Python mode, against the module without force lanes in the same
+    mode: the same statuses and metrics, bit for bit."""
+    positions = 180       # (the lanes take steps up to 2 deg)
+    pb = build_problem(synthesis, dataclasses.replace(synthesis.sweep, positions=positions))
+    status, metrics = pb.evaluate_rows(candidates[:400])
+    lanes = pb.kernels.LANES
+    rows = np.flatnonzero(metrics[:, ks.M_FORCES_DONE] == 1.0)[:2 * lanes]
+    assert len(rows) == 2 * lanes
+    np.save(tmp_path / "pars.npy", candidates[rows])
+    r = subprocess.run([sys.executable, "-c", FORCE_FALLBACK,
+                        str(STUDIES / "ov7_synthesis.toml"), str(tmp_path / "pars.npy"),
+                        str(positions), str(tmp_path / "met_")],
+                       env=child_env(NUMBA_DISABLE_JIT="1"), capture_output=True, text=True,
+                       timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    out = json.loads(r.stdout.strip().splitlines()[-1])
+    assert out["calls"]["force_lanes"] >= 2 and out["calls"]["fallback"] >= lanes
+    np.testing.assert_array_equal(out["refused"], out["scalar"])
+    np.testing.assert_array_equal(out["refused"], status[rows])
+    got, want = np.load(tmp_path / "met_refused.npy"), np.load(tmp_path / "met_scalar.npy")
+    assert (want[:, ks.M_FORCES_DONE] == 1.0).all()
+    assert got.tobytes() == want.tobytes()
+
+
 # ----------------------------------------------------------------- generated force equations
 def _unrolled(m):
     """The generated lines of an m x m solve as a Python function of (a, b)."""

@@ -62,7 +62,8 @@ def _top_level(tree):
 
 def test_every_skeleton_part_is_there():
     assert PARTS == ["advance_closed", "advance_newton", "batch", "careful", "crank_dynamics",
-                     "header", "no_lanes", "parallel", "sweep_stages", "watch"]
+                     "header", "lane_forces", "no_lane_forces", "no_lanes", "parallel",
+                     "sweep_stages", "watch"]
 
 
 @pytest.mark.parametrize("name", PARTS)
@@ -141,6 +142,10 @@ def test_the_generated_source_holds_every_part_verbatim(sources):
             assert text.format(why="No output rocker declared") in sources["ov7_base"]
             text = text.format(why="A group without a lane form")
             assert text in sources["cam_rocker_input_sweep"]
+        elif name == "no_lane_forces":
+            assert text.format(why="no output rocker declared") in sources["ov7_base"]
+            text = text.format(why="no lane path: a group without a lane form of its positions")
+            assert text in sources["cam_rocker_input_sweep"]
         assert text in everything, name
     assert part("advance_closed") in sources["ov7_base"]
     assert part("advance_newton") in sources["ov7_synthesis mechanism"]
@@ -150,4 +155,6 @@ def test_the_generated_source_holds_every_part_verbatim(sources):
         assert part("sweep_stages") in sources[sweep] and part("parallel") in sources[sweep]
         assert f"from {module_name(sources[sweep + ' mechanism'])} import (" in sources[sweep]
     assert "def walk(" in sources["ov7_synthesis"]       # the lane path, not no_lanes
+    assert "def force_lanes(" in sources["ov7_synthesis"]     # and the force lanes
+    assert part("lane_forces") in sources["ov7_synthesis"]
     assert "every candidate takes the careful path" not in sources["ov7_synthesis"]

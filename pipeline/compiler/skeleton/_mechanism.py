@@ -21,3 +21,8 @@ constants = position = start = transmission = None     # generate
 advance = None              # generate: skeleton advance_closed or advance_newton
 forces_at = None            # forces
 setup_lane = block_walk = lanes_apply = None    # lanes (or skeleton no_lanes)
+
+# the force lanes' constants and kernels (lane_forces, or skeleton no_lane_forces)
+HAS_LANE_FORCES = False
+N_FROWS = FT_COLS = N_RCOLS = F_pm = F_bad = 0
+force_lanes = force_lane_in = None

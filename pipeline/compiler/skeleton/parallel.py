@@ -12,8 +12,10 @@ from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLI
                          N_INPUTS, LANES, N_LANE_ROWS,
                          THETA_COLS, R_margin, R_flag, R_first_flag, R_last_flag, setup_lane,
                          block_walk, lanes_apply, constants)
+from ._mechanism import (HAS_LANE_FORCES, N_FROWS, FT_COLS, N_RCOLS, force_lane_in)
 from .careful import walk_angle
-from .sweep_stages import careful_tail, no_metrics, settle
+from .sweep_stages import careful_tail, no_metrics, settle, LANE_METRICS, NEEDS_FORCES
+from .lane_forces import lane_forces_apply, force_flush
 from .watch import watch_work
 
 # ---- the skeleton: from here on, pasted into the generated module ----
@@ -57,6 +59,16 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
     ww = watch_work()
     pos, d1, d2, margins, state, _ = wk
     fast = lanes_apply(phis, tols)
+    # the force lanes: candidates the lanes vouched for that reach the force stage
+    # gather in a block of their own (fidx), solved together when it is full
+    in_force_lanes = HAS_LANE_FORCES and fast and lane_forces_apply(settings)
+    FS = np.empty(N_FROWS * LANES)
+    FT = np.empty((npos, FT_COLS * LANES))
+    RB = np.empty((npos, N_RCOLS * LANES))
+    crank_tab = np.empty((npos + 1, 2))
+    crank_tab[0, 0] = math.nan
+    fidx = np.empty(LANES, np.int64)
+    forced = 0
     filled = 0
     for i in range(lo, hi + 1):          # i == hi: the last, partial block
         if i < hi:
@@ -109,8 +121,24 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                 if want_law:     # the lane's rocker angles, for the law error
                     for k in range(npos):
                         col[k] = theta[k, l]
-                status[idx[l]] = settle(pars[idx[l]], vouched, phis, phi_close, tols,
-                                        settings, loads, col, trail, qmax, qmin, err[l],
-                                        start_k[l], full[l], S[R_margin, l], wk, fw, ww,
-                                        corr, metrics[idx[l]])
+                how = vouched
+                if in_force_lanes and vouched > 0:
+                    how = np.int64(LANE_METRICS)    # the force stage in the force lanes
+                st = settle(pars[idx[l]], how, phis, phi_close, tols, settings, loads, col,
+                            trail, qmax, qmin, err[l], start_k[l], full[l], S[R_margin, l],
+                            wk, fw, ww, corr, metrics[idx[l]])
+                if st != NEEDS_FORCES:
+                    status[idx[l]] = st
+                    continue
+                force_lane_in(pars[idx[l]], forced, trail, FS, FT, phis, crank_tab)
+                fidx[forced] = idx[l]
+                forced += 1
+                if forced == LANES:
+                    force_flush(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols,
+                                settings, loads, col, trail, qmax, qmin, wk, fw, ww, corr,
+                                status, metrics)
+                    forced = 0
             filled = 0
+    if forced > 0:
+        force_flush(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols, settings, loads,
+                    col, trail, qmax, qmin, wk, fw, ww, corr, status, metrics)

@@ -28,6 +28,13 @@ from .careful import walk_angle, walk_start, walk_steps
 from .watch import (locate, watch, watch_work)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
+# settle's ``vouched`` beyond the lane's 1 (and the careful path's <= 0): a lane's
+# metrics up to the force stage (then NEEDS_FORCES: the force lanes run it), and a
+# lane's force stage alone (the force lanes could not vouch for it)
+LANE_METRICS = 2
+LANE_FORCES = 3
+NEEDS_FORCES = -2
+
 @njit(inline='always', **JIT)
 def no_metrics(out):
     """A candidate's metrics row before anything is known: NaN, no force stage."""
@@ -191,10 +198,34 @@ def settle(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qma
     careful path walks the revolution first.  Then stroke, dwell and margin
     metrics, the law error where asked, and the force stage where it
     applies.  col, trail, qmax, qmin, wk (work), fw (force_work), corr (n):
-    work arrays of the caller, so nothing is allocated per candidate."""
+    work arrays of the caller, so nothing is allocated per candidate.
+    ``vouched`` LANE_METRICS: a lane's, returning NEEDS_FORCES instead of
+    running the force stage (the force lanes run it); LANE_FORCES: a lane's
+    force stage alone, its other metrics already in ``out``."""
+    K = constants(par)
+    if vouched != LANE_FORCES:
+        st = lane_or_careful_metrics(K, vouched, phis, phi_close, tols, settings, col, qmax,
+                                     qmin, err, start_k, full, margin, wk, ww, corr, out)
+        if st != NEEDS_FORCES or vouched == LANE_METRICS:
+            return st
+    st = OK
+    for attempt in range(2):
+        # with the lane path's solutions first; if a direct solve refuses, the
+        # careful walk (one call site: numba inlines per call site)
+        trail_ok = vouched > 0 and attempt == 0
+        st = force_stage(par, K, phis, tols, settings, loads, out, trail, trail_ok, wk, fw)
+        if st == OK or not trail_ok:
+            break
+    return st
+
+
+@njit(inline='always', **JIT)
+def lane_or_careful_metrics(K, vouched, phis, phi_close, tols, settings, col, qmax, qmin, err,
+                            start_k, full, margin, wk, ww, corr, out):
+    """``settle``'s metrics before the force stage: its status, or NEEDS_FORCES
+    where the force stage applies (the stroke and margin within the gates)."""
     no_metrics(out)
     n = phis.shape[0]
-    K = constants(par)
     iters = float(NEWTON_STEPS * N_TRIADS * n)
     if vouched <= 0:
         st, margin, iters = careful_positions(K, phis, phi_close, tols, col, out, wk, ww)
@@ -221,15 +252,7 @@ def settle(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qma
         return OK
     if N_TRIADS > 0 and not (margin >= settings[SET_MARGIN_MIN]):
         return OK
-    st = OK
-    for attempt in range(2):
-        # with the lane path's solutions first; if a direct solve refuses, the
-        # careful walk (one call site: numba inlines per call site)
-        trail_ok = vouched > 0 and attempt == 0
-        st = force_stage(par, K, phis, tols, settings, loads, out, trail, trail_ok, wk, fw)
-        if st == OK or not trail_ok:
-            break
-    return st
+    return NEEDS_FORCES
 
 
 # inline='always': one call site in the sweep; as its own function numba would

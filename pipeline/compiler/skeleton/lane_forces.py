@@ -1,0 +1,81 @@
+"""The force lanes' driver of a generated module (``pipeline.compiler.lane_forces``
+writes ``force_lanes`` and ``force_lane_in`` above it): a full block of force
+lanes solved together, then each lane's metrics, or the scalar force stage
+for a lane the force lanes could not vouch for.
+
+The text below the marker line is pasted into the generated module
+(``pipeline.compiler.lane_forces``); the imports above it declare, for linters
+and readers, the names the generated module gives it."""
+
+from .header import (math, np, njit, JIT, OK, M_PEAK_R, M_PEAK_JOINT, M_PEAK_PHI,
+                     M_PEAK_MBAL, M_EQUILIBRIUM, M_SHAKING_F, M_SHAKING_M, M_FORCES_DONE,
+                     SET_WANT_FORCES, SET_WANT_PEAKS, SET_WANT_TRANSMISSION,
+                     SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING, SET_OMEGA1, SET_EPS1,
+                     T_NEWTON_TOL, T_SINGULAR, may_reach)
+from ._mechanism import (N_JOINTS, LANES, N_FROWS, FT_COLS, F_pm, F_bad,
+                         force_lanes)
+from .sweep_stages import settle, LANE_FORCES
+
+# ---- the skeleton: from here on, pasted into the generated module ----
+@njit(**JIT)
+def lane_forces_apply(settings):
+    """Whether the force lanes compute what the settings ask for: the
+    kinetostatics' peaks alone (the other peaks, the transmission angle, the
+    virtual-power residual and the shaking take the scalar force stage)."""
+    return (settings[SET_WANT_FORCES] != 0.0 and settings[SET_WANT_PEAKS] == 0.0
+            and settings[SET_WANT_TRANSMISSION] == 0.0
+            and settings[SET_WANT_EQUILIBRIUM] == 0.0 and settings[SET_WANT_SHAKING] == 0.0)
+
+
+# inline='always': one call site in the sweep (compile time, as the other stages)
+@njit(inline='always', **JIT)
+def force_flush(pars, fidx, filled, FS, FT, RB, phis, phi_close, tols, settings, loads, col,
+                trail, qmax, qmin, wk, fw, ww, corr, status, metrics):
+    """The force lanes of candidates fidx[:filled] (the rest of the block a copy
+    of lane 0), then each candidate's force metrics into its row: from the
+    lanes, or by the scalar force stage where a lane could not vouch for its
+    candidate (``settle`` with LANE_FORCES)."""
+    npos = phis.shape[0]
+    for l in range(filled, LANES):
+        for r in range(N_FROWS):
+            FS[r * LANES + l] = FS[r * LANES]
+        for k in range(npos):
+            for q in range(FT_COLS):
+                FT[k, q * LANES + l] = FT[k, q * LANES]
+    force_lanes(FS, FT, RB, fidx.shape[0], npos, tols[T_NEWTON_TOL], tols[T_SINGULAR],
+                settings[SET_OMEGA1], settings[SET_EPS1], loads)
+    for l in range(filled):
+        i = fidx[l]
+        if FS[F_bad * LANES + l] != 0.0:
+            for k in range(npos):
+                for q in range(trail.shape[1]):
+                    trail[k, q] = FT[k, q * LANES + l]
+            status[i] = settle(pars[i], np.int64(LANE_FORCES), phis, phi_close, tols, settings,
+                               loads, col, trail, qmax, qmin, 0.0, np.int64(-1), 0.0, 0.0, wk,
+                               fw, ww, corr, metrics[i])
+            continue
+        # the peak reaction from the lanes' reactions: force_stage's own loop
+        peak = -1.0
+        peak_j = -1
+        peak_phi = math.nan
+        for k in range(npos):
+            for j in range(N_JOINTS):
+                rx = RB[k, 2 * j * LANES + l]
+                ry = RB[k, (2 * j + 1) * LANES + l]
+                if not may_reach(rx, ry, peak):
+                    continue
+                r = math.hypot(rx, ry)
+                if r > peak or not math.isfinite(r):
+                    peak = r
+                    peak_j = j
+                    peak_phi = phis[k]
+        out = metrics[i]
+        out[M_PEAK_R] = peak
+        out[M_PEAK_JOINT] = peak_j
+        out[M_PEAK_PHI] = peak_phi
+        out[M_PEAK_MBAL] = abs(FS[F_pm * LANES + l])
+        out[M_EQUILIBRIUM] = math.nan
+        out[M_SHAKING_F] = math.nan
+        out[M_SHAKING_M] = math.nan
+        out[M_FORCES_DONE] = 1.0
+        status[i] = OK
