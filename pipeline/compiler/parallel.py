@@ -55,6 +55,24 @@ def run_rows(kernel, pars, *args, n_jobs=None, task_rows=TASK_ROWS):
         for lo, hi in ranges:
             kernel(pars, lo, hi, *args)
         return
-    futures = [_pool(jobs).submit(kernel, pars, lo, hi, *args) for lo, hi in ranges]
-    for f in futures:
-        f.result()
+    # the calling thread works too, taking ranges in turn with the pool's threads:
+    # one thread fewer to wake (a search's generation is a millisecond or two of
+    # kernels, and waking a sleeping worker took as long again)
+    todo = iter(ranges)
+    lock = threading.Lock()
+
+    def work():
+        while True:
+            with lock:
+                r = next(todo, None)
+            if r is None:
+                return
+            kernel(pars, r[0], r[1], *args)
+
+    pool = _pool(jobs - 1)
+    futures = [pool.submit(work) for _ in range(min(jobs, len(ranges)) - 1)]
+    try:
+        work()
+    finally:
+        for f in futures:
+            f.result()
