@@ -28,12 +28,14 @@ import math
 import numpy as np
 
 from pymoo.algorithms.moo.nsga2 import NSGA2
-from pymoo.core.duplicate import DefaultDuplicateElimination
 from pymoo.core.variable import get
-from pymoo.operators.survival.rank_and_crowding.metrics import get_crowding_function
+from pymoo.operators.crossover.sbx import SimulatedBinaryCrossover
+from pymoo.operators.mutation.pm import PolynomialMutation
 from pymoo.util.misc import random_permutations
 from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 from pymoo.util.randomized_argsort import randomized_argsort
+
+from ..kernels.nsga2_ops import crowding_distance, pm, sbx, unique_rows
 
 
 class _Bounds:
@@ -70,6 +72,11 @@ class ArrayNSGA2:
         if reference.mating.crossover.n_offsprings != reference.mating.crossover.n_parents:
             raise RuntimeError("ArrayNSGA2 follows a crossover with as many children as "
                                "parents (pymoo's SBX: 2 and 2)")   # pragma: no cover
+        if not (isinstance(reference.mating.crossover, SimulatedBinaryCrossover)
+                and isinstance(reference.mating.mutation, PolynomialMutation)
+                and not reference.mating.mutation.at_least_once):    # pragma: no cover
+            raise RuntimeError("ArrayNSGA2 follows pymoo's NSGA2 with SBX and polynomial "
+                               "mutation (not at least once)")
         self.crossover = reference.mating.crossover
         self.mutation = reference.mating.mutation
         self.n_max = reference.mating.n_max_iterations
@@ -78,8 +85,6 @@ class ArrayNSGA2:
         self.repair = repair if repair is not None else (lambda X: X)
         self.random_state = np.random.default_rng(seed)
         self.nds = NonDominatedSorting()
-        self.crowding = get_crowding_function("cd")
-        self.duplicates = DefaultDuplicateElimination(func=lambda X: X)
         self.x0 = np.asarray(x0, float)
         # the population: designs, objectives, constraint violations, crowding distances
         self.X = self.F = self.CV = self.crowd = None
@@ -88,7 +93,7 @@ class ArrayNSGA2:
     def ask(self) -> np.ndarray:
         """The next designs to evaluate (empty: the mating found nothing new)."""
         if self.X is None:      # Initialization: the sampling repaired, duplicates removed
-            return self.duplicates.do(self.repair(np.array(self.x0)))
+            return unique_rows(self.repair(np.array(self.x0)))
         return self._mating()
 
     def _mating(self):
@@ -98,7 +103,7 @@ class ArrayNSGA2:
             n_remaining = self.n_offsprings - len(off)
             _off = self._mate(n_remaining)
             _off = self.repair(np.array(_off))
-            _off = self.duplicates.do(_off, self.X, off)
+            _off = unique_rows(_off, self.X, off)
             if len(off) + len(_off) > self.n_offsprings:
                 _off = _off[:self.n_offsprings - len(off)]
             off = np.concatenate([off, _off])
@@ -117,13 +122,19 @@ class ArrayNSGA2:
         Xp = np.empty((cx.n_offsprings, n_matings, X.shape[2]))
         cross = rs.random(n_matings) < get(cx.prob, size=n_matings)
         if np.any(cross):
-            Q = cx._do(self.problem, X, random_state=rs)
+            # SimulatedBinaryCrossover._do, compiled between its draws (kernels.nsga2_ops)
+            eta, prob_var, prob_exch, prob_bin = get(cx.eta, cx.prob_var, cx.prob_exch,
+                                                     cx.prob_bin, size=(n_matings, 1))
+            Q = sbx(X, self.problem.xl, self.problem.xu, eta, prob_var, prob_exch, prob_bin,
+                    rs)
             Xp[:, cross] = Q[:, cross]
         Xp[:, ~cross] = X[:, ~cross]     # no crossover: the parents themselves
         off = Xp.reshape(-1, X.shape[-1])
         # Mutation.do
         mu = self.mutation
-        Xm = mu._do(self.problem, off, random_state=rs)
+        # PolynomialMutation._do, compiled between its draws (kernels.nsga2_ops)
+        Xm = pm(off, self.problem.xl, self.problem.xu, get(mu.eta, size=len(off)),
+                mu.get_prob_var(self.problem, size=len(off)), rs)
         mut = rs.random(size=len(off)) <= get(mu.prob, size=len(off))
         off = off.copy()
         off[mut] = Xm[mut]
@@ -188,12 +199,12 @@ class ArrayNSGA2:
             I = np.arange(len(front))  # noqa: E741
             if len(survivors) + len(I) > n_survive:
                 n_remove = len(survivors) + len(front) - n_survive
-                crowding = self.crowding.do(F[front, :], n_remove=n_remove)
+                crowding = crowding_distance(np.array(F[front, :], dtype=np.double))
                 I = randomized_argsort(crowding, order="descending", method="numpy",  # noqa: E741
                                        random_state=self.random_state)
                 I = I[:-n_remove]  # noqa: E741
             else:
-                crowding = self.crowding.do(F[front, :], n_remove=0)
+                crowding = crowding_distance(np.array(F[front, :], dtype=np.double))
             crowd[where[front]] = crowding
             survivors.extend(front[I])
         return np.asarray(survivors, np.int64)

@@ -150,14 +150,14 @@ def test_the_test_problem_reaches_every_branch(monkeypatch):
     pop, off = 30, 7
     alg = ArrayNSGA2(pop, off, first_generation(pop, 2), XL, XU, 2, repair=repair)
     alg.random_state = rng = _Counting(alg.random_state)
-    real, removed = alg.duplicates.do, []
+    import pipeline.runs.nsga2 as mod
+    real, removed = mod.unique_rows, []
 
     def counting(x, *others):
         kept = real(x, *others)
         removed.append(len(x) - len(kept))
         return kept
-    alg.duplicates.do = counting
-    import pipeline.runs.nsga2 as mod
+    monkeypatch.setattr(mod, "unique_rows", counting)
     splits = []
     real_sort = mod.randomized_argsort
     monkeypatch.setattr(mod, "randomized_argsort",
@@ -181,3 +181,94 @@ def test_violation_is_pymoo_s(width):
     rng = np.random.default_rng(width)
     G = rng.normal(size=(500, width)) * 10.0 ** rng.integers(-5, 13, size=(500, width))
     assert np.array_equal(violation(G), np.array([calc_cv(G=g) for g in G]).ravel())
+
+
+# ----------------------------------------------------------------- the compiled steps
+def test_crowding_distance_is_pymoo_s():
+    """kernels.nsga2_ops.crowding_distance against pymoo's 'cd' crowding, bit for
+    bit: fronts of 1 to 60 points, objectives on coarse grids (ties, equal
+    columns: a range of 0), spread over magnitudes, infinities."""
+    from pymoo.operators.survival.rank_and_crowding.metrics import get_crowding_function
+
+    from pipeline.kernels.nsga2_ops import crowding_distance
+    cd = get_crowding_function("cd")
+    rng = np.random.default_rng(4)
+    checked = ties = 0
+    for trial in range(400):
+        n, m = int(rng.integers(1, 60)), int(rng.integers(1, 4))
+        F = rng.normal(size=(n, m)) * 10.0 ** rng.integers(-3, 4, size=m)
+        if trial % 3 == 0:
+            F = np.round(F, 0)                       # ties within a column
+        if trial % 7 == 0:
+            F[:, 0] = 1.5                            # a column of one value
+        if trial % 11 == 0 and n > 3:
+            F[1, -1] = np.inf
+        want = cd.do(F, n_remove=0)
+        got = crowding_distance(np.array(F, dtype=np.double))
+        assert got.tobytes() == want.tobytes(), (trial, got, want)
+        checked += 1
+        ties += len(np.unique(F[:, 0])) < n
+    assert checked == 400 and ties > 50
+
+
+def test_unique_rows_is_pymoo_s():
+    """kernels.nsga2_ops.unique_rows against pymoo's DefaultDuplicateElimination:
+    exact copies within a batch and against the population and the offspring so
+    far, near copies (apart by the spacing of doubles, and by 1e-17 in a small
+    variable: the threshold 1e-16), NaN rows."""
+    from pymoo.core.duplicate import DefaultDuplicateElimination
+
+    from pipeline.kernels.nsga2_ops import unique_rows
+    ref = DefaultDuplicateElimination(func=lambda X: X)
+    rng = np.random.default_rng(5)
+    dropped = 0
+    for trial in range(200):
+        pop = rng.random((int(rng.integers(0, 30)), 4)) * 300.0
+        X = rng.random((int(rng.integers(0, 30)), 4)) * 300.0
+        off = rng.random((int(rng.integers(0, 10)), 4)) * 300.0
+        if len(X) > 4:
+            X[1] = X[0]                                          # a copy within X
+            X[2, 0] = np.nextafter(X[3, 0], np.inf)              # one ulp apart: kept
+            X[2, 1:] = X[3, 1:]
+            X[4, 3] = np.nan
+        if len(X) > 6 and len(pop):
+            X[5] = pop[0]                                        # a copy of the population
+            X[6] = pop[-1]
+            X[6, 3] = 1e-17 if trial % 2 else 2e-16              # small variables
+            pop[-1, 3] = 0.0
+        if len(X) > 7 and len(off):
+            X[7] = off[0]
+        want = ref.do(X, pop, off)
+        got = unique_rows(X, pop, off)
+        assert got.tobytes() == np.asarray(want, float).tobytes(), trial
+        dropped += len(X) - len(got)
+    assert dropped > 300
+
+
+def test_sbx_and_pm_are_pymoo_s():
+    """kernels.nsga2_ops.sbx and pm against pymoo's SBX and PM operators, drawing
+    from generators of the same seed: the same offspring bit for bit and the
+    generators left in the same state (as many draws), over parents at the
+    bounds, equal parents and a variable of equal bounds."""
+    from pymoo.operators.crossover.sbx import SBX
+    from pymoo.operators.mutation.pm import PM
+    from pymoo.core.variable import get
+
+    from pipeline.kernels.nsga2_ops import pm, sbx
+    box = _Box()
+    cx, mu = SBX(), PM()
+    for seed in range(60):
+        rng = np.random.default_rng(seed)
+        n = int(rng.integers(1, 40))
+        X = XL + rng.random((2, n, len(XL))) * (XU - XL)
+        X[:, ::5, 1] = XL[1]                          # at a bound
+        X[1, ::4] = X[0, ::4]                         # equal parents
+        a, b = np.random.default_rng(seed + 1000), np.random.default_rng(seed + 1000)
+        want = cx._do(box, X, random_state=a)
+        eta, pv, pe, pb = get(cx.eta, cx.prob_var, cx.prob_exch, cx.prob_bin, size=(n, 1))
+        got = sbx(X, XL, XU, eta, pv, pe, pb, b)
+        assert got.tobytes() == want.tobytes() and a.random() == b.random(), seed
+        off = want.reshape(-1, len(XL))
+        want = mu._do(box, off, random_state=a)
+        got = pm(off, XL, XU, get(mu.eta, size=len(off)), mu.get_prob_var(box, size=len(off)), b)
+        assert got.tobytes() == want.tobytes() and a.random() == b.random(), seed
