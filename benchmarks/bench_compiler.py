@@ -243,7 +243,26 @@ def measure(quick=False, n=None, interpreter=True, with_stage_a=True):
     ta = _rate(lambda: pb_full.evaluate_rows(pars_b, n_jobs=cores), nf, 1, rep) * 1e6
     ti = _rate(lambda: stage_b_full_interp(pb_full, pars_b), nf, 1, rep) * 1e6 \
         if interpreter else math.nan
-    return rows, dict(full_1=t1, full_all=ta, full_interp_all=ti, cores=cores)
+    # the force stage in lanes against the scalar force stage: the same module but for
+    # the force lanes, the same candidates, 1 core, the two alternated
+    from pipeline.compiler import kernels_for
+    from pipeline.compiler.parallel import run_rows
+    from pipeline.kernels import sweep as ks
+    scalar = kernels_for(pb_full.plan, pb_full.rocker, force_lanes=False)
+
+    def scalar_rows():
+        st = np.zeros(nf, np.int8)
+        met = np.full((nf, ks.N_METRICS), np.nan)
+        run_rows(scalar.evaluate, pars_b, pb_full.phis, pb_full.phi_close, pb_full.tols,
+                 pb_full.settings(), pb_full.loads, st, met, n_jobs=1)
+        return met
+    forced = float(np.mean(scalar_rows()[:, ks.M_FORCES_DONE] == 1.0))
+    lanes_1, scalar_1 = [], []
+    for _ in range(rep):
+        lanes_1.append(_rate(lambda: pb_full.evaluate_rows(pars_b, n_jobs=1), nf, 1, 1))
+        scalar_1.append(_rate(scalar_rows, nf, 1, 1))
+    return rows, dict(full_1=t1, full_all=ta, full_interp_all=ti, cores=cores,
+                      force_lanes=max(lanes_1) / max(scalar_1), forced=forced)
 
 
 def _walk_rate(stage, pars, rep):
@@ -380,6 +399,10 @@ def main(argv=None):
               f"candidates/s on 1 core, {full['full_all']:,.0f} on {cores} cores"
               + (f"; the interpreter {interp:,.0f} on {cores} cores "
                  f"(x{full['full_all'] / interp:.1f})." if math.isfinite(interp) else ".")]
+    lines += ["", f"The force stage in lanes (`pipeline/compiler/lane_forces.py`), the default "
+              f"study's full metrics on 1 core, alternated with the same module whose force stage "
+              f"is scalar (the same numbers to the bit): x{full['force_lanes']:.2f} the candidates/s "
+              f"({100 * full['forced']:.0f} % of the candidates reach the force stage)."]
     lines += ["", "The other sweeps against the default study's full metrics on "
               f"{cores} cores (their own draws; the default study runs the force stage for "
               "the candidates that meet its stroke and margin, these for every candidate "

@@ -50,13 +50,10 @@ def lane_form(plan, ems) -> str:
     return ""
 
 
-def _point_lines(i, q):
-    return f"P{i}_{q}", f"V{i}_{q}", f"A{i}_{q}"
-
-
 def lane_force_kernel(plan, names, ems) -> str:
     """Source of the force lanes of ``plan`` (``force_lanes``, ``force_lane_in``,
-    ``force_lane_out`` and their constants), or of the skeleton without them."""
+    their constants and the driver ``force_flush``), or of the skeleton without
+    them."""
     why = lane_form(plan, ems)
     if not all(e.fast for e in ems[:plan.n_kinematic]):
         why = "no lane path: a group without a lane form of its positions"

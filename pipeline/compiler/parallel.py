@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import os
 import threading
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, wait
 
 from ..kernels.config import LANE_WIDTH
 
@@ -60,19 +60,30 @@ def run_rows(kernel, pars, *args, n_jobs=None, task_rows=TASK_ROWS):
     # kernels, and waking a sleeping worker took as long again)
     todo = iter(ranges)
     lock = threading.Lock()
+    stop = threading.Event()        # a range failed (or the caller was interrupted)
 
     def work():
-        while True:
+        while not stop.is_set():
             with lock:
                 r = next(todo, None)
             if r is None:
                 return
-            kernel(pars, r[0], r[1], *args)
+            try:
+                kernel(pars, r[0], r[1], *args)
+            except BaseException:
+                stop.set()
+                raise
 
     pool = _pool(jobs - 1)
     futures = [pool.submit(work) for _ in range(min(jobs, len(ranges)) - 1)]
     try:
         work()
+    except BaseException:
+        stop.set()
+        raise
     finally:
-        for f in futures:
-            f.result()
+        # every thread done with the arrays before they go back to the caller; the
+        # first failure of a pool thread is raised (the caller's own, if any, first)
+        wait(futures)
+    for f in futures:
+        f.result()

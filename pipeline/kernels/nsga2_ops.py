@@ -7,9 +7,10 @@ them in one pass each, with the same numbers:
 * :func:`crowding_distance`: pymoo's ``calc_crowding_distance`` (the 'cd'
   crowding of its rank-and-crowding survival): per objective, a stable sort,
   the gaps to the neighbours over the objective's range (0 where the range
-  is 0 or a gap is NaN; inf at the ends), summed over the objectives in their
-  order and divided by their number; inf for every point of a front of at
-  most 2.  The same floating-point operations in the same order.
+  is 0 or a gap is NaN; inf at the ends); their sum over the objectives is
+  numpy's own (``np.sum`` over a row: pairwise from 8 objectives on), divided
+  by their number; inf for every point of a front of at most 2.  The same
+  floating-point operations in the same order.
 * :func:`unique_rows`: pymoo's ``DefaultDuplicateElimination`` (epsilon
   1e-16): a row is dropped where its Euclidean distance to an earlier row of
   its own array, or to a row of each further array, is at most epsilon.  The
@@ -34,14 +35,23 @@ _JIT = dict(cache=True, nogil=True, error_model="numpy")
 EPSILON = 1e-16           # pymoo's DefaultDuplicateElimination
 
 
-@njit(**_JIT)
 def crowding_distance(F):
     """pymoo's FunctionalDiversity(calc_crowding_distance) of the rows of F
     (n points, m objectives)."""
+    F = np.ascontiguousarray(F, dtype=np.double)
     n, m = F.shape
     if n <= 2:
         return np.full(n, np.inf)
-    total = np.zeros(n)
+    return np.sum(_crowding_gaps(F), axis=1) / m
+
+
+@njit(**_JIT)
+def _crowding_gaps(F):
+    """Per point and objective, the gaps to its neighbours in that objective
+    over the objective's range (calc_crowding_distance's dist_to_last +
+    dist_to_next, in the points' own order)."""
+    n, m = F.shape
+    total = np.zeros((n, m))
     for j in range(m):
         order = np.argsort(F[:, j], kind="mergesort")
         v = F[order, j]
@@ -57,9 +67,8 @@ def crowding_distance(F):
                 dl = 0.0
             if math.isnan(dn):
                 dn = 0.0
-            # numpy's sum over the objectives: 0.0 + x0 + x1 + ... in order
-            total[order[i]] += dl + dn
-    return total / m
+            total[order[i], j] = dl + dn
+    return total
 
 
 @njit(**_JIT)
@@ -201,14 +210,21 @@ def sbx_children(X, cross, E, side1, q1, side2, q2, r_bin, xl, xu):
             Q[0, m, v] = ch1
             Q[1, m, v] = ch2
             i += 1
-    for p in range(2):
-        for m in range(nm):
-            for v in range(nv):
-                if Q[p, m, v] < xl[v]:
-                    Q[p, m, v] = xl[v]
-                if Q[p, m, v] > xu[v]:
-                    Q[p, m, v] = xu[v]
+    _clamp(Q[0], xl, xu)
+    _clamp(Q[1], xl, xu)
     return Q
+
+
+@njit(**_JIT)
+def _clamp(X, xl, xu):
+    """pymoo's repair_clamp and set_to_bounds_if_outside on the rows of X: a
+    value below its lower bound takes it, then one above its upper bound."""
+    for r in range(X.shape[0]):
+        for v in range(X.shape[1]):
+            if X[r, v] < xl[v]:
+                X[r, v] = xl[v]
+            if X[r, v] > xu[v]:
+                X[r, v] = xu[v]
 
 
 @njit(**_JIT)
@@ -273,12 +289,7 @@ def pm_mutants(X, mut, E, rand, q, xl, xu):
                 y = hi
             Xp[r, v] = y
             i += 1
-    for r in range(n):
-        for v in range(nv):
-            if Xp[r, v] < xl[v]:
-                Xp[r, v] = xl[v]
-            if Xp[r, v] > xu[v]:
-                Xp[r, v] = xu[v]
+    _clamp(Xp, xl, xu)
     return Xp
 
 

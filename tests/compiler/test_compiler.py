@@ -497,6 +497,62 @@ def test_a_force_lane_refused_takes_the_scalar_force_stage(synthesis, candidates
     assert got.tobytes() == want.tobytes()
 
 
+# the force lanes with external loads (a force at a point, a moment alone), in numba's
+# Python mode: the default study with two loads added would compile a new mechanism
+# twice (with and without force lanes); in Python mode it compiles nothing
+FORCE_LOADS = r"""
+import dataclasses, json, sys
+import numpy as np
+from pipeline.compiler import kernels_for
+from pipeline.kernels import sweep as ks
+from pipeline.runs.sweep import build_problem
+from pipeline.study.reader import load_study
+from pipeline.study.sweep_spec import draw_candidates, parameter_rows
+s = load_study(sys.argv[1])
+pb = build_problem(s, dataclasses.replace(s.sweep, positions=180))
+assert len(pb.plan.load_body) == 2 and pb.kernels.HAS_LANE_FORCES
+pars = parameter_rows(pb.plan, pb.spec, draw_candidates(pb.spec, 0)[:200])
+out = {}
+for label, mod in (("lanes", pb.kernels), ("scalar", kernels_for(pb.plan, pb.rocker,
+                                                                  force_lanes=False))):
+    n = pars.shape[0]
+    status = np.zeros(n, np.int8); met = np.full((n, ks.N_METRICS), np.nan)
+    mod.evaluate(pars, 0, n, pb.phis, pb.phi_close, pb.tols, pb.settings(), pb.loads, status,
+                 met)
+    out[label] = (status.tolist(), met.tobytes().hex(),
+                  int((met[:, ks.M_FORCES_DONE] == 1.0).sum()))
+print(json.dumps(out))
+"""
+
+LOADS = """
+[[mechanism.loads]]        # the thread's pull at the eyelet
+body = "rocker 5-7-8"
+point = "P8"
+fx = "3 * sin(phi)"
+fy = "-8"
+
+[[mechanism.loads]]        # a moment alone on the ternary link
+body = "ternary 3-4-5"
+moment = "0.5"
+"""
+
+
+def test_the_force_lanes_take_external_loads(tmp_path):
+    """External loads (a force at a point that varies with the crank angle, a
+    moment alone) in the force lanes: the same statuses and metrics, bit for bit,
+    as the scalar force stage, in numba's Python mode."""
+    text = (STUDIES / "ov7_synthesis.toml").read_text()
+    study = tmp_path / "loaded.toml"
+    study.write_text(text.replace("\n[output]", LOADS + "\n[output]", 1))
+    r = subprocess.run([sys.executable, "-c", FORCE_LOADS, str(study)],
+                       env=child_env(NUMBA_DISABLE_JIT="1"), capture_output=True, text=True,
+                       timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    out = json.loads(r.stdout.strip().splitlines()[-1])
+    assert out["lanes"][2] >= 10                    # candidates through the force stage
+    assert out["lanes"] == out["scalar"]
+
+
 # ----------------------------------------------------------------- generated force equations
 def _unrolled(m):
     """The generated lines of an m x m solve as a Python function of (a, b)."""
@@ -609,6 +665,38 @@ def test_rows_run_in_ranges_on_threads():
     assert sorted(calls) == [(0, 56, "y"), (56, 100, "y")]
     with pytest.raises(ValueError, match="n_jobs"):
         run_rows(kernel, np.zeros((10, 1)), "x", n_jobs=0)
+
+
+def test_the_calling_thread_takes_ranges_and_a_failure_stops_the_rest():
+    """The calling thread runs ranges beside the pool's threads (it does not sleep
+    while they work); a range that raises stops the others from taking more, every
+    thread is done with the arrays when run_rows raises, and the error is the one
+    raised."""
+    import threading
+    import time
+    threads = set()
+
+    def kernel(pars, lo, hi):
+        threads.add(threading.get_ident())
+        time.sleep(0.002)
+    for _ in range(20):         # (which threads take ranges is up to the scheduler)
+        run_rows(kernel, np.zeros((64, 1)), n_jobs=2, task_rows=8)
+        if threading.get_ident() in threads and len(threads) == 2:
+            break
+    assert threading.get_ident() in threads and len(threads) == 2
+    done, running = [], []
+
+    def failing(pars, lo, hi):
+        running.append(lo)
+        time.sleep(0.01)
+        if lo == 16:
+            raise RuntimeError("range 16 fails")
+        done.append(lo)
+        running.remove(lo)
+    with pytest.raises(RuntimeError, match="range 16"):
+        run_rows(failing, np.zeros((800, 1)), n_jobs=2, task_rows=8)
+    assert running == [16]              # nothing else still at work when it raised
+    assert len(done) < 10               # and the 100 ranges were not all run
 
 
 # ----------------------------------------------------------------- a second run compiles nothing

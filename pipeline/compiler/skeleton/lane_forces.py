@@ -7,14 +7,13 @@ The text below the marker line is pasted into the generated module
 (``pipeline.compiler.lane_forces``); the imports above it declare, for linters
 and readers, the names the generated module gives it."""
 
-from .header import (math, np, njit, JIT, OK, M_PEAK_R, M_PEAK_JOINT, M_PEAK_PHI,
-                     M_PEAK_MBAL, M_EQUILIBRIUM, M_SHAKING_F, M_SHAKING_M, M_FORCES_DONE,
-                     SET_WANT_FORCES, SET_WANT_PEAKS, SET_WANT_TRANSMISSION,
+from .header import (math, np, njit, JIT, JIT_INNER, OK, M_FORCES_DONE, SET_WANT_FORCES,
+                     SET_WANT_PEAKS, SET_WANT_TRANSMISSION,
                      SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING, SET_OMEGA1, SET_EPS1,
-                     T_NEWTON_TOL, T_SINGULAR, may_reach)
+                     T_NEWTON_TOL, T_SINGULAR)
 from ._mechanism import (N_JOINTS, LANES, N_FROWS, FT_COLS, F_pm, F_bad,
                          force_lanes)
-from .sweep_stages import settle, LANE_FORCES
+from .sweep_stages import settle, LANE_FORCES, reaction_peak, force_peaks_out
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 @njit(**JIT)
@@ -27,8 +26,8 @@ def lane_forces_apply(settings):
             and settings[SET_WANT_EQUILIBRIUM] == 0.0 and settings[SET_WANT_SHAKING] == 0.0)
 
 
-# inline='always': one call site in the sweep (compile time, as the other stages)
-@njit(inline='always', **JIT)
+# its own function: evaluate calls it at two places (a full block, and the last)
+@njit(**JIT_INNER)
 def force_flush(pars, fidx, filled, FS, FT, RB, phis, phi_close, tols, settings, loads, col,
                 trail, qmax, qmin, wk, fw, ww, corr, status, metrics):
     """The force lanes of candidates fidx[:filled] (the rest of the block a copy
@@ -60,22 +59,10 @@ def force_flush(pars, fidx, filled, FS, FT, RB, phis, phi_close, tols, settings,
         peak_phi = math.nan
         for k in range(npos):
             for j in range(N_JOINTS):
-                rx = RB[k, 2 * j * LANES + l]
-                ry = RB[k, (2 * j + 1) * LANES + l]
-                if not may_reach(rx, ry, peak):
-                    continue
-                r = math.hypot(rx, ry)
-                if r > peak or not math.isfinite(r):
-                    peak = r
-                    peak_j = j
-                    peak_phi = phis[k]
-        out = metrics[i]
-        out[M_PEAK_R] = peak
-        out[M_PEAK_JOINT] = peak_j
-        out[M_PEAK_PHI] = peak_phi
-        out[M_PEAK_MBAL] = abs(FS[F_pm * LANES + l])
-        out[M_EQUILIBRIUM] = math.nan
-        out[M_SHAKING_F] = math.nan
-        out[M_SHAKING_M] = math.nan
-        out[M_FORCES_DONE] = 1.0
+                peak, peak_j, peak_phi = reaction_peak(RB[k, 2 * j * LANES + l],
+                                                       RB[k, (2 * j + 1) * LANES + l], j,
+                                                       phis[k], peak, peak_j, peak_phi)
+        force_peaks_out(metrics[i], peak, peak_j, peak_phi, FS[F_pm * LANES + l], False,
+                        0.0, False, 0.0, 0.0)
+        metrics[i, M_FORCES_DONE] = 1.0
         status[i] = OK

@@ -1,6 +1,6 @@
 """The force lanes of a generated module whose force stage has no lane form
-(``pipeline.compiler.lane_forces`` fills in {why}): every candidate takes
-the scalar force stage.
+(``pipeline.compiler.lane_forces`` or, without an output rocker,
+``generate`` fills in {why}): every candidate takes the scalar force stage.
 
 The text below the marker line is pasted into the generated module
 (``pipeline.compiler.lane_forces``); the imports above it declare, for linters

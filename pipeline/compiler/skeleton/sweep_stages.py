@@ -339,13 +339,8 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
                 if abs(sm) > peak_sm or not math.isfinite(sm):
                     peak_sm = abs(sm)
             for j in range(N_JOINTS):
-                if not may_reach(r_out[j, 0], r_out[j, 1], peak):
-                    continue        # (the same peak to the bit, without the hypot)
-                r = math.hypot(r_out[j, 0], r_out[j, 1])
-                if r > peak or not math.isfinite(r):
-                    peak = r
-                    peak_j = j
-                    peak_phi = phis[k]
+                peak, peak_j, peak_phi = reaction_peak(r_out[j, 0], r_out[j, 1], j, phis[k],
+                                                       peak, peak_j, peak_phi)
         if want_p:
             # |a| = |r'' omega1^2 + r' eps1| of the working point (mm/s^2)
             ax = d2[iw, 0] * omega1 ** 2 + d1[iw, 0] * eps1
@@ -376,13 +371,8 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
                 trans_cos = math.cos(t)
                 trans_sin = math.sin(t)
     if want_f:
-        out[M_PEAK_R] = peak
-        out[M_PEAK_JOINT] = peak_j
-        out[M_PEAK_PHI] = peak_phi
-        out[M_PEAK_MBAL] = abs(peak_m)
-        out[M_EQUILIBRIUM] = worst_eq if want_eq else math.nan
-        out[M_SHAKING_F] = peak_sf if want_sh else math.nan
-        out[M_SHAKING_M] = peak_sm if want_sh else math.nan
+        force_peaks_out(out, peak, peak_j, peak_phi, peak_m, want_eq, worst_eq, want_sh,
+                        peak_sf, peak_sm)
     if want_p:
         out[M_PEAK_ACC] = peak_a / 1000.0        # m/s^2
         out[M_PEAK_EPS] = peak_e
@@ -391,4 +381,29 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
     out[M_FORCES_DONE] = 1.0
     return OK
 
+
+@njit(inline='always', **JIT)
+def reaction_peak(rx, ry, j, phi, peak, peak_j, peak_phi):
+    """The running maximum of |R| with the joint and the crank angle where it is
+    (peak -1: none yet), after joint ``j``'s reaction (rx, ry) at ``phi``; NaN and
+    inf take it (``may_reach``: the same peak to the bit without most hypots)."""
+    if may_reach(rx, ry, peak):
+        r = math.hypot(rx, ry)
+        if r > peak or not math.isfinite(r):
+            return r, j, phi
+    return peak, peak_j, peak_phi
+
+
+@njit(inline='always', **JIT)
+def force_peaks_out(out, peak, peak_j, peak_phi, peak_m, want_eq, worst_eq, want_sh, peak_sf,
+                    peak_sm):
+    """The kinetostatics' peaks into a candidate's metrics row (NaN for those not
+    asked for)."""
+    out[M_PEAK_R] = peak
+    out[M_PEAK_JOINT] = peak_j
+    out[M_PEAK_PHI] = peak_phi
+    out[M_PEAK_MBAL] = abs(peak_m)
+    out[M_EQUILIBRIUM] = worst_eq if want_eq else math.nan
+    out[M_SHAKING_F] = peak_sf if want_sh else math.nan
+    out[M_SHAKING_M] = peak_sm if want_sh else math.nan
 
