@@ -55,6 +55,9 @@ def pytest_configure(config):
         os.environ["PIPELINE_TEST_COMPILE_CACHE"] = str(cache)
     os.environ["PIPELINE_CACHE_DIR"] = str(cache / "modules")
     os.environ["NUMBA_CACHE_DIR"] = str(cache / "numba")
+    # no compile beside a run (pipeline.compiler.beside): the suite's two workers keep
+    # both cores busy already; tests/compiler/test_compiler.py tests it on its own
+    os.environ["PIPELINE_COMPILE_BESIDE"] = "0"
 
 
 def compile_cache(config, base):

@@ -109,7 +109,36 @@ def kernels_for(plan, rocker=None, watch=True, force_lanes=True):
     src = source_for(plan, rocker, watch, force_lanes)
     mod = _imported(src, module_name(src))
     _BY_STRUCTURE[key] = mod
+    if rocker is not None:
+        _compile_beside(mod)
     return mod
+
+
+def _compile_beside(mod) -> None:
+    """Where ``mod`` (a sweep's module) has force lanes that numba's cache does
+    not hold yet and this process may use two cores or more: a process of their
+    own compiles its stand-alone kernels into the cache meanwhile
+    (``pipeline.compiler.beside``).  ``PIPELINE_COMPILE_BESIDE=0`` turns it off."""
+    if (os.environ.get("PIPELINE_COMPILE_BESIDE", "1") == "0"
+            or os.environ.get("NUMBA_DISABLE_JIT", "0") not in ("", "0")
+            or not getattr(mod, "HAS_LANE_FORCES", False)):
+        return
+    from .parallel import default_jobs
+    if default_jobs() < 2:
+        return
+    try:        # the index numba's cache keeps of the force lanes' compiled versions
+        if Path(mod.force_lanes._cache._cache_file._index_path).exists():
+            return
+    except AttributeError:      # another numba: look no further, compile beside
+        pass
+    import subprocess
+    path = Path(mod.SOURCE_PATH)
+    try:
+        subprocess.Popen([sys.executable, "-m", "pipeline.compiler.beside", mod.__name__,
+                          str(path.parent)], stdin=subprocess.DEVNULL,
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:         # no second process: the run compiles them itself
+        pass
 
 
 def gpu_kernels_for(plan, rocker=None):

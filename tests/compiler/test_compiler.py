@@ -7,6 +7,7 @@ import collections
 import dataclasses
 import json
 import math
+import os
 import re
 import subprocess
 import sys
@@ -551,6 +552,72 @@ def test_the_force_lanes_take_external_loads(tmp_path):
     out = json.loads(r.stdout.strip().splitlines()[-1])
     assert out["lanes"][2] >= 10                    # candidates through the force stage
     assert out["lanes"] == out["scalar"]
+
+
+# the stand-alone kernels compiled first as pipeline.compiler.beside compiles them,
+# then a run's evaluate in the same process (a new module: nothing of it cached),
+# with numba's compile events recorded
+BESIDE = r"""
+import json, sys
+import numpy as np
+from numba.core import event
+from pipeline.compiler.beside import compile_standalone
+from pipeline.runs.sweep import build_problem
+from pipeline.study.reader import load_study
+s = load_study(sys.argv[1])
+pb = build_problem(s, s.sweep)
+compile_standalone(pb.kernels)
+with event.install_recorder("numba:compile") as rec:
+    status, metrics = pb.evaluate_rows(np.ascontiguousarray(pb.plan.par[None, :]), parallel=False)
+names = sorted({e.data["dispatcher"].py_func.__name__ for _, e in rec.buffer})
+print(json.dumps({"compiled": names, "metrics": metrics.tobytes().hex()}))
+"""
+
+
+def test_the_stand_alone_kernels_compile_beside_for_evaluate_s_types(problem, tmp_path):
+    """What pipeline.compiler.beside compiles in a process of its own is what a
+    run's evaluate calls: compiled first in a process, they are not compiled
+    again for evaluate (the same signatures, so a run loads them from numba's
+    cache); and the trigger starts it only where the module has force lanes,
+    their cache is empty and it is not turned off."""
+    env = child_env(PIPELINE_CACHE_DIR=str(tmp_path / "modules"))
+    r = subprocess.run([sys.executable, "-c", BESIDE, str(STUDIES / "ov7_synthesis.toml")],
+                       env=env, capture_output=True, text=True, timeout=900)
+    assert r.returncode == 0, r.stderr[-2000:]
+    out = json.loads(r.stdout.strip().splitlines()[-1])
+    assert "evaluate" in out["compiled"] and "settle" in out["compiled"]
+    assert "force_lanes" not in out["compiled"] and "walk" not in out["compiled"]
+    _, want = problem.evaluate_rows(np.ascontiguousarray(problem.plan.par[None, :]))
+    assert out["metrics"] == want.tobytes().hex()
+    # the trigger (pipeline.compiler._compile_beside)
+    import types
+
+    import pipeline.compiler as pc
+    started = []
+
+    def module(has_forces, index):
+        cache = types.SimpleNamespace(_cache_file=types.SimpleNamespace(_index_path=index))
+        return types.SimpleNamespace(HAS_LANE_FORCES=has_forces, __name__="pipeline_mech_x",
+                                     force_lanes=types.SimpleNamespace(_cache=cache),
+                                     SOURCE_PATH=str(tmp_path / "pipeline_mech_x.py"))
+    (tmp_path / "there.nbi").write_text("")
+    cases = (("1", True, "none.nbi", 1), ("1", True, "there.nbi", 0),
+             ("0", True, "none.nbi", 0), ("1", False, "none.nbi", 0))
+    import subprocess as sp
+    real = sp.Popen
+    try:
+        sp.Popen = lambda argv, **kw: started.append(argv)
+        for flag, has, index, n in cases:
+            started.clear()
+            os.environ["PIPELINE_COMPILE_BESIDE"] = flag
+            pc._compile_beside(module(has, tmp_path / index))
+            assert len(started) == n, (flag, has, index)
+            if n:
+                assert started[0][1:] == ["-m", "pipeline.compiler.beside", "pipeline_mech_x",
+                                          str(tmp_path)]
+    finally:
+        sp.Popen = real
+        os.environ["PIPELINE_COMPILE_BESIDE"] = "0"
 
 
 # ----------------------------------------------------------------- generated force equations

@@ -134,11 +134,12 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                 fidx[forced] = idx[l]
                 forced += 1
                 if forced == LANES:
-                    force_flush(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols,
-                                settings, loads, col, trail, qmax, qmin, wk, fw, ww, corr,
-                                status, metrics)
+                    # np.int64(...): no literal argument, one compiled version
+                    force_flush(pars, fidx, np.int64(forced), FS, FT, RB, phis, phi_close,
+                                tols, settings, loads, col, trail, qmax, qmin, wk, fw, ww,
+                                corr, status, metrics)
                     forced = 0
             filled = 0
     if forced > 0:
-        force_flush(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols, settings, loads,
-                    col, trail, qmax, qmin, wk, fw, ww, corr, status, metrics)
+        force_flush(pars, fidx, np.int64(forced), FS, FT, RB, phis, phi_close, tols, settings,
+                    loads, col, trail, qmax, qmin, wk, fw, ww, corr, status, metrics)
