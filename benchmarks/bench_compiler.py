@@ -243,18 +243,18 @@ def measure(quick=False, n=None, interpreter=True, with_stage_a=True):
     ta = _rate(lambda: pb_full.evaluate_rows(pars_b, n_jobs=cores), nf, 1, rep) * 1e6
     ti = _rate(lambda: stage_b_full_interp(pb_full, pars_b), nf, 1, rep) * 1e6 \
         if interpreter else math.nan
-    # the force stage in lanes against the scalar force stage: the same module but for
-    # the force lanes, the same candidates, 1 core, the two alternated
-    from pipeline.compiler import kernels_for
+    # the force stage in lanes against the scalar force stage (the same module, its
+    # settings asking for the scalar stage), the same candidates, 1 core, alternated
     from pipeline.compiler.parallel import run_rows
     from pipeline.kernels import sweep as ks
-    scalar = kernels_for(pb_full.plan, pb_full.rocker, force_lanes=False)
+    scalar_settings = pb_full.settings().copy()
+    scalar_settings[ks.SET_SCALAR_FORCES] = 1.0
 
     def scalar_rows():
         st = np.zeros(nf, np.int8)
         met = np.full((nf, ks.N_METRICS), np.nan)
-        run_rows(scalar.evaluate, pars_b, pb_full.phis, pb_full.phi_close, pb_full.tols,
-                 pb_full.settings(), pb_full.loads, st, met, n_jobs=1)
+        run_rows(pb_full.kernels.evaluate, pars_b, pb_full.phis, pb_full.phi_close,
+                 pb_full.tols, scalar_settings, pb_full.loads, st, met, n_jobs=1)
         return met
     forced = float(np.mean(scalar_rows()[:, ks.M_FORCES_DONE] == 1.0))
     lanes_1, scalar_1 = [], []

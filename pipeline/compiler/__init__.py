@@ -31,7 +31,7 @@ from .generate import defined_functions, generate
 
 _LOCK = threading.Lock()
 _MODULES: dict[str, object] = {}
-_DIGEST: list[str] = []
+_DIGEST: dict[bool, str] = {}
 
 
 def cache_dir() -> Path:
@@ -42,43 +42,45 @@ def cache_dir() -> Path:
     return Path(base) / "pipeline"
 
 
-def library_digest() -> str:
-    """Digest of every kernel and compiler source the generated modules depend on."""
-    if not _DIGEST:
+def library_digest(lanes=True) -> str:
+    """Digest of every kernel and compiler source the generated modules depend
+    on, and of the floating-point flags they are compiled with: the lane walk's
+    only where ``lanes`` (a module without an output rocker has no lane walk,
+    so PIPELINE_FASTMATH=strict and the default share it)."""
+    if lanes not in _DIGEST:
         here = Path(__file__).resolve().parent
         files = (sorted(here.glob("*.py")) + sorted((here / "skeleton").glob("*.py"))
                  + sorted((here.parent / "kernels").glob("*.py")))
         h = hashlib.sha256()
         from ..kernels.config import FASTMATH, LANE_FASTMATH
-        for flags in (FASTMATH, LANE_FASTMATH):    # the flags too
+        for flags in (FASTMATH, LANE_FASTMATH) if lanes else (FASTMATH,):    # the flags too
             h.update(repr(sorted(flags) if flags else "strict").encode())
         for f in files:
             h.update(f.name.encode())
             h.update(f.read_bytes())
-        _DIGEST.append(h.hexdigest()[:16])
-    return _DIGEST[0]
+        _DIGEST[lanes] = h.hexdigest()[:16]
+    return _DIGEST[lanes]
 
 
-def source_for(plan, rocker=None, watch=True, force_lanes=True) -> str:
+def source_for(plan, rocker=None, watch=True) -> str:
     """The generated source of ``plan``'s kernels (``rocker``: the output
     rocker's (pivot, point) names, for the sweep's positions stage; ``watch``:
-    False only for the benchmark of the watch's cost; ``force_lanes``: False
-    only for the baseline of the force lanes, tests and benchmark).  With a rocker, the
+    False only for the benchmark of the watch's cost).  With a rocker, the
     sweep's module, which imports every kernel the rocker does not change from
     the module of ``plan`` without one (``source_for(plan, None, watch)``)."""
     shared = None
     if rocker is not None:
         base = source_for(plan, None, watch)
         shared = (module_name(base), defined_functions(base))
-    return generate(plan, rocker=rocker, digest=library_digest(), lanes_width=LANES,
-                    watch=watch, shared=shared, force_lanes=force_lanes)
+    return generate(plan, rocker=rocker, digest=library_digest(rocker is not None),
+                    lanes_width=LANES, watch=watch, shared=shared)
 
 
 def module_name(source: str) -> str:
     return "pipeline_mech_" + hashlib.sha256(source.encode()).hexdigest()[:20]
 
 
-def structure_key(plan, rocker=None, watch=True, force_lanes=True) -> tuple:
+def structure_key(plan, rocker=None, watch=True) -> tuple:
     """What the generated source depends on: the plan's structure (not its
     parameter values) and the rocker; a cheap key for the modules in memory."""
     arrays = (plan.codes, plan.gidx, plan.goff, plan.fixed_idx, plan.fixed_off, plan.link_a,
@@ -91,22 +93,22 @@ def structure_key(plan, rocker=None, watch=True, force_lanes=True) -> tuple:
                    for t in plan.input_tables)
     return (tuple(a.tobytes() for a in arrays), tables, plan.point_names, plan.par_names,
             plan.group_names, plan.n_visible, plan.n_kinematic, plan.crank_body, plan.gravity,
-            tuple(rocker) if rocker is not None else None, bool(watch), bool(force_lanes),
+            tuple(rocker) if rocker is not None else None, bool(watch),
             str(cache_dir()))
 
 
 _BY_STRUCTURE: dict[tuple, object] = {}
 
 
-def kernels_for(plan, rocker=None, watch=True, force_lanes=True):
+def kernels_for(plan, rocker=None, watch=True):
     """The generated kernels of ``plan``, imported (written first if new)."""
-    key = structure_key(plan, rocker, watch, force_lanes)
+    key = structure_key(plan, rocker, watch)
     mod = _BY_STRUCTURE.get(key)
     if mod is not None:
         return mod
     if rocker is not None:
         kernels_for(plan, None, watch)      # the module the sweep's imports from: written
-    src = source_for(plan, rocker, watch, force_lanes)
+    src = source_for(plan, rocker, watch)
     mod = _imported(src, module_name(src))
     _BY_STRUCTURE[key] = mod
     if rocker is not None:

@@ -41,8 +41,7 @@ def _array(name, a, dtype):
     return f"{name} = np.array({body}, dtype=np.{dtype}).reshape({shape})"
 
 
-def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=None,
-             force_lanes=True) -> str:
+def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=None) -> str:
     """Python source of the kernels of ``plan`` (``rocker``: the output
     rocker's (pivot, point) names, for the sweep's dwell and stroke).  Without
     ``watch`` no group is watched between positions (the benchmark's baseline
@@ -54,9 +53,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
     batch, crank dynamics).  The sweep's module then imports them from it and
     defines only what the rocker changes (its careful stages, lanes and
     ``evaluate``): a scene and a sweep of one mechanism share those kernels'
-    compiled code (numba's cache), instead of compiling them once each.
-    Without ``force_lanes`` the force stage has no lane form (the baseline of
-    its tests and benchmark; never for results)."""
+    compiled code (numba's cache), instead of compiling them once each."""
     n = Names(plan)
     ems = emitters_for(plan, n)
     n_triads = sum(e.continued for e in ems)
@@ -118,7 +115,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
             w(line)
 
     if shared is not None:
-        sweep = _sweep_parts(plan, n, ems, rocker, lanes_width, watch, force_lanes)
+        sweep = _sweep_parts(plan, n, ems, rocker, lanes_width, watch)
         own = set(defined_functions(sweep))
         names = [f for f in shared[1] if f not in own]
         w("# ---- the kernels the rocker does not change: the mechanism's own module ----")
@@ -185,7 +182,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
           "smallest so far, whose cos and sin are best_cos, best_sin (NaN: none yet).",
           body))
     w(_spaced(part("watch") + part("careful") + part("crank_dynamics") + part("batch")))
-    w(_sweep_parts(plan, n, ems, rocker, lanes_width, watch, force_lanes))
+    w(_sweep_parts(plan, n, ems, rocker, lanes_width, watch))
     return _checked("\n".join(out))     # ends with the blank line after the last part
 
 
@@ -194,13 +191,12 @@ def defined_functions(src: str) -> list[str]:
     return re.findall(r"^def (\w+)\(", src, re.M)
 
 
-def _sweep_parts(plan, n, ems, rocker, lanes_width, watch, force_lanes=True) -> str:
+def _sweep_parts(plan, n, ems, rocker, lanes_width, watch) -> str:
     """What the output rocker changes: the sweep's careful stages, its lanes
     (or the skeleton without them) and ``evaluate``."""
     if rocker is not None:
         lanes = lane_kernel(plan, n, ems, rocker, lanes_width, watch)
-        forces = (lane_force_kernel(plan, n, ems) if force_lanes else
-                  part("no_lane_forces").format(why="left out: the baseline of their tests"))
+        forces = lane_force_kernel(plan, n, ems)
     else:
         lanes = _spaced(no_rocker_kernel())
         forces = part("no_lane_forces").format(why="no output rocker declared")

@@ -62,7 +62,9 @@ SET_WANT_TRANSMISSION = 11   # 1.0: the smallest transmission angle
 SET_WANT_LAW = 12       # 0: no law error; 1: law at a fixed alignment; 2: best alignment
 SET_WANT_EQUILIBRIUM = 13   # 1.0: the worst equilibrium residual (with SET_WANT_FORCES)
 SET_WANT_SHAKING = 14   # 1.0: the peak shaking force and moment (with SET_WANT_FORCES)
-N_SETTINGS = 15
+SET_SCALAR_FORCES = 15  # 1.0: the scalar force stage for every candidate, never the force
+                        # lanes (the baseline of their tests and benchmark; never for results)
+N_SETTINGS = 16
 SET_LAW0 = N_SETTINGS   # with SET_WANT_LAW: the law at positions 0 .. 2n - 1 (two turns)
 
 LAW_FIXED = 1.0
@@ -74,7 +76,7 @@ MARGIN_SAFE = 1e-3
 def settings(stroke_radius, dwell_w, want_forces, stroke_lo, stroke_hi, margin_min, omega1,
              eps1, margin_safe=MARGIN_SAFE, want_peaks=False, work_point=-1,
              want_transmission=False, law=None, law_best=False, want_equilibrium=False,
-             want_shaking=False):
+             want_shaking=False, scalar_forces=False):
     """The settings vector of a sweep, in slot order.  ``law``: the motion
     law's normalised displacement at the n positions of the grid (None: no
     law error); it is stored twice over (2n values), so a shifted law reads
@@ -96,6 +98,7 @@ def settings(stroke_radius, dwell_w, want_forces, stroke_lo, stroke_hi, margin_m
     s[SET_WANT_LAW] = 0.0 if law is None else (LAW_BEST if law_best else LAW_FIXED)
     s[SET_WANT_EQUILIBRIUM] = 1.0 if want_equilibrium else 0.0
     s[SET_WANT_SHAKING] = 1.0 if want_shaking else 0.0
+    s[SET_SCALAR_FORCES] = 1.0 if scalar_forces else 0.0
     if law is not None:
         n = law.shape[0]
         s[SET_LAW0:SET_LAW0 + n] = law

@@ -365,9 +365,12 @@ def test_the_lane_walk_is_vectorized(problem):
 
 
 # ----------------------------------------------------------------- the force lanes
-def _without_force_lanes(problem):
-    """The problem's kernels with the scalar force stage for every candidate."""
-    return kernels_for(problem.plan, problem.rocker, force_lanes=False)
+def _scalar_forces(settings):
+    """``settings`` asking for the scalar force stage for every candidate (the
+    force lanes' baseline: the same module, the same candidates)."""
+    s = settings.copy()
+    s[ks.SET_SCALAR_FORCES] = 1.0
+    return s
 
 
 def _rows(kernels, problem, pars, settings=None):
@@ -382,14 +385,15 @@ def _rows(kernels, problem, pars, settings=None):
 
 def test_the_force_lanes_give_the_scalar_force_stage_s_bits(problem, candidates):
     """Every candidate's metrics with the force stage in lanes and without it
-    (the same module but for the force lanes): the same statuses and the same
-    metrics, bit for bit; many candidates reach the force stage; a phiM0 that
-    changes from candidate to candidate (the crank's cos/sin table made again)
-    changes nothing either."""
-    assert problem.kernels.HAS_LANE_FORCES and problem.settings()[ks.SET_WANT_FORCES]
+    (the same module, its settings asking for the scalar force stage): the same
+    statuses and the same metrics, bit for bit; many candidates reach the force
+    stage; a phiM0 that changes from candidate to candidate (the crank's cos/sin
+    table made again) changes nothing either."""
+    k, settings = problem.kernels, problem.settings()
+    assert k.HAS_LANE_FORCES and settings[ks.SET_WANT_FORCES]
+    assert k.lane_forces_apply(settings) and not k.lane_forces_apply(_scalar_forces(settings))
     s1, m1 = problem.evaluate_rows(candidates)
-    s0, m0 = _rows(_without_force_lanes(problem), problem, candidates)
-    assert not _without_force_lanes(problem).HAS_LANE_FORCES
+    s0, m0 = _rows(k, problem, candidates, _scalar_forces(settings))
     np.testing.assert_array_equal(s1, s0)
     assert m1.tobytes() == m0.tobytes()
     assert (m1[:, ks.M_FORCES_DONE] == 1.0).sum() > 500
@@ -397,7 +401,7 @@ def test_the_force_lanes_give_the_scalar_force_stage_s_bits(problem, candidates)
     col = problem.plan.par_names.index("crank.phiM0")
     pars[:, col] += np.deg2rad(np.arange(len(pars)) % 3)
     s1, m1 = problem.evaluate_rows(pars)
-    s0, m0 = _rows(_without_force_lanes(problem), problem, pars)
+    s0, m0 = _rows(k, problem, pars, _scalar_forces(settings))
     np.testing.assert_array_equal(s1, s0)
     assert m1.tobytes() == m0.tobytes()
 
@@ -413,7 +417,7 @@ def test_force_lanes_apply_only_where_they_compute_what_is_asked(problem, candid
         settings[flag] = 1.0
         assert not k.lane_forces_apply(settings)
         s1, m1 = _rows(k, problem, candidates[:300], settings)
-        s0, m0 = _rows(_without_force_lanes(problem), problem, candidates[:300], settings)
+        s0, m0 = _rows(k, problem, candidates[:300], _scalar_forces(settings))
         np.testing.assert_array_equal(s1, s0)
         assert m1.tobytes() == m0.tobytes()
     assert k.lane_forces_apply(problem.settings())
@@ -457,17 +461,17 @@ def counted(par, how, *a):
     calls["fallback"] += int(how == m.LANE_FORCES)
     return settle(par, how, *a)
 m.settle = counted
-from pipeline.compiler import kernels_for
-base = kernels_for(pb.plan, pb.rocker, force_lanes=False)
+scalar = pb.settings().copy()
+scalar[ks.SET_SCALAR_FORCES] = 1.0
 n = pars.shape[0]
 out = {}
-for label, mod in (("refused", m), ("scalar", base)):
+for label, settings in (("refused", pb.settings()), ("scalar", scalar)):
     status = np.zeros(n, np.int8); met = np.full((n, ks.N_METRICS), np.nan)
-    mod.evaluate(pars, 0, n, pb.phis, pb.phi_close, pb.tols, pb.settings(), pb.loads, status,
-                 met)
+    m.evaluate(pars, 0, n, pb.phis, pb.phi_close, pb.tols, settings, pb.loads, status, met)
     np.save(sys.argv[4] + label + ".npy", met)
     out[label] = status.tolist()
-print(json.dumps({"calls": calls, **out}))
+    out["calls_" + label] = dict(calls)
+print(json.dumps(out))
 """
 
 
@@ -490,7 +494,8 @@ def test_a_force_lane_refused_takes_the_scalar_force_stage(synthesis, candidates
                        timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
     out = json.loads(r.stdout.strip().splitlines()[-1])
-    assert out["calls"]["force_lanes"] >= 2 and out["calls"]["fallback"] >= lanes
+    assert out["calls_refused"]["force_lanes"] >= 2 and out["calls_refused"]["fallback"] >= lanes
+    assert out["calls_scalar"] == out["calls_refused"]      # the scalar run: no force lanes
     np.testing.assert_array_equal(out["refused"], out["scalar"])
     np.testing.assert_array_equal(out["refused"], status[rows])
     got, want = np.load(tmp_path / "met_refused.npy"), np.load(tmp_path / "met_scalar.npy")
@@ -499,12 +504,11 @@ def test_a_force_lane_refused_takes_the_scalar_force_stage(synthesis, candidates
 
 
 # the force lanes with external loads (a force at a point, a moment alone), in numba's
-# Python mode: the default study with two loads added would compile a new mechanism
-# twice (with and without force lanes); in Python mode it compiles nothing
+# Python mode: the default study with two loads added would compile a new mechanism;
+# in Python mode it compiles nothing
 FORCE_LOADS = r"""
 import dataclasses, json, sys
 import numpy as np
-from pipeline.compiler import kernels_for
 from pipeline.kernels import sweep as ks
 from pipeline.runs.sweep import build_problem
 from pipeline.study.reader import load_study
@@ -513,13 +517,14 @@ s = load_study(sys.argv[1])
 pb = build_problem(s, dataclasses.replace(s.sweep, positions=180))
 assert len(pb.plan.load_body) == 2 and pb.kernels.HAS_LANE_FORCES
 pars = parameter_rows(pb.plan, pb.spec, draw_candidates(pb.spec, 0)[:200])
+scalar = pb.settings().copy()
+scalar[ks.SET_SCALAR_FORCES] = 1.0
 out = {}
-for label, mod in (("lanes", pb.kernels), ("scalar", kernels_for(pb.plan, pb.rocker,
-                                                                  force_lanes=False))):
+for label, settings in (("lanes", pb.settings()), ("scalar", scalar)):
     n = pars.shape[0]
     status = np.zeros(n, np.int8); met = np.full((n, ks.N_METRICS), np.nan)
-    mod.evaluate(pars, 0, n, pb.phis, pb.phi_close, pb.tols, pb.settings(), pb.loads, status,
-                 met)
+    pb.kernels.evaluate(pars, 0, n, pb.phis, pb.phi_close, pb.tols, settings, pb.loads,
+                        status, met)
     out[label] = (status.tolist(), met.tobytes().hex(),
                   int((met[:, ks.M_FORCES_DONE] == 1.0).sum()))
 print(json.dumps(out))
@@ -554,41 +559,30 @@ def test_the_force_lanes_take_external_loads(tmp_path):
     assert out["lanes"] == out["scalar"]
 
 
-# the stand-alone kernels compiled first as pipeline.compiler.beside compiles them,
-# then a run's evaluate in the same process (a new module: nothing of it cached),
-# with numba's compile events recorded
-BESIDE = r"""
-import json, sys
-import numpy as np
-from numba.core import event
-from pipeline.compiler.beside import compile_standalone
-from pipeline.runs.sweep import build_problem
-from pipeline.study.reader import load_study
-s = load_study(sys.argv[1])
-pb = build_problem(s, s.sweep)
-compile_standalone(pb.kernels)
-with event.install_recorder("numba:compile") as rec:
-    status, metrics = pb.evaluate_rows(np.ascontiguousarray(pb.plan.par[None, :]), parallel=False)
-names = sorted({e.data["dispatcher"].py_func.__name__ for _, e in rec.buffer})
-print(json.dumps({"compiled": names, "metrics": metrics.tobytes().hex()}))
-"""
-
-
-def test_the_stand_alone_kernels_compile_beside_for_evaluate_s_types(problem, tmp_path):
+def test_the_stand_alone_kernels_compile_beside_for_evaluate_s_types(problem, candidates,
+                                                                    tmp_path):
     """What pipeline.compiler.beside compiles in a process of its own is what a
-    run's evaluate calls: compiled first in a process, they are not compiled
-    again for evaluate (the same signatures, so a run loads them from numba's
-    cache); and the trigger starts it only where the module has force lanes,
-    their cache is empty and it is not turned off."""
-    env = child_env(PIPELINE_CACHE_DIR=str(tmp_path / "modules"))
-    r = subprocess.run([sys.executable, "-c", BESIDE, str(STUDIES / "ov7_synthesis.toml")],
-                       env=env, capture_output=True, text=True, timeout=900)
+    run's evaluate calls: after evaluate (compiled here, or loaded from numba's
+    cache with the versions of its callees that its compile saved there),
+    beside's calls compile nothing (the same argument types, so what it writes
+    to numba's cache is what a run loads; an int32 where evaluate passes an
+    int64 failed here); it runs as a process; and the trigger starts it only
+    where the module has force lanes, their cache is empty and it is not
+    turned off."""
+    from numba.core import event
+    from pipeline.compiler.beside import compile_standalone
+    k = problem.kernels
+    status, metrics = problem.evaluate_rows(candidates)
+    assert (metrics[:, ks.M_FORCES_DONE] == 1.0).sum() > k.LANES     # force blocks ran
+    with event.install_recorder("numba:compile") as rec:
+        compile_standalone(k)
+    compiled = {e.data["dispatcher"].py_func.__name__ for _, e in rec.buffer}
+    assert not compiled & {"force_lanes", "walk"}, compiled
+    assert k.force_lanes.signatures and k.walk.signatures      # called (loaded, or there)
+    r = subprocess.run([sys.executable, "-m", "pipeline.compiler.beside", k.__name__,
+                        str(Path(k.SOURCE_PATH).parent)], env=child_env(),
+                       capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
-    out = json.loads(r.stdout.strip().splitlines()[-1])
-    assert "evaluate" in out["compiled"] and "settle" in out["compiled"]
-    assert "force_lanes" not in out["compiled"] and "walk" not in out["compiled"]
-    _, want = problem.evaluate_rows(np.ascontiguousarray(problem.plan.par[None, :]))
-    assert out["metrics"] == want.tobytes().hex()
     # the trigger (pipeline.compiler._compile_beside)
     import types
 

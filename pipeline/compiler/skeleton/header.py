@@ -45,7 +45,7 @@ from pipeline.kernels.sweep import (M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, 
                                     SET_MARGIN_MIN, SET_OMEGA1, SET_EPS1, SET_MARGIN_SAFE,
                                     SET_WANT_PEAKS, SET_WORK_POINT, SET_WANT_TRANSMISSION,
                                     SET_WANT_LAW, SET_LAW0, LAW_BEST,
-                                    SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING)
+                                    SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING, SET_SCALAR_FORCES)
 from pipeline.kernels.triad import class3, class3_slider, ternary_angle
 from pipeline.kernels.watch import (FOLD_BACK, LOCATE_MIN_STEP,
                                    LOCATE_NEWTON_TOL, RESOLVED, SUB, cubic_bound, fold_distance,
@@ -74,7 +74,7 @@ __all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_INNER', 'JIT_LANES', '
            'SET_WANT_FORCES', 'SET_STROKE_LO', 'SET_STROKE_HI', 'SET_MARGIN_MIN',
            'SET_OMEGA1', 'SET_EPS1', 'SET_MARGIN_SAFE', 'SET_WANT_PEAKS', 'SET_WORK_POINT',
            'SET_WANT_TRANSMISSION', 'SET_WANT_LAW', 'SET_LAW0', 'LAW_BEST',
-           'SET_WANT_EQUILIBRIUM', 'SET_WANT_SHAKING', 'class3',
+           'SET_WANT_EQUILIBRIUM', 'SET_WANT_SHAKING', 'SET_SCALAR_FORCES', 'class3',
            'class3_slider', 'ternary_angle', 'FOLD_BACK', 'LOCATE_MIN_STEP',
            'LOCATE_NEWTON_TOL', 'RESOLVED', 'SUB', 'cubic_bound', 'fold_distance',
            'third_difference', 'uniform_hit', 'window_score', 'window_vertex', 'may_reach')

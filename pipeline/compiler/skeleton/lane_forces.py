@@ -9,7 +9,8 @@ and readers, the names the generated module gives it."""
 
 from .header import (math, np, njit, JIT, JIT_INNER, OK, M_FORCES_DONE, SET_WANT_FORCES,
                      SET_WANT_PEAKS, SET_WANT_TRANSMISSION,
-                     SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING, SET_OMEGA1, SET_EPS1,
+                     SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING, SET_SCALAR_FORCES, SET_OMEGA1,
+                     SET_EPS1,
                      T_NEWTON_TOL, T_SINGULAR)
 from ._mechanism import (N_JOINTS, LANES, N_FROWS, FT_COLS, F_pm, F_bad,
                          force_lanes)
@@ -20,8 +21,11 @@ from .sweep_stages import settle, LANE_FORCES, reaction_peak, force_peaks_out
 def lane_forces_apply(settings):
     """Whether the force lanes compute what the settings ask for: the
     kinetostatics' peaks alone (the other peaks, the transmission angle, the
-    virtual-power residual and the shaking take the scalar force stage)."""
-    return (settings[SET_WANT_FORCES] != 0.0 and settings[SET_WANT_PEAKS] == 0.0
+    virtual-power residual and the shaking take the scalar force stage), and
+    the settings do not ask for the scalar force stage (SET_SCALAR_FORCES: the
+    baseline of the force lanes' tests and benchmark)."""
+    return (settings[SET_WANT_FORCES] != 0.0 and settings[SET_SCALAR_FORCES] == 0.0
+            and settings[SET_WANT_PEAKS] == 0.0
             and settings[SET_WANT_TRANSMISSION] == 0.0
             and settings[SET_WANT_EQUILIBRIUM] == 0.0 and settings[SET_WANT_SHAKING] == 0.0)
 
