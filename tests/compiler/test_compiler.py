@@ -783,6 +783,34 @@ def _cache_files(folder):
             for p in Path(folder).rglob("*") if p.is_file()}
 
 
+NAMES = r"""
+import json, sys
+from pipeline.compiler import module_name, source_for
+from pipeline.study.reader import load_study
+s = load_study(sys.argv[1])
+plan = s.mechanism.compile()
+print(json.dumps([module_name(source_for(plan)),
+                  module_name(source_for(plan, tuple(s.output.rocker)))]))
+"""
+
+
+def test_the_floating_point_flags_name_the_modules_that_use_them():
+    """numba's cache key has no floating-point flags, so the generated modules'
+    names carry them: a sweep's module (its lane walk contracts a*b + c by
+    default) differs under PIPELINE_FASTMATH=strict, the module without a rocker
+    (no lane walk) is the same one, and under =fast both differ."""
+    names = {}
+    for mode in ("default", "strict", "fast"):
+        r = subprocess.run([sys.executable, "-c", NAMES, str(STUDIES / "ov7_synthesis.toml")],
+                           env=child_env(PIPELINE_FASTMATH=mode), capture_output=True,
+                           text=True, timeout=300)
+        assert r.returncode == 0, r.stderr[-2000:]
+        names[mode] = json.loads(r.stdout.strip().splitlines()[-1])
+    assert names["strict"][0] == names["default"][0]
+    assert names["strict"][1] != names["default"][1]
+    assert names["fast"][0] != names["default"][0] and names["fast"][1] != names["default"][1]
+
+
 def test_a_second_run_compiles_nothing(tmp_path):
     """Two processes run a study (mechanism A's scene: one of the cheaper ones to
     compile) with one cache folder (the generated modules and numba's code)
