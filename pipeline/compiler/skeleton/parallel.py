@@ -62,9 +62,10 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
     # the force lanes: candidates the lanes vouched for that reach the force stage
     # gather in a block of their own (fidx), solved together when it is full
     in_force_lanes = HAS_LANE_FORCES and fast and lane_forces_apply(settings)
+    nf = npos if in_force_lanes else 0      # (their arrays only where they run)
     FS = np.empty(N_FROWS * LANES)
-    FT = np.empty((npos, FT_COLS * LANES))
-    RB = np.empty((npos, N_RCOLS * LANES))
+    FT = np.empty((nf, FT_COLS * LANES))
+    RB = np.empty((nf, N_RCOLS * LANES))
     crank_tab = np.empty((npos + 1, 2))
     crank_tab[0, 0] = math.nan
     fidx = np.empty(LANES, np.int64)
