@@ -273,17 +273,17 @@ def _walk_rate(stage, pars, rep):
     npos = len(stage.phis)
     blocks = []
     pos, d1, d2, m, state, _ = work(k.N_POINTS, k.N_GROUPS, k.N_TRIADS)
+    phis = np.asarray(stage.phis)
+    close = stage.phi_close if math.isfinite(stage.phi_close) else phis[0]
     for b in range(len(pars) // L):
         S = np.empty((k.N_LANE_ROWS, L))
         # the walk's rows: the positions, the closing one and two past it (as the
         # sweep's evaluate allocates them; walk_angle in the generated module)
         th = np.empty((npos + 3, L * k.THETA_COLS))
         for lane in range(L):
-            k.setup_lane(pars, b * L + lane, lane, stage.phis, stage.tols, S, th, pos, d1, d2, m,
-                         state)
+            k.setup_lane(pars, b * L + lane, lane, stage.phis, close, stage.tols, S, th, pos, d1,
+                         d2, m, state)
         blocks.append((S, th))
-    phis = np.asarray(stage.phis)
-    close = stage.phi_close if math.isfinite(stage.phi_close) else phis[0]
     ext = np.concatenate([phis, close + (phis[:3] - phis[0])])
     c, s = np.cos(ext), np.sin(ext)
 

@@ -33,7 +33,7 @@ def compile_standalone(mod) -> None:
         ft = np.ones((npos, mod.FT_COLS * lanes))
         rb = np.zeros((npos, mod.N_RCOLS * lanes))
         loads = np.zeros((npos, len(mod.LOAD_BODY), 3))
-        mod.force_lanes(fs, ft, rb, lanes, npos, 1e-12, 1e-6, 1.0, 0.0, loads)
+        mod.force_lanes(fs, ft, rb, lanes, npos, 1e-12, 1e-6, 1.0, 0.0, loads, np.int64(0))
     if getattr(mod, "HAS_LANES", False):
         s = np.ones((mod.N_LANE_ROWS, lanes))
         theta = np.zeros((npos, lanes * mod.THETA_COLS))

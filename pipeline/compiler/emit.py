@@ -161,6 +161,30 @@ class RRREmitter(Emitter):
 class RRPEmitter(Emitter):
     watched = True
     code = kc.G_RRP
+    fast = True
+
+    def derived(self):
+        # the lane form's guide direction: the hoisted cos/sin of its angle
+        return _hoisted_cos_sin(self, "guide_angle")
+
+    def lanes(self):
+        # kernels.groups.rrp's lines on the guide's unit vector (a guide of fixed
+        # direction: its operations, the same bits)
+        A, G, B = self.xy(0), self.xy(1), self.xy(2)
+        lab, w = lane(self.k("L_AB")), lane(self.k("W"))
+        return ([f"# {self.title()}: slider {B} on the guide through {G}, link from {A}"]
+                + lane_direction(self, "u1", "guide_angle", 3)
+                + ["nx = -u1y", "ny = u1x",
+                   f"dx = {A}x - {G}x", f"dy = {A}y - {G}y",
+                   "p = u1x * dx + u1y * dy", "h = nx * dx + ny * dy",
+                   f"q2 = {lab} * {lab} - h * h",
+                   "bad = bad | (q2 < 0.0)",
+                   "q = math.sqrt(max(q2, 0.0))",
+                   f"s = p + {w} * q",
+                   f"{B}x = {G}x + s * u1x", f"{B}y = {G}y + s * u1y",
+                   "# margin |cos| of the angle between the link and the guide",
+                   f"m = q / {lab}",
+                   "low = low | (not (m >= margin_safe))"])
 
     def careful(self):
         ga = self.p(3) if self.ix[3] >= 0 else "-1"
@@ -219,7 +243,7 @@ def _hoisted_cos_sin(e, *keys):
     return out
 
 
-def _lane_direction(e, u, angle_key, j):
+def lane_direction(e, u, angle_key, j):
     """Lane lines of a guide's unit direction ``u``x, ``u``y (kernels.groups._direction
     as a vector): e(angle) hoisted, or, for a guide turning with the link at gidx
     columns j, j + 1, that link's vector normalised and turned by the hoisted
@@ -235,7 +259,7 @@ def _lane_direction(e, u, angle_key, j):
             f"{u}y = f * ({s} * vx + {c} * vy)"]
 
 
-def _lane_meet(G1, e1, G2, e2, B):
+def lane_meet(G1, e1, G2, e2, B):
     """Lane lines of ``B`` where two lines meet (kernels.groups._line_meet): line i
     through G_i along u_i (locals u1x ... u2y) at the offset e_i along n_i = u_i
     turned +90 deg; ``m`` the margin |sin| of the angle between them (near 0:
@@ -261,9 +285,9 @@ class PRPEmitter(Emitter):
 
     def lanes(self):
         return ([f"# {self.title()}: {self.xy(6)} where the two guide lines meet"]
-                + _lane_direction(self, "u1", "guide1_angle", 1)
-                + _lane_direction(self, "u2", "guide2_angle", 4)
-                + _lane_meet(self.xy(0), lane(self.k("guide1_offset")), self.xy(3),
+                + lane_direction(self, "u1", "guide1_angle", 1)
+                + lane_direction(self, "u2", "guide2_angle", 4)
+                + lane_meet(self.xy(0), lane(self.k("guide1_offset")), self.xy(3),
                              lane(self.k("guide2_offset")), self.xy(6)))
 
     def careful(self):
@@ -302,9 +326,9 @@ class RPPEmitter(Emitter):
         cs, ss = lane(f"{self.k('slot_angle')}_cos"), lane(f"{self.k('slot_angle')}_sin")
         return ([f"# {self.title()}: {self.xy(4)} where the guide and the slot through "
                  f"{self.xy(0)} meet"]
-                + _lane_direction(self, "u1", "guide_angle", 2)
+                + lane_direction(self, "u1", "guide_angle", 2)
                 + [f"u2x = {cs} * u1x - {ss} * u1y", f"u2y = {ss} * u1x + {cs} * u1y"]
-                + _lane_meet(self.xy(1), lane(self.k("guide_offset")), self.xy(0),
+                + lane_meet(self.xy(1), lane(self.k("guide_offset")), self.xy(0),
                              f"-{lane(self.k('slot_offset'))}", self.xy(4)))
 
     def careful(self):
@@ -418,7 +442,11 @@ class InputEmitter(Emitter):
             return []
         return _hoisted_cos_sin(self, "guide_angle")
 
-    def careful(self):
+    fast = True
+    theta_col = -1          # its columns of the lane path's table (lanes.lane_kernel)
+
+    def law_call(self):
+        """(words, expression) of the input's law at ``phi``: (q, q', q'')."""
         k = self.k
         rotary = self.kind == ik.ROTARY
         if self.law == ik.LAW_LINEAR:
@@ -433,6 +461,12 @@ class InputEmitter(Emitter):
             start, travel = ("start_angle", "travel_angle") if rotary else ("start", "stroke")
             law = (f"rise_return(phi, {k(start)}, {k(travel)}, {k('phase_angle')}, "
                    f"{k('rise_angle')}, {cyc})")
+        return words, law
+
+    def careful(self):
+        k = self.k
+        rotary = self.kind == ik.ROTARY
+        words, law = self.law_call()
         lines = [f"# {self.title()}: {words}", f"q, q1, q2 = {law}"]
         if rotary:
             lines += [f"# {self.pname(1)} = {self.pname(0)} + length e(q)",
@@ -444,6 +478,37 @@ class InputEmitter(Emitter):
                       f"st, m = slider_input(pos, d1, d2, {self.p(0)}, {self.p(1)}, {a}_cos, "
                       f"{a}_sin, q, q1, q2, order)"]
         return lines
+
+    def law_steps(self):
+        """Lines of ``setup_lane`` that fill the input's columns of the lane path's
+        table (theta[k, col * LANES + l]) at every step k of the walk: e(q) (a
+        rotary input) or q (a slider input), then q' and q'', by the careful
+        path's own law and library calls (the same bits); the lanes read them
+        instead of calling the library."""
+        c = self.theta_col
+        words, law = self.law_call()
+        rotary = self.kind == ik.ROTARY
+        return [f"# {self.title()}: {words}, at every step of the walk",
+                "for k in range(phis.shape[0] + 3):",
+                "    phi = walk_angle(phis, k, close)",
+                f"    q, q1, q2 = {law}",
+                f"    theta[k, {c} * LANES + l] = {'math.cos(q)' if rotary else 'q'}",
+                f"    theta[k, {c + 1} * LANES + l] = {'math.sin(q)' if rotary else '0.0'}",
+                f"    theta[k, {c + 2} * LANES + l] = q1",
+                f"    theta[k, {c + 3} * LANES + l] = q2"]
+
+    def lanes(self):
+        c = self.theta_col
+        piv, tip = self.xy(0), self.xy(1)
+        if self.kind == ik.ROTARY:
+            L = lane(self.k("length"))
+            return [f"# {self.title()}: {tip} = {piv} + length e(q), e(q) from the lane's table",
+                    f"{tip}x = {piv}x + {L} * theta[k, {c} * LANES + l]",
+                    f"{tip}y = {piv}y + {L} * theta[k, {c + 1} * LANES + l]"]
+        a = self.k("guide_angle")
+        return [f"# {self.title()}: {tip} = {piv} + q e(guide_angle), q from the lane's table",
+                f"{tip}x = {piv}x + theta[k, {c} * LANES + l] * {lane(a + '_cos')}",
+                f"{tip}y = {piv}y + theta[k, {c} * LANES + l] * {lane(a + '_sin')}"]
 
 
 class ClassIIIEmitter(Emitter):

@@ -175,12 +175,30 @@ def is_square(plan) -> bool:
     return nb > 0 and 2 * nj + 2 * ns + int(has_crank) + ni == 3 * nb and (has_crank or ni > 0)
 
 
-def eliminated(plan, names):
+def slide_angle(plan, names, k) -> str:
+    """The expression of slide ``k``'s angle (rad; from its guide link where it
+    turns with one): the declared angle, turned with the guide parameters it
+    follows (a design variable turns the slide with its guide)."""
+    follow = [int(i) for i in plan.slide_follow[k] if i >= 0]
+    if not follow:
+        return literal(float(plan.slide_angle[k]))
+    return " + ".join([literal(float(plan.slide_angle[k] - plan.slide_declared[k]))]
+                      + [f"par[PAR_{names.par(i)}]" for i in follow])
+
+
+def eliminated(plan, names, lanes=False):
     """(lines, m) of a square plan's kinetostatics at one position (the body of
     ``forces_at``): the applied loads (``applied_loads`` into loads_out), the
     force-balance rows eliminated here, the m x m system left solved at run
     time, the reactions into r_out (slides and inputs into slide_out) and the
-    returned M_bal."""
+    returned M_bal.
+
+    ``lanes``: the lines for the force lanes (``pipeline.compiler.lane_forces``),
+    where no library call may stand: a slide's normal from the cos/sin of its
+    angle, hoisted per candidate (``SLIDE_COS_k``, ``SLIDE_SIN_k``), and, for a
+    slide that turns with a link, the link's unit vector turned by them, in
+    place of atan2 and sin/cos at every position (the same direction, to
+    rounding); a link of no length sets ``bad``."""
     nb, nj, ns = len(plan.body_names), len(plan.joint_names), len(plan.slide_names)
     ni = plan.n_inputs
     n = 3 * nb
@@ -232,21 +250,30 @@ def eliminated(plan, names):
     for k in range(ns):
         q = int(plan.slide_bodies[k, 1])
         sq = int(plan.body_com[q])
-        # the slide's direction: its angle, turned with the guide parameters it
-        # follows (a design variable turns the slide with its guide)
-        follow = [int(i) for i in plan.slide_follow[k] if i >= 0]
-        angle = literal(float(plan.slide_angle[k]))
-        if follow:
-            angle = " + ".join([literal(float(plan.slide_angle[k] - plan.slide_declared[k]))]
-                               + [f"par[PAR_{names.par(i)}]" for i in follow])
-        if plan.slide_dir[k, 0] >= 0:
-            a_, b_ = (int(v) for v in plan.slide_dir[k])
-            th = sym.var(f"math.atan2(pos[{P[b_]}, 1] - pos[{P[a_]}, 1], pos[{P[b_]}, 0] - "
-                         f"pos[{P[a_]}, 0]) + {angle}")
+        angle = slide_angle(plan, names, k)
+        if lanes:
+            c_, s_ = f"SLIDE_COS_{k}", f"SLIDE_SIN_{k}"
+            if plan.slide_dir[k, 0] >= 0:
+                a_, b_ = (int(v) for v in plan.slide_dir[k])
+                dx = sym.var(f"pos[{P[b_]}, 0] - pos[{P[a_]}, 0]")
+                dy = sym.var(f"pos[{P[b_]}, 1] - pos[{P[a_]}, 1]")
+                r2 = sym.var(f"{dx} * {dx} + {dy} * {dy}")
+                L.append(f"bad = bad | (not ({r2} > 0.0))")
+                f = sym.var(f"1.0 / math.sqrt({r2})")
+                nx = sym.var(f"-({f} * ({s_} * {dx} + {c_} * {dy}))")
+                ny = sym.var(f"{f} * ({c_} * {dx} - {s_} * {dy})")
+            else:
+                nx = sym.var(f"-{s_}")
+                ny = sym.var(c_)
         else:
-            th = sym.var(angle)
-        nx = sym.var(f"-math.sin({th})")
-        ny = sym.var(f"math.cos({th})")
+            if plan.slide_dir[k, 0] >= 0:
+                a_, b_ = (int(v) for v in plan.slide_dir[k])
+                th = sym.var(f"math.atan2(pos[{P[b_]}, 1] - pos[{P[a_]}, 1], pos[{P[b_]}, 0] - "
+                             f"pos[{P[a_]}, 0]) + {angle}")
+            else:
+                th = sym.var(angle)
+            nx = sym.var(f"-math.sin({th})")
+            ny = sym.var(f"math.cos({th})")
         col = 2 * nj + 2 * k
         for side in range(2):
             body = int(plan.slide_bodies[k, side])
@@ -281,8 +308,12 @@ def eliminated(plan, names):
             L.append(f"# input {label}: a drive force along its guide at the block; "
                      "q' = u . (block' - guide point') in m")
             g = names.K(int(plan.input_group[k]), "guide_angle")
-            ux = sym.var(f"math.cos(par[PAR_{g}])")
-            uy = sym.var(f"math.sin(par[PAR_{g}])")
+            if lanes:       # (the input's hoisted cos/sin of the same angle: the same bits)
+                ux = sym.var(f"LANE_CONST({g}_cos)")
+                uy = sym.var(f"LANE_CONST({g}_sin)")
+            else:
+                ux = sym.var(f"math.cos(par[PAR_{g}])")
+                uy = sym.var(f"math.sin(par[PAR_{g}])")
             s_ = int(plan.body_com[body])
             lx = sym.var(f"(pos[{b_}, 0] - pos[{P[s_]}, 0]) * {MM}")
             ly = sym.var(f"(pos[{b_}, 1] - pos[{P[s_]}, 1]) * {MM}")
@@ -360,11 +391,14 @@ def eliminated(plan, names):
                  f"slide_out[{k}, 1] = x{2 * nj + 2 * k + 1}"]
     if ni:
         body.append("# every input's drive, and its share of the main shaft's moment")
+        share = [f"slide_out[{ns + k}, 1]" for k in range(ni)]
+        if lanes:               # (the lanes keep no slide_out: locals)
+            share = [f"drive_share{k}" for k in range(ni)]
         for k in range(ni):
-            body += [f"slide_out[{ns + k}, 0] = x{col_in + k}",
-                     f"slide_out[{ns + k}, 1] = x{col_in + k} * {shares[k]}"]
-        total = " + ".join(([f"x{col_m}"] if has_crank else [])
-                           + [f"slide_out[{ns + k}, 1]" for k in range(ni)])
+            if not lanes:
+                body.append(f"slide_out[{ns + k}, 0] = x{col_in + k}")
+            body.append(f"{share[k]} = x{col_in + k} * {shares[k]}")
+        total = " + ".join(([f"x{col_m}"] if has_crank else []) + share)
         body.append(f"return {total}")
     else:
         body.append(f"return x{col_m}")

@@ -196,7 +196,7 @@ def _sweep_parts(plan, n, ems, rocker, lanes_width, watch) -> str:
     (or the skeleton without them) and ``evaluate``."""
     if rocker is not None:
         lanes = lane_kernel(plan, n, ems, rocker, lanes_width, watch)
-        forces = lane_force_kernel(plan, n, ems)
+        forces = lane_force_kernel(plan, n, ems, rocker)
     else:
         lanes = _spaced(no_rocker_kernel())
         forces = part("no_lane_forces").format(why="no output rocker declared")

@@ -7,6 +7,11 @@ vector instructions.  Every per-candidate constant and every piece of state
 that lives from one crank position to the next is a row of one array
 ``S[row, lane]`` (a single base pointer: no aliasing to rule out).
 
+Inputs besides the crank: ``setup_lane`` fills the input's columns of the
+lane's table with its law at every step of the walk (e(q), or q for a slider,
+then q' and q'': the careful path's own law and library calls), and the walk
+reads them; the force lanes take them over as a class III solution.
+
 The fast path is exact to rounding where it runs, and says where it cannot
 vouch for a lane (S[R_flag, lane] set): an assembly failure or a margin below
 ``settings[SET_MARGIN_SAFE]``, a Newton that did not reach the tolerance in
@@ -29,7 +34,7 @@ import re
 
 from ..kernels.continuation import FOLD_SHARE
 from ..kernels.watch import ERR_FACTOR
-from .emit import ClassIIIEmitter, _wrap_line, constant_names, lane
+from .emit import ClassIIIEmitter, InputEmitter, _wrap_line, constant_names, lane
 from .names import text
 from .skeleton import part
 
@@ -131,6 +136,9 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
     kin = ems[:plan.n_kinematic]
     fast = all(e.fast for e in kin)
     triads = [e for e in kin if e.continued]    # (with a lane form: class3 only)
+    inputs = [e for e in kin if isinstance(e, InputEmitter)]
+    for j, e in enumerate(inputs):      # their columns of the table, after the triads'
+        e.theta_col = 1 + 4 * len(triads) + 4 * j
     rows = []
     # per-candidate constants: every entry of constants(par)
     consts = constant_names(plan, names, ems)
@@ -150,7 +158,9 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
            f"LANES = {width}",
            f"HAS_LANES = {fast}   # every kinematic group has a lane form",
            f"NEWTON_STEPS = {NEWTON_STEPS}   # Newton steps per position in the lanes",
-           f"THETA_COLS = {1 + 4 * len(triads)}   # rocker angle, then e(a), e(b) of each class III group",
+           f"THETA_COLS = {1 + 4 * len(triads) + 4 * len(inputs)}   # rocker angle, e(a), e(b) of "
+           "each class III group, e(q) (or q), q', q'' of each input",
+           f"THETA_IN = {1 + 4 * len(triads)}   # the first column of the inputs' laws",
            f"N_LANE_ROWS = {len(rows)}",
            "# rows of the lane array S[row, lane]"]
     src += [f"R_{r} = {i}" for i, r in enumerate(rows)]
@@ -169,6 +179,9 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
         a(line)
     for c in consts:
         a(f"S[R_{c}, l] = {c}")
+    for e in inputs:
+        for line in e.law_steps():
+            a(line)
     a("st = advance(K, walk_start(K, phis[0], state), phis[0], np.int64(1), tols, state, pos,")
     a("             d1, d2, margins, np.bool_(False))")
     a("ok = st == OK")
@@ -304,10 +317,12 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
     src += [""] + walk + ["", ""]
     src += ["# inline='always': one call site in the sweep; as its own function numba would", '# build and link a library of everything it calls once more (compile time)',
             "@njit(inline='always', **JIT)",
-            "def setup_lane(pars, i, l, phis, tols, S, theta, pos, d1, d2, margins, state):",
-            '    """Candidate ``i`` into lane ``l``: its constants, and the careful solve at',
-            "    phis[0] (order 1: the first increment of the class III angles comes from",
-            '    their analogs).  Returns OK, the status of a failure there, or -1."""']
+            "def setup_lane(pars, i, l, phis, close, tols, S, theta, pos, d1, d2, margins, state):",
+            '    """Candidate ``i`` into lane ``l``: its constants, its inputs\' laws at every',
+            "    step of the walk (``close``: phi_close, or phis[0] where the revolution",
+            "    need not close), and the careful solve at phis[0] (order 1: the first",
+            "    increment of the class III angles comes from their analogs).  Returns",
+            '    OK, the status of a failure there, or -1."""']
     src += ["    " + x for x in setup]
     src += ["    # OK (0): in the lane; a failure at phis[0] is the careful path's own first",
             "    # step, reported as it is; -1: assembled, but the lane cannot start (careful)",
@@ -366,7 +381,7 @@ def _split(line, width=90):
 
 # the lane path's constants where there is no output rocker (not a sweep)
 NO_ROCKER = ("ROCKER_PIVOT = 0", "ROCKER_POINT = 0", "LANES = 1", "HAS_LANES = False",
-             "N_LANE_ROWS = 4", "THETA_COLS = 1", "R_margin = 0", "R_flag = 1",
+             "N_LANE_ROWS = 4", "THETA_COLS = 1", "THETA_IN = 1", "R_margin = 0", "R_flag = 1",
              "R_first_flag = 2", "R_last_flag = 3",
              "NEWTON_STEPS = 0")
 

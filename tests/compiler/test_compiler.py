@@ -26,7 +26,7 @@ from pipeline.kernels.config import JIT
 from pipeline.kernels.forces import force_work, gauss_solve, kinetostatics
 from pipeline.kernels.metrics import dwell_error, dwell_lanes
 from pipeline.solve.scene import revolution_angles, solve_curves
-from pipeline.study.reader import load_study
+from pipeline.study.reader import load_study, parse_study
 from pipeline.runs.sweep import build_problem
 from pipeline.study.sweep_spec import draw_candidates, parameter_rows
 from support.checkout import child_env
@@ -171,8 +171,8 @@ def lanes_vouched(problem, pars):
     for b in range(len(pars) // L):
         S = np.empty((k.N_LANE_ROWS, L))
         theta = np.empty((npos + 3, L * k.THETA_COLS))
-        if any(k.setup_lane(pars, b * L + lane, lane, problem.phis, problem.tols, S, theta, pos,
-                            d1, d2, m, state) != kc.OK for lane in range(L)):
+        if any(k.setup_lane(pars, b * L + lane, lane, problem.phis, close, problem.tols, S,
+                            theta, pos, d1, d2, m, state) != kc.OK for lane in range(L)):
             continue
         k.block_walk(S, theta, np.cos(ext), np.sin(ext), problem.phis, problem.tols,
                      problem.settings())
@@ -334,6 +334,78 @@ def test_ppr_lanes_agree_with_the_careful_path(tmp_path):
     assert_lanes_agree(pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0)), class3=False)
 
 
+def test_input_and_rrp_lanes_agree_with_the_careful_path():
+    """The cam-driven rocker (a rotary input on a cycloidal law, an RRP on a
+    guide of fixed direction, forces and peaks) in the lanes: the input's law
+    from a table the lane fills by the careful path's own calls, the RRP by its
+    careful lines on the hoisted guide direction.  The link's lower bound
+    brought down so that a share of the draws cannot reach the sinker bar's
+    guide all the way round: the RRP's toggle, which the lanes hand over."""
+    text = (STUDIES / "cam_rocker_input_sweep.toml").read_text()
+    text = text.replace("min = 42.0, max = 55.0", "min = 30.0, max = 55.0")
+    assert "min = 30.0, max = 55.0" in text
+    study = parse_study(text, "cam_wide.toml")
+    pb = build_problem(study, study.sweep)
+    spec = dataclasses.replace(study.sweep, candidates=2000, chunk_size=2000)
+    status = assert_lanes_agree(pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0)),
+                                class3=False)
+    assert (status != kc.OK).sum() > 100
+    assert pb.kernels.HAS_LANE_FORCES and pb.kernels.SAME_BITS
+
+
+SLIDER_SWEEP = """
+[output]
+working_point = "P7"
+rocker = ["P6", "P3"]
+links = ["5_3", "6_3"]
+analysis = "forces"
+
+[sweep]
+candidates = 1500
+seed = 3
+positions = 360
+chunk_size = 1500
+stroke_radius = 30.0
+objectives = ["peak_acceleration", "peak_reaction"]
+metrics = ["peak_acceleration", "peak_reaction", "peak_M_bal", "stroke"]
+
+[sweep.variables]
+link = { param = "lever.L_AB", min = 36.0, max = 48.0 }
+lever = { param = "lever.L_CB", min = 26.0, max = 34.0 }
+guide_y = { param = "P4.y", min = -44.0, max = -36.0 }
+
+[sweep.constraints]
+stroke = { min = 5.0 }
+"""
+
+
+def test_a_slider_input_in_the_lanes_and_the_force_lanes():
+    """The programmed slide (a slider input on a table law, an RRR, a lever
+    with a load) as a sweep: the lanes against the careful path, and the force
+    lanes (the input's stroke and its drive along the guide, the RRR to
+    rounding) against the scalar force stage: the same statuses, joints and
+    angles, the peaks within the lanes' agreement."""
+    text = (STUDIES / "actuator_slider_input.toml").read_text()
+    text = text[:text.index("[output]")].replace('kind = "scene"', 'kind = "sweep"') \
+        .replace('type = "RRR"\n', 'type = "RRR"\nname = "lever"\n')
+    assert 'name = "lever"' in text
+    study = parse_study(text + SLIDER_SWEEP, "actuator_sweep.toml")
+    pb = build_problem(study, study.sweep)
+    pars = parameter_rows(pb.plan, pb.spec, draw_candidates(pb.spec, 0))
+    assert_lanes_agree(pb, pars, class3=False)
+    k, settings = pb.kernels, pb.settings()
+    assert k.HAS_LANE_FORCES and not k.SAME_BITS and k.lane_forces_apply(settings)
+    s1, m1 = pb.evaluate_rows(pars)
+    s0, m0 = _rows(k, pb, pars, _scalar_forces(settings))
+    np.testing.assert_array_equal(s1, s0)
+    done = m0[:, ks.M_FORCES_DONE] == 1.0
+    assert done.sum() > 500
+    for col in (ks.M_FORCES_DONE, ks.M_PEAK_JOINT, ks.M_PEAK_PHI):
+        np.testing.assert_array_equal(m1[:, col], m0[:, col])
+    for col in (ks.M_PEAK_R, ks.M_PEAK_MBAL, ks.M_PEAK_ACC, ks.M_PEAK_EPS):
+        np.testing.assert_allclose(m1[done, col], m0[done, col], rtol=LANE_AGREEMENT_REL, atol=0)
+
+
 def test_a_candidate_gets_the_same_numbers_wherever_it_runs(problem, candidates):
     """Thread count, order and batch split change nothing, bit for bit."""
     s1, m1 = problem.evaluate_rows(candidates, n_jobs=1)
@@ -404,15 +476,34 @@ def test_the_force_lanes_give_the_scalar_force_stage_s_bits(problem, candidates)
     s0, m0 = _rows(k, problem, pars, _scalar_forces(settings))
     np.testing.assert_array_equal(s1, s0)
     assert m1.tobytes() == m0.tobytes()
+    assert k.SAME_BITS
+
+
+def test_the_force_lanes_give_the_working_point_s_and_the_rocker_s_peaks(problem, candidates):
+    """With SET_WANT_PEAKS the force lanes also take the working point's peak |a|
+    and the output rocker's peak |eps| (the working point chosen at run time):
+    the scalar force stage's bits, for two working points."""
+    k = problem.kernels
+    for point in ("P8", "P5"):
+        settings = problem.settings().copy()
+        settings[ks.SET_WANT_PEAKS] = 1.0
+        settings[ks.SET_WORK_POINT] = problem.plan.point(point)
+        assert k.lane_forces_apply(settings)
+        s1, m1 = _rows(k, problem, candidates[:1000], settings)
+        s0, m0 = _rows(k, problem, candidates[:1000], _scalar_forces(settings))
+        np.testing.assert_array_equal(s1, s0)
+        assert m1.tobytes() == m0.tobytes()
+        done = m1[:, ks.M_FORCES_DONE] == 1.0
+        assert done.sum() > 50 and np.isfinite(m1[done, ks.M_PEAK_ACC]).all()
+        assert (m1[done, ks.M_PEAK_EPS] > 0.0).all()
 
 
 def test_force_lanes_apply_only_where_they_compute_what_is_asked(problem, candidates):
-    """Settings that ask for more than the kinetostatics' peaks (the transmission
-    angle, the working point's acceleration, the virtual-power residual, the
-    shaking) take the scalar force stage: the same bits as without force lanes."""
+    """Settings that ask for more than the kinetostatics' and the motion's peaks
+    (the transmission angle, the virtual-power residual, the shaking) take the
+    scalar force stage: the same bits as without force lanes."""
     k = problem.kernels
-    for flag in (ks.SET_WANT_TRANSMISSION, ks.SET_WANT_PEAKS, ks.SET_WANT_EQUILIBRIUM,
-                 ks.SET_WANT_SHAKING):
+    for flag in (ks.SET_WANT_TRANSMISSION, ks.SET_WANT_EQUILIBRIUM, ks.SET_WANT_SHAKING):
         settings = problem.settings().copy()
         settings[flag] = 1.0
         assert not k.lane_forces_apply(settings)
@@ -432,7 +523,60 @@ def test_the_force_lanes_are_vectorized(problem):
     FS = np.ones(k.N_FROWS * k.LANES)
     FT = np.ones((npos, k.FT_COLS * k.LANES))
     RB = np.zeros((npos, k.N_RCOLS * k.LANES))
-    f(FS, FT, RB, k.LANES, npos, 1e-12, 1e-6, 1.0, 0.0, problem.loads)
+    f(FS, FT, RB, k.LANES, npos, 1e-12, 1e-6, 1.0, 0.0, problem.loads, 3)
+    asm = next(iter(f.inspect_asm().values()))
+    ops = collections.Counter(re.findall(r"\b(v?(?:mul|add|sub|div|sqrt)pd)\b", asm))
+    assert sum(ops.values()) > 300, ops
+
+
+@pytest.fixture(scope="module")
+def prp_problem():
+    """The slotted rocker's sweep as shipped (tests/model/test_new_dyads runs it too)."""
+    study = load_study(STUDIES / "slotted_rocker_prp_sweep.toml")
+    pb = build_problem(study, study.sweep)
+    x = np.concatenate([draw_candidates(pb.spec, c) for c in range(2)])
+    return pb, np.ascontiguousarray(parameter_rows(pb.plan, pb.spec, x))
+
+
+def test_the_force_lanes_of_dyads_and_slides_agree_with_the_scalar_force_stage(prp_problem):
+    """The slotted rocker (an RRR, a PRP whose slot turns with the rocker, a
+    guide of fixed direction, a block that only translates) in the force
+    lanes: its groups and its turning slide by their forms without a library
+    call (the cosine law without acos, guide directions as link vectors turned
+    by hoisted cos/sin), so the scalar force stage's numbers to rounding, not
+    its bits.  The same statuses, peak joints, peak angles and verdicts; the
+    peak reaction, |M_bal|, the working point's |a| and the rocker's |eps|
+    within the lanes' agreement with the careful path; and not the same bits
+    (the lanes run their own forms)."""
+    pb, pars = prp_problem
+    k, settings = pb.kernels, pb.settings()
+    assert k.HAS_LANE_FORCES and not k.SAME_BITS
+    assert settings[ks.SET_WANT_PEAKS] and k.lane_forces_apply(settings)
+    s1, m1 = pb.evaluate_rows(pars)
+    s0, m0 = _rows(k, pb, pars, _scalar_forces(settings))
+    np.testing.assert_array_equal(s1, s0)
+    done = m0[:, ks.M_FORCES_DONE] == 1.0
+    assert done.sum() > 1500
+    for col in (ks.M_FORCES_DONE, ks.M_PEAK_JOINT, ks.M_PEAK_PHI, ks.M_STROKE, ks.M_DWELL):
+        np.testing.assert_array_equal(m1[:, col], m0[:, col])
+    for col in (ks.M_PEAK_R, ks.M_PEAK_MBAL, ks.M_PEAK_ACC, ks.M_PEAK_EPS):
+        np.testing.assert_allclose(m1[done, col], m0[done, col], rtol=LANE_AGREEMENT_REL, atol=0)
+        assert np.isfinite(m1[done, col]).all()
+    assert m1.tobytes() != m0.tobytes()
+
+
+def test_the_force_lanes_of_dyads_and_slides_are_vectorized(prp_problem):
+    """Packed (SIMD) floating-point instructions in the slotted rocker's force
+    lanes (the working point's select over the points, the clamped square root
+    of the cosine law)."""
+    pb, _ = prp_problem
+    k = pb.kernels
+    f = njit(**dict(kc.JIT, cache=False))(k.force_lanes.py_func)
+    npos = 4
+    FS = np.ones(k.N_FROWS * k.LANES)
+    FT = np.ones((npos, k.FT_COLS * k.LANES))
+    RB = np.zeros((npos, k.N_RCOLS * k.LANES))
+    f(FS, FT, RB, k.LANES, npos, 1e-12, 1e-6, 1.0, 0.0, pb.loads, 3)
     asm = next(iter(f.inspect_asm().values()))
     ops = collections.Counter(re.findall(r"\b(v?(?:mul|add|sub|div|sqrt)pd)\b", asm))
     assert sum(ops.values()) > 300, ops

@@ -117,10 +117,11 @@ def test_pyflakes_finds_nothing_in_the_skeleton():
 def sources():
     """Generated sources that use every part: a scene of a closed-form mechanism
     (no rocker), a sweep with class III groups and lanes, a sweep of a group
-    without a lane form; each sweep's module and the module of its mechanism
-    (no rocker: everything the rocker does not change), which it imports from."""
+    without a lane form (the class III group with a slider); each sweep's module
+    and the module of its mechanism (no rocker: everything the rocker does not
+    change), which it imports from."""
     out = {}
-    for name in ("ov7_base", "ov7_synthesis", "cam_rocker_input_sweep"):
+    for name in ("ov7_base", "ov7_synthesis", "ov7_class3_slider_sweep"):
         study = load_study(STUDIES / f"{name}.toml")
         plan = study.mechanism.compile()
         if study.kind == "sweep":
@@ -141,15 +142,15 @@ def test_the_generated_source_holds_every_part_verbatim(sources):
         elif name == "no_lanes":
             assert text.format(why="No output rocker declared") in sources["ov7_base"]
             text = text.format(why="A group without a lane form")
-            assert text in sources["cam_rocker_input_sweep"]
+            assert text in sources["ov7_class3_slider_sweep"]
         elif name == "no_lane_forces":
             assert text.format(why="no output rocker declared") in sources["ov7_base"]
             text = text.format(why="no lane path: a group without a lane form of its positions")
-            assert text in sources["cam_rocker_input_sweep"]
+            assert text in sources["ov7_class3_slider_sweep"]
         assert text in everything, name
     assert part("advance_closed") in sources["ov7_base"]
     assert part("advance_newton") in sources["ov7_synthesis mechanism"]
-    for sweep in ("ov7_synthesis", "cam_rocker_input_sweep"):
+    for sweep in ("ov7_synthesis", "ov7_class3_slider_sweep"):
         # the sweep's module defines what the rocker changes, imports the rest
         assert part("advance_newton") not in sources[sweep] and "def position(" not in sources[sweep]
         assert part("sweep_stages") in sources[sweep] and part("parallel") in sources[sweep]

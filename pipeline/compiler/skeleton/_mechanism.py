@@ -14,6 +14,7 @@ N_WATCH = 0
 
 # the lane path's constants (lanes: a sweep's output rocker and lane rows)
 ROCKER_PIVOT = ROCKER_POINT = LANES = NEWTON_STEPS = N_LANE_ROWS = THETA_COLS = 0
+THETA_IN = 0
 R_margin = R_flag = R_first_flag = R_last_flag = 0
 
 # kernels written from the plan
@@ -24,5 +25,6 @@ setup_lane = block_walk = lanes_apply = None    # lanes (or skeleton no_lanes)
 
 # the force lanes' constants and kernels (lane_forces, or skeleton no_lane_forces)
 HAS_LANE_FORCES = False
-N_FROWS = FT_COLS = N_RCOLS = F_pm = F_bad = 0
+SAME_BITS = False
+N_FROWS = FT_COLS = N_RCOLS = F_pm = F_pe = F_bad = 0
 force_lanes = force_lane_in = None

@@ -7,12 +7,12 @@ The text below the marker line is pasted into the generated module
 (``pipeline.compiler.lane_forces``); the imports above it declare, for linters
 and readers, the names the generated module gives it."""
 
-from .header import (math, np, njit, JIT, JIT_INNER, OK, M_FORCES_DONE, SET_WANT_FORCES,
-                     SET_WANT_PEAKS, SET_WANT_TRANSMISSION,
+from .header import (math, np, njit, JIT, JIT_INNER, OK, M_FORCES_DONE, M_PEAK_ACC,
+                     M_PEAK_EPS, SET_WANT_FORCES, SET_WANT_PEAKS, SET_WANT_TRANSMISSION,
                      SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING, SET_SCALAR_FORCES, SET_OMEGA1,
-                     SET_EPS1,
-                     T_NEWTON_TOL, T_SINGULAR)
-from ._mechanism import (N_JOINTS, LANES, N_FROWS, FT_COLS, F_pm, F_bad,
+                     SET_EPS1, SET_WORK_POINT,
+                     T_NEWTON_TOL, T_SINGULAR, may_reach)
+from ._mechanism import (N_JOINTS, LANES, N_FROWS, FT_COLS, N_RCOLS, F_pm, F_pe, F_bad,
                          force_lanes)
 from .sweep_stages import settle, LANE_FORCES, reaction_peak, force_peaks_out
 
@@ -20,12 +20,12 @@ from .sweep_stages import settle, LANE_FORCES, reaction_peak, force_peaks_out
 @njit(**JIT)
 def lane_forces_apply(settings):
     """Whether the force lanes compute what the settings ask for: the
-    kinetostatics' peaks alone (the other peaks, the transmission angle, the
-    virtual-power residual and the shaking take the scalar force stage), and
-    the settings do not ask for the scalar force stage (SET_SCALAR_FORCES: the
-    baseline of the force lanes' tests and benchmark)."""
+    kinetostatics' peaks, with or without the working point's and the rocker's
+    (the transmission angle, the virtual-power residual and the shaking take
+    the scalar force stage), and the settings do not ask for the scalar force
+    stage (SET_SCALAR_FORCES: the baseline of the force lanes' tests and
+    benchmark)."""
     return (settings[SET_WANT_FORCES] != 0.0 and settings[SET_SCALAR_FORCES] == 0.0
-            and settings[SET_WANT_PEAKS] == 0.0
             and settings[SET_WANT_TRANSMISSION] == 0.0
             and settings[SET_WANT_EQUILIBRIUM] == 0.0 and settings[SET_WANT_SHAKING] == 0.0)
 
@@ -46,7 +46,9 @@ def force_flush(pars, fidx, filled, FS, FT, RB, phis, phi_close, tols, settings,
             for q in range(FT_COLS):
                 FT[k, q * LANES + l] = FT[k, q * LANES]
     force_lanes(FS, FT, RB, fidx.shape[0], npos, tols[T_NEWTON_TOL], tols[T_SINGULAR],
-                settings[SET_OMEGA1], settings[SET_EPS1], loads)
+                settings[SET_OMEGA1], settings[SET_EPS1], loads,
+                np.int64(settings[SET_WORK_POINT]))
+    want_p = settings[SET_WANT_PEAKS] != 0.0
     for l in range(filled):
         i = fidx[l]
         if FS[F_bad * LANES + l] != 0.0:
@@ -68,5 +70,17 @@ def force_flush(pars, fidx, filled, FS, FT, RB, phis, phi_close, tols, settings,
                                                        phis[k], peak, peak_j, peak_phi)
         force_peaks_out(metrics[i], peak, peak_j, peak_phi, FS[F_pm * LANES + l], False,
                         0.0, False, 0.0, 0.0)
+        if want_p:
+            # the working point's peak |a| from the lanes' accelerations: force_stage's loop
+            peak_a = 0.0
+            for k in range(npos):
+                ax = RB[k, (N_RCOLS - 2) * LANES + l]
+                ay = RB[k, (N_RCOLS - 1) * LANES + l]
+                if may_reach(ax, ay, peak_a):
+                    a = math.hypot(ax, ay)
+                    if a > peak_a or not math.isfinite(a):
+                        peak_a = a
+            metrics[i, M_PEAK_ACC] = peak_a / 1000.0        # m/s^2
+            metrics[i, M_PEAK_EPS] = FS[F_pe * LANES + l]
         metrics[i, M_FORCES_DONE] = 1.0
         status[i] = OK

@@ -11,6 +11,7 @@ from .header import (njit, JIT)
 # ---- the skeleton: from here on, pasted into the generated module ----
 # ---- the force stage in lanes: none ({why}) ----
 HAS_LANE_FORCES = False
+SAME_BITS = False
 N_FROWS = 1
 FT_COLS = 1
 N_RCOLS = 1

@@ -10,7 +10,7 @@ from .header import (njit, JIT, JIT_INNER)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 @njit(**JIT)
-def setup_lane(pars, i, l, phis, tols, S, theta, pos, d1, d2, margins, state):
+def setup_lane(pars, i, l, phis, close, tols, S, theta, pos, d1, d2, margins, state):
     """{why}: every candidate takes the careful path."""
     return -1
 

@@ -9,8 +9,8 @@ from .header import (math, np, njit, JIT_ALLOC, OK, work, force_work, dwell_lane
                      M_FAIL_PHI, M_FAIL_GROUP, SET_DWELL_W,
                      SET_WANT_LAW)
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
-                         N_INPUTS, LANES, N_LANE_ROWS,
-                         THETA_COLS, R_margin, R_flag, R_first_flag, R_last_flag, setup_lane,
+                         N_INPUTS, LANES, N_LANE_ROWS, THETA_COLS, THETA_IN,
+                         R_margin, R_flag, R_first_flag, R_last_flag, setup_lane,
                          block_walk, lanes_apply, constants)
 from ._mechanism import (HAS_LANE_FORCES, N_FROWS, FT_COLS, N_RCOLS, force_lane_in)
 from .careful import walk_angle
@@ -76,8 +76,8 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
             code = -1
             if fast:
                 # np.int64(...): no literal argument, one compiled version
-                code = setup_lane(pars, i, np.int64(filled), phis, tols, S, theta, pos, d1,
-                                  d2, margins, state)
+                code = setup_lane(pars, i, np.int64(filled), phis, close, tols, S, theta, pos,
+                                  d1, d2, margins, state)
             if code == OK:
                 idx[filled] = i
                 filled += 1
@@ -97,6 +97,9 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                     S[r, l] = S[r, 0]
                 for q in range(THETA_COLS):
                     theta[0, q * LANES + l] = theta[0, q * LANES]
+                for k in range(1, npos + 3):   # (the inputs' laws: every step)
+                    for q in range(THETA_IN, THETA_COLS):
+                        theta[k, q * LANES + l] = theta[k, q * LANES]
             block_walk(S, theta, cph, sph, phis, tols, settings)
             dwell_lanes(theta, npos, w, LANES, W5, err, start_k, full)
             for l in range(filled):
