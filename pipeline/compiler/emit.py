@@ -547,16 +547,19 @@ class ClassIIIEmitter(Emitter):
 
 class ClassIIISliderEmitter(Emitter):
     """The class III group with a block on a guide in place of lead 5-7: the
-    careful path only (a plan with it takes the careful path for every
-    candidate), the continuation state and the watch like ``ClassIIIEmitter``."""
+    continuation state, the watch and the lane form (``lanes._triad_lines``)
+    like ``ClassIIIEmitter``'s."""
     watched = True
     continued = True
     code = kc.G_CLASS3_SLIDER
+    fast = True
 
     def derived(self):
         u = self.k("U435")
         return [(u, f"ternary_angle({self.k('L34')}, {self.k('L45')}, {self.k('L35')}, "
-                    f"{self.k('orientation')})")]
+                    f"{self.k('orientation')})"),
+                (f"{u}_cos", f"math.cos({u})"), (f"{u}_sin", f"math.sin({u})")] \
+            + _hoisted_cos_sin(self, "guide_angle")    # (the lane form's guide direction)
 
     def careful(self):
         i2, i6, i7, i3, i4, i5 = (self.p(j) for j in range(6))
@@ -571,7 +574,8 @@ class ClassIIISliderEmitter(Emitter):
                 _wrap_line(f"st, m = class3_slider(pos, d1, d2, {i2}, {i6}, {i7}, {i3}, {i4}, "
                            f"{i5}, {ga}, {gb}, {k('L23')}, {k('L34')}, {k('U435')}, "
                            f"{k('L35')}, {k('L46')}, {k('guide_angle')}, {k('guide_offset')}, "
-                           f"state, {self.triad_row}, order, tols)")]
+                           f"state, {self.triad_row}, order, tols, {k('U435')}_cos, "
+                           f"{k('U435')}_sin)")]
 
 
 EMITTERS = {e.code: e for e in (CrankEmitter, RRREmitter, RRPEmitter, RPREmitter,

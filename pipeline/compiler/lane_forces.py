@@ -44,7 +44,8 @@ from __future__ import annotations
 
 import re
 
-from .emit import (AttachEmitter, ClassIIIEmitter, CrankEmitter, InputEmitter, PRPEmitter,
+from .emit import (AttachEmitter, ClassIIIEmitter, ClassIIISliderEmitter, CrankEmitter,
+                   InputEmitter, PRPEmitter,
                    RPPEmitter, RRPEmitter, RRREmitter, constant_names, lane, lane_direction,
                    lane_meet)
 from ..kernels.inputs import ROTARY
@@ -57,7 +58,7 @@ from .skeleton import part
 # library call (the cosine law without acos, guide directions as link vectors
 # turned by hoisted cos/sin): the scalar force stage's numbers to rounding
 BIT_FOR_BIT = (CrankEmitter, ClassIIIEmitter, AttachEmitter, InputEmitter)
-TO_ROUNDING = (RRREmitter, PRPEmitter, RPPEmitter, RRPEmitter)
+TO_ROUNDING = (RRREmitter, PRPEmitter, RPPEmitter, RRPEmitter, ClassIIISliderEmitter)
 
 
 def lane_form(plan, ems) -> str:
@@ -75,9 +76,16 @@ def same_bits(plan, ems) -> bool:
     """Whether the force lanes of ``plan`` give the scalar force stage's bits:
     every group's lines are its careful kernel's, and every slide has a fixed
     direction (its normal from the same sin/cos of the same angle)."""
-    return (all(isinstance(e, BIT_FOR_BIT) or (isinstance(e, RRPEmitter) and e.ix[3] < 0)
-                for e in ems)
+    return (all(isinstance(e, BIT_FOR_BIT) or _on_a_fixed_guide(e) for e in ems)
             and all(int(plan.slide_dir[k, 0]) < 0 for k in range(len(plan.slide_names))))
+
+
+def _on_a_fixed_guide(e) -> bool:
+    """An RRP or a class III group with a slider whose guide has a fixed
+    direction: its lines are the careful kernel's (the hoisted cos/sin of the
+    guide's angle is the same call on the same angle)."""
+    col = {RRPEmitter: 3, ClassIIISliderEmitter: 6}.get(type(e))     # the guide link's column
+    return col is not None and e.ix[col] < 0
 
 
 def lane_force_kernel(plan, names, ems, rocker) -> str:
@@ -95,7 +103,7 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
         return part("no_lane_forces").format(why=why)
     consts = constant_names(plan, names, ems)
     nb, nj = len(plan.body_names), len(plan.joint_names)
-    triads = [e for e in ems if isinstance(e, ClassIIIEmitter)]
+    triads = [e for e in ems if e.continued]
     crank = [e for e in ems if isinstance(e, CrankEmitter)]
     inputs = [e for e in ems if isinstance(e, InputEmitter)]
     handed = 4 * len(triads) + 4 * len(inputs)      # the lane walk's columns handed over
@@ -129,6 +137,8 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
                   f"A{tip}_0 = A{o}_0 - {ln} * cc", f"A{tip}_1 = A{o}_1 - {ln} * sc"]
         elif isinstance(e, ClassIIIEmitter):
             L += _class3_lines(e, c, t)
+        elif isinstance(e, ClassIIISliderEmitter):
+            L += _class3_slider_lines(e, c, t)
         elif isinstance(e, InputEmitter):
             L += _input_lines(e, c, t, 4 * len(triads) + 4 * inputs.index(e))
         elif isinstance(e, RRPEmitter):
@@ -306,6 +316,78 @@ def _class3_lines(e, c, t):
         f"k5y = k3y - {l35} * b1 * b1 * sc - A{i7}_1",
         "rhs1 = -(q4x * q4x + q4y * q4y) - (r4x * k4x + r4y * k4y)",
         "rhs2 = -(q5x * q5x + q5y * q5y) - (r5x * k5x + r5y * k5y)",
+        "a2 = (rhs1 * j22 - j12 * rhs2) / dj", "b2 = (j11 * rhs2 - rhs1 * j21) / dj",
+        f"A{i3}_0 = A{i2}_0 - {l23} * a1 * a1 * ca - {l23} * a2 * sa",
+        f"A{i3}_1 = A{i2}_1 - {l23} * a1 * a1 * sa + {l23} * a2 * ca",
+        f"A{i4}_0 = A{i3}_0 - {l34} * (b2 * sb + b1 * b1 * cb)",
+        f"A{i4}_1 = A{i3}_1 + {l34} * (b2 * cb - b1 * b1 * sb)",
+        f"A{i5}_0 = A{i3}_0 - {l35} * (b2 * sc + b1 * b1 * cc)",
+        f"A{i5}_1 = A{i3}_1 + {l35} * (b2 * cc - b1 * b1 * sc)",
+    ]
+
+
+def _class3_slider_lines(e, c, t):
+    """kernels.triad.class3_slider at a solution handed over (``slider_handed``,
+    ``_accept`` without a move, ``_place``, first and second analogs), operation
+    for operation; the guide's direction as ``rrp``'s (hoisted for a fixed one:
+    the same bits)."""
+    i2, i6, i7, i3, i4, i5 = e.ix[:6]
+    k = e.k
+    l23, l34, l35, l46, off = (c(k(x)) for x in ("L23", "L34", "L35", "L46", "guide_offset"))
+    uc, us = c(f"{k('U435')}_cos"), c(f"{k('U435')}_sin")
+    r = 4 * e.triad_row
+    sign = c(f"sign{e.triad_row}")
+    guide = (_from_position_lanes(lane_direction(e, "u1", "guide_angle", 6))
+             + _direction_analogs(e, "t1", 6)
+             + ["ux = u1x", "uy = u1y", "nx = -uy", "ny = ux", "th1 = t11", "th2 = t12"])
+    return guide + [
+        f"ca = {t(r)}", f"sa = {t(r + 1)}", f"cb = {t(r + 2)}", f"sb = {t(r + 3)}",
+        f"cc = cb * {uc} - sb * {us}", f"sc = sb * {uc} + cb * {us}",
+        "# slider_closure_unit: the residuals and det J at the handed solution",
+        f"p3x = P{i2}_0 + {l23} * ca", f"p3y = P{i2}_1 + {l23} * sa",
+        f"r4x = p3x + {l34} * cb - P{i6}_0", f"r4y = p3y + {l34} * sb - P{i6}_1",
+        f"f1 = 0.5 * (r4x * r4x + r4y * r4y - {l46} * {l46})",
+        f"f2 = nx * (p3x + {l35} * cc - P{i7}_0) + ny * (p3y + {l35} * sc - P{i7}_1) - {off}",
+        f"j11 = {l23} * (-r4x * sa + r4y * ca)", f"j12 = {l34} * (-r4x * sb + r4y * cb)",
+        f"j21 = {l23} * (-nx * sa + ny * ca)", f"j22 = {l35} * (-nx * sc + ny * cc)",
+        f"taken = max(abs(f1) / {l46}, abs(f2)) <= tol * max({l23}, {l46})",
+        "det = j11 * j22 - j12 * j21",
+        f"margin = abs(det) / ({l23} * {l46} * max({l34}, {l35}))",
+        "sgn = 1.0 if det > 0.0 else -1.0",
+        f"prev = {sign}",
+        "bad = bad | (not taken) | ((prev != 0.0) & (sgn != prev)) | (not (margin >= tsing))",
+        f"{sign} = sgn",
+        "# _place",
+        f"P{i3}_0 = P{i2}_0 + {l23} * ca", f"P{i3}_1 = P{i2}_1 + {l23} * sa",
+        f"P{i4}_0 = P{i3}_0 + {l34} * cb", f"P{i4}_1 = P{i3}_1 + {l34} * sb",
+        f"P{i5}_0 = P{i3}_0 + {l35} * cc", f"P{i5}_1 = P{i3}_1 + {l35} * sc",
+        "# first analogs: r4.(P4' - P6') = 0, n.(P5' - G') - th' u.(P5 - G) = 0",
+        f"r4x = P{i4}_0 - P{i6}_0", f"r4y = P{i4}_1 - P{i6}_1",
+        f"w5x = P{i5}_0 - P{i7}_0", f"w5y = P{i5}_1 - P{i7}_1",
+        f"j11 = {l23} * (-r4x * sa + r4y * ca)", f"j12 = {l34} * (-r4x * sb + r4y * cb)",
+        f"j21 = {l23} * (-nx * sa + ny * ca)", f"j22 = {l35} * (-nx * sc + ny * cc)",
+        f"rhs1 = -(r4x * (V{i2}_0 - V{i6}_0) + r4y * (V{i2}_1 - V{i6}_1))",
+        f"rhs2 = (-(nx * (V{i2}_0 - V{i7}_0) + ny * (V{i2}_1 - V{i7}_1)) "
+        "+ th1 * (ux * w5x + uy * w5y))",
+        "dj = j11 * j22 - j12 * j21",
+        "a1 = (rhs1 * j22 - j12 * rhs2) / dj", "b1 = (j11 * rhs2 - rhs1 * j21) / dj",
+        f"V{i3}_0 = V{i2}_0 - {l23} * z * z * ca - {l23} * a1 * sa",
+        f"V{i3}_1 = V{i2}_1 - {l23} * z * z * sa + {l23} * a1 * ca",
+        f"V{i4}_0 = V{i3}_0 - {l34} * (b1 * sb + z * z * cb)",
+        f"V{i4}_1 = V{i3}_1 + {l34} * (b1 * cb - z * z * sb)",
+        f"V{i5}_0 = V{i3}_0 - {l35} * (b1 * sc + z * z * cc)",
+        f"V{i5}_1 = V{i3}_1 + {l35} * (b1 * cc - z * z * sc)",
+        "# second analogs",
+        f"q4x = V{i4}_0 - V{i6}_0", f"q4y = V{i4}_1 - V{i6}_1",
+        f"v5x = V{i5}_0 - V{i7}_0", f"v5y = V{i5}_1 - V{i7}_1",
+        f"k3x = A{i2}_0 - {l23} * a1 * a1 * ca", f"k3y = A{i2}_1 - {l23} * a1 * a1 * sa",
+        f"k4x = k3x - {l34} * b1 * b1 * cb - A{i6}_0",
+        f"k4y = k3y - {l34} * b1 * b1 * sb - A{i6}_1",
+        f"k5x = k3x - {l35} * b1 * b1 * cc - A{i7}_0",
+        f"k5y = k3y - {l35} * b1 * b1 * sc - A{i7}_1",
+        "rhs1 = -(q4x * q4x + q4y * q4y) - (r4x * k4x + r4y * k4y)",
+        "rhs2 = (-(nx * k5x + ny * k5y) + 2.0 * th1 * (ux * v5x + uy * v5y)",
+        f"        + th2 * (ux * w5x + uy * w5y) + th1 * th1 * {off})",
         "a2 = (rhs1 * j22 - j12 * rhs2) / dj", "b2 = (j11 * rhs2 - rhs1 * j21) / dj",
         f"A{i3}_0 = A{i2}_0 - {l23} * a1 * a1 * ca - {l23} * a2 * sa",
         f"A{i3}_1 = A{i2}_1 - {l23} * a1 * a1 * sa + {l23} * a2 * ca",

@@ -20,7 +20,8 @@ a change of sign of det J, a revolution that does not close, a rocker step
 too large for the series.  Such a lane is redone on the careful path, which
 gives every status and failure angle exactly as before.
 
-Class III groups: the unknown angles a, b live as unit vectors e(a), e(b);
+Class III groups (and their sliding variant, P5 on a guide's line instead of
+a lead): the unknown angles a, b live as unit vectors e(a), e(b);
 a Newton update is a rotation by a small angle, with cos/sin from their
 series (exact to rounding for |angle| <= 0.05 rad, larger corrections are
 refused); the predictor rotates by the last increment (the secant predictor
@@ -34,7 +35,8 @@ import re
 
 from ..kernels.continuation import FOLD_SHARE
 from ..kernels.watch import ERR_FACTOR
-from .emit import ClassIIIEmitter, InputEmitter, _wrap_line, constant_names, lane
+from .emit import (ClassIIISliderEmitter, InputEmitter, _wrap_line,
+                   constant_names, lane, lane_direction)
 from .names import text
 from .skeleton import part
 
@@ -56,17 +58,26 @@ def _rot_lines(c, s, delta):
 
 
 def _triad_lines(e, names):
-    """Lane lines of one class III group: predictor, NEWTON_STEPS Newton steps,
-    the confirming evaluation and the checks."""
+    """Lane lines of one class III group (or its sliding variant: P5 on a line
+    instead of a lead): predictor, NEWTON_STEPS Newton steps, the confirming
+    evaluation and the checks."""
     P2, P6, P7, P3, P4, P5 = (e.xy(j) for j in range(6))
     k = e.k
     t = f"t{e.triad_row}"
-    L23, L34, L35, L46, L57 = (lane(k(x)) for x in ("L23", "L34", "L35", "L46", "L57"))
+    slider = isinstance(e, ClassIIISliderEmitter)
+    L23, L34, L35, L46 = (lane(k(x)) for x in ("L23", "L34", "L35", "L46"))
     cu, su = lane(f"{k('U435')}_cos"), lane(f"{k('U435')}_sin")
     r = {x: f"S[R_{t}_{x}, l]" for x in ("ca", "sa", "cb", "sb", "dca", "dsa", "dcb", "dsb",
                                           "sign")}
-    out = [f"# {e.title()}: Newton on the closure |P4 - P6| = L46, |P5 - P7| = L57",
-           "# predictor: e(a), e(b) turned by the last increment (secant)",
+    if slider:
+        off = lane(k("guide_offset"))
+        out = [f"# {e.title()}: Newton on |P4 - P6| = L46 and n.(P5 - {P7}) = offset, n the",
+               "# guide's unit normal (kernels.triad.slider_closure)"]
+        out += lane_direction(e, "gu", "guide_angle", 6) + ["gnx = -guy", "gny = gux"]
+    else:
+        L57 = lane(k("L57"))
+        out = [f"# {e.title()}: Newton on the closure |P4 - P6| = L46, |P5 - P7| = L57"]
+    out += ["# predictor: e(a), e(b) turned by the last increment (secant)",
            f"ca0 = {r['ca']}", f"sa0 = {r['sa']}", f"cb0 = {r['cb']}", f"sb0 = {r['sb']}",
            f"ca = ca0 * {r['dca']} - sa0 * {r['dsa']}",
            f"sa = sa0 * {r['dca']} + ca0 * {r['dsa']}",
@@ -75,6 +86,20 @@ def _triad_lines(e, names):
            "corr_a = 0.0", "corr_b = 0.0"]
 
     def evaluate():
+        if slider:      # (slider_closure_unit: F1 halved, F2 a distance)
+            return [
+                f"cc = cb * {cu} - sb * {su}", f"sc = sb * {cu} + cb * {su}",
+                f"{P3}x = {P2}x + {L23} * ca", f"{P3}y = {P2}y + {L23} * sa",
+                f"r4x = {P3}x + {L34} * cb - {P6}x", f"r4y = {P3}y + {L34} * sb - {P6}y",
+                f"f1 = 0.5 * (r4x * r4x + r4y * r4y - {L46} * {L46})",
+                f"f2 = gnx * ({P3}x + {L35} * cc - {P7}x) + gny * ({P3}y + {L35} * sc - {P7}y)"
+                f" - {off}",
+                f"j11 = {L23} * (r4y * ca - r4x * sa)",
+                f"j12 = {L34} * (r4y * cb - r4x * sb)",
+                f"j21 = {L23} * (gny * ca - gnx * sa)",
+                f"j22 = {L35} * (gny * cc - gnx * sc)",
+                "det = j11 * j22 - j12 * j21",
+            ]
         return [
             f"cc = cb * {cu} - sb * {su}", f"sc = sb * {cu} + cb * {su}",
             f"{P3}x = {P2}x + {L23} * ca", f"{P3}y = {P2}y + {L23} * sa",
@@ -102,10 +127,15 @@ def _triad_lines(e, names):
             "g = 1.5 - 0.5 * (cb * cb + sb * sb)", "cb *= g", "sb *= g",
             "# confirming evaluation: the residual, and det J for the margin and the branch"]
     out += evaluate()
+    if slider:
+        out += [f"res = max(abs(f1) / {L46}, abs(f2))",
+                f"conv = res <= tol * max({L23}, {L46})",
+                f"m = abs(det) / ({L23} * {L46} * max({L34}, {L35}))"]
+    else:
+        out += [f"res = max(abs(f1) / (2.0 * {L46}), abs(f2) / (2.0 * {L57}))",
+                f"conv = res <= tol * max({L46}, {L57})",
+                f"m = abs(det) / (4.0 * {L23} * {L46} * {L57} * max({L34}, {L35}))"]
     out += [
-        f"res = max(abs(f1) / (2.0 * {L46}), abs(f2) / (2.0 * {L57}))",
-        f"conv = res <= tol * max({L46}, {L57})",
-        f"m = abs(det) / (4.0 * {L23} * {L46} * {L57} * max({L34}, {L35}))",
         "sgn = 1.0 if det > 0.0 else -1.0",
         f"big = big | (not conv) | (sgn != {r['sign']}) | (abs(corr_a) > jump) | "
         "(abs(corr_b) > jump)",
@@ -272,7 +302,7 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
         inner += [f"{pn}x = S[R_{names.par(off)}, l]",
                   f"{pn}y = S[R_{names.par(int(off) + 1)}, l]"]
     for e in kin:
-        inner += (_triad_lines(e, names) if isinstance(e, ClassIIIEmitter) else e.lanes())
+        inner += (_triad_lines(e, names) if e.continued else e.lanes())
         if e in watched:
             inner += _watch_lines(watched.index(e), e)
     inner += [

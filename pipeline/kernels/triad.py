@@ -344,12 +344,15 @@ def slider_closure(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, u435,
     """Residuals (F1, F2) of the sliding variant at (a, b) and their Jacobian
     d(F1, F2)/d(a, b): F1 = (|P4 - P6|^2 - L46^2) / 2 (mm^2), F2 = n.(P5 - G) -
     offset (mm), n the guide's unit normal."""
-    ca = math.cos(a)
-    sa = math.sin(a)
-    cb = math.cos(b)
-    sb = math.sin(b)
-    cc = math.cos(b + u435)
-    sc = math.sin(b + u435)
+    return slider_closure_unit(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, offset,
+                               math.cos(a), math.sin(a), math.cos(b), math.sin(b),
+                               math.cos(b + u435), math.sin(b + u435))
+
+
+@njit(**JIT)
+def slider_closure_unit(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, offset, ca, sa,
+                        cb, sb, cc, sc):
+    """``slider_closure`` at the unit vectors e(a), e(b), e(b + U435)."""
     p3x = p2x + l23 * ca
     p3y = p2y + l23 * sa
     r4x = p3x + l34 * cb - p6x
@@ -362,6 +365,27 @@ def slider_closure(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, u435,
     j21 = l23 * (-nx * sa + ny * ca)
     j22 = l35 * (-nx * sc + ny * cc)
     return f1, f2, j11, j12, j21, j22, (ca, sa, cb, sb, cc, sc)
+
+
+@njit(**JIT)
+def slider_handed(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, offset, u_cos, u_sin,
+                  state, g, tol):
+    """``handed`` for the sliding variant: the solution handed over in state row
+    ``g`` as unit vectors, (taken, det J, the cos/sin of a, b and b + U435),
+    taken where its residuals are within ``slider_newton``'s tolerance.  Clears
+    the hand-over flag."""
+    state[g, S_HANDED] = 0.0
+    ca = state[g, S_CA]
+    sa = state[g, S_SA]
+    cb = state[g, S_CB]
+    sb = state[g, S_SB]
+    cc = cb * u_cos - sb * u_sin
+    sc = sb * u_cos + cb * u_sin
+    f1, f2, j11, j12, j21, j22, trig = slider_closure_unit(p2x, p2y, p6x, p6y, gx, gy, nx, ny,
+                                                           l23, l34, l35, l46, offset, ca, sa,
+                                                           cb, sb, cc, sc)
+    taken = max(abs(f1) / l46, abs(f2)) <= tol * max(l23, l46)
+    return taken, j11 * j22 - j12 * j21, trig
 
 
 @njit(**JIT)
@@ -418,7 +442,7 @@ def _nan_joints(pos, d1, d2, i3, i4, i5, order_from):
 
 @njit(**JIT)
 def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l35, l46,
-                  guide_angle, offset, state, g, order, tols):
+                  guide_angle, offset, state, g, order, tols, u_cos=math.nan, u_sin=math.nan):
     """Solve the sliding class III group whose continuation state is row ``g``
     of ``state``, at the current crank position (see ``class3``).
 
@@ -426,14 +450,19 @@ def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l
     ``guide_angle`` (ga < 0) or that of the link ga->gb plus ``guide_angle``
     (``groups._direction``).  The margin is |det J| / (L23 L46 max(L34, L35)),
     J the Jacobian of (F1, F2) above: scale-free, 0 at a singular position.
-    Returns (status, margin).
+    Flagged ``S_HANDED``, the solution at this position as unit vectors
+    (``slider_handed``; u_cos, u_sin: cos and sin of U435, computed here if
+    NaN), as ``class3``.  Returns (status, margin).
     """
+    handed_over = state[g, S_HANDED] != 0.0     # (a hand-over holds for one solve only)
     if not (math.isfinite(u435) and l23 > 0.0 and l46 > 0.0):
+        state[g, S_HANDED] = 0.0
         _nan_joints(pos, d1, d2, i3, i4, i5, 0)
         state[g, S_MARGIN] = 0.0
         return BAD_GEOMETRY, 0.0
     th, th1, th2 = guide_direction(pos, d1, d2, ga, gb, guide_angle, order)
     if not math.isfinite(th):   # the guide link has no length: no direction
+        state[g, S_HANDED] = 0.0
         _nan_joints(pos, d1, d2, i3, i4, i5, 0)
         state[g, S_MARGIN] = 0.0
         return SINGULAR, 0.0
@@ -449,10 +478,25 @@ def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l
     gy = pos[i7, 1]
     a0 = state[g, S_A]
     b0 = state[g, S_B]
-    outcome, a, b, iters, det, trig = slider_newton(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34,
-                                              l35, l46, u435, offset, a0, b0,
-                                              tols[T_NEWTON_TOL], int(tols[T_NEWTON_MAXITER]),
-                                              tols[T_NEWTON_STEP], _give_up(state, g, tols))
+    taken = False
+    if handed_over:
+        if not (u_cos == u_cos and u_sin == u_sin):
+            u_cos = math.cos(u435)
+            u_sin = math.sin(u435)
+        taken, det, trig = slider_handed(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46,
+                                         offset, u_cos, u_sin, state, g, tols[T_NEWTON_TOL])
+        if taken:   # the angles are not needed: the next position is handed over too
+            outcome, a, b, iters = CONVERGED, math.nan, math.nan, 0
+        else:       # Newton from the handed angles, its move checked like any other
+            a0 = math.atan2(state[g, S_SA], state[g, S_CA])
+            b0 = math.atan2(state[g, S_SB], state[g, S_CB])
+    if not taken:   # (one call site of slider_newton: compile time)
+        outcome, a, b, iters, det, trig = slider_newton(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23,
+                                                        l34, l35, l46, u435, offset, a0, b0,
+                                                        tols[T_NEWTON_TOL],
+                                                        int(tols[T_NEWTON_MAXITER]),
+                                                        tols[T_NEWTON_STEP],
+                                                        _give_up(state, g, tols))
     state[g, S_ITERS] = iters
     if outcome != CONVERGED:
         _nan_joints(pos, d1, d2, i3, i4, i5, 0)
@@ -462,7 +506,7 @@ def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l
         return NEWTON_MAXITER, 0.0
     margin = abs(det) / (l23 * l46 * max(l34, l35))
     state[g, S_MARGIN] = margin
-    status = _accept(state, g, a, b, a0, b0, det, margin, tols)
+    status = _accept(state, g, a, b, a0, b0, det, margin, tols, not taken)
     ca, sa, cb, sb, cc, sc = _place(pos, i2, i3, i4, i5, l23, l34, l35, trig)
     if order < 1:
         return status, margin

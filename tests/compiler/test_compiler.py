@@ -353,6 +353,35 @@ def test_input_and_rrp_lanes_agree_with_the_careful_path():
     assert pb.kernels.HAS_LANE_FORCES and pb.kernels.SAME_BITS
 
 
+def test_class3_slider_lanes_agree_with_the_careful_path():
+    """The class III group with a block on a guide (the shipped sweep: forces,
+    a return spring) in the lanes: Newton on |P4 - P6| = L46 and the block's
+    line, as the careful path's slider_closure on unit vectors; the lanes
+    against the careful path alone (statuses, failing groups and angles, the
+    metrics and the singularity margin to the lanes' figures), and the force
+    lanes, from the lanes' solutions handed over (the careful kernel's
+    ``slider_handed``), against the scalar force stage: the same bits.  The
+    guide's offset and lead 4-6 widened so that some draws fold or cannot
+    assemble somewhere in the revolution."""
+    text = (STUDIES / "ov7_class3_slider_sweep.toml").read_text()
+    text = text.replace("min = 240.0, max = 280.0", "min = 150.0, max = 330.0") \
+               .replace("min = 95.0, max = 115.0", "min = 60.0, max = 140.0")
+    assert "min = 150.0, max = 330.0" in text and "min = 60.0, max = 140.0" in text
+    study = parse_study(text, "class3_slider_wide.toml")
+    pb = build_problem(study, study.sweep)
+    spec = dataclasses.replace(study.sweep, candidates=3000, chunk_size=3000)
+    pars = parameter_rows(pb.plan, spec, draw_candidates(spec, 0))
+    status = assert_lanes_agree(pb, pars, class3=True)
+    assert (status != kc.OK).sum() > 20
+    k, settings = pb.kernels, pb.settings()
+    assert k.HAS_LANE_FORCES and k.SAME_BITS and k.lane_forces_apply(settings)
+    s1, m1 = pb.evaluate_rows(pars)
+    s0, m0 = _rows(k, pb, pars, _scalar_forces(settings))
+    np.testing.assert_array_equal(s1, s0)
+    assert m1.tobytes() == m0.tobytes()
+    assert (m1[:, ks.M_FORCES_DONE] == 1.0).sum() > 500
+
+
 SLIDER_SWEEP = """
 [output]
 working_point = "P7"

@@ -116,10 +116,10 @@ def test_pyflakes_finds_nothing_in_the_skeleton():
 @pytest.fixture(scope="module")
 def sources():
     """Generated sources that use every part: a scene of a closed-form mechanism
-    (no rocker), a sweep with class III groups and lanes, a sweep of a group
-    without a lane form (the class III group with a slider); each sweep's module
-    and the module of its mechanism (no rocker: everything the rocker does not
-    change), which it imports from."""
+    (no rocker), a sweep with class III groups and lanes, a sweep with a class
+    III group with a slider, the take-up's mechanism (an RPR: no lane form) with
+    a rocker; each sweep's module and the module of its mechanism (no rocker:
+    everything the rocker does not change), which it imports from."""
     out = {}
     for name in ("ov7_base", "ov7_synthesis", "ov7_class3_slider_sweep"):
         study = load_study(STUDIES / f"{name}.toml")
@@ -129,6 +129,8 @@ def sources():
             out[name + " mechanism"] = source_for(plan)
         else:
             out[name] = source_for(plan)
+    plan = load_study(STUDIES / "takeup_dynamics.toml").mechanism.compile()
+    out["takeup with a rocker"] = source_for(plan, tuple(plan.point_names[:2]))
     return out
 
 
@@ -142,11 +144,11 @@ def test_the_generated_source_holds_every_part_verbatim(sources):
         elif name == "no_lanes":
             assert text.format(why="No output rocker declared") in sources["ov7_base"]
             text = text.format(why="A group without a lane form")
-            assert text in sources["ov7_class3_slider_sweep"]
+            assert text in sources["takeup with a rocker"]
         elif name == "no_lane_forces":
             assert text.format(why="no output rocker declared") in sources["ov7_base"]
             text = text.format(why="no lane path: a group without a lane form of its positions")
-            assert text in sources["ov7_class3_slider_sweep"]
+            assert text in sources["takeup with a rocker"]
         assert text in everything, name
     assert part("advance_closed") in sources["ov7_base"]
     assert part("advance_newton") in sources["ov7_synthesis mechanism"]
