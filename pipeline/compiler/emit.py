@@ -77,13 +77,30 @@ class Emitter:
         """Lines of module-level constants the group's kernels read (none by default)."""
         return []
 
+    def transmission_items(self):
+        """The group's transmission angles (``pipeline.solve.peaks.transmission_items``)
+        as (words, items): each item (kind, arguments) of ``kernels.metrics``'
+        ``dyad_transmission`` ("dyad": point indices A, B, C),
+        ``lead_transmission`` ("lead": J, P, A, B, C, D) or ``lines_transmission``
+        ("lines": a, b, alpha, c, d, beta; a point index -1 for a fixed
+        direction, the angles as expressions of the constants); none by default."""
+        return "", []
+
     def transmission(self):
         """Lines that lower ``tr`` to the group's transmission angles at this
-        position (rad; ``pipeline.solve.peaks.transmission_items``), given the
-        cos and sin of the smallest angle so far (``best_cos``, ``best_sin``:
-        ``kernels.metrics.fold_angle`` skips an angle certainly above it); none
-        by default."""
-        return []
+        position (rad), given the cos and sin of the smallest angle so far
+        (``best_cos``, ``best_sin``: ``kernels.metrics.fold_angle`` skips an
+        angle certainly above it)."""
+        words, items = self.transmission_items()
+        if not items:
+            return []
+        lines = [f"# {self.title()}: {words}"]
+        for kind, args in items:
+            a = [self.n.I(x) if isinstance(x, int) and x >= 0 else
+                 ("-1" if isinstance(x, int) else x) for x in args]
+            call = f"tr = min(tr, {kind}_transmission(pos, {', '.join(a)}, best_cos, best_sin))"
+            lines.append(_wrap_line(call) if kind == "lines" else call)
+        return lines
 
 
 class CrankEmitter(Emitter):
@@ -152,10 +169,9 @@ class RRREmitter(Emitter):
             "low = low | (not (m >= margin_safe))",
         ]
 
-    def transmission(self):
-        a, c, b = (self.p(j) for j in range(3))
-        return [f"# {self.title()}: the angle at {self.pname(2)} between the links",
-                f"tr = min(tr, dyad_transmission(pos, {a}, {b}, {c}, best_cos, best_sin))"]
+    def transmission_items(self):
+        a, c, b = self.ix[:3]
+        return f"the angle at {self.pname(2)} between the links", [("dyad", (a, b, c))]
 
 
 class RRPEmitter(Emitter):
@@ -194,12 +210,10 @@ class RRPEmitter(Emitter):
                 f"st, m = rrp(pos, d1, d2, {self.p(0)}, {self.p(1)}, {self.p(2)}, {ga}, {gb}, "
                 f"{self.k('L_AB')}, {self.k('guide_angle')}, {self.k('W')}, order, sing, slack)"]
 
-    def transmission(self):
-        ga, gb = _guide_link(self, 3)
-        return [f"# {self.title()}: link {self.pname(0)}-{self.pname(2)} against the guide's "
-                "normal",
-                _wrap_line(f"tr = min(tr, lines_transmission(pos, {self.p(0)}, {self.p(2)}, 0.0, "
-                           f"{ga}, {gb}, {self.k('guide_angle')} + 0.5 * math.pi, best_cos, best_sin))")]
+    def transmission_items(self):
+        return (f"link {self.pname(0)}-{self.pname(2)} against the guide's normal",
+                [("lines", (self.ix[0], self.ix[2], "0.0", self.ix[3], self.ix[4],
+                            f"{self.k('guide_angle')} + 0.5 * math.pi"))])
 
 
 class RPREmitter(Emitter):
@@ -212,11 +226,10 @@ class RPREmitter(Emitter):
                 f"st, m = rpr(pos, d1, d2, {self.p(0)}, {self.p(1)}, {self.p(2)}, "
                 f"{self.k('offset')}, {self.k('guide_length')}, {self.k('W')}, order, sing, slack)"]
 
-    def transmission(self):
-        c, a, e = self.p(1), self.p(0), self.p(2)
-        return [f"# {self.title()}: {self.pname(1)}->{self.pname(0)} against the guide's normal",
-                _wrap_line(f"tr = min(tr, lines_transmission(pos, {c}, {a}, 0.0, {c}, {e}, "
-                           "0.5 * math.pi, best_cos, best_sin))")]
+    def transmission_items(self):
+        c, a, e = self.ix[1], self.ix[0], self.ix[2]
+        return (f"{self.pname(1)}->{self.pname(0)} against the guide's normal",
+                [("lines", (c, a, "0.0", c, e, "0.5 * math.pi"))])
 
 
 def _guide_link(e, j):
@@ -302,13 +315,10 @@ class PRPEmitter(Emitter):
                 f"{self.p(6)}, {k('guide1_angle')}, {k('guide1_offset')}, {k('guide2_angle')}, "
                 f"{k('guide2_offset')}, order, sing)"]
 
-    def transmission(self):
-        a1, b1 = _guide_link(self, 1)
-        a2, b2 = _guide_link(self, 4)
-        return [f"# {self.title()}: the angle between the two guides",
-                _wrap_line(f"tr = min(tr, lines_transmission(pos, {a1}, {b1}, "
-                           f"{self.k('guide1_angle')}, {a2}, {b2}, {self.k('guide2_angle')}, best_cos, "
-                           "best_sin))")]
+    def transmission_items(self):
+        return "the angle between the two guides", [
+            ("lines", (self.ix[1], self.ix[2], self.k("guide1_angle"), self.ix[4], self.ix[5],
+                       self.k("guide2_angle")))]
 
 
 class RPPEmitter(Emitter):
@@ -341,12 +351,10 @@ class RPPEmitter(Emitter):
                 f"{k('guide_angle')}, {k('guide_offset')}, {k('slot_angle')}, "
                 f"{k('slot_offset')}, order, sing)"]
 
-    def transmission(self):
-        ga, gb = _guide_link(self, 2)
-        g = self.k("guide_angle")
-        return [f"# {self.title()}: the angle between the slot and the guide",
-                _wrap_line(f"tr = min(tr, lines_transmission(pos, {ga}, {gb}, {g}, {ga}, {gb}, "
-                           f"{g} + {self.k('slot_angle')}, best_cos, best_sin))")]
+    def transmission_items(self):
+        ga, gb, g = self.ix[2], self.ix[3], self.k("guide_angle")
+        return "the angle between the slot and the guide", [
+            ("lines", (ga, gb, g, ga, gb, f"{g} + {self.k('slot_angle')}"))]
 
 
 class AttachEmitter(Emitter):
@@ -534,15 +542,12 @@ class ClassIIIEmitter(Emitter):
                 f"{k('L34')}, {k('U435')}, {k('L35')}, {k('L46')}, {k('L57')}, state, "
                 f"{self.triad_row}, order, tols, {k('U435')}_cos, {k('U435')}_sin)"]
 
-    def transmission(self):
-        i2, i6, i7, i3, i4, i5 = (self.p(j) for j in range(6))
+    def transmission_items(self):
+        i2, i6, i7, i3, i4, i5 = self.ix[:6]
         n = self.pname
-        return [f"# {self.title()}: leads {n(4)}-{n(1)} and {n(5)}-{n(2)}, each against the "
-                "line to the meet of the other two leads",
-                f"tr = min(tr, lead_transmission(pos, {i4}, {i6}, {i2}, {i3}, {i5}, {i7}, best_cos, "
-                "best_sin))",
-                f"tr = min(tr, lead_transmission(pos, {i5}, {i7}, {i2}, {i3}, {i4}, {i6}, best_cos, "
-                "best_sin))"]
+        return (f"leads {n(4)}-{n(1)} and {n(5)}-{n(2)}, each against the line to the meet of "
+                "the other two leads",
+                [("lead", (i4, i6, i2, i3, i5, i7)), ("lead", (i5, i7, i2, i3, i4, i6))])
 
 
 class ClassIIISliderEmitter(Emitter):

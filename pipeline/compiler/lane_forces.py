@@ -5,7 +5,8 @@ and margin gates, are solved together position by position: kinematics to
 the acceleration analogs, the applied and inertia loads, the force equations
 (``force_equations.eliminated``, the same lines as ``forces_at``), the
 running maxima of |M_bal| and of the output rocker's |angular acceleration|,
-and the working point's acceleration; the lane loop is the innermost loop,
+the working point's acceleration, and |u x w|, |u . w| of every transmission
+item (``Emitter.transmission_items``); the lane loop is the innermost loop,
 straight-line code, so LLVM turns it into packed vector instructions.
 
 Two kinds of lines (``BIT_FOR_BIT``, ``TO_ROUNDING``):
@@ -32,9 +33,10 @@ Where the scalar stage would stop or leave the handed solution (its closure
 residual above Newton's tolerance, det J changing sign or below the
 singularity margin, a group that does not assemble, a link of no length),
 the lane says so (row F_bad) and its candidate takes the scalar force stage,
-as before.  The peak reaction and the working point's peak |a| are found
-afterwards from what the lanes wrote, by the scalar stage's own loops
-(``may_reach`` and ``math.hypot``, a library call).
+as before.  The peak reaction, the working point's peak |a| and the smallest
+transmission angle are found afterwards from what the lanes wrote, by the
+scalar stage's own loops (``may_reach`` and ``math.hypot``; ``fold_angle``'s
+skip and ``math.atan2``: library calls).
 
 A mechanism with a group or a force system the lanes do not know (see
 ``lane_form``) keeps the scalar force stage for every candidate.
@@ -46,8 +48,8 @@ import re
 
 from .emit import (AttachEmitter, ClassIIIEmitter, ClassIIISliderEmitter, CrankEmitter,
                    InputEmitter, PRPEmitter,
-                   RPPEmitter, RRPEmitter, RRREmitter, constant_names, lane, lane_direction,
-                   lane_meet)
+                   RPPEmitter, RRPEmitter, RRREmitter, _wrap_line, constant_names, lane,
+                   lane_direction, lane_meet)
 from ..kernels.inputs import ROTARY
 from .force_equations import MM, UNROLLED_MAX, eliminated, is_square, slide_angle
 from .skeleton import part
@@ -111,6 +113,12 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
     rows = consts + [f"mass{b}" for b in range(nb)] + [f"jS{b}" for b in range(nb)]
     rows += [f"slide{k}_{x}" for k in range(ns) for x in ("cos", "sin")]
     rows += ["pm", "pe", "bad"] + [f"sign{e.triad_row}" for e in triads]
+    # the transmission items (transmission()'s), their angles' cos/sin hoisted
+    items = [it for e in ems[:plan.n_kinematic] for it in e.transmission_items()[1]]
+    angles = [(q, j, x) for q, (kind, args) in enumerate(items) if kind == "lines"
+              for j, x in ((0, args[2]), (1, args[5]))]
+    rows += [f"tr{q}_{j}_{f}" for q, j, _ in angles for f in ("cos", "sin")]
+    tr_col = 2 * nj + 2
     ft = handed + 2 * len(crank)     # per position: e(a), e(b) of each class III group,
     #                                  e(q) (or q), q', q'' of each input, the crank's cos/sin
 
@@ -191,13 +199,21 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
           f"pm = {c('pm')}",
           f"{c('pm')} = mb if ((abs(mb) > abs(pm)) | (not (mb - mb == 0.0))) else pm"]
     L += _peak_lines(plan, rocker, c)
+    for q, (kind, args) in enumerate(items):
+        L += _transmission_lines(q, kind, args, c)
+        L += [f"RB[k, {tr_col + 2 * q} * LANES + l] = abs(ux * wy - uy * wx)",
+              f"RB[k, {tr_col + 2 * q + 1} * LANES + l] = abs(ux * wx + uy * wy)"]
     L += [f"{c('bad')} = 1.0 if bad else {c('bad')}"]
     flat = [f"F_{r} = {i}" for i, r in enumerate(rows)]
     src = ["# ---- the force stage in lanes (pipeline.compiler.lane_forces) ----",
            "HAS_LANE_FORCES = True", f"N_FROWS = {len(rows)}   # rows of FS[row * LANES + lane]",
            f"FT_COLS = {ft}   # FT[k, col * LANES + lane]: e(a), e(b) of each class III group, "
-           "e(q) (or q), q', q'' of each input, the crank's cos/sin", f"N_RCOLS = {2 * nj + 2}   # RB[k, col * LANES + lane]: the "
-           "reactions (x, y) of each joint, the working point's acceleration (x, y)",
+           "e(q) (or q), q', q'' of each input, the crank's cos/sin", f"N_RCOLS = {tr_col + 2 * len(items)}   # RB[k, col * LANES + lane]: "
+           "the reactions (x, y) of each joint, the working point's acceleration (x, y), "
+           "|u x w|, |u . w| of each transmission item",
+           f"ACC_COL = {2 * nj}   # RB's columns of the working point's acceleration",
+           f"N_TRANS = {len(items)}   # the transmission items (transmission()'s)",
+           f"TR_COL = {tr_col}   # RB's column of the first",
            f"SAME_BITS = {same_bits(plan, ems)}   # the force lanes give the scalar force "
            "stage's bits (else its numbers to rounding)"]
     src += flat
@@ -225,6 +241,11 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
             "    of phis[k] + phiM0 (crank_tab: the last phiM0 in row 0, the table after",
             '    it; computed again only for another phiM0)."""',
             "    K = constants(par)"]
+    if angles:
+        src += ["    " + x for x in _wrap_line("(" + ", ".join(consts) + ",) = K", 90).split("\n")]
+        for q, j, x in angles:
+            src += [f"    FS[F_tr{q}_{j}_cos * LANES + l] = math.cos({x})   # (metrics._line's)",
+                    f"    FS[F_tr{q}_{j}_sin * LANES + l] = math.sin({x})"]
     for i, r in enumerate(consts):
         src.append(f"    FS[F_{r} * LANES + l] = K[{i}]")
     for b in range(nb):
@@ -255,6 +276,24 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
     src += ["", ""]
     src += [part("lane_forces")]
     return "\n".join(src) + "\n"
+
+
+def _triad_analog_lines(e, c, order):
+    """``kernels.triad._place_analogs``' lines for the class III vertices 3, 4, 5:
+    the first analogs (``order`` 1: from a1, b1, with the first analogs' own
+    zero a1 = b1 = 0 as the local z) or the second (2: from a2, b2 and a1, b1),
+    on the cos/sin of a, b and b + U435."""
+    i2, i3, i4, i5 = e.ix[0], e.ix[3], e.ix[4], e.ix[5]
+    l23, l34, l35 = (c(e.k(x)) for x in ("L23", "L34", "L35"))
+    D, ak, bk, a1, b1 = ("V", "a1", "b1", "z", "z") if order == 1 else ("A", "a2", "b2", "a1", "b1")
+    return [
+        f"{D}{i3}_0 = {D}{i2}_0 - {l23} * {a1} * {a1} * ca - {l23} * {ak} * sa",
+        f"{D}{i3}_1 = {D}{i2}_1 - {l23} * {a1} * {a1} * sa + {l23} * {ak} * ca",
+        f"{D}{i4}_0 = {D}{i3}_0 - {l34} * ({bk} * sb + {b1} * {b1} * cb)",
+        f"{D}{i4}_1 = {D}{i3}_1 + {l34} * ({bk} * cb - {b1} * {b1} * sb)",
+        f"{D}{i5}_0 = {D}{i3}_0 - {l35} * ({bk} * sc + {b1} * {b1} * cc)",
+        f"{D}{i5}_1 = {D}{i3}_1 + {l35} * ({bk} * cc - {b1} * {b1} * sc)",
+    ]
 
 
 def _class3_lines(e, c, t):
@@ -300,12 +339,7 @@ def _class3_lines(e, c, t):
         f"rhs2 = -(r5x * (V{i2}_0 - V{i7}_0) + r5y * (V{i2}_1 - V{i7}_1))",
         "dj = j11 * j22 - j12 * j21",
         "a1 = (rhs1 * j22 - j12 * rhs2) / dj", "b1 = (j11 * rhs2 - rhs1 * j21) / dj",
-        f"V{i3}_0 = V{i2}_0 - {l23} * z * z * ca - {l23} * a1 * sa",
-        f"V{i3}_1 = V{i2}_1 - {l23} * z * z * sa + {l23} * a1 * ca",
-        f"V{i4}_0 = V{i3}_0 - {l34} * (b1 * sb + z * z * cb)",
-        f"V{i4}_1 = V{i3}_1 + {l34} * (b1 * cb - z * z * sb)",
-        f"V{i5}_0 = V{i3}_0 - {l35} * (b1 * sc + z * z * cc)",
-        f"V{i5}_1 = V{i3}_1 + {l35} * (b1 * cc - z * z * sc)",
+    ] + _triad_analog_lines(e, c, 1) + [
         "# second analogs",
         f"q4x = V{i4}_0 - V{i6}_0", f"q4y = V{i4}_1 - V{i6}_1",
         f"q5x = V{i5}_0 - V{i7}_0", f"q5y = V{i5}_1 - V{i7}_1",
@@ -317,13 +351,7 @@ def _class3_lines(e, c, t):
         "rhs1 = -(q4x * q4x + q4y * q4y) - (r4x * k4x + r4y * k4y)",
         "rhs2 = -(q5x * q5x + q5y * q5y) - (r5x * k5x + r5y * k5y)",
         "a2 = (rhs1 * j22 - j12 * rhs2) / dj", "b2 = (j11 * rhs2 - rhs1 * j21) / dj",
-        f"A{i3}_0 = A{i2}_0 - {l23} * a1 * a1 * ca - {l23} * a2 * sa",
-        f"A{i3}_1 = A{i2}_1 - {l23} * a1 * a1 * sa + {l23} * a2 * ca",
-        f"A{i4}_0 = A{i3}_0 - {l34} * (b2 * sb + b1 * b1 * cb)",
-        f"A{i4}_1 = A{i3}_1 + {l34} * (b2 * cb - b1 * b1 * sb)",
-        f"A{i5}_0 = A{i3}_0 - {l35} * (b2 * sc + b1 * b1 * cc)",
-        f"A{i5}_1 = A{i3}_1 + {l35} * (b2 * cc - b1 * b1 * sc)",
-    ]
+    ] + _triad_analog_lines(e, c, 2)
 
 
 def _class3_slider_lines(e, c, t):
@@ -371,12 +399,7 @@ def _class3_slider_lines(e, c, t):
         "+ th1 * (ux * w5x + uy * w5y))",
         "dj = j11 * j22 - j12 * j21",
         "a1 = (rhs1 * j22 - j12 * rhs2) / dj", "b1 = (j11 * rhs2 - rhs1 * j21) / dj",
-        f"V{i3}_0 = V{i2}_0 - {l23} * z * z * ca - {l23} * a1 * sa",
-        f"V{i3}_1 = V{i2}_1 - {l23} * z * z * sa + {l23} * a1 * ca",
-        f"V{i4}_0 = V{i3}_0 - {l34} * (b1 * sb + z * z * cb)",
-        f"V{i4}_1 = V{i3}_1 + {l34} * (b1 * cb - z * z * sb)",
-        f"V{i5}_0 = V{i3}_0 - {l35} * (b1 * sc + z * z * cc)",
-        f"V{i5}_1 = V{i3}_1 + {l35} * (b1 * cc - z * z * sc)",
+    ] + _triad_analog_lines(e, c, 1) + [
         "# second analogs",
         f"q4x = V{i4}_0 - V{i6}_0", f"q4y = V{i4}_1 - V{i6}_1",
         f"v5x = V{i5}_0 - V{i7}_0", f"v5y = V{i5}_1 - V{i7}_1",
@@ -389,13 +412,7 @@ def _class3_slider_lines(e, c, t):
         "rhs2 = (-(nx * k5x + ny * k5y) + 2.0 * th1 * (ux * v5x + uy * v5y)",
         f"        + th2 * (ux * w5x + uy * w5y) + th1 * th1 * {off})",
         "a2 = (rhs1 * j22 - j12 * rhs2) / dj", "b2 = (j11 * rhs2 - rhs1 * j21) / dj",
-        f"A{i3}_0 = A{i2}_0 - {l23} * a1 * a1 * ca - {l23} * a2 * sa",
-        f"A{i3}_1 = A{i2}_1 - {l23} * a1 * a1 * sa + {l23} * a2 * ca",
-        f"A{i4}_0 = A{i3}_0 - {l34} * (b2 * sb + b1 * b1 * cb)",
-        f"A{i4}_1 = A{i3}_1 + {l34} * (b2 * cb - b1 * b1 * sb)",
-        f"A{i5}_0 = A{i3}_0 - {l35} * (b2 * sc + b1 * b1 * cc)",
-        f"A{i5}_1 = A{i3}_1 + {l35} * (b2 * cc - b1 * b1 * sc)",
-    ]
+    ] + _triad_analog_lines(e, c, 2)
 
 
 def _attach_lines(e, c):
@@ -550,6 +567,40 @@ def _meet_lines(g1, e1, g2, e2, b):
         f"(V{b}_1 - V{g2}_1) * u2y) + t22 * s2 + t21 * t21 * {e2})",
         f"A{b}_0 = (h1 * n2y - n1y * h2) / dn", f"A{b}_1 = (n1x * h2 - h1 * n2x) / dn",
     ])
+
+
+def _transmission_lines(q, kind, args, c):
+    """Transmission item ``q`` (``Emitter.transmission_items``) at this position:
+    the directions u, w that ``kernels.metrics``' dyad_transmission,
+    lead_transmission or lines_transmission hands to ``fold_angle``, by their
+    lines (a line's angle: its hoisted cos/sin, ``_line``'s own calls)."""
+    P = lambda i, x: f"P{i}_{x}"    # noqa: E731
+    if kind == "dyad":
+        a, b, cc = args
+        return [f"ux = {P(a, 0)} - {P(b, 0)}", f"uy = {P(a, 1)} - {P(b, 1)}",
+                f"wx = {P(cc, 0)} - {P(b, 0)}", f"wy = {P(cc, 1)} - {P(b, 1)}"]
+    if kind == "lead":
+        j, p, a, b, cc, d = args
+        return [f"jx = {P(j, 0)}", f"jy = {P(j, 1)}",
+                f"ax = {P(a, 0)} - jx", f"ay = {P(a, 1)} - jy",
+                f"bx = {P(b, 0)} - jx", f"by = {P(b, 1)} - jy",
+                f"cx = {P(cc, 0)} - jx", f"cy = {P(cc, 1)} - jy",
+                f"dx = {P(d, 0)} - jx", f"dy = {P(d, 1)} - jy",
+                "l1x = ay - by", "l1y = bx - ax", "l1w = ax * by - ay * bx",
+                "l2x = cy - dy", "l2y = dx - cx", "l2w = cx * dy - cy * dx",
+                f"ux = {P(p, 0)} - jx", f"uy = {P(p, 1)} - jy",
+                "wx = l1y * l2w - l1w * l2y", "wy = l1w * l2x - l1x * l2w"]
+    out = []
+    for (i0, i1), (v, w) in (((args[0], args[1]), ("ux", "uy")),
+                             ((args[3], args[4]), ("wx", "wy"))):
+        j = 0 if v == "ux" else 1
+        cs, sn = c(f"tr{q}_{j}_cos"), c(f"tr{q}_{j}_sin")
+        if i0 < 0:
+            out += [f"{v} = {cs}", f"{w} = {sn}"]
+        else:
+            out += [f"dx = {P(i1, 0)} - {P(i0, 0)}", f"dy = {P(i1, 1)} - {P(i0, 1)}",
+                    f"{v} = {cs} * dx - {sn} * dy", f"{w} = {sn} * dx + {cs} * dy"]
+    return out
 
 
 def _peak_lines(plan, rocker, c):

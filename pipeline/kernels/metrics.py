@@ -273,8 +273,13 @@ def fold_angle(ux, uy, wx, wy, best_cos=math.nan, best_sin=math.nan):
     call): |u x w| cos(best) > |u . w| sin(best) (1 + 1e-9) says
     atan2(|u x w|, |u . w|) > best, whatever the rounding of either side, so
     the minimum is the same to the bit; NaN (no minimum yet) never skips."""
-    c = abs(ux * wy - uy * wx)
-    d = abs(ux * wx + uy * wy)
+    return fold_cd(abs(ux * wy - uy * wx), abs(ux * wx + uy * wy), best_cos, best_sin)
+
+
+@njit(**JIT)
+def fold_cd(c, d, best_cos=math.nan, best_sin=math.nan):
+    """``fold_angle`` from c = |u x w| and d = |u . w| (the force lanes keep
+    these per position and take the minimum afterwards)."""
     if c * best_cos > d * best_sin * _ABOVE:
         return math.inf
     return math.atan2(c, d)

@@ -162,6 +162,18 @@ def newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b,
 
 
 @njit(**JIT)
+def _handed_unit(state, g, u_cos, u_sin):
+    """The unit vectors e(a), e(b) handed over in state row ``g`` and e(b + U435)
+    from them (u_cos, u_sin: cos and sin of U435); clears the hand-over flag."""
+    state[g, S_HANDED] = 0.0
+    ca = state[g, S_CA]
+    sa = state[g, S_SA]
+    cb = state[g, S_CB]
+    sb = state[g, S_SB]
+    return ca, sa, cb, sb, cb * u_cos - sb * u_sin, sb * u_cos + cb * u_sin
+
+
+@njit(**JIT)
 def handed(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u_cos, u_sin, state, g, tol):
     """The solution handed over in state row ``g`` as unit vectors e(a), e(b)
     (the lane path's, ``S_CA`` .. ``S_SB``): (taken, det J, the cos/sin of
@@ -169,13 +181,7 @@ def handed(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u_cos, u_sin, 
     tolerance (the test Newton's first iteration makes, without its cos and
     sin: the unit vectors are the solution); else the caller runs Newton
     from its angles.  Clears the hand-over flag."""
-    state[g, S_HANDED] = 0.0
-    ca = state[g, S_CA]
-    sa = state[g, S_SA]
-    cb = state[g, S_CB]
-    sb = state[g, S_SB]
-    cc = cb * u_cos - sb * u_sin
-    sc = sb * u_cos + cb * u_sin
+    ca, sa, cb, sb, cc, sc = _handed_unit(state, g, u_cos, u_sin)
     f1, f2, j11, j12, j21, j22, trig = closure_unit(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34,
                                                     l35, l46, l57, ca, sa, cb, sb, cc, sc)
     taken = max(abs(f1) / (2.0 * l46), abs(f2) / (2.0 * l57)) <= tol * max(l46, l57)
@@ -374,13 +380,7 @@ def slider_handed(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, offset
     ``g`` as unit vectors, (taken, det J, the cos/sin of a, b and b + U435),
     taken where its residuals are within ``slider_newton``'s tolerance.  Clears
     the hand-over flag."""
-    state[g, S_HANDED] = 0.0
-    ca = state[g, S_CA]
-    sa = state[g, S_SA]
-    cb = state[g, S_CB]
-    sb = state[g, S_SB]
-    cc = cb * u_cos - sb * u_sin
-    sc = sb * u_cos + cb * u_sin
+    ca, sa, cb, sb, cc, sc = _handed_unit(state, g, u_cos, u_sin)
     f1, f2, j11, j12, j21, j22, trig = slider_closure_unit(p2x, p2y, p6x, p6y, gx, gy, nx, ny,
                                                            l23, l34, l35, l46, offset, ca, sa,
                                                            cb, sb, cc, sc)

@@ -422,17 +422,7 @@ def test_a_slider_input_in_the_lanes_and_the_force_lanes():
     pb = build_problem(study, study.sweep)
     pars = parameter_rows(pb.plan, pb.spec, draw_candidates(pb.spec, 0))
     assert_lanes_agree(pb, pars, class3=False)
-    k, settings = pb.kernels, pb.settings()
-    assert k.HAS_LANE_FORCES and not k.SAME_BITS and k.lane_forces_apply(settings)
-    s1, m1 = pb.evaluate_rows(pars)
-    s0, m0 = _rows(k, pb, pars, _scalar_forces(settings))
-    np.testing.assert_array_equal(s1, s0)
-    done = m0[:, ks.M_FORCES_DONE] == 1.0
-    assert done.sum() > 500
-    for col in (ks.M_FORCES_DONE, ks.M_PEAK_JOINT, ks.M_PEAK_PHI):
-        np.testing.assert_array_equal(m1[:, col], m0[:, col])
-    for col in (ks.M_PEAK_R, ks.M_PEAK_MBAL, ks.M_PEAK_ACC, ks.M_PEAK_EPS):
-        np.testing.assert_allclose(m1[done, col], m0[done, col], rtol=LANE_AGREEMENT_REL, atol=0)
+    assert_force_lanes_round(pb, pars, 500)
 
 
 def test_a_candidate_gets_the_same_numbers_wherever_it_runs(problem, candidates):
@@ -508,14 +498,18 @@ def test_the_force_lanes_give_the_scalar_force_stage_s_bits(problem, candidates)
     assert k.SAME_BITS
 
 
-def test_the_force_lanes_give_the_working_point_s_and_the_rocker_s_peaks(problem, candidates):
-    """With SET_WANT_PEAKS the force lanes also take the working point's peak |a|
-    and the output rocker's peak |eps| (the working point chosen at run time):
-    the scalar force stage's bits, for two working points."""
+def test_the_force_lanes_give_the_motion_s_peaks_and_the_transmission_angle(problem,
+                                                                             candidates):
+    """With SET_WANT_PEAKS and SET_WANT_TRANSMISSION the force lanes also take the
+    working point's peak |a| (the working point chosen at run time), the output
+    rocker's peak |eps| and the smallest transmission angle (the class III
+    leads'): the scalar force stage's bits, for two working points."""
     k = problem.kernels
+    assert k.N_TRANS == 2
     for point in ("P8", "P5"):
         settings = problem.settings().copy()
         settings[ks.SET_WANT_PEAKS] = 1.0
+        settings[ks.SET_WANT_TRANSMISSION] = 1.0
         settings[ks.SET_WORK_POINT] = problem.plan.point(point)
         assert k.lane_forces_apply(settings)
         s1, m1 = _rows(k, problem, candidates[:1000], settings)
@@ -525,14 +519,15 @@ def test_the_force_lanes_give_the_working_point_s_and_the_rocker_s_peaks(problem
         done = m1[:, ks.M_FORCES_DONE] == 1.0
         assert done.sum() > 50 and np.isfinite(m1[done, ks.M_PEAK_ACC]).all()
         assert (m1[done, ks.M_PEAK_EPS] > 0.0).all()
+        assert (m1[done, ks.M_MIN_TRANS] > 0.0).all()
 
 
 def test_force_lanes_apply_only_where_they_compute_what_is_asked(problem, candidates):
     """Settings that ask for more than the kinetostatics' and the motion's peaks
-    (the transmission angle, the virtual-power residual, the shaking) take the
-    scalar force stage: the same bits as without force lanes."""
+    and the transmission angle (the virtual-power residual, the shaking) take
+    the scalar force stage: the same bits as without force lanes."""
     k = problem.kernels
-    for flag in (ks.SET_WANT_TRANSMISSION, ks.SET_WANT_EQUILIBRIUM, ks.SET_WANT_SHAKING):
+    for flag in (ks.SET_WANT_EQUILIBRIUM, ks.SET_WANT_SHAKING):
         settings = problem.settings().copy()
         settings[flag] = 1.0
         assert not k.lane_forces_apply(settings)
@@ -543,9 +538,9 @@ def test_force_lanes_apply_only_where_they_compute_what_is_asked(problem, candid
     assert k.lane_forces_apply(problem.settings())
 
 
-def test_the_force_lanes_are_vectorized(problem):
-    """Packed (SIMD) floating-point instructions in the force lanes' machine code
-    (indexing FT and RB flat kept the loop scalar: this test failed then)."""
+def _packed_force_lane_ops(problem):
+    """The packed (SIMD) floating-point instructions in the machine code of
+    ``problem``'s force lanes, counted by kind."""
     k = problem.kernels
     f = njit(**dict(kc.JIT, cache=False))(k.force_lanes.py_func)
     npos = 4
@@ -554,7 +549,13 @@ def test_the_force_lanes_are_vectorized(problem):
     RB = np.zeros((npos, k.N_RCOLS * k.LANES))
     f(FS, FT, RB, k.LANES, npos, 1e-12, 1e-6, 1.0, 0.0, problem.loads, 3)
     asm = next(iter(f.inspect_asm().values()))
-    ops = collections.Counter(re.findall(r"\b(v?(?:mul|add|sub|div|sqrt)pd)\b", asm))
+    return collections.Counter(re.findall(r"\b(v?(?:mul|add|sub|div|sqrt)pd)\b", asm))
+
+
+def test_the_force_lanes_are_vectorized(problem):
+    """Packed (SIMD) floating-point instructions in the force lanes' machine code
+    (indexing FT and RB flat kept the loop scalar: this test failed then)."""
+    ops = _packed_force_lane_ops(problem)
     assert sum(ops.values()) > 300, ops
 
 
@@ -567,47 +568,58 @@ def prp_problem():
     return pb, np.ascontiguousarray(parameter_rows(pb.plan, pb.spec, x))
 
 
+def assert_force_lanes_round(pb, pars, min_done):
+    """The force lanes of a mechanism whose lines are not all its careful
+    kernels' (``SAME_BITS`` False) against the scalar force stage on ``pars``: the
+    same statuses, verdicts, peak joints and angles, the positions stage's
+    metrics to the bit; the peaks (and the transmission angle) within the lanes'
+    agreement with the careful path; and not the same bits."""
+    k, settings = pb.kernels, pb.settings()
+    assert k.HAS_LANE_FORCES and not k.SAME_BITS and k.lane_forces_apply(settings)
+    s1, m1 = pb.evaluate_rows(pars)
+    s0, m0 = _rows(k, pb, pars, _scalar_forces(settings))
+    np.testing.assert_array_equal(s1, s0)
+    done = m0[:, ks.M_FORCES_DONE] == 1.0
+    assert done.sum() > min_done
+    for col in (ks.M_FORCES_DONE, ks.M_PEAK_JOINT, ks.M_PEAK_PHI, ks.M_STROKE, ks.M_DWELL):
+        np.testing.assert_array_equal(m1[:, col], m0[:, col])
+    cols = [ks.M_PEAK_R, ks.M_PEAK_MBAL, ks.M_PEAK_ACC, ks.M_PEAK_EPS]
+    if settings[ks.SET_WANT_TRANSMISSION]:
+        cols.append(ks.M_MIN_TRANS)
+    for col in cols:
+        np.testing.assert_allclose(m1[done, col], m0[done, col], rtol=LANE_AGREEMENT_REL, atol=0)
+        assert np.isfinite(m1[done, col]).all()
+    assert m1.tobytes() != m0.tobytes()
+
+
 def test_the_force_lanes_of_dyads_and_slides_agree_with_the_scalar_force_stage(prp_problem):
     """The slotted rocker (an RRR, a PRP whose slot turns with the rocker, a
     guide of fixed direction, a block that only translates) in the force
     lanes: its groups and its turning slide by their forms without a library
     call (the cosine law without acos, guide directions as link vectors turned
     by hoisted cos/sin), so the scalar force stage's numbers to rounding, not
-    its bits.  The same statuses, peak joints, peak angles and verdicts; the
-    peak reaction, |M_bal|, the working point's |a| and the rocker's |eps|
-    within the lanes' agreement with the careful path; and not the same bits
-    (the lanes run their own forms)."""
+    its bits."""
     pb, pars = prp_problem
-    k, settings = pb.kernels, pb.settings()
-    assert k.HAS_LANE_FORCES and not k.SAME_BITS
-    assert settings[ks.SET_WANT_PEAKS] and k.lane_forces_apply(settings)
-    s1, m1 = pb.evaluate_rows(pars)
-    s0, m0 = _rows(k, pb, pars, _scalar_forces(settings))
-    np.testing.assert_array_equal(s1, s0)
-    done = m0[:, ks.M_FORCES_DONE] == 1.0
-    assert done.sum() > 1500
-    for col in (ks.M_FORCES_DONE, ks.M_PEAK_JOINT, ks.M_PEAK_PHI, ks.M_STROKE, ks.M_DWELL):
-        np.testing.assert_array_equal(m1[:, col], m0[:, col])
-    for col in (ks.M_PEAK_R, ks.M_PEAK_MBAL, ks.M_PEAK_ACC, ks.M_PEAK_EPS):
-        np.testing.assert_allclose(m1[done, col], m0[done, col], rtol=LANE_AGREEMENT_REL, atol=0)
-        assert np.isfinite(m1[done, col]).all()
-    assert m1.tobytes() != m0.tobytes()
+    assert pb.settings()[ks.SET_WANT_PEAKS]
+    assert_force_lanes_round(pb, pars, 1500)
+
+
+def test_the_force_lanes_of_the_cross_slide_agree_with_the_scalar_force_stage():
+    """The cross slide's sweep (an RRR and a PPR, solved as an RPP; the smallest
+    transmission angle asked for: the RRR's angle at its joint and the slot's
+    against the guide): to rounding."""
+    study = load_study(STUDIES / "ppr_cross_slide_sweep.toml")
+    pb = build_problem(study, study.sweep)
+    assert pb.settings()[ks.SET_WANT_TRANSMISSION] and pb.kernels.N_TRANS == 2
+    pars = parameter_rows(pb.plan, pb.spec, draw_candidates(pb.spec, 0))
+    assert_force_lanes_round(pb, np.ascontiguousarray(pars), 500)
 
 
 def test_the_force_lanes_of_dyads_and_slides_are_vectorized(prp_problem):
     """Packed (SIMD) floating-point instructions in the slotted rocker's force
     lanes (the working point's select over the points, the clamped square root
     of the cosine law)."""
-    pb, _ = prp_problem
-    k = pb.kernels
-    f = njit(**dict(kc.JIT, cache=False))(k.force_lanes.py_func)
-    npos = 4
-    FS = np.ones(k.N_FROWS * k.LANES)
-    FT = np.ones((npos, k.FT_COLS * k.LANES))
-    RB = np.zeros((npos, k.N_RCOLS * k.LANES))
-    f(FS, FT, RB, k.LANES, npos, 1e-12, 1e-6, 1.0, 0.0, pb.loads, 3)
-    asm = next(iter(f.inspect_asm().values()))
-    ops = collections.Counter(re.findall(r"\b(v?(?:mul|add|sub|div|sqrt)pd)\b", asm))
+    ops = _packed_force_lane_ops(prp_problem[0])
     assert sum(ops.values()) > 300, ops
 
 

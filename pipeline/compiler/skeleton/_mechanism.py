@@ -27,4 +27,6 @@ setup_lane = block_walk = lanes_apply = None    # lanes (or skeleton no_lanes)
 HAS_LANE_FORCES = False
 SAME_BITS = False
 N_FROWS = FT_COLS = N_RCOLS = F_pm = F_pe = F_bad = 0
+# RB's columns of the working point's acceleration; the transmission items, their first
+ACC_COL = N_TRANS = TR_COL = 0
 force_lanes = force_lane_in = None

@@ -33,8 +33,9 @@ from pipeline.kernels.geometry import may_reach
 from pipeline.kernels.groups import attach, crank, prp, rpp, rpr, rrp, rrr
 from pipeline.kernels.inputs import (linear_law, rise_return, rotary_input, slider_input,
                                      table_law)
-from pipeline.kernels.metrics import (dwell_error, dwell_lanes, dyad_transmission, law_error,
-                                      lead_transmission, lines_transmission, relative_angle)
+from pipeline.kernels.metrics import (dwell_error, dwell_lanes, dyad_transmission, fold_cd,
+                                      law_error, lead_transmission, lines_transmission,
+                                      relative_angle)
 from pipeline.kernels.sweep import (M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, M_PEAK_R,
                                     M_PEAK_JOINT, M_PEAK_PHI, M_PEAK_MBAL, M_FAIL_PHI,
                                     M_NEWTON_MEAN, M_FORCES_DONE, M_FAIL_GROUP, M_PEAK_ACC,
@@ -64,7 +65,7 @@ __all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_INNER', 'JIT_LANES', '
            'equilibrium_residual', 'force_work',
            'gauss_solve', 'kinetostatics', 'shaking', 'attach', 'crank', 'prp', 'rpp', 'rpr', 'rrp',
            'rrr', 'linear_law', 'rise_return', 'rotary_input', 'slider_input', 'table_law',
-           'dwell_error', 'dwell_lanes', 'dyad_transmission', 'law_error',
+           'dwell_error', 'dwell_lanes', 'dyad_transmission', 'fold_cd', 'law_error',
            'lead_transmission', 'lines_transmission', 'relative_angle', 'M_STROKE',
            'M_DWELL', 'M_DWELL_START', 'M_MARGIN', 'M_PEAK_R', 'M_PEAK_JOINT',
            'M_PEAK_PHI', 'M_PEAK_MBAL', 'M_FAIL_PHI', 'M_NEWTON_MEAN', 'M_FORCES_DONE',

@@ -8,12 +8,12 @@ The text below the marker line is pasted into the generated module
 and readers, the names the generated module gives it."""
 
 from .header import (math, np, njit, JIT, JIT_INNER, OK, M_FORCES_DONE, M_PEAK_ACC,
-                     M_PEAK_EPS, SET_WANT_FORCES, SET_WANT_PEAKS, SET_WANT_TRANSMISSION,
-                     SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING, SET_SCALAR_FORCES, SET_OMEGA1,
-                     SET_EPS1, SET_WORK_POINT,
-                     T_NEWTON_TOL, T_SINGULAR, may_reach)
-from ._mechanism import (N_JOINTS, LANES, N_FROWS, FT_COLS, N_RCOLS, F_pm, F_pe, F_bad,
-                         force_lanes)
+                     M_PEAK_EPS, M_MIN_TRANS, SET_WANT_FORCES, SET_WANT_PEAKS,
+                     SET_WANT_TRANSMISSION, SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING,
+                     SET_SCALAR_FORCES, SET_OMEGA1, SET_EPS1, SET_WORK_POINT,
+                     T_NEWTON_TOL, T_SINGULAR, fold_cd, may_reach)
+from ._mechanism import (N_JOINTS, LANES, N_FROWS, FT_COLS, ACC_COL, N_TRANS, TR_COL, F_pm,
+                         F_pe, F_bad, force_lanes)
 from .sweep_stages import settle, LANE_FORCES, reaction_peak, force_peaks_out
 
 # ---- the skeleton: from here on, pasted into the generated module ----
@@ -21,12 +21,11 @@ from .sweep_stages import settle, LANE_FORCES, reaction_peak, force_peaks_out
 def lane_forces_apply(settings):
     """Whether the force lanes compute what the settings ask for: the
     kinetostatics' peaks, with or without the working point's and the rocker's
-    (the transmission angle, the virtual-power residual and the shaking take
-    the scalar force stage), and the settings do not ask for the scalar force
-    stage (SET_SCALAR_FORCES: the baseline of the force lanes' tests and
-    benchmark)."""
+    and the smallest transmission angle (the virtual-power residual and the
+    shaking take the scalar force stage), and the settings do not ask for the
+    scalar force stage (SET_SCALAR_FORCES: the baseline of the force lanes'
+    tests and benchmark)."""
     return (settings[SET_WANT_FORCES] != 0.0 and settings[SET_SCALAR_FORCES] == 0.0
-            and settings[SET_WANT_TRANSMISSION] == 0.0
             and settings[SET_WANT_EQUILIBRIUM] == 0.0 and settings[SET_WANT_SHAKING] == 0.0)
 
 
@@ -49,6 +48,7 @@ def force_flush(pars, fidx, filled, FS, FT, RB, phis, phi_close, tols, settings,
                 settings[SET_OMEGA1], settings[SET_EPS1], loads,
                 np.int64(settings[SET_WORK_POINT]))
     want_p = settings[SET_WANT_PEAKS] != 0.0
+    want_t = settings[SET_WANT_TRANSMISSION] != 0.0
     for l in range(filled):
         i = fidx[l]
         if FS[F_bad * LANES + l] != 0.0:
@@ -74,13 +74,30 @@ def force_flush(pars, fidx, filled, FS, FT, RB, phis, phi_close, tols, settings,
             # the working point's peak |a| from the lanes' accelerations: force_stage's loop
             peak_a = 0.0
             for k in range(npos):
-                ax = RB[k, (N_RCOLS - 2) * LANES + l]
-                ay = RB[k, (N_RCOLS - 1) * LANES + l]
+                ax = RB[k, ACC_COL * LANES + l]
+                ay = RB[k, (ACC_COL + 1) * LANES + l]
                 if may_reach(ax, ay, peak_a):
                     a = math.hypot(ax, ay)
                     if a > peak_a or not math.isfinite(a):
                         peak_a = a
             metrics[i, M_PEAK_ACC] = peak_a / 1000.0        # m/s^2
             metrics[i, M_PEAK_EPS] = FS[F_pe * LANES + l]
+        if want_t:
+            # the smallest transmission angle from the lanes' |u x w|, |u . w| of every
+            # item: force_stage's loop over transmission() (fold_angle's skip and atan2)
+            trans = math.inf
+            trans_cos = math.nan
+            trans_sin = math.nan
+            for k in range(npos):
+                t = math.inf
+                for q in range(N_TRANS):
+                    t = min(t, fold_cd(RB[k, (TR_COL + 2 * q) * LANES + l],
+                                       RB[k, (TR_COL + 2 * q + 1) * LANES + l], trans_cos,
+                                       trans_sin))
+                if t < trans or (not math.isfinite(t) and t != math.inf):
+                    trans = t
+                    trans_cos = math.cos(t)
+                    trans_sin = math.sin(t)
+            metrics[i, M_MIN_TRANS] = trans if trans <= 0.5 * math.pi else math.nan
         metrics[i, M_FORCES_DONE] = 1.0
         status[i] = OK
