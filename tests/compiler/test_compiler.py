@@ -26,11 +26,13 @@ from pipeline.kernels.config import JIT
 from pipeline.kernels.forces import force_work, gauss_solve, kinetostatics
 from pipeline.kernels.metrics import dwell_error, dwell_lanes
 from pipeline.solve.scene import revolution_angles, solve_curves
-from pipeline.study.reader import load_study, parse_study
+from pipeline.study.reader import load_study
 from pipeline.runs.sweep import build_problem
 from pipeline.study.sweep_spec import draw_candidates, parameter_rows
 from support.checkout import child_env
-from support.tolerances import FAIL_ANGLE_TRIAD_RAD, LANE_AGREEMENT_REL, LANE_MARGIN_REL
+from support.lanes import (assert_lanes_agree, evaluate_with, packed_force_lane_ops,
+                           scalar_forces)
+from support.tolerances import FAIL_ANGLE_TRIAD_RAD
 
 STUDIES = Path(__file__).resolve().parents[2] / "studies"
 
@@ -141,44 +143,6 @@ def test_compile_runs_different_kernels_in_worker_processes(caplog):
 
 
 # ----------------------------------------------------------------- lanes against the careful path
-def _careful(problem, pars):
-    k = problem.kernels
-    n = pars.shape[0]
-    status = np.zeros(n, np.int8)
-    metrics = np.full((n, ks.N_METRICS), np.nan)
-    col = np.empty(len(problem.phis))
-    trail = np.empty((len(problem.phis) + 1, 4))
-    q1, q2 = (np.empty(len(problem.phis) + problem.dwell_w + 1, np.int64) for _ in range(2))
-    for i in range(n):
-        status[i] = k.evaluate_careful(pars[i], problem.phis, problem.phi_close, problem.tols,
-                                       problem.settings(), problem.loads, col, trail, q1, q2,
-                                       metrics[i])
-    return status, metrics
-
-
-def lanes_vouched(problem, pars):
-    """(lanes the walk vouched for, lanes walked) over the blocks of ``pars`` whose
-    every candidate starts in a lane: the generated setup_lane and block_walk
-    called as the sweep's evaluate calls them."""
-    from pipeline.kernels.continuation import work
-    k = problem.kernels
-    L, npos = k.LANES, len(problem.phis)
-    pos, d1, d2, m, state, _ = work(k.N_POINTS, k.N_GROUPS, k.N_TRIADS)
-    phis = np.asarray(problem.phis)
-    close = problem.phi_close if math.isfinite(problem.phi_close) else phis[0]
-    ext = np.concatenate([phis, close + (phis[:3] - phis[0])])    # the walk's angles
-    vouched = walked = 0
-    for b in range(len(pars) // L):
-        S = np.empty((k.N_LANE_ROWS, L))
-        theta = np.empty((npos + 3, L * k.THETA_COLS))
-        if any(k.setup_lane(pars, b * L + lane, lane, problem.phis, close, problem.tols, S,
-                            theta, pos, d1, d2, m, state) != kc.OK for lane in range(L)):
-            continue
-        k.block_walk(S, theta, np.cos(ext), np.sin(ext), problem.phis, problem.tols,
-                     problem.settings())
-        walked += L
-        vouched += int((S[k.R_flag] == 0.0).sum())
-    return vouched, walked
 
 
 def kinematic_only(text):
@@ -192,43 +156,6 @@ def kinematic_only(text):
                           flags=re.M)
         assert n == 1, key
     return text
-
-
-def assert_lanes_agree(problem, candidates, class3=True):
-    """The lane path (evaluate_rows) against the careful path alone, candidate by
-    candidate: the same statuses and failing groups, the failure angles within
-    the location figures (a lane that flagged itself is walked from two positions
-    before its flag: ``careful_tail``), the metrics to rounding; and the lanes
-    vouch for most candidates (a lane path that handed every lane over would
-    agree trivially)."""
-    assert problem.kernels.HAS_LANES
-    vouched, walked = lanes_vouched(problem, candidates[:400])
-    assert walked >= 200 and vouched >= 0.6 * walked, (vouched, walked)
-    s_fast, m_fast = problem.evaluate_rows(candidates)
-    s_ref, m_ref = _careful(problem, candidates)
-    np.testing.assert_array_equal(s_fast, s_ref)
-    ok = s_ref == kc.OK
-    assert ok.sum() > 100
-    # the README's figures: 1e-12 relative, the singularity margin 7.2e-12 (a small
-    # difference of large products); what is counted or located is identical
-    cols = ((ks.M_STROKE, LANE_AGREEMENT_REL), (ks.M_DWELL, LANE_AGREEMENT_REL),
-            (ks.M_DWELL_START, 0.0))
-    if problem.spec.wants_forces:
-        cols += ((ks.M_PEAK_R, LANE_AGREEMENT_REL), (ks.M_PEAK_MBAL, LANE_AGREEMENT_REL),
-                 (ks.M_PEAK_PHI, 0.0), (ks.M_FORCES_DONE, 0.0))
-    for col, rel in cols + (((ks.M_MARGIN, LANE_MARGIN_REL),) if class3 else ()):
-        a, b = m_fast[ok, col], m_ref[ok, col]
-        np.testing.assert_array_equal(np.isnan(a), np.isnan(b))
-        f = np.isfinite(b)
-        assert f.sum() > 100, col
-        np.testing.assert_allclose(a[f], b[f], rtol=rel, atol=0, err_msg=f"metric column {col}")
-    # a failure the lane's careful walk located from two positions before the lane's
-    # flag, against the walk from the start: the same group, the same boundary
-    # located twice (each within FAIL_ANGLE_TRIAD_RAD of the exact one)
-    np.testing.assert_array_equal(m_fast[~ok, ks.M_FAIL_GROUP], m_ref[~ok, ks.M_FAIL_GROUP])
-    np.testing.assert_allclose(m_fast[~ok, ks.M_FAIL_PHI], m_ref[~ok, ks.M_FAIL_PHI], rtol=0,
-                               atol=2 * FAIL_ANGLE_TRIAD_RAD)
-    return s_ref
 
 
 def test_lanes_agree_with_the_careful_path(problem, candidates):
@@ -334,97 +261,6 @@ def test_ppr_lanes_agree_with_the_careful_path(tmp_path):
     assert_lanes_agree(pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0)), class3=False)
 
 
-def test_input_and_rrp_lanes_agree_with_the_careful_path():
-    """The cam-driven rocker (a rotary input on a cycloidal law, an RRP on a
-    guide of fixed direction, forces and peaks) in the lanes: the input's law
-    from a table the lane fills by the careful path's own calls, the RRP by its
-    careful lines on the hoisted guide direction.  The link's lower bound
-    brought down so that a share of the draws cannot reach the sinker bar's
-    guide all the way round: the RRP's toggle, which the lanes hand over."""
-    text = (STUDIES / "cam_rocker_input_sweep.toml").read_text()
-    text = text.replace("min = 42.0, max = 55.0", "min = 30.0, max = 55.0")
-    assert "min = 30.0, max = 55.0" in text
-    study = parse_study(text, "cam_wide.toml")
-    pb = build_problem(study, study.sweep)
-    spec = dataclasses.replace(study.sweep, candidates=2000, chunk_size=2000)
-    status = assert_lanes_agree(pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0)),
-                                class3=False)
-    assert (status != kc.OK).sum() > 100
-    assert pb.kernels.HAS_LANE_FORCES and pb.kernels.SAME_BITS
-
-
-def test_class3_slider_lanes_agree_with_the_careful_path():
-    """The class III group with a block on a guide (the shipped sweep: forces,
-    a return spring) in the lanes: Newton on |P4 - P6| = L46 and the block's
-    line, as the careful path's slider_closure on unit vectors; the lanes
-    against the careful path alone (statuses, failing groups and angles, the
-    metrics and the singularity margin to the lanes' figures), and the force
-    lanes, from the lanes' solutions handed over (the careful kernel's
-    ``slider_handed``), against the scalar force stage: the same bits.  The
-    guide's offset and lead 4-6 widened so that some draws fold or cannot
-    assemble somewhere in the revolution."""
-    text = (STUDIES / "ov7_class3_slider_sweep.toml").read_text()
-    text = text.replace("min = 240.0, max = 280.0", "min = 150.0, max = 330.0") \
-               .replace("min = 95.0, max = 115.0", "min = 60.0, max = 140.0")
-    assert "min = 150.0, max = 330.0" in text and "min = 60.0, max = 140.0" in text
-    study = parse_study(text, "class3_slider_wide.toml")
-    pb = build_problem(study, study.sweep)
-    spec = dataclasses.replace(study.sweep, candidates=3000, chunk_size=3000)
-    pars = parameter_rows(pb.plan, spec, draw_candidates(spec, 0))
-    status = assert_lanes_agree(pb, pars, class3=True)
-    assert (status != kc.OK).sum() > 20
-    k, settings = pb.kernels, pb.settings()
-    assert k.HAS_LANE_FORCES and k.SAME_BITS and k.lane_forces_apply(settings)
-    s1, m1 = pb.evaluate_rows(pars)
-    s0, m0 = _rows(k, pb, pars, _scalar_forces(settings))
-    np.testing.assert_array_equal(s1, s0)
-    assert m1.tobytes() == m0.tobytes()
-    assert (m1[:, ks.M_FORCES_DONE] == 1.0).sum() > 500
-
-
-SLIDER_SWEEP = """
-[output]
-working_point = "P7"
-rocker = ["P6", "P3"]
-links = ["5_3", "6_3"]
-analysis = "forces"
-
-[sweep]
-candidates = 1500
-seed = 3
-positions = 360
-chunk_size = 1500
-stroke_radius = 30.0
-objectives = ["peak_acceleration", "peak_reaction"]
-metrics = ["peak_acceleration", "peak_reaction", "peak_M_bal", "stroke"]
-
-[sweep.variables]
-link = { param = "lever.L_AB", min = 36.0, max = 48.0 }
-lever = { param = "lever.L_CB", min = 26.0, max = 34.0 }
-guide_y = { param = "P4.y", min = -44.0, max = -36.0 }
-
-[sweep.constraints]
-stroke = { min = 5.0 }
-"""
-
-
-def test_a_slider_input_in_the_lanes_and_the_force_lanes():
-    """The programmed slide (a slider input on a table law, an RRR, a lever
-    with a load) as a sweep: the lanes against the careful path, and the force
-    lanes (the input's stroke and its drive along the guide, the RRR to
-    rounding) against the scalar force stage: the same statuses, joints and
-    angles, the peaks within the lanes' agreement."""
-    text = (STUDIES / "actuator_slider_input.toml").read_text()
-    text = text[:text.index("[output]")].replace('kind = "scene"', 'kind = "sweep"') \
-        .replace('type = "RRR"\n', 'type = "RRR"\nname = "lever"\n')
-    assert 'name = "lever"' in text
-    study = parse_study(text + SLIDER_SWEEP, "actuator_sweep.toml")
-    pb = build_problem(study, study.sweep)
-    pars = parameter_rows(pb.plan, pb.spec, draw_candidates(pb.spec, 0))
-    assert_lanes_agree(pb, pars, class3=False)
-    assert_force_lanes_round(pb, pars, 500)
-
-
 def test_a_candidate_gets_the_same_numbers_wherever_it_runs(problem, candidates):
     """Thread count, order and batch split change nothing, bit for bit."""
     s1, m1 = problem.evaluate_rows(candidates, n_jobs=1)
@@ -456,22 +292,6 @@ def test_the_lane_walk_is_vectorized(problem):
 
 
 # ----------------------------------------------------------------- the force lanes
-def _scalar_forces(settings):
-    """``settings`` asking for the scalar force stage for every candidate (the
-    force lanes' baseline: the same module, the same candidates)."""
-    s = settings.copy()
-    s[ks.SET_SCALAR_FORCES] = 1.0
-    return s
-
-
-def _rows(kernels, problem, pars, settings=None):
-    n = pars.shape[0]
-    status = np.zeros(n, np.int8)
-    metrics = np.full((n, ks.N_METRICS), np.nan)
-    run_rows(kernels.evaluate, np.ascontiguousarray(pars), problem.phis, problem.phi_close,
-             problem.tols, problem.settings() if settings is None else settings,
-             problem.loads, status, metrics)
-    return status, metrics
 
 
 def test_the_force_lanes_give_the_scalar_force_stage_s_bits(problem, candidates):
@@ -482,9 +302,9 @@ def test_the_force_lanes_give_the_scalar_force_stage_s_bits(problem, candidates)
     table made again) changes nothing either."""
     k, settings = problem.kernels, problem.settings()
     assert k.HAS_LANE_FORCES and settings[ks.SET_WANT_FORCES]
-    assert k.lane_forces_apply(settings) and not k.lane_forces_apply(_scalar_forces(settings))
+    assert k.lane_forces_apply(settings) and not k.lane_forces_apply(scalar_forces(settings))
     s1, m1 = problem.evaluate_rows(candidates)
-    s0, m0 = _rows(k, problem, candidates, _scalar_forces(settings))
+    s0, m0 = evaluate_with(k, problem, candidates, scalar_forces(settings))
     np.testing.assert_array_equal(s1, s0)
     assert m1.tobytes() == m0.tobytes()
     assert (m1[:, ks.M_FORCES_DONE] == 1.0).sum() > 500
@@ -492,7 +312,7 @@ def test_the_force_lanes_give_the_scalar_force_stage_s_bits(problem, candidates)
     col = problem.plan.par_names.index("crank.phiM0")
     pars[:, col] += np.deg2rad(np.arange(len(pars)) % 3)
     s1, m1 = problem.evaluate_rows(pars)
-    s0, m0 = _rows(k, problem, pars, _scalar_forces(settings))
+    s0, m0 = evaluate_with(k, problem, pars, scalar_forces(settings))
     np.testing.assert_array_equal(s1, s0)
     assert m1.tobytes() == m0.tobytes()
     assert k.SAME_BITS
@@ -512,8 +332,8 @@ def test_the_force_lanes_give_the_motion_s_peaks_and_the_transmission_angle(prob
         settings[ks.SET_WANT_TRANSMISSION] = 1.0
         settings[ks.SET_WORK_POINT] = problem.plan.point(point)
         assert k.lane_forces_apply(settings)
-        s1, m1 = _rows(k, problem, candidates[:1000], settings)
-        s0, m0 = _rows(k, problem, candidates[:1000], _scalar_forces(settings))
+        s1, m1 = evaluate_with(k, problem, candidates[:1000], settings)
+        s0, m0 = evaluate_with(k, problem, candidates[:1000], scalar_forces(settings))
         np.testing.assert_array_equal(s1, s0)
         assert m1.tobytes() == m0.tobytes()
         done = m1[:, ks.M_FORCES_DONE] == 1.0
@@ -531,100 +351,20 @@ def test_force_lanes_apply_only_where_they_compute_what_is_asked(problem, candid
         settings = problem.settings().copy()
         settings[flag] = 1.0
         assert not k.lane_forces_apply(settings)
-        s1, m1 = _rows(k, problem, candidates[:300], settings)
-        s0, m0 = _rows(k, problem, candidates[:300], _scalar_forces(settings))
+        s1, m1 = evaluate_with(k, problem, candidates[:300], settings)
+        s0, m0 = evaluate_with(k, problem, candidates[:300], scalar_forces(settings))
         np.testing.assert_array_equal(s1, s0)
         assert m1.tobytes() == m0.tobytes()
     assert k.lane_forces_apply(problem.settings())
 
 
-def _packed_force_lane_ops(problem):
-    """The packed (SIMD) floating-point instructions in the machine code of
-    ``problem``'s force lanes, counted by kind."""
-    k = problem.kernels
-    f = njit(**dict(kc.JIT, cache=False))(k.force_lanes.py_func)
-    npos = 4
-    FS = np.ones(k.N_FROWS * k.LANES)
-    FT = np.ones((npos, k.FT_COLS * k.LANES))
-    RB = np.zeros((npos, k.N_RCOLS * k.LANES))
-    f(FS, FT, RB, k.LANES, npos, 1e-12, 1e-6, 1.0, 0.0, problem.loads, 3)
-    asm = next(iter(f.inspect_asm().values()))
-    return collections.Counter(re.findall(r"\b(v?(?:mul|add|sub|div|sqrt)pd)\b", asm))
-
-
 def test_the_force_lanes_are_vectorized(problem):
     """Packed (SIMD) floating-point instructions in the force lanes' machine code
     (indexing FT and RB flat kept the loop scalar: this test failed then)."""
-    ops = _packed_force_lane_ops(problem)
+    ops = packed_force_lane_ops(problem)
     assert sum(ops.values()) > 300, ops
 
 
-@pytest.fixture(scope="module")
-def prp_problem():
-    """The slotted rocker's sweep as shipped (tests/model/test_new_dyads runs it too)."""
-    study = load_study(STUDIES / "slotted_rocker_prp_sweep.toml")
-    pb = build_problem(study, study.sweep)
-    x = np.concatenate([draw_candidates(pb.spec, c) for c in range(2)])
-    return pb, np.ascontiguousarray(parameter_rows(pb.plan, pb.spec, x))
-
-
-def assert_force_lanes_round(pb, pars, min_done):
-    """The force lanes of a mechanism whose lines are not all its careful
-    kernels' (``SAME_BITS`` False) against the scalar force stage on ``pars``: the
-    same statuses, verdicts, peak joints and angles, the positions stage's
-    metrics to the bit; the peaks (and the transmission angle) within the lanes'
-    agreement with the careful path; and not the same bits."""
-    k, settings = pb.kernels, pb.settings()
-    assert k.HAS_LANE_FORCES and not k.SAME_BITS and k.lane_forces_apply(settings)
-    s1, m1 = pb.evaluate_rows(pars)
-    s0, m0 = _rows(k, pb, pars, _scalar_forces(settings))
-    np.testing.assert_array_equal(s1, s0)
-    done = m0[:, ks.M_FORCES_DONE] == 1.0
-    assert done.sum() > min_done
-    for col in (ks.M_FORCES_DONE, ks.M_PEAK_JOINT, ks.M_PEAK_PHI, ks.M_STROKE, ks.M_DWELL):
-        np.testing.assert_array_equal(m1[:, col], m0[:, col])
-    cols = [ks.M_PEAK_R, ks.M_PEAK_MBAL, ks.M_PEAK_ACC, ks.M_PEAK_EPS]
-    if settings[ks.SET_WANT_TRANSMISSION]:
-        cols.append(ks.M_MIN_TRANS)
-    for col in cols:
-        np.testing.assert_allclose(m1[done, col], m0[done, col], rtol=LANE_AGREEMENT_REL, atol=0)
-        assert np.isfinite(m1[done, col]).all()
-    assert m1.tobytes() != m0.tobytes()
-
-
-def test_the_force_lanes_of_dyads_and_slides_agree_with_the_scalar_force_stage(prp_problem):
-    """The slotted rocker (an RRR, a PRP whose slot turns with the rocker, a
-    guide of fixed direction, a block that only translates) in the force
-    lanes: its groups and its turning slide by their forms without a library
-    call (the cosine law without acos, guide directions as link vectors turned
-    by hoisted cos/sin), so the scalar force stage's numbers to rounding, not
-    its bits."""
-    pb, pars = prp_problem
-    assert pb.settings()[ks.SET_WANT_PEAKS]
-    assert_force_lanes_round(pb, pars, 1500)
-
-
-def test_the_force_lanes_of_the_cross_slide_agree_with_the_scalar_force_stage():
-    """The cross slide's sweep (an RRR and a PPR, solved as an RPP; the smallest
-    transmission angle asked for: the RRR's angle at its joint and the slot's
-    against the guide): to rounding."""
-    study = load_study(STUDIES / "ppr_cross_slide_sweep.toml")
-    pb = build_problem(study, study.sweep)
-    assert pb.settings()[ks.SET_WANT_TRANSMISSION] and pb.kernels.N_TRANS == 2
-    pars = parameter_rows(pb.plan, pb.spec, draw_candidates(pb.spec, 0))
-    assert_force_lanes_round(pb, np.ascontiguousarray(pars), 500)
-
-
-def test_the_force_lanes_of_dyads_and_slides_are_vectorized(prp_problem):
-    """Packed (SIMD) floating-point instructions in the slotted rocker's force
-    lanes (the working point's select over the points, the clamped square root
-    of the cosine law)."""
-    ops = _packed_force_lane_ops(prp_problem[0])
-    assert sum(ops.values()) > 300, ops
-
-
-# a lane the force lanes cannot vouch for, made so in numba's Python mode: every
-# other lane's verdict set after the force lanes ran, and the fallbacks counted
 FORCE_FALLBACK = r"""
 import dataclasses, json, sys
 import numpy as np

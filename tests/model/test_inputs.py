@@ -19,7 +19,10 @@ from pipeline.kernels import config as kc
 from pipeline.kernels.inputs import linear_law, rise_return, table_law
 from pipeline.model.mechanism import Law, RotaryInput, SliderInput
 from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
-from pipeline.study.reader import StudyError, load_study
+from pipeline.runs.sweep import build_problem
+from pipeline.study.reader import StudyError, load_study, parse_study
+from pipeline.study.sweep_spec import draw_candidates, parameter_rows
+from support.lanes import assert_force_lanes_round, assert_lanes_agree
 from support.power import virtual_power
 from support.tolerances import FAIL_ANGLE_RAD, REACTION_MP_REL, VIRTUAL_POWER_REL
 
@@ -540,3 +543,66 @@ def test_the_steepest_law_allowed_has_its_exact_peak(studies):
     ref = _cycloid_peak_acceleration(8.0, 40.0, 0.37, 35.0, 60.0)
     assert ref > 2.8e4 and peak.grid_value < 0.98 * ref     # the grid alone misses it
     assert peak.value == pytest.approx(ref, rel=1e-7)
+
+
+# ----------------------------------------------------------------- the lanes
+def test_input_and_rrp_lanes_agree_with_the_careful_path(studies):
+    """The cam-driven rocker (a rotary input on a cycloidal law, an RRP on a
+    guide of fixed direction, forces and peaks) in the lanes: the input's law
+    from a table the lane fills by the careful path's own calls, the RRP by its
+    careful lines on the hoisted guide direction.  The link's lower bound
+    brought down so that a share of the draws cannot reach the sinker bar's
+    guide all the way round: the RRP's toggle, which the lanes hand over."""
+    text = (studies / "cam_rocker_input_sweep.toml").read_text()
+    text = text.replace("min = 42.0, max = 55.0", "min = 30.0, max = 55.0")
+    assert "min = 30.0, max = 55.0" in text
+    study = parse_study(text, "cam_wide.toml")
+    pb = build_problem(study, study.sweep)
+    spec = dataclasses.replace(study.sweep, candidates=2000, chunk_size=2000)
+    status = assert_lanes_agree(pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0)),
+                                class3=False)
+    assert (status != kc.OK).sum() > 100
+    assert pb.kernels.HAS_LANE_FORCES and pb.kernels.SAME_BITS
+
+
+SLIDER_SWEEP = """
+[output]
+working_point = "P7"
+rocker = ["P6", "P3"]
+links = ["5_3", "6_3"]
+analysis = "forces"
+
+[sweep]
+candidates = 1500
+seed = 3
+positions = 360
+chunk_size = 1500
+stroke_radius = 30.0
+objectives = ["peak_acceleration", "peak_reaction"]
+metrics = ["peak_acceleration", "peak_reaction", "peak_M_bal", "stroke"]
+
+[sweep.variables]
+link = { param = "RRR[2].L_AB", min = 36.0, max = 48.0 }
+lever = { param = "RRR[2].L_CB", min = 26.0, max = 34.0 }
+guide_y = { param = "P4.y", min = -44.0, max = -36.0 }
+
+[sweep.constraints]
+stroke = { min = 5.0 }
+"""
+
+
+def test_a_slider_input_in_the_lanes_and_the_force_lanes(studies):
+    """The programmed slide (a slider input on a table law, an RRR, a lever
+    with a load) as a sweep: the lanes against the careful path, and the force
+    lanes (the input's stroke and its drive along the guide, the RRR to
+    rounding) against the scalar force stage: the same statuses, joints and
+    angles, the peaks within the lanes' agreement."""
+    text = (studies / "actuator_slider_input.toml").read_text()
+    # (the scene's mechanism as it is: its module, compiled for this file's scenes,
+    # is the one the sweep's module imports from)
+    text = text[:text.index("[output]")].replace('kind = "scene"', 'kind = "sweep"')
+    study = parse_study(text + SLIDER_SWEEP, "actuator_sweep.toml")
+    pb = build_problem(study, study.sweep)
+    pars = parameter_rows(pb.plan, pb.spec, draw_candidates(pb.spec, 0))
+    assert_lanes_agree(pb, pars, class3=False)
+    assert_force_lanes_round(pb, pars, 500)

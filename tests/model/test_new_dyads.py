@@ -17,8 +17,12 @@ from pipeline.compiler.emit import EMITTERS
 from pipeline.solve.reactions import scene_forces
 from pipeline.kernels import config as kc
 from pipeline.model.mechanism import PRP, RPP
-from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
+from pipeline.solve.scene import revolution_angles, solve_curves
 from pipeline.study.reader import StudyError, load_study, parse_study
+from pipeline.kernels import sweep as ks
+from pipeline.runs.sweep import build_problem
+from pipeline.study.sweep_spec import draw_candidates, parameter_rows
+from support.lanes import assert_force_lanes_round, packed_force_lane_ops
 from support.power import virtual_power
 from support.references import against_mp_reference
 from support.tolerances import FAIL_ANGLE_RAD, MP_REFERENCE_REL, REACTION_MP_REL, SELF_FD_REL, VIRTUAL_POWER_REL
@@ -413,3 +417,37 @@ def test_pareto_analysis_of_the_prp_sweep(prp_sweep):
     test over the feasible candidates."""
     from support.sweep_helpers import assert_fronts_are_the_brute_force_rank
     assert_fronts_are_the_brute_force_rank(prp_sweep[1])
+
+
+# ----------------------------------------------------------------- the force lanes
+@pytest.fixture(scope="module")
+def prp_problem(studies):
+    """The slotted rocker's sweep as shipped (tests/model/test_new_dyads runs it too)."""
+    study = load_study(studies / "slotted_rocker_prp_sweep.toml")
+    pb = build_problem(study, study.sweep)
+    x = np.concatenate([draw_candidates(pb.spec, c) for c in range(2)])
+    return pb, np.ascontiguousarray(parameter_rows(pb.plan, pb.spec, x))
+
+
+def test_the_force_lanes_of_dyads_and_slides_agree_with_the_scalar_force_stage(prp_problem):
+    """The slotted rocker (an RRR, a PRP whose slot turns with the rocker, a
+    guide of fixed direction, a block that only translates) in the force
+    lanes: its groups and its turning slide by their forms without a library
+    call (the cosine law without acos, guide directions as link vectors turned
+    by hoisted cos/sin), so the scalar force stage's numbers to rounding, not
+    its bits."""
+    pb, pars = prp_problem
+    assert pb.settings()[ks.SET_WANT_PEAKS]
+    assert_force_lanes_round(pb, pars, 1500)
+
+
+def test_the_force_lanes_of_dyads_and_slides_are_vectorized(prp_problem):
+    """Packed (SIMD) floating-point instructions in the slotted rocker's force
+    lanes (the working point's select over the points, the clamped square root
+    of the cosine law)."""
+    ops = packed_force_lane_ops(prp_problem[0])
+    assert sum(ops.values()) > 300, ops
+
+
+# a lane the force lanes cannot vouch for, made so in numba's Python mode: every
+# other lane's verdict set after the force lanes ran, and the fallbacks counted

@@ -15,7 +15,11 @@ from pipeline import compile as pc
 from pipeline.compiler.emit import EMITTERS
 from pipeline.model.groups import GROUP_TYPES, PPR, RPP
 from pipeline.runner import solve_scene
+from pipeline.kernels import sweep as ks
+from pipeline.runs.sweep import build_problem
 from pipeline.study.reader import StudyError, load_study, parse_study
+from pipeline.study.sweep_spec import draw_candidates, parameter_rows
+from support.lanes import assert_force_lanes_round
 
 SCENE = "ppr_cross_slide"
 SWEEP = "ppr_cross_slide_sweep"
@@ -140,3 +144,14 @@ def test_a_sweep_over_a_ppr_dimension_runs(studies, tmp_path):
         assert np.all(np.isfinite(acc)) and np.ptp(acc) > 0
         # the PPR's transmission angle is its slot against its guide
         assert np.all(tr <= np.minimum(slot, 180.0 - slot) + 1e-9)
+
+
+def test_the_force_lanes_of_the_cross_slide_agree_with_the_scalar_force_stage(studies):
+    """The cross slide's sweep (an RRR and a PPR, solved as an RPP; the smallest
+    transmission angle asked for: the RRR's angle at its joint and the slot's
+    against the guide): to rounding."""
+    study = load_study(studies / "ppr_cross_slide_sweep.toml")
+    pb = build_problem(study, study.sweep)
+    assert pb.settings()[ks.SET_WANT_TRANSMISSION] and pb.kernels.N_TRANS == 2
+    pars = parameter_rows(pb.plan, pb.spec, draw_candidates(pb.spec, 0))
+    assert_force_lanes_round(pb, np.ascontiguousarray(pars), 500)
