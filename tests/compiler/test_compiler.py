@@ -143,21 +143,6 @@ def test_compile_runs_different_kernels_in_worker_processes(caplog):
 
 
 # ----------------------------------------------------------------- lanes against the careful path
-
-
-def kinematic_only(text):
-    """A sweep study's text without its bodies, slides and loads, its objectives and
-    metrics the stroke and the dwell error: the same kinematic groups, lanes and
-    careful path, no force stage to compile (a third of a module's compile)."""
-    text = text[:text.index("[[mechanism.bodies]]")] + text[text.index("[output]"):]
-    for key, value in (("analysis", '"positions"'), ("objectives", '["stroke", "dwell_error"]'),
-                       ("metrics", '["stroke", "dwell_error"]'), ("peak_M_bal", None)):
-        text, n = re.subn(rf"^{key} = .*$", "" if value is None else f"{key} = {value}", text,
-                          flags=re.M)
-        assert n == 1, key
-    return text
-
-
 def test_lanes_agree_with_the_careful_path(problem, candidates):
     assert_lanes_agree(problem, candidates)
 
@@ -218,47 +203,6 @@ def test_a_failing_lane_is_walked_from_just_before_its_flag(synthesis, candidate
     np.testing.assert_array_equal(out["status"], status[rows])
     np.testing.assert_allclose(out["fail_phi"], metrics[rows, ks.M_FAIL_PHI], rtol=0,
                                atol=2 * FAIL_ANGLE_TRIAD_RAD)
-
-
-def test_prp_lanes_agree_with_the_careful_path(tmp_path):
-    """The slotted rocker's PRP in the lanes: its guides from the rocker's link
-    vector and the hoisted angles, B where they meet.  Bounds widened so that a
-    third of the draws turn the frame's guide parallel to the slot somewhere in
-    the revolution: the lanes hand those over, and the careful path finds the
-    fold where it finds it alone.  The output measured is the pin B itself, seen
-    from the frame's guide point (the study's own rocker comes before the PRP),
-    so that the stroke and the dwell hold the lanes' B to the careful path's (no
-    force stage: the lanes hand it nothing of the PRP's)."""
-    text = (STUDIES / "slotted_rocker_prp_sweep.toml").read_text()
-    text = text.replace("min = -20.0, max = 20.0", "min = -90.0, max = 90.0") \
-               .replace("min = -5.0, max = 5.0", "min = -30.0, max = 30.0") \
-               .replace("min = -10.0, max = 10.0", "min = 5.0, max = 30.0") \
-               .replace('rocker = ["P4", "P3"]', 'rocker = ["P6", "P5"]')
-    assert text.count("max = 30.0") == 2 and 'rocker = ["P6", "P5"]' in text
-    (tmp_path / "wide.toml").write_text(kinematic_only(text))
-    study = load_study(tmp_path / "wide.toml")
-    pb = build_problem(study, study.sweep)
-    spec = dataclasses.replace(study.sweep, candidates=2000, chunk_size=2000)
-    status = assert_lanes_agree(pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0)),
-                                class3=False)
-    assert (status == kc.SINGULAR).sum() > 300
-
-
-def test_ppr_lanes_agree_with_the_careful_path(tmp_path):
-    """The cross slide's PPR (solved as an RPP: the guide's line and the slot's,
-    turned from it by the hoisted slot angle) in the lanes, over slot angles from
-    1 to 179 deg.  The output measured is the carriage's point B seen from its
-    guide's point, so that the stroke and the dwell hold the lanes' B."""
-    text = (STUDIES / "ppr_cross_slide_sweep.toml").read_text()
-    text = text.replace("min = 45.0, max = 75.0", "min = 1.0, max = 179.0") \
-               .replace("min = -5.0, max = 5.0", "min = 5.0, max = 30.0") \
-               .replace('rocker = ["P4", "P3"]', 'rocker = ["P5", "P6"]')
-    assert "max = 179.0" in text and "max = 30.0" in text and '["P5", "P6"]' in text
-    (tmp_path / "wide.toml").write_text(kinematic_only(text))
-    study = load_study(tmp_path / "wide.toml")
-    pb = build_problem(study, study.sweep)
-    spec = dataclasses.replace(study.sweep, candidates=2000, chunk_size=2000)
-    assert_lanes_agree(pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0)), class3=False)
 
 
 def test_a_candidate_gets_the_same_numbers_wherever_it_runs(problem, candidates):

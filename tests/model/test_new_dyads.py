@@ -22,7 +22,7 @@ from pipeline.study.reader import StudyError, load_study, parse_study
 from pipeline.kernels import sweep as ks
 from pipeline.runs.sweep import build_problem
 from pipeline.study.sweep_spec import draw_candidates, parameter_rows
-from support.lanes import assert_force_lanes_round, packed_force_lane_ops
+from support.lanes import assert_force_lanes_round, assert_lanes_agree, packed_force_lane_ops
 from support.power import virtual_power
 from support.references import against_mp_reference
 from support.tolerances import FAIL_ANGLE_RAD, MP_REFERENCE_REL, REACTION_MP_REL, SELF_FD_REL, VIRTUAL_POWER_REL
@@ -451,3 +451,24 @@ def test_the_force_lanes_of_dyads_and_slides_are_vectorized(prp_problem):
 
 # a lane the force lanes cannot vouch for, made so in numba's Python mode: every
 # other lane's verdict set after the force lanes ran, and the fallbacks counted
+
+
+def test_prp_lanes_agree_with_the_careful_path(studies):
+    """The slotted rocker's PRP in the lanes: its guides from the rocker's link
+    vector and the hoisted angles, B where they meet.  Bounds widened so that a
+    third of the draws turn the frame's guide parallel to the slot somewhere in
+    the revolution: the lanes hand those over, and the careful path finds the
+    fold where it finds it alone.  The force stage's peaks (the block's and the
+    slider's loads, the slides) hold the lanes' B and its analogs to the careful
+    path's; the study's own mechanism and rocker, so its module is this file's."""
+    text = (studies / "slotted_rocker_prp_sweep.toml").read_text()
+    text = text.replace("min = -20.0, max = 20.0", "min = -90.0, max = 90.0") \
+               .replace("min = -5.0, max = 5.0", "min = -30.0, max = 30.0") \
+               .replace("min = -10.0, max = 10.0", "min = 5.0, max = 30.0")
+    assert text.count("max = 30.0") == 2 and "max = 90.0" in text
+    study = parse_study(text, "prp_wide.toml")
+    pb = build_problem(study, study.sweep)
+    spec = dataclasses.replace(study.sweep, candidates=2000, chunk_size=2000)
+    status = assert_lanes_agree(pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0)),
+                                class3=False)
+    assert (status == kc.SINGULAR).sum() > 300
