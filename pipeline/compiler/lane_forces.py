@@ -278,6 +278,25 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
     return "\n".join(src) + "\n"
 
 
+def _accept_and_place_lines(e, c):
+    """``kernels.triad._accept`` at a solution handed over (no move: the sign of
+    det J and the margin, as the lane's verdict) and ``_place``, on det,
+    margin, taken and the cos/sin of a, b and b + U435."""
+    i2, i3, i4, i5 = e.ix[0], e.ix[3], e.ix[4], e.ix[5]
+    l23, l34, l35 = (c(e.k(x)) for x in ("L23", "L34", "L35"))
+    sign = c(f"sign{e.triad_row}")
+    return [
+        "sgn = 1.0 if det > 0.0 else -1.0",
+        f"prev = {sign}",
+        "bad = bad | (not taken) | ((prev != 0.0) & (sgn != prev)) | (not (margin >= tsing))",
+        f"{sign} = sgn",
+        "# _place",
+        f"P{i3}_0 = P{i2}_0 + {l23} * ca", f"P{i3}_1 = P{i2}_1 + {l23} * sa",
+        f"P{i4}_0 = P{i3}_0 + {l34} * cb", f"P{i4}_1 = P{i3}_1 + {l34} * sb",
+        f"P{i5}_0 = P{i3}_0 + {l35} * cc", f"P{i5}_1 = P{i3}_1 + {l35} * sc",
+    ]
+
+
 def _triad_analog_lines(e, c, order):
     """``kernels.triad._place_analogs``' lines for the class III vertices 3, 4, 5:
     the first analogs (``order`` 1: from a1, b1, with the first analogs' own
@@ -305,7 +324,6 @@ def _class3_lines(e, c, t):
     l23, l34, l35, l46, l57 = (c(k(x)) for x in ("L23", "L34", "L35", "L46", "L57"))
     uc, us = c(f"{k('U435')}_cos"), c(f"{k('U435')}_sin")
     r = 4 * e.triad_row
-    sign = c(f"sign{e.triad_row}")
     return [
         f"ca = {t(r)}", f"sa = {t(r + 1)}", f"cb = {t(r + 2)}", f"sb = {t(r + 3)}",
         f"cc = cb * {uc} - sb * {us}", f"sc = sb * {uc} + cb * {us}",
@@ -322,14 +340,7 @@ def _class3_lines(e, c, t):
         f"taken = max(abs(f1) / (2.0 * {l46}), abs(f2) / (2.0 * {l57})) <= tol * max({l46}, {l57})",
         "det = j11 * j22 - j12 * j21",
         f"margin = abs(det) / (4.0 * {l23} * {l46} * {l57} * max({l34}, {l35}))",
-        "sgn = 1.0 if det > 0.0 else -1.0",
-        f"prev = {sign}",
-        "bad = bad | (not taken) | ((prev != 0.0) & (sgn != prev)) | (not (margin >= tsing))",
-        f"{sign} = sgn",
-        "# _place",
-        f"P{i3}_0 = P{i2}_0 + {l23} * ca", f"P{i3}_1 = P{i2}_1 + {l23} * sa",
-        f"P{i4}_0 = P{i3}_0 + {l34} * cb", f"P{i4}_1 = P{i3}_1 + {l34} * sb",
-        f"P{i5}_0 = P{i3}_0 + {l35} * cc", f"P{i5}_1 = P{i3}_1 + {l35} * sc",
+    ] + _accept_and_place_lines(e, c) + [
         "# first analogs",
         f"r4x = P{i4}_0 - P{i6}_0", f"r4y = P{i4}_1 - P{i6}_1",
         f"r5x = P{i5}_0 - P{i7}_0", f"r5y = P{i5}_1 - P{i7}_1",
@@ -364,7 +375,6 @@ def _class3_slider_lines(e, c, t):
     l23, l34, l35, l46, off = (c(k(x)) for x in ("L23", "L34", "L35", "L46", "guide_offset"))
     uc, us = c(f"{k('U435')}_cos"), c(f"{k('U435')}_sin")
     r = 4 * e.triad_row
-    sign = c(f"sign{e.triad_row}")
     guide = (_from_position_lanes(lane_direction(e, "u1", "guide_angle", 6))
              + _direction_analogs(e, "t1", 6)
              + ["ux = u1x", "uy = u1y", "nx = -uy", "ny = ux", "th1 = t11", "th2 = t12"])
@@ -381,14 +391,7 @@ def _class3_slider_lines(e, c, t):
         f"taken = max(abs(f1) / {l46}, abs(f2)) <= tol * max({l23}, {l46})",
         "det = j11 * j22 - j12 * j21",
         f"margin = abs(det) / ({l23} * {l46} * max({l34}, {l35}))",
-        "sgn = 1.0 if det > 0.0 else -1.0",
-        f"prev = {sign}",
-        "bad = bad | (not taken) | ((prev != 0.0) & (sgn != prev)) | (not (margin >= tsing))",
-        f"{sign} = sgn",
-        "# _place",
-        f"P{i3}_0 = P{i2}_0 + {l23} * ca", f"P{i3}_1 = P{i2}_1 + {l23} * sa",
-        f"P{i4}_0 = P{i3}_0 + {l34} * cb", f"P{i4}_1 = P{i3}_1 + {l34} * sb",
-        f"P{i5}_0 = P{i3}_0 + {l35} * cc", f"P{i5}_1 = P{i3}_1 + {l35} * sc",
+    ] + _accept_and_place_lines(e, c) + [
         "# first analogs: r4.(P4' - P6') = 0, n.(P5' - G') - th' u.(P5 - G) = 0",
         f"r4x = P{i4}_0 - P{i6}_0", f"r4y = P{i4}_1 - P{i6}_1",
         f"w5x = P{i5}_0 - P{i7}_0", f"w5y = P{i5}_1 - P{i7}_1",

@@ -174,6 +174,13 @@ def _handed_unit(state, g, u_cos, u_sin):
 
 
 @njit(**JIT)
+def _handed_angles(state, g):
+    """The angles (a, b) of the unit vectors handed over in state row ``g``
+    (where they are not taken: Newton's start)."""
+    return math.atan2(state[g, S_SA], state[g, S_CA]), math.atan2(state[g, S_SB], state[g, S_CB])
+
+
+@njit(**JIT)
 def handed(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u_cos, u_sin, state, g, tol):
     """The solution handed over in state row ``g`` as unit vectors e(a), e(b)
     (the lane path's, ``S_CA`` .. ``S_SB``): (taken, det J, the cos/sin of
@@ -282,8 +289,7 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
         if taken:   # the angles are not needed: the next position is handed over too
             outcome, a, b, iters = CONVERGED, math.nan, math.nan, 0
         else:       # Newton from the handed angles, its move checked like any other
-            a0 = math.atan2(state[g, S_SA], state[g, S_CA])
-            b0 = math.atan2(state[g, S_SB], state[g, S_CB])
+            a0, b0 = _handed_angles(state, g)
     if not taken:   # (one call site of newton: compile time)
         outcome, a, b, iters, det, trig = newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35,
                                                  l46, l57, u435, a0, b0, tols[T_NEWTON_TOL],
@@ -488,8 +494,7 @@ def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l
         if taken:   # the angles are not needed: the next position is handed over too
             outcome, a, b, iters = CONVERGED, math.nan, math.nan, 0
         else:       # Newton from the handed angles, its move checked like any other
-            a0 = math.atan2(state[g, S_SA], state[g, S_CA])
-            b0 = math.atan2(state[g, S_SB], state[g, S_CB])
+            a0, b0 = _handed_angles(state, g)
     if not taken:   # (one call site of slider_newton: compile time)
         outcome, a, b, iters, det, trig = slider_newton(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23,
                                                         l34, l35, l46, u435, offset, a0, b0,
