@@ -17,11 +17,10 @@ Adding a group type means adding one emitter here and its tests.
 
 from __future__ import annotations
 
-import math
-
 from ..kernels import config as kc
 from ..kernels import inputs as ik
-from .names import text
+from .lane_geometry import hoisted_cos_sin, lane_direction, lane_meet
+from .names import NO_POINT, lane, text, wrap_line
 
 
 class Emitter:
@@ -97,9 +96,9 @@ class Emitter:
         lines = [f"# {self.title()}: {words}"]
         for kind, args in items:
             a = [self.n.I(x) if isinstance(x, int) and x >= 0 else
-                 ("-1" if isinstance(x, int) else x) for x in args]
+                 (NO_POINT if isinstance(x, int) else x) for x in args]
             call = f"tr = min(tr, {kind}_transmission(pos, {', '.join(a)}, best_cos, best_sin))"
-            lines.append(_wrap_line(call) if kind == "lines" else call)
+            lines.append(wrap_line(call) if kind == "lines" else call)
         return lines
 
 
@@ -113,7 +112,7 @@ class CrankEmitter(Emitter):
                 f"{self.k('phiM0')}, phi, order)"]
 
     def derived(self):
-        return _hoisted_cos_sin(self, "phiM0")
+        return hoisted_cos_sin(self, "phiM0")
 
     def lanes(self):
         # e(phi1 + phiM0) = e(phi1) rotated by phiM0: the table's cos/sin times
@@ -181,7 +180,7 @@ class RRPEmitter(Emitter):
 
     def derived(self):
         # the lane form's guide direction: the hoisted cos/sin of its angle
-        return _hoisted_cos_sin(self, "guide_angle")
+        return hoisted_cos_sin(self, "guide_angle")
 
     def lanes(self):
         # kernels.groups.rrp's lines on the guide's unit vector (a guide of fixed
@@ -203,8 +202,8 @@ class RRPEmitter(Emitter):
                    "low = low | (not (m >= margin_safe))"])
 
     def careful(self):
-        ga = self.p(3) if self.ix[3] >= 0 else "-1"
-        gb = self.p(4) if self.ix[4] >= 0 else "-1"
+        ga = self.p(3) if self.ix[3] >= 0 else NO_POINT
+        gb = self.p(4) if self.ix[4] >= 0 else NO_POINT
         return [f"# {self.title()}: slider {self.pname(2)} on the guide through "
                 f"{self.pname(1)}, link from {self.pname(0)}",
                 f"st, m = rrp(pos, d1, d2, {self.p(0)}, {self.p(1)}, {self.p(2)}, {ga}, {gb}, "
@@ -234,9 +233,9 @@ class RPREmitter(Emitter):
 
 def _guide_link(e, j):
     """Point index constants of a guide link's ends at gidx columns j, j + 1
-    ("-1, -1" for a guide of fixed direction)."""
+    (NO_POINT for a guide of fixed direction)."""
     if e.ix[j] < 0:
-        return "-1", "-1"
+        return NO_POINT, NO_POINT
     return e.p(j), e.p(j + 1)
 
 
@@ -247,46 +246,6 @@ def _guide_words(e, j, link_j, angle_key):
             f"+ {angle_key}")
 
 
-def _hoisted_cos_sin(e, *keys):
-    """``derived`` entries: cos and sin of the angles ``keys``, once per candidate."""
-    out = []
-    for key in keys:
-        a = e.k(key)
-        out += [(f"{a}_cos", f"math.cos({a})"), (f"{a}_sin", f"math.sin({a})")]
-    return out
-
-
-def lane_direction(e, u, angle_key, j):
-    """Lane lines of a guide's unit direction ``u``x, ``u``y (kernels.groups._direction
-    as a vector): e(angle) hoisted, or, for a guide turning with the link at gidx
-    columns j, j + 1, that link's vector normalised and turned by the hoisted
-    cos/sin of the angle (a link of no length: the careful path)."""
-    c, s = lane(f"{e.k(angle_key)}_cos"), lane(f"{e.k(angle_key)}_sin")
-    if e.ix[j] < 0:
-        return [f"{u}x = {c}", f"{u}y = {s}"]
-    a, b = e.xy(j), e.xy(j + 1)
-    return [f"vx = {b}x - {a}x", f"vy = {b}y - {a}y", "r2 = vx * vx + vy * vy",
-            "bad = bad | (not (r2 > 0.0))",
-            "f = 1.0 / math.sqrt(r2)",
-            f"{u}x = f * ({c} * vx - {s} * vy)",
-            f"{u}y = f * ({s} * vx + {c} * vy)"]
-
-
-def lane_meet(G1, e1, G2, e2, B):
-    """Lane lines of ``B`` where two lines meet (kernels.groups._line_meet): line i
-    through G_i along u_i (locals u1x ... u2y) at the offset e_i along n_i = u_i
-    turned +90 deg; ``m`` the margin |sin| of the angle between them (near 0:
-    the careful path)."""
-    return ["n1x = -u1y", "n1y = u1x", "n2x = -u2y", "n2y = u2x",
-            "den = u1x * n2x + u1y * n2y",
-            "m = abs(den)",
-            "low = low | (not (m >= margin_safe))",
-            f"gx = {G1}x - {G2}x", f"gy = {G1}y - {G2}y",
-            f"s1 = ({e2} - {e1} * (n1x * n2x + n1y * n2y) - (gx * n2x + gy * n2y)) / den",
-            f"{B}x = {G1}x + {e1} * n1x + s1 * u1x",
-            f"{B}y = {G1}y + {e1} * n1y + s1 * u1y"]
-
-
 class PRPEmitter(Emitter):
     watched = True
     code = kc.G_PRP
@@ -294,7 +253,7 @@ class PRPEmitter(Emitter):
 
     def derived(self):
         # the lane form turns unit vectors by the guides' angles: their cos/sin, hoisted
-        return _hoisted_cos_sin(self, "guide1_angle", "guide2_angle")
+        return hoisted_cos_sin(self, "guide1_angle", "guide2_angle")
 
     def lanes(self):
         return ([f"# {self.title()}: {self.xy(6)} where the two guide lines meet"]
@@ -327,7 +286,7 @@ class RPPEmitter(Emitter):
     fast = True
 
     def derived(self):
-        return _hoisted_cos_sin(self, "guide_angle", "slot_angle")
+        return hoisted_cos_sin(self, "guide_angle", "slot_angle")
 
     def lanes(self):
         # kernels.groups.rpp: the guide's line through G at guide_offset, and the
@@ -367,7 +326,7 @@ class AttachEmitter(Emitter):
     def careful(self):
         if self.ix[1] < 0:
             return [f"# {self.title()}: {self.pname(3)} = {self.pname(0)} + length e(angle)",
-                    f"st, m = attach(pos, d1, d2, {self.p(0)}, -1, -1, {self.p(3)}, "
+                    f"st, m = attach(pos, d1, d2, {self.p(0)}, {NO_POINT}, {NO_POINT}, {self.p(3)}, "
                     f"{self.k('angle')}, {self.k('length')}, order)"]
         base, a, b, out = (self.p(j) for j in (0, 1, 2, 3))
         c, s_, L = f"{self.k('angle')}_cos", f"{self.k('angle')}_sin", self.k("length")
@@ -409,7 +368,7 @@ class AttachEmitter(Emitter):
         ]
 
     def derived(self):
-        return _hoisted_cos_sin(self, "angle")
+        return hoisted_cos_sin(self, "angle")
 
     def lanes(self):
         base, a, b, out = (self.xy(j) for j in (0, 1, 2, 3))
@@ -442,13 +401,13 @@ class InputEmitter(Emitter):
             return []
         knots, coef = self.plan.input_tables[self.i]
         return [f"# the periodic spline of {text(self.label)}'s table: knots (rad) and coefficients",
-                _wrap_line(f"{self.table}_KNOTS = np.array({[float(x) for x in knots]!r})"),
-                _wrap_line(f"{self.table}_COEF = np.array({coef.tolist()!r})")]
+                wrap_line(f"{self.table}_KNOTS = np.array({[float(x) for x in knots]!r})"),
+                wrap_line(f"{self.table}_COEF = np.array({coef.tolist()!r})")]
 
     def derived(self):
         if self.kind != ik.SLIDER:
             return []
-        return _hoisted_cos_sin(self, "guide_angle")
+        return hoisted_cos_sin(self, "guide_angle")
 
     fast = True
     theta_col = -1          # its columns of the lane path's table (lanes.lane_kernel)
@@ -564,7 +523,7 @@ class ClassIIISliderEmitter(Emitter):
         return [(u, f"ternary_angle({self.k('L34')}, {self.k('L45')}, {self.k('L35')}, "
                     f"{self.k('orientation')})"),
                 (f"{u}_cos", f"math.cos({u})"), (f"{u}_sin", f"math.sin({u})")] \
-            + _hoisted_cos_sin(self, "guide_angle")    # (the lane form's guide direction)
+            + hoisted_cos_sin(self, "guide_angle")    # (the lane form's guide direction)
 
     def careful(self):
         i2, i6, i7, i3, i4, i5 = (self.p(j) for j in range(6))
@@ -576,7 +535,7 @@ class ClassIIISliderEmitter(Emitter):
                 f"on the guide {_guide_words(self, 2, 6, 'guide_angle')}",
                 "# (P5 at guide_offset from it); Newton on |P4 - P6| = L46, n.(P5 - G) = offset",
                 f"# from the continuation state row {self.triad_row}",
-                _wrap_line(f"st, m = class3_slider(pos, d1, d2, {i2}, {i6}, {i7}, {i3}, {i4}, "
+                wrap_line(f"st, m = class3_slider(pos, d1, d2, {i2}, {i6}, {i7}, {i3}, {i4}, "
                            f"{i5}, {ga}, {gb}, {k('L23')}, {k('L34')}, {k('U435')}, "
                            f"{k('L35')}, {k('L46')}, {k('guide_angle')}, {k('guide_offset')}, "
                            f"state, {self.triad_row}, order, tols, {k('U435')}_cos, "
@@ -602,21 +561,6 @@ def emitters_for(plan, names):
     return out
 
 
-def lane(name: str) -> str:
-    """A per-candidate constant in the lane path: row R_name of the block's
-    constants, this lane."""
-    return f"S[R_{name}, l]"
-
-
-def literal(x: float) -> str:
-    """A float as Python source that reads back to the same double."""
-    if math.isnan(x):
-        return "math.nan"
-    if math.isinf(x):
-        return "math.inf" if x > 0 else "-math.inf"
-    return repr(float(x))
-
-
 def constants_of(plan, n, ems):
     """(local name, expression) of every per-candidate constant: the fixed
     pivots, each group's parameters and what its emitter derives from them."""
@@ -633,19 +577,3 @@ def constants_of(plan, n, ems):
 
 def constant_names(plan, n, ems):
     return [c[0] for c in constants_of(plan, n, ems)]
-
-
-def _wrap_line(s, width=95):
-    """Break a long tuple line at commas (inside the parentheses)."""
-    if len(s) <= width:
-        return s
-    parts = s.split(", ")
-    lines, cur = [], ""
-    for p in parts:
-        if cur and len(cur) + len(p) + 2 > width:
-            lines.append(cur + ",")
-            cur = "        " + p
-        else:
-            cur = p if not cur else cur + ", " + p
-    lines.append(cur)
-    return "\n".join(lines)

@@ -18,7 +18,7 @@ reports NaN, as before).
 from __future__ import annotations
 
 from ..kernels.inputs import ROTARY
-from .emit import literal
+from .names import literal
 from .names import text
 
 MM = 1e-3

@@ -26,11 +26,11 @@ import re
 
 import numpy as np
 
-from .emit import _wrap_line, constants_of, emitters_for, literal
+from .emit import constants_of, emitters_for
 from .force_equations import force_kernel
 from .lane_forces import lane_force_kernel
 from .lanes import lane_kernel, no_rocker_kernel
-from .names import Names, text
+from .names import NO_POINT, Names, literal, text, wrap_line
 from .skeleton import part
 
 
@@ -82,6 +82,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
     w("# point indices in pos/d1/d2")
     for i, p in enumerate(plan.point_names):
         w(f"{n.I(i)} = np.int64({i})   # {text(p)}")
+    w(f"{NO_POINT} = np.int64(-1)   # none: a guide, line or link of fixed direction")
     w("")
     w("# columns of a candidate's parameter row")
     for i, p in enumerate(plan.par_names):
@@ -119,7 +120,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
         own = set(defined_functions(sweep))
         names = [f for f in shared[1] if f not in own]
         w("# ---- the kernels the rocker does not change: the mechanism's own module ----")
-        w(_wrap_line(f"from {shared[0]} import " + _tuple(names)))
+        w(wrap_line(f"from {shared[0]} import " + _tuple(names)))
         w(sweep)
         return _checked("\n".join(out))
 
@@ -162,7 +163,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
     triads = [e for e in ems if e.continued]
     body = [unpack]
     for e in triads:
-        body.append(f"start_triad(state, {e.triad_row}, {e.k('a0')}, {e.k('b0')})")
+        body.append(f"start_triad(state, np.int64({e.triad_row}), {e.k('a0')}, {e.k('b0')})")
     body.append(f"return {triads[0].k('phi_start')}" if triads else "return math.nan")
     w(_fn("start(K, state)",
           "Start every class III group from its declared guess; returns the crank\n"
@@ -222,7 +223,7 @@ def _tuple(names):
 
 
 def _unpack(names):
-    return _wrap_line(_tuple(names) + " = K")
+    return wrap_line(_tuple(names) + " = K")
 
 
 def _fn(sig, doc, body, jit="**JIT"):

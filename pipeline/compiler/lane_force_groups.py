@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 
 from ..kernels.inputs import ROTARY
-from .emit import lane_direction, lane_meet
+from .lane_geometry import lane_direction, lane_meet
 
 
 def accept_and_place_lines(e, c):

@@ -47,12 +47,13 @@ from __future__ import annotations
 import re
 
 from .emit import (AttachEmitter, ClassIIIEmitter, ClassIIISliderEmitter, CrankEmitter,
-                   InputEmitter, PRPEmitter, RPPEmitter, RRPEmitter, RRREmitter, _wrap_line,
-                   constant_names, lane)
+                   InputEmitter, PRPEmitter, RPPEmitter, RRPEmitter, RRREmitter,
+                   constant_names)
 from .force_equations import MM, UNROLLED_MAX, eliminated, is_square, slide_angle
 from .lane_force_groups import (attach_lines, class3_lines, class3_slider_lines,
                                 direction_lines, from_position_lanes, input_lines, meet_lines,
                                 peak_lines, rrp_lines, rrr_lines, transmission_lines)
+from .names import lane, wrap_line
 from .skeleton import part
 
 # the groups whose careful kernels the force lanes repeat operation for operation
@@ -243,7 +244,7 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
             '    it; computed again only for another phiM0)."""',
             "    K = constants(par)"]
     if angles:
-        src += ["    " + x for x in _wrap_line("(" + ", ".join(consts) + ",) = K", 90).split("\n")]
+        src += ["    " + x for x in wrap_line("(" + ", ".join(consts) + ",) = K", 90).split("\n")]
         for q, j, x in angles:
             src += [f"    FS[F_tr{q}_{j}_cos * LANES + l] = math.cos({x})   # (metrics._line's)",
                     f"    FS[F_tr{q}_{j}_sin * LANES + l] = math.sin({x})"]

@@ -35,9 +35,9 @@ import re
 
 from ..kernels.continuation import FOLD_SHARE
 from ..kernels.watch import ERR_FACTOR
-from .emit import (ClassIIISliderEmitter, InputEmitter, _wrap_line,
-                   constant_names, lane, lane_direction)
-from .names import text
+from .emit import ClassIIISliderEmitter, InputEmitter, constant_names
+from .lane_geometry import lane_direction
+from .names import lane, text, wrap_line
 from .skeleton import part
 
 NEWTON_STEPS = 2          # Newton steps per position after the predictor
@@ -406,7 +406,7 @@ def _watch_lines(i, e):
 
 
 def _split(line, width=90):
-    return _wrap_line(line, width).split("\n")
+    return wrap_line(line, width).split("\n")
 
 
 # the lane path's constants where there is no output rocker (not a sweep)

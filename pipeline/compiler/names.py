@@ -10,9 +10,20 @@ the mass data of body ``b`` ``body{b}_mass``/``body{b}_J_S``.  A user's name
 appears only in comments, written by ``text`` (``ascii()``: one line of
 printable ASCII, whatever the name holds), next to the definition it names,
 so a reader of a generated kernel still sees which point ``I_3`` is.
+
+The text helpers every writer of generated lines uses are here too: ``lane``
+(a per-candidate constant in the lane path), ``literal`` (a float that reads
+back to the same double) and ``wrap_line``.
 """
 
 from __future__ import annotations
+
+import math
+
+
+# the point index constant of no point (a guide, line or link of fixed direction):
+# an int64 value, like I_i, so that no library kernel compiles for a literal -1
+NO_POINT = "NO_POINT"
 
 
 def text(name) -> str:
@@ -83,3 +94,34 @@ class Names:
         if not (key.isidentifier() and key.isascii()):
             raise ValueError(f"{key!r} is not an emitter's key")
         return self._group_param.get((int(g), key), f"g{int(g)}_{key}")
+
+
+def lane(name: str) -> str:
+    """A per-candidate constant in the lane path: row R_name of the block's
+    constants, this lane."""
+    return f"S[R_{name}, l]"
+
+
+def literal(x: float) -> str:
+    """A float as Python source that reads back to the same double."""
+    if math.isnan(x):
+        return "math.nan"
+    if math.isinf(x):
+        return "math.inf" if x > 0 else "-math.inf"
+    return repr(float(x))
+
+
+def wrap_line(s, width=95):
+    """Break a long tuple line at commas (inside the parentheses)."""
+    if len(s) <= width:
+        return s
+    parts = s.split(", ")
+    lines, cur = [], ""
+    for p in parts:
+        if cur and len(cur) + len(p) + 2 > width:
+            lines.append(cur + ",")
+            cur = "        " + p
+        else:
+            cur = p if not cur else cur + ", " + p
+    lines.append(cur)
+    return "\n".join(lines)

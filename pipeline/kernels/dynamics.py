@@ -32,6 +32,7 @@ integration with its status.
 
 import math
 
+import numpy as np
 from numba import njit
 
 from .config import JIT
@@ -73,7 +74,8 @@ def drive(const, tab_phi, h_phi, tab_t, h_t, phi, t, loads_k):
     for k in range(loads_k.shape[0]):
         for j in range(3):
             loads_k[k, j] = channel(const, tab_phi, h_phi, tab_t, h_t, 1 + 3 * k + j, phi, t)
-    return channel(const, tab_phi, h_phi, tab_t, h_t, 0, phi, t)
+    # np.int64: not the literal 0 (one compiled channel for every call)
+    return channel(const, tab_phi, h_phi, tab_t, h_t, np.int64(0), phi, t)
 
 
 # ----------------------------------------------------------------- Lagrange terms

@@ -23,6 +23,7 @@ with the same unknowns, continuation state and checks as ``class3``.
 
 import math
 
+import numpy as np
 from numba import njit
 
 from .config import (JIT, OK, NEWTON_MAXITER, SINGULAR, BRANCH_JUMP,
@@ -132,7 +133,7 @@ def newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b,
     det = math.nan
     trig = (math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
     last = math.inf       # the last full Newton step (rad)
-    strikes = 0
+    strikes = np.int64(0)   # (not the literal 0: one compiled _stalls)
     tol_mm = tol * max(l46, l57)
     for it in range(maxiter + 1):
         f1, f2, j11, j12, j21, j22, trig = closure(p2x, p2y, p6x, p6y, p7x, p7y,
@@ -268,7 +269,7 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
     handed_over = state[g, S_HANDED] != 0.0     # (a hand-over holds for one solve only)
     if not (math.isfinite(u435) and l23 > 0.0 and l46 > 0.0 and l57 > 0.0):
         state[g, S_HANDED] = 0.0
-        _nan_joints(pos, d1, d2, i3, i4, i5, 0)
+        _nan_joints(pos, d1, d2, i3, i4, i5, np.int64(0))
         state[g, S_MARGIN] = 0.0
         return BAD_GEOMETRY, 0.0
     p2x = pos[i2, 0]
@@ -298,7 +299,7 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
     state[g, S_ITERS] = iters
     scale = 4.0 * l23 * l46 * l57 * max(l34, l35)
     if outcome != CONVERGED:
-        _nan_joints(pos, d1, d2, i3, i4, i5, 0)
+        _nan_joints(pos, d1, d2, i3, i4, i5, np.int64(0))
         state[g, S_MARGIN] = 0.0
         if outcome == SINGULAR_JACOBIAN:
             return SINGULAR, 0.0
@@ -312,7 +313,7 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
     if order < 1:
         return status, margin
     if status == SINGULAR:
-        _nan_joints(pos, d1, d2, i3, i4, i5, 1)
+        _nan_joints(pos, d1, d2, i3, i4, i5, np.int64(1))
         return status, margin
 
     r4x = pos[i4, 0] - p6x
@@ -405,7 +406,7 @@ def slider_newton(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, u435, 
     det = math.nan
     trig = (math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
     last = math.inf       # the last full Newton step (rad)
-    strikes = 0
+    strikes = np.int64(0)   # (not the literal 0: one compiled _stalls)
     tol_mm = tol * max(l23, l46)
     for it in range(maxiter + 1):
         f1, f2, j11, j12, j21, j22, trig = slider_closure(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23,
@@ -463,13 +464,13 @@ def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l
     handed_over = state[g, S_HANDED] != 0.0     # (a hand-over holds for one solve only)
     if not (math.isfinite(u435) and l23 > 0.0 and l46 > 0.0):
         state[g, S_HANDED] = 0.0
-        _nan_joints(pos, d1, d2, i3, i4, i5, 0)
+        _nan_joints(pos, d1, d2, i3, i4, i5, np.int64(0))
         state[g, S_MARGIN] = 0.0
         return BAD_GEOMETRY, 0.0
     th, th1, th2 = guide_direction(pos, d1, d2, ga, gb, guide_angle, order)
     if not math.isfinite(th):   # the guide link has no length: no direction
         state[g, S_HANDED] = 0.0
-        _nan_joints(pos, d1, d2, i3, i4, i5, 0)
+        _nan_joints(pos, d1, d2, i3, i4, i5, np.int64(0))
         state[g, S_MARGIN] = 0.0
         return SINGULAR, 0.0
     ux = math.cos(th)
@@ -504,7 +505,7 @@ def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l
                                                         _give_up(state, g, tols))
     state[g, S_ITERS] = iters
     if outcome != CONVERGED:
-        _nan_joints(pos, d1, d2, i3, i4, i5, 0)
+        _nan_joints(pos, d1, d2, i3, i4, i5, np.int64(0))
         state[g, S_MARGIN] = 0.0
         if outcome == SINGULAR_JACOBIAN:
             return SINGULAR, 0.0
@@ -516,7 +517,7 @@ def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l
     if order < 1:
         return status, margin
     if status == SINGULAR:
-        _nan_joints(pos, d1, d2, i3, i4, i5, 1)
+        _nan_joints(pos, d1, d2, i3, i4, i5, np.int64(1))
         return status, margin
 
     r4x = pos[i4, 0] - p6x

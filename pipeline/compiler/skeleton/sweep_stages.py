@@ -166,7 +166,7 @@ def careful_tail(K, phis, k0, k1, trail, tols, out, wk, ww):
     if advance(K, phis[k0], phis[k0], np.int64(0), tols, state, pos, d1, d2, margins,
                np.bool_(False)) != OK:
         return OK
-    watch(K, 0, phis[k0], tols, state, pos, d1, d2, margins, ww)   # (its history)
+    watch(K, np.int64(0), phis[k0], tols, state, pos, d1, d2, margins, ww)   # (its history)
     for k in range(k0 + 1, k1):
         st = careful_step(K, k - k0, phis[k - 1], phis[k], tols, out, wk, ww)
         if st != OK:

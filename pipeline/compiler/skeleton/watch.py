@@ -179,7 +179,7 @@ def refine(K, lo, hi, tols, state, pos, d1, d2, margins, ww):
             found[2] = margins[N_GROUPS]
             return st
         sub_phi[0] = lo
-        watched_values(margins, sub_val, 0)
+        watched_values(margins, sub_val, np.int64(0))
         for i in range(1, SUB + 1):
             t = hi if i == SUB else lo + (hi - lo) * i / SUB
             st = advance(K, sub_phi[i - 1], t, np.int64(0), tols, state, pos, d1, d2,
