@@ -18,8 +18,10 @@ and is held as a ratio against:
   ``benchmarks/interpreter/``), on the same candidates, in the same process;
 * the NumPy-vectorised baseline (four-bar positions).
 
-Compile time is measured apart: a new mechanism (an empty cache of generated
-modules, in a fresh process) and a cached one (the same again), per study.
+Compile time is measured apart, each study in a fresh process: the default
+study first with numba's cache and the generated modules' both empty (the first
+run after installing), then scenes of mechanisms new to the cache, then each
+again, cached.
 
 Jobs (360 positions per revolution):
   B positions stage   dwell-only sweep stage of mechanism B (class III Newton to 1e-12,
@@ -315,19 +317,23 @@ def whole_process(candidates):
 
 
 def compile_times(studies):
-    """Seconds per study: a new mechanism (fresh cache of generated modules) and
-    a cached one, each in a fresh process (`pipeline compile STUDY`)."""
+    """Seconds per study, each in a fresh process (`pipeline compile STUDY`), with
+    both caches empty at the start: numba's (the library kernels' as well) and
+    the generated modules'.  The first study is therefore compiled as on the
+    first run after installing; each later one as a new mechanism afterwards
+    (the library kernels it shares with the ones before load from the cache);
+    then each study once more, cached.  Returns {study: (new, cached)}."""
     out = {}
-    with tempfile.TemporaryDirectory() as d:
-        env = dict(os.environ, PIPELINE_CACHE_DIR=d)
-        for s in studies:
-            res = []
-            for _ in range(2):
-                p = subprocess.run([sys.executable, "-m", "pipeline.cli", "compile", str(s),
-                                    "--format", "json"], env=env, capture_output=True,
-                                   text=True, check=True, cwd=ROOT)
-                res.append(float(re.search(r"(\d+\.\d+) s", p.stdout).group(1)))
-            out[s.stem] = tuple(res)
+    with tempfile.TemporaryDirectory() as d, tempfile.TemporaryDirectory() as nb:
+        env = dict(os.environ, PIPELINE_CACHE_DIR=d, NUMBA_CACHE_DIR=nb)
+
+        def once(s):
+            p = subprocess.run([sys.executable, "-m", "pipeline.cli", "compile", str(s),
+                                "--format", "json"], env=env, capture_output=True,
+                               text=True, check=True, cwd=ROOT)
+            return float(re.search(r"(\d+\.\d+) s", p.stdout).group(1))
+        new = {s.stem: once(s) for s in studies}
+        out = {s.stem: (new[s.stem], once(s)) for s in studies}
     return out
 
 
@@ -425,13 +431,21 @@ def main(argv=None):
     lines += [f"Default study, whole process with HDF5 (`pipeline run`, {n_whole:,} "
               f"candidates, kernels cached): {rate:,.0f} candidates/s, {wall:.1f} s wall "
               f"for the process{against}.", ""]
-    studies = [STUDIES / f"{s}.toml" for s in ("ov7_synthesis", "ov7_class3", "ov7_base",
+    # the main job first (every cache empty: the first run after installing), then
+    # scenes of mechanisms no study before them has (ov7_class3 is the default
+    # study's own mechanism: its kernels are that study's, not a new mechanism's)
+    studies = [STUDIES / f"{s}.toml" for s in ("ov7_synthesis", "ov7_base",
                                                 "warp_feed_fourbar", "takeup_dynamics")]
     ct = {} if a.smoke else compile_times(studies[:2] if a.quick else studies)
     if ct:
-        lines += ["Compile time (fresh process each): a new mechanism / a cached one", "",
-                  "| study | new mechanism | cached |", "|---|---|---|"]
-        lines += [f"| {k} | {v[0]:.1f} s | {v[1]:.2f} s |" for k, v in ct.items()]
+        lines += ["Compile time, each in a fresh process, numba's cache and the generated "
+                  "modules' empty at the start (issue 27: the main job <= 8 s, a new "
+                  "scene <= 3 s):", "",
+                  "| study | new | cached |", "|---|---|---|"]
+        for i, (k, v) in enumerate(ct.items()):
+            what = ("the first run after installing" if i == 0 else
+                    "a new mechanism afterwards")
+            lines.append(f"| {k} ({what}) | {v[0]:.1f} s | {v[1]:.2f} s |")
     text = "\n".join(lines) + "\n"
     print(text)
     write_text(out / "compiler.md", text)
