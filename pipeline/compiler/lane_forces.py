@@ -236,7 +236,8 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
     src += ["            " + x for x in L]
     src += ["", ""]
     # force_lane_in: one candidate into lane l
-    src += ["@njit(inline='always', **JIT)",
+    src += ["# its own function: compiled beside the run (pipeline.compiler.beside)",
+            "@njit(**JIT_INNER)",
             "def force_lane_in(par, l, trail, FS, FT, phis, crank_tab):",
             '    """Candidate ``par`` into force lane ``l``: its constants, masses and the',
             '    class III solutions of the lane walk (``trail``), and the crank\'s cos/sin',

@@ -86,6 +86,31 @@ def test_point_indices_are_not_literals(synthesis):
     assert all(types.maybe_literal(v) is None and typeof(v) == types.int64 for v in idx)
 
 
+def test_every_kernel_of_the_sweep_compiles_once(problem, candidates):
+    """One compiled version per kernel: a literal argument (a generated -1 for no
+    point, a 0 for a row or a position) made numba compile watch, start_triad,
+    _stalls, _nan_joints ... a second time; and the process beside a new
+    mechanism's run (``compiler.beside``) compiles its kernels for the very types
+    ``evaluate`` passes, or the run compiles each of them once more."""
+    from numba.core.registry import CPUDispatcher
+
+    from pipeline.compiler.beside import compile_standalone
+    from pipeline.kernels import continuation, triad
+    mod = problem.kernels
+    problem.evaluate_rows(np.ascontiguousarray(candidates[:64]), parallel=False)
+    compile_standalone(mod)             # what the process beside compiles, here
+    base = sys.modules[mod.position.py_func.__module__]
+    kernels = {f"{m.__name__}.{k}": v for m in (mod, base) for k, v in vars(m).items()
+               if isinstance(v, CPUDispatcher) and v.py_func.__module__ == m.__name__}
+    kernels.update({"start_triad": continuation.start_triad, "_stalls": triad._stalls,
+                    "_nan_joints": triad._nan_joints})
+    for name in ("setup_lane", "block_walk", "force_lane_in", "careful_tail", "force_stage",
+                 "walk", "force_lanes", "settle", "evaluate"):
+        assert getattr(mod, name).signatures, name       # compiled, by evaluate or beside
+    twice = {k: v.signatures for k, v in kernels.items() if len(v.signatures) > 1}
+    assert not twice
+
+
 def test_no_exec_or_eval_in_the_compiler():
     here = Path(__file__).resolve().parents[2] / "pipeline" / "compiler"
     for f in here.rglob("*.py"):     # the skeleton files too

@@ -134,7 +134,7 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                 if st != NEEDS_FORCES:
                     status[idx[l]] = st
                     continue
-                force_lane_in(pars[idx[l]], forced, trail, FS, FT, phis, crank_tab)
+                force_lane_in(pars[idx[l]], np.int64(forced), trail, FS, FT, phis, crank_tab)
                 fidx[forced] = idx[l]
                 forced += 1
                 if forced == LANES:

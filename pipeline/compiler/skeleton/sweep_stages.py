@@ -8,7 +8,7 @@ The text below the marker line is pasted into the generated module
 (``pipeline.compiler.generate``, after ``careful``); the imports above it declare,
 for linters and readers, the names the generated module gives it."""
 
-from .header import (math, np, njit, JIT, JIT_ALLOC, OK, BRANCH_JUMP, S_ITERS,
+from .header import (math, np, njit, JIT, JIT_ALLOC, JIT_INNER, OK, BRANCH_JUMP, S_ITERS,
                      S_MARGIN, closes, copy2, work, force_work, dwell_error, law_error,
                      relative_angle, M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, M_PEAK_R,
                      M_PEAK_JOINT, M_PEAK_PHI, M_PEAK_MBAL, M_FAIL_PHI, M_NEWTON_MEAN,
@@ -134,8 +134,9 @@ def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww):
     return OK, margin, iters
 
 
-# inline='always': one call site in the sweep (see careful_positions)
-@njit(inline='always', **JIT)
+# its own function, compiled from the start in the process beside the run
+# (pipeline.compiler.beside), which then loads it from numba's cache
+@njit(**JIT_INNER)
 def careful_tail(K, phis, k0, k1, trail, tols, out, wk, ww):
     """The careful walk of a lane that flagged itself, where the lane could not
     vouch: the first window, then positions ``k0`` .. k1 - 1 (3 < k0 < n, k1 <= n):
@@ -255,9 +256,9 @@ def lane_or_careful_metrics(K, vouched, phis, phi_close, tols, settings, col, qm
     return NEEDS_FORCES
 
 
-# inline='always': one call site in the sweep; as its own function numba would
-# build and link a library of everything it calls once more (compile time)
-@njit(inline='always', **JIT)
+# its own function, compiled from the start in the process beside the run
+# (pipeline.compiler.beside), which then loads it from numba's cache
+@njit(**JIT_INNER)
 def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, fw):
     """Stage 2 at every position of the grid, what the settings ask for:
     kinetostatics (SET_WANT_FORCES: the peak reaction, its joint and angle,
