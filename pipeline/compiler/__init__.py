@@ -117,19 +117,19 @@ def kernels_for(plan, rocker=None, watch=True):
 
 
 def _compile_beside(mod) -> None:
-    """Where ``mod`` (a sweep's module) has force lanes that numba's cache does
+    """Where ``mod`` (a sweep's module) has a lane walk that numba's cache does
     not hold yet and this process may use two cores or more: a process of their
     own compiles its stand-alone kernels into the cache meanwhile
     (``pipeline.compiler.beside``).  ``PIPELINE_COMPILE_BESIDE=0`` turns it off."""
     if (os.environ.get("PIPELINE_COMPILE_BESIDE", "1") == "0"
             or os.environ.get("NUMBA_DISABLE_JIT", "0") not in ("", "0")
-            or not getattr(mod, "HAS_LANE_FORCES", False)):
+            or not getattr(mod, "HAS_LANES", False)):
         return
     from .parallel import default_jobs
     if default_jobs() < 2:
         return
-    try:        # the index numba's cache keeps of the force lanes' compiled versions
-        if Path(mod.force_lanes._cache._cache_file._index_path).exists():
+    try:        # the index numba's cache keeps of the lane walk's compiled versions
+        if Path(mod.walk._cache._cache_file._index_path).exists():
             return
     except AttributeError:      # another numba: look no further, compile beside
         pass

@@ -24,33 +24,17 @@ import numpy as np
 
 def compile_standalone(mod) -> None:
     """Compile (or load) the kernels of the generated sweep module ``mod`` that
-    call nothing of ``settle``'s careful stages (``walk``, ``force_lanes``,
-    ``force_stage``, ``setup_lane``, ``block_walk``, ``force_lane_in``) and
-    ``careful_tail``, for the argument types ``evaluate`` and ``settle`` give
-    them: ``walk`` and ``force_lanes`` by running them on a few positions of
-    dummy data, the others (no Python wrapper) by ``compile`` with the types of
-    such data."""
-    lanes = mod.LANES
-    npos = 4
-    if getattr(mod, "HAS_LANE_FORCES", False):
-        fs = np.ones(mod.N_FROWS * lanes)
-        ft = np.ones((npos, mod.FT_COLS * lanes))
-        rb = np.zeros((npos, mod.N_RCOLS * lanes))
-        loads = np.zeros((npos, len(mod.LOAD_BODY), 3))
-        mod.force_lanes(fs, ft, rb, lanes, npos, 1e-12, 1e-6, 1.0, 0.0, loads, np.int64(0))
-    if getattr(mod, "HAS_LANES", False):
-        s = np.ones((mod.N_LANE_ROWS, lanes))
-        theta = np.zeros((npos, lanes * mod.THETA_COLS))
-        c = np.cos(np.arange(float(npos)))
-        mod.walk(s.reshape(-1), lanes, theta, c, c, 2, 1, 1e-12, 0.1, 0.05, 1e-3, 1e-7, 1e-6)
-        _compile_callees(mod, npos)
-
-
-def _compile_callees(mod, npos):
-    """``compile`` the kernels ``evaluate`` and ``settle`` call that have no
-    Python wrapper, for the numba types of arrays, tuples and numbers like the
-    ones those pass (C-contiguous float64 arrays, int64 indices)."""
+    call nothing of ``settle``'s careful stages, and ``careful_tail``, for the
+    argument types ``evaluate`` and ``settle`` give them: first those that call
+    nothing the run compiles (the force lanes, the lane walk), then, once the
+    run has compiled ``position`` and ``advance`` (numba's cache), the ones
+    that call them, in the order the run reaches them.  ``walk`` and
+    ``force_lanes`` by running them on a few positions of dummy data, the others
+    (no Python wrapper) by ``compile`` with the types of such data."""
     from numba import typeof
+    lanes, npos = mod.LANES, 4
+    if not getattr(mod, "HAS_LANES", False):
+        return
     a1, a2 = np.zeros(4), np.zeros((4, 4))
     par = np.ones(mod.N_PARAMS)
     K = mod.constants(par)
@@ -59,15 +43,30 @@ def _compile_callees(mod, npos):
     ww = mod.watch_work()
     i64, f64, b = np.int64(0), 0.0, True
     loads = np.zeros((npos, 1, 3))
-    jobs = [("force_stage", (par, K, a1, a1, a1, loads, a1, a2, b, wk, fw)),
-            ("setup_lane", (a2, i64, i64, a1, f64, a1, a2, a2, a2, a2, a2, a1, a2)),
-            ("block_walk", (a2, a2, a1, a1, a1, a1, a1)),
-            ("force_lane_in", (par, i64, a2, a1, a2, a1, a2)),
-            ("careful_tail", (K, a1, i64, i64, a2, a1, a1, wk, ww))]
-    for name, args in jobs:
-        fn = getattr(mod, name, None)
-        if fn is not None and hasattr(fn, "compile"):
-            fn.compile(tuple(typeof(x) for x in args))
+    status = np.zeros(4, np.int8)       # (the run's status array: pipeline.runs.problem)
+    ix = np.zeros(4, np.int64)
+
+    def compile_(name, *args):
+        getattr(mod, name).compile(tuple(typeof(x) for x in args))
+
+    if getattr(mod, "HAS_LANE_FORCES", False):
+        fs = np.ones(mod.N_FROWS * lanes)
+        ft = np.ones((npos, mod.FT_COLS * lanes))
+        rb = np.zeros((npos, mod.N_RCOLS * lanes))
+        mod.force_lanes(fs, ft, rb, lanes, npos, 1e-12, 1e-6, 1.0, 0.0,
+                        np.zeros((npos, len(mod.LOAD_BODY), 3)), np.int64(0))
+    s = np.ones((mod.N_LANE_ROWS, lanes))
+    theta = np.zeros((npos, lanes * mod.THETA_COLS))
+    c = np.cos(np.arange(float(npos)))
+    mod.walk(s.reshape(-1), lanes, theta, c, c, 2, 1, 1e-12, 0.1, 0.05, 1e-3, 1e-7, 1e-6)
+    # (by now the run has usually compiled position and advance: numba's cache)
+    compile_("force_stage", par, K, a1, a1, a1, loads, a1, a2, b, wk, fw)
+    if getattr(mod, "HAS_LANE_FORCES", False):
+        compile_("force_flush", ix, i64, a1, a2, a2, a1, a1, a1, loads, status, a2)
+        compile_("force_lane_in", par, i64, a2, a1, a2, a1, a2)
+    compile_("block_walk", a2, a2, a1, a1, a1, a1, a1)
+    compile_("careful_tail", K, a1, i64, i64, a2, a1, a1, wk, ww)
+    compile_("setup_lane", a2, i64, i64, a1, f64, a1, a2, a2, a2, a2, a2, a1, a2)
 
 
 def main(argv=None) -> int:

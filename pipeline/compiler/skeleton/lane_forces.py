@@ -1,7 +1,8 @@
 """The force lanes' driver of a generated module (``pipeline.compiler.lane_forces``
 writes ``force_lanes`` and ``force_lane_in`` above it): a full block of force
-lanes solved together, then each lane's metrics, or the scalar force stage
-for a lane the force lanes could not vouch for.
+lanes solved together, then each lane's metrics (``force_flush``), and the
+scalar force stage for a lane the force lanes could not vouch for
+(``force_refused``).
 
 The text below the marker line is pasted into the generated module
 (``pipeline.compiler.lane_forces``); the imports above it declare, for linters
@@ -29,14 +30,14 @@ def lane_forces_apply(settings):
             and settings[SET_WANT_EQUILIBRIUM] == 0.0 and settings[SET_WANT_SHAKING] == 0.0)
 
 
-# its own function: evaluate calls it at two places (a full block, and the last)
+# its own function, which calls nothing of settle's: the process beside the run
+# compiles it from the start (pipeline.compiler.beside)
 @njit(**JIT_INNER)
-def force_flush(pars, fidx, filled, FS, FT, RB, phis, phi_close, tols, settings, loads, col,
-                trail, qmax, qmin, wk, fw, ww, corr, status, metrics):
+def force_flush(fidx, filled, FS, FT, RB, phis, tols, settings, loads, status, metrics):
     """The force lanes of candidates fidx[:filled] (the rest of the block a copy
-    of lane 0), then each candidate's force metrics into its row: from the
-    lanes, or by the scalar force stage where a lane could not vouch for its
-    candidate (``settle`` with LANE_FORCES)."""
+    of lane 0), then each candidate's force metrics into its row from the
+    lanes; a candidate whose lane could not vouch for it (FS's F_bad) is left
+    to the scalar force stage (``force_refused``)."""
     npos = phis.shape[0]
     for l in range(filled, LANES):
         for r in range(N_FROWS):
@@ -52,13 +53,7 @@ def force_flush(pars, fidx, filled, FS, FT, RB, phis, phi_close, tols, settings,
     for l in range(filled):
         i = fidx[l]
         if FS[F_bad * LANES + l] != 0.0:
-            for k in range(npos):
-                for q in range(trail.shape[1]):
-                    trail[k, q] = FT[k, q * LANES + l]
-            status[i] = settle(pars[i], np.int64(LANE_FORCES), phis, phi_close, tols, settings,
-                               loads, col, trail, qmax, qmin, 0.0, np.int64(-1), 0.0, 0.0, wk,
-                               fw, ww, corr, metrics[i])
-            continue
+            continue            # (force_refused)
         # the peak reaction from the lanes' reactions: force_stage's own loop
         peak = -1.0
         peak_j = -1
@@ -101,3 +96,23 @@ def force_flush(pars, fidx, filled, FS, FT, RB, phis, phi_close, tols, settings,
             metrics[i, M_MIN_TRANS] = trans if trans <= 0.5 * math.pi else math.nan
         metrics[i, M_FORCES_DONE] = 1.0
         status[i] = OK
+
+
+# inline='always': evaluate's two call sites (a full block, and the last); as a
+# function of its own it would link settle's code once more (compile time)
+@njit(inline='always', **JIT)
+def force_refused(pars, fidx, filled, FS, FT, phis, phi_close, tols, settings, loads, col,
+                  trail, qmax, qmin, wk, fw, ww, corr, status, metrics):
+    """The scalar force stage (``settle`` with LANE_FORCES) of the candidates
+    fidx[:filled] of a flushed block whose lane could not vouch for them, from
+    the lane walk's class III solutions (FT's first columns)."""
+    npos = phis.shape[0]
+    for l in range(filled):
+        if FS[F_bad * LANES + l] != 0.0:
+            i = fidx[l]
+            for k in range(npos):
+                for q in range(trail.shape[1]):
+                    trail[k, q] = FT[k, q * LANES + l]
+            status[i] = settle(pars[i], np.int64(LANE_FORCES), phis, phi_close, tols, settings,
+                               loads, col, trail, qmax, qmin, 0.0, np.int64(-1), 0.0, 0.0, wk,
+                               fw, ww, corr, metrics[i])

@@ -28,6 +28,11 @@ def force_lane_in(par, l, trail, FS, FT, phis, crank_tab):
 
 
 @njit(**JIT)
-def force_flush(pars, fidx, filled, FS, FT, RB, phis, phi_close, tols, settings, loads, col,
-                trail, qmax, qmin, wk, fw, ww, corr, status, metrics):
+def force_flush(fidx, filled, FS, FT, RB, phis, tols, settings, loads, status, metrics):
+    return
+
+
+@njit(**JIT)
+def force_refused(pars, fidx, filled, FS, FT, phis, phi_close, tols, settings, loads, col,
+                  trail, qmax, qmin, wk, fw, ww, corr, status, metrics):
     return

@@ -15,7 +15,7 @@ from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLI
 from ._mechanism import (HAS_LANE_FORCES, N_FROWS, FT_COLS, N_RCOLS, force_lane_in)
 from .careful import walk_angle
 from .sweep_stages import careful_tail, no_metrics, settle, LANE_METRICS, NEEDS_FORCES
-from .lane_forces import lane_forces_apply, force_flush
+from .lane_forces import lane_forces_apply, force_flush, force_refused
 from .watch import watch_work
 
 # ---- the skeleton: from here on, pasted into the generated module ----
@@ -139,11 +139,15 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                 forced += 1
                 if forced == LANES:
                     # np.int64(...): no literal argument, one compiled version
-                    force_flush(pars, fidx, np.int64(forced), FS, FT, RB, phis, phi_close,
-                                tols, settings, loads, col, trail, qmax, qmin, wk, fw, ww,
-                                corr, status, metrics)
+                    force_flush(fidx, np.int64(forced), FS, FT, RB, phis, tols, settings,
+                                loads, status, metrics)
+                    force_refused(pars, fidx, np.int64(forced), FS, FT, phis, phi_close, tols,
+                                  settings, loads, col, trail, qmax, qmin, wk, fw, ww, corr,
+                                  status, metrics)
                     forced = 0
             filled = 0
     if forced > 0:
-        force_flush(pars, fidx, np.int64(forced), FS, FT, RB, phis, phi_close, tols, settings,
-                    loads, col, trail, qmax, qmin, wk, fw, ww, corr, status, metrics)
+        force_flush(fidx, np.int64(forced), FS, FT, RB, phis, tols, settings, loads, status,
+                    metrics)
+        force_refused(pars, fidx, np.int64(forced), FS, FT, phis, phi_close, tols, settings,
+                      loads, col, trail, qmax, qmin, wk, fw, ww, corr, status, metrics)
