@@ -346,8 +346,9 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
         walk += ["        if k == k_close:"] + ["            " + flat(x) for x in shut]
     src += [""] + walk + ["", ""]
     src += ["# its own function, compiled from the start in the process beside the run",
-            "# (pipeline.compiler.beside), which then loads it from numba's cache",
-            "@njit(**JIT_INNER)",
+            "# (pipeline.compiler.beside), which then loads it from numba's cache;",
+            "# with a Python wrapper: the lane tests and the benchmark call it",
+            "@njit(**JIT)",
             "def setup_lane(pars, i, l, phis, close, tols, S, theta, pos, d1, d2, margins, state):",
             '    """Candidate ``i`` into lane ``l``: its constants, its inputs\' laws at every',
             "    step of the walk (``close``: phi_close, or phis[0] where the revolution",
@@ -359,7 +360,7 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
             "    # step, reported as it is; -1: assembled, but the lane cannot start (careful)",
             "    return (0 if ok else -1) if st == OK else st", "", ""]
     src += ["# its own function: compiled beside the run, as setup_lane",
-            "@njit(**JIT_INNER)",
+            "@njit(**JIT)",
             "def block_walk(S, theta, cph_tab, sph_tab, phis, tols, settings):",
             '    """The lock-step walk of a full block (every lane set up), then the closing',
             '    checks; S[R_flag, l] != 0 marks a lane the careful path must redo."""',

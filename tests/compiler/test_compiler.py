@@ -91,24 +91,26 @@ def test_every_kernel_of_the_sweep_compiles_once(problem, candidates):
     point, a 0 for a row or a position) made numba compile watch, start_triad,
     _stalls, _nan_joints ... a second time; and the process beside a new
     mechanism's run (``compiler.beside``) compiles its kernels for the very types
-    ``evaluate`` passes, or the run compiles each of them once more."""
-    from numba.core.registry import CPUDispatcher
-
+    ``evaluate`` passes, or the run compiles each of them once more.  The
+    versions counted: those compiled in this process and those in numba's cache
+    (where a kernel loaded from the cache was compiled, here or before)."""
     from pipeline.compiler.beside import compile_standalone
     from pipeline.kernels import continuation, triad
     mod = problem.kernels
     problem.evaluate_rows(np.ascontiguousarray(candidates[:64]), parallel=False)
     compile_standalone(mod)             # what the process beside compiles, here
-    base = sys.modules[mod.position.py_func.__module__]
-    kernels = {f"{m.__name__}.{k}": v for m in (mod, base) for k, v in vars(m).items()
-               if isinstance(v, CPUDispatcher) and v.py_func.__module__ == m.__name__}
+
+    def versions(d):
+        cached = d._cache._cache_file._load_index()
+        return {str(tuple(s)) for s in d.signatures} | {str(tuple(k[0])) for k in cached}
+    kernels = {name: getattr(mod, name) for name in (
+        "setup_lane", "block_walk", "force_lane_in", "careful_tail", "force_stage", "walk",
+        "force_lanes", "force_flush", "settle", "evaluate", "watch", "locate", "refine")}
     kernels.update({"start_triad": continuation.start_triad, "_stalls": triad._stalls,
                     "_nan_joints": triad._nan_joints})
-    for name in ("setup_lane", "block_walk", "force_lane_in", "careful_tail", "force_stage",
-                 "walk", "force_lanes", "settle", "evaluate"):
-        assert getattr(mod, name).signatures, name       # compiled, by evaluate or beside
-    twice = {k: v.signatures for k, v in kernels.items() if len(v.signatures) > 1}
-    assert not twice
+    seen = {name: versions(d) for name, d in kernels.items()}
+    assert all(seen.values()), [n for n, v in seen.items() if not v]
+    assert not {n: v for n, v in seen.items() if len(v) > 1}
 
 
 def test_no_exec_or_eval_in_the_compiler():
@@ -461,7 +463,7 @@ def test_the_stand_alone_kernels_compile_beside_for_evaluate_s_types(problem, ca
     beside's calls compile nothing (the same argument types, so what it writes
     to numba's cache is what a run loads; an int32 where evaluate passes an
     int64 failed here); it runs as a process; and the trigger starts it only
-    where the module has force lanes, their cache is empty and it is not
+    where the module has a lane walk, its cache is empty and it is not
     turned off."""
     from numba.core import event
     from pipeline.compiler.beside import compile_standalone
@@ -471,7 +473,8 @@ def test_the_stand_alone_kernels_compile_beside_for_evaluate_s_types(problem, ca
     with event.install_recorder("numba:compile") as rec:
         compile_standalone(k)
     compiled = {e.data["dispatcher"].py_func.__name__ for _, e in rec.buffer}
-    assert not compiled & {"force_lanes", "walk"}, compiled
+    assert not compiled & {"force_lanes", "walk", "force_flush", "force_stage", "force_lane_in",
+                           "block_walk", "careful_tail", "setup_lane"}, compiled
     assert k.force_lanes.signatures and k.walk.signatures      # called (loaded, or there)
     r = subprocess.run([sys.executable, "-m", "pipeline.compiler.beside", k.__name__,
                         str(Path(k.SOURCE_PATH).parent)], env=child_env(),
@@ -483,10 +486,10 @@ def test_the_stand_alone_kernels_compile_beside_for_evaluate_s_types(problem, ca
     import pipeline.compiler as pc
     started = []
 
-    def module(has_forces, index):
+    def module(has_lanes, index):
         cache = types.SimpleNamespace(_cache_file=types.SimpleNamespace(_index_path=index))
-        return types.SimpleNamespace(HAS_LANE_FORCES=has_forces, __name__="pipeline_mech_x",
-                                     force_lanes=types.SimpleNamespace(_cache=cache),
+        return types.SimpleNamespace(HAS_LANES=has_lanes, __name__="pipeline_mech_x",
+                                     walk=types.SimpleNamespace(_cache=cache),
                                      SOURCE_PATH=str(tmp_path / "pipeline_mech_x.py"))
     (tmp_path / "there.nbi").write_text("")
     cases = (("1", True, "none.nbi", 1), ("1", True, "there.nbi", 0),
