@@ -51,6 +51,22 @@ def triad_analog_lines(e, c, order):
     ]
 
 
+def second_analog_terms(e, c):
+    """The terms of the second analogs' right-hand sides that both class III
+    kernels share (``class3`` and ``class3_slider``, operation for operation):
+    vertex 3's acceleration without a2's term (k3), and vertices 4 and 5 from it
+    without b2's, less the accelerations of the leads' pivots 6 and 7 (k4, k5)."""
+    i2, i6, i7 = e.ix[0], e.ix[1], e.ix[2]
+    l23, l34, l35 = (c(e.k(x)) for x in ("L23", "L34", "L35"))
+    return [
+        f"k3x = A{i2}_0 - {l23} * a1 * a1 * ca", f"k3y = A{i2}_1 - {l23} * a1 * a1 * sa",
+        f"k4x = k3x - {l34} * b1 * b1 * cb - A{i6}_0",
+        f"k4y = k3y - {l34} * b1 * b1 * sb - A{i6}_1",
+        f"k5x = k3x - {l35} * b1 * b1 * cc - A{i7}_0",
+        f"k5y = k3y - {l35} * b1 * b1 * sc - A{i7}_1",
+    ]
+
+
 def class3_lines(e, c, t):
     """kernels.triad.class3 at a solution handed over (``handed``, ``_accept``
     without a move, ``_place``, first and second analogs), operation for
@@ -90,11 +106,7 @@ def class3_lines(e, c, t):
         "# second analogs",
         f"q4x = V{i4}_0 - V{i6}_0", f"q4y = V{i4}_1 - V{i6}_1",
         f"q5x = V{i5}_0 - V{i7}_0", f"q5y = V{i5}_1 - V{i7}_1",
-        f"k3x = A{i2}_0 - {l23} * a1 * a1 * ca", f"k3y = A{i2}_1 - {l23} * a1 * a1 * sa",
-        f"k4x = k3x - {l34} * b1 * b1 * cb - A{i6}_0",
-        f"k4y = k3y - {l34} * b1 * b1 * sb - A{i6}_1",
-        f"k5x = k3x - {l35} * b1 * b1 * cc - A{i7}_0",
-        f"k5y = k3y - {l35} * b1 * b1 * sc - A{i7}_1",
+    ] + second_analog_terms(e, c) + [
         "rhs1 = -(q4x * q4x + q4y * q4y) - (r4x * k4x + r4y * k4y)",
         "rhs2 = -(q5x * q5x + q5y * q5y) - (r5x * k5x + r5y * k5y)",
         "a2 = (rhs1 * j22 - j12 * rhs2) / dj", "b2 = (j11 * rhs2 - rhs1 * j21) / dj",
@@ -142,11 +154,7 @@ def class3_slider_lines(e, c, t):
         "# second analogs",
         f"q4x = V{i4}_0 - V{i6}_0", f"q4y = V{i4}_1 - V{i6}_1",
         f"v5x = V{i5}_0 - V{i7}_0", f"v5y = V{i5}_1 - V{i7}_1",
-        f"k3x = A{i2}_0 - {l23} * a1 * a1 * ca", f"k3y = A{i2}_1 - {l23} * a1 * a1 * sa",
-        f"k4x = k3x - {l34} * b1 * b1 * cb - A{i6}_0",
-        f"k4y = k3y - {l34} * b1 * b1 * sb - A{i6}_1",
-        f"k5x = k3x - {l35} * b1 * b1 * cc - A{i7}_0",
-        f"k5y = k3y - {l35} * b1 * b1 * sc - A{i7}_1",
+    ] + second_analog_terms(e, c) + [
         "rhs1 = -(q4x * q4x + q4y * q4y) - (r4x * k4x + r4y * k4y)",
         "rhs2 = (-(nx * k5x + ny * k5y) + 2.0 * th1 * (ux * v5x + uy * v5y)",
         f"        + th2 * (ux * w5x + uy * w5y) + th1 * th1 * {off})",
