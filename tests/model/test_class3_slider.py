@@ -22,9 +22,7 @@ from pipeline.kernels import sweep as ks
 from pipeline.model.mechanism import ClassIIISlider
 from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
 from pipeline.study.reader import StudyError, load_study, parse_study
-from pipeline.runs.sweep import build_problem
-from pipeline.study.sweep_spec import draw_candidates, parameter_rows
-from support.lanes import assert_lanes_agree, evaluate_with, scalar_forces
+from support.lanes import assert_lanes_agree, evaluate_with, scalar_forces, widened_draws
 from support.power import virtual_power
 from support.references import against_mp_reference
 from support.tolerances import FAIL_ANGLE_RAD, MP_REFERENCE_REL, REACTION_MP_REL, SELF_FD_REL, VIRTUAL_POWER_REL
@@ -438,14 +436,9 @@ def test_class3_slider_lanes_agree_with_the_careful_path(studies):
     ``slider_handed``), against the scalar force stage: the same bits.  The
     guide's offset and lead 4-6 widened so that some draws fold or cannot
     assemble somewhere in the revolution."""
-    text = (studies / "ov7_class3_slider_sweep.toml").read_text()
-    text = text.replace("min = 240.0, max = 280.0", "min = 150.0, max = 330.0") \
-               .replace("min = 95.0, max = 115.0", "min = 60.0, max = 140.0")
-    assert "min = 150.0, max = 330.0" in text and "min = 60.0, max = 140.0" in text
-    study = parse_study(text, "class3_slider_wide.toml")
-    pb = build_problem(study, study.sweep)
-    spec = dataclasses.replace(study.sweep, candidates=3000, chunk_size=3000)
-    pars = parameter_rows(pb.plan, spec, draw_candidates(spec, 0))
+    pb, pars = widened_draws(studies, "ov7_class3_slider_sweep",
+                             [("min = 240.0, max = 280.0", "min = 150.0, max = 330.0"),
+                              ("min = 95.0, max = 115.0", "min = 60.0, max = 140.0")], 3000)
     status = assert_lanes_agree(pb, pars, class3=True)
     assert (status != kc.OK).sum() > 20
     k, settings = pb.kernels, pb.settings()

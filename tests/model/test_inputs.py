@@ -22,7 +22,7 @@ from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
 from pipeline.runs.sweep import build_problem
 from pipeline.study.reader import StudyError, load_study, parse_study
 from pipeline.study.sweep_spec import draw_candidates, parameter_rows
-from support.lanes import assert_force_lanes_round, assert_lanes_agree
+from support.lanes import assert_force_lanes_round, assert_lanes_agree, widened_draws
 from support.power import virtual_power
 from support.tolerances import FAIL_ANGLE_RAD, REACTION_MP_REL, VIRTUAL_POWER_REL
 
@@ -553,14 +553,9 @@ def test_input_and_rrp_lanes_agree_with_the_careful_path(studies):
     careful lines on the hoisted guide direction.  The link's lower bound
     brought down so that a share of the draws cannot reach the sinker bar's
     guide all the way round: the RRP's toggle, which the lanes hand over."""
-    text = (studies / "cam_rocker_input_sweep.toml").read_text()
-    text = text.replace("min = 42.0, max = 55.0", "min = 30.0, max = 55.0")
-    assert "min = 30.0, max = 55.0" in text
-    study = parse_study(text, "cam_wide.toml")
-    pb = build_problem(study, study.sweep)
-    spec = dataclasses.replace(study.sweep, candidates=2000, chunk_size=2000)
-    status = assert_lanes_agree(pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0)),
-                                class3=False)
+    pb, pars = widened_draws(studies, "cam_rocker_input_sweep",
+                             [("min = 42.0, max = 55.0", "min = 30.0, max = 55.0")], 2000)
+    status = assert_lanes_agree(pb, pars, class3=False)
     assert (status != kc.OK).sum() > 100
     assert pb.kernels.HAS_LANE_FORCES and pb.kernels.SAME_BITS
 

@@ -22,7 +22,8 @@ from pipeline.study.reader import StudyError, load_study, parse_study
 from pipeline.kernels import sweep as ks
 from pipeline.runs.sweep import build_problem
 from pipeline.study.sweep_spec import draw_candidates, parameter_rows
-from support.lanes import assert_force_lanes_round, assert_lanes_agree, packed_force_lane_ops
+from support.lanes import (assert_force_lanes_round, assert_lanes_agree, packed_force_lane_ops,
+                           widened_draws)
 from support.power import virtual_power
 from support.references import against_mp_reference
 from support.tolerances import FAIL_ANGLE_RAD, MP_REFERENCE_REL, REACTION_MP_REL, SELF_FD_REL, VIRTUAL_POWER_REL
@@ -461,14 +462,9 @@ def test_prp_lanes_agree_with_the_careful_path(studies):
     fold where it finds it alone.  The force stage's peaks (the block's and the
     slider's loads, the slides) hold the lanes' B and its analogs to the careful
     path's; the study's own mechanism and rocker, so its module is this file's."""
-    text = (studies / "slotted_rocker_prp_sweep.toml").read_text()
-    text = text.replace("min = -20.0, max = 20.0", "min = -90.0, max = 90.0") \
-               .replace("min = -5.0, max = 5.0", "min = -30.0, max = 30.0") \
-               .replace("min = -10.0, max = 10.0", "min = 5.0, max = 30.0")
-    assert text.count("max = 30.0") == 2 and "max = 90.0" in text
-    study = parse_study(text, "prp_wide.toml")
-    pb = build_problem(study, study.sweep)
-    spec = dataclasses.replace(study.sweep, candidates=2000, chunk_size=2000)
-    status = assert_lanes_agree(pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0)),
-                                class3=False)
+    pb, pars = widened_draws(studies, "slotted_rocker_prp_sweep",
+                             [("min = -20.0, max = 20.0", "min = -90.0, max = 90.0"),
+                              ("min = -5.0, max = 5.0", "min = -30.0, max = 30.0"),
+                              ("min = -10.0, max = 10.0", "min = 5.0, max = 30.0")], 2000)
+    status = assert_lanes_agree(pb, pars, class3=False)
     assert (status == kc.SINGULAR).sum() > 300

@@ -5,7 +5,6 @@ PPR study gives bit for bit the numbers of the same mechanism declared as an
 RPP (A = the slider's pin).  Also: the one registration table (every type's
 emitter is the one its plan code picks) and a sweep over a PPR dimension."""
 
-import dataclasses
 import math
 
 import h5py
@@ -20,7 +19,7 @@ from pipeline.kernels import sweep as ks
 from pipeline.runs.sweep import build_problem
 from pipeline.study.reader import StudyError, load_study, parse_study
 from pipeline.study.sweep_spec import draw_candidates, parameter_rows
-from support.lanes import assert_force_lanes_round, assert_lanes_agree
+from support.lanes import assert_force_lanes_round, assert_lanes_agree, widened_draws
 
 SCENE = "ppr_cross_slide"
 SWEEP = "ppr_cross_slide_sweep"
@@ -163,11 +162,7 @@ def test_ppr_lanes_agree_with_the_careful_path(studies):
     turned from it by the hoisted slot angle) in the lanes, over slot angles from
     1 to 179 deg: the force stage's peaks hold the lanes' B and its analogs to
     the careful path's (the study's own module)."""
-    text = (studies / "ppr_cross_slide_sweep.toml").read_text()
-    text = text.replace("min = 45.0, max = 75.0", "min = 1.0, max = 179.0") \
-               .replace("min = -5.0, max = 5.0", "min = 5.0, max = 30.0")
-    assert "max = 179.0" in text and "max = 30.0" in text
-    study = parse_study(text, "ppr_wide.toml")
-    pb = build_problem(study, study.sweep)
-    spec = dataclasses.replace(study.sweep, candidates=2000, chunk_size=2000)
-    assert_lanes_agree(pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0)), class3=False)
+    pb, pars = widened_draws(studies, "ppr_cross_slide_sweep",
+                             [("min = 45.0, max = 75.0", "min = 1.0, max = 179.0"),
+                              ("min = -5.0, max = 5.0", "min = 5.0, max = 30.0")], 2000)
+    assert_lanes_agree(pb, pars, class3=False)

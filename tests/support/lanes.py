@@ -15,6 +15,25 @@ from pipeline.kernels import sweep as ks
 from support.tolerances import FAIL_ANGLE_TRIAD_RAD, LANE_AGREEMENT_REL, LANE_MARGIN_REL
 
 
+def widened_draws(studies, stem, widen, candidates):
+    """A shipped sweep study (``studies``/``stem``.toml) with ranges of its text
+    widened (``widen``: (old, new) pairs, each old text there exactly once), its
+    problem, and the first ``candidates`` draws of its chunk 0 as parameter rows."""
+    import dataclasses
+
+    from pipeline.runs.sweep import build_problem
+    from pipeline.study.reader import parse_study
+    from pipeline.study.sweep_spec import draw_candidates, parameter_rows
+    text = (studies / f"{stem}.toml").read_text()
+    for old, new in widen:
+        assert text.count(old) == 1, old
+        text = text.replace(old, new)
+    study = parse_study(text, f"{stem}_wide.toml")
+    pb = build_problem(study, study.sweep)
+    spec = dataclasses.replace(study.sweep, candidates=candidates, chunk_size=candidates)
+    return pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0))
+
+
 def careful_rows(problem, pars):
     """Statuses and metrics of ``pars`` on the careful path alone (``evaluate_careful``)."""
     k = problem.kernels
