@@ -323,7 +323,6 @@ def compile_times(studies):
     first run after installing; each later one as a new mechanism afterwards
     (the library kernels it shares with the ones before load from the cache);
     then each study once more, cached.  Returns {study: (new, cached)}."""
-    out = {}
     with tempfile.TemporaryDirectory() as d, tempfile.TemporaryDirectory() as nb:
         env = dict(os.environ, PIPELINE_CACHE_DIR=d, NUMBA_CACHE_DIR=nb)
 
@@ -333,8 +332,7 @@ def compile_times(studies):
                                text=True, check=True, cwd=ROOT)
             return float(re.search(r"(\d+\.\d+) s", p.stdout).group(1))
         new = {s.stem: once(s) for s in studies}
-        out = {s.stem: (new[s.stem], once(s)) for s in studies}
-    return out
+        return {s.stem: (new[s.stem], once(s)) for s in studies}
 
 
 # the sweeps issue 27 holds to half the default study's rate per candidate-position
