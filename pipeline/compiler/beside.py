@@ -40,7 +40,7 @@ def compile_standalone(mod) -> None:
     K = mod.constants(par)
     wk = mod.work(mod.N_POINTS, mod.N_GROUPS, mod.N_TRIADS)
     fw = mod.force_work(mod.N_BODIES, mod.N_JOINTS, mod.N_SLIDES + mod.N_INPUTS)
-    ww = mod.watch_work()
+    ww = mod.watch_work(mod.N_WATCH, mod.N_TRIADS)
     i64, f64, b = np.int64(0), 0.0, True
     loads = np.zeros((npos, 1, 3))
     status = np.zeros(4, np.int8)       # (the run's status array: pipeline.runs.problem)

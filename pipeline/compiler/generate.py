@@ -1,6 +1,6 @@
 """The generated module of one mechanism: the emitters' lines in plan order
 inside fixed loop skeletons (real Python files in pipeline/compiler/skeleton,
-pasted verbatim: header, advance_closed or advance_newton, watch, careful,
+pasted verbatim: header, advance_closed or advance_newton, the walk (pipeline.kernels.walk), careful,
 crank_dynamics, batch, sweep_stages, no_lanes, parallel).  A sweep's module
 (with an output rocker) has the header, sweep_stages, its lanes and parallel,
 and imports the rest from the module of its mechanism (no rocker).
@@ -11,7 +11,8 @@ signatures carry candidates, crank angles, loads, settings and outputs):
 * ``constants(par)``: every per-candidate constant, computed once;
 * ``position``: every group at one crank angle (careful path);
 * ``start``/``advance``: the continuation (predictor-corrector for class III);
-* ``revolution``: scene curves at a list of crank angles;
+* ``revolution``: scene curves at a list of crank angles (pipeline.kernels.walk's,
+  compiled once per installation: the module gives it ``advance`` and ``start``);
 * ``forces_at``/``forces_curve``: kinetostatics at one / every position;
 * ``evaluate_careful``/``evaluate``: the sweep's stages for one candidate /
   a batch (lock-step lanes where the groups have a lane form, the careful
@@ -68,10 +69,13 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
 
     # ---------------------------------------------------------------- constants of the plan
     w("# ---- the mechanism's plan, as constants ----")
-    w(f"N_POINTS = {plan.n_points}")
-    w(f"N_GROUPS = {plan.n_groups}")
+    # the sizes the kernels allocate work arrays by (work, force_work, watch_work) as
+    # np.int64, not literals: one compiled version of each serves every mechanism
+    w(f"N_POINTS = np.int64({plan.n_points})")
+    w(f"N_GROUPS = np.int64({plan.n_groups})")
     w(f"N_KINEMATIC = {plan.n_kinematic}   # groups before the hidden centres of mass")
-    w(f"N_TRIADS = {n_triads}   # class III groups, either kind (rows of the continuation state)")
+    w(f"N_TRIADS = np.int64({n_triads})   # class III groups, either kind (rows of the "
+      "continuation state)")
     w(f"N_PARAMS = {len(plan.par_names)}")
     w(f"GRAVITY = {literal(plan.gravity)}")
     w("")
@@ -102,14 +106,14 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
     watched = [e.g for e in ems[:plan.n_kinematic] if e.watched and watch]
     w("# groups whose margin the walks watch between positions (pipeline.kernels.watch)")
     w(_array("WATCH_G", watched, "int64"))
-    w(f"N_WATCH = {len(watched)}")
+    w(f"N_WATCH = np.int64({len(watched)})")
     w(f"CRANK_BODY = {plan.crank_body}")
     w(f"CRANK_PIVOT = {plan.crank_pivot}   # the shaking moment's reference point")
-    w(f"N_BODIES = {len(plan.body_names)}")
-    w(f"N_JOINTS = {len(plan.joint_names)}")
-    w(f"N_SLIDES = {len(plan.slide_names)}")
-    w(f"N_INPUTS = {plan.n_inputs}   # inputs besides the crank: their drives follow the "
-      "slides' rows of slide_out")
+    w(f"N_BODIES = np.int64({len(plan.body_names)})")
+    w(f"N_JOINTS = np.int64({len(plan.joint_names)})")
+    w(f"N_SLIDES = np.int64({len(plan.slide_names)})")
+    w(f"N_INPUTS = np.int64({plan.n_inputs})   # inputs besides the crank: their drives follow "
+      "the slides' rows of slide_out")
     w("")
     for e in ems:
         for line in e.module_constants():
@@ -168,7 +172,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
     w(_fn("start(K, state)",
           "Start every class III group from its declared guess; returns the crank\n"
           "angle where the guesses apply (NaN without class III groups: closed form).",
-          body, jit="**JIT_INNER"))
+          body, jit="**JIT_FIRST_CLASS"))
 
     w(_spaced(part("advance_newton" if n_triads else "advance_closed")))
     w(force_kernel(plan, n))
@@ -182,9 +186,20 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
           "where the mechanism has none, or where every angle is certainly above the\n"
           "smallest so far, whose cos and sin are best_cos, best_sin (NaN: none yet).",
           body))
-    w(_spaced(part("watch") + part("careful") + part("crank_dynamics") + part("batch")))
+    w(_spaced(module_walk() + part("careful") + part("crank_dynamics") + part("batch")))
     w(_sweep_parts(plan, n, ems, rocker, lanes_width, watch))
     return _checked("\n".join(out))     # ends with the blank line after the last part
+
+
+def module_walk() -> str:
+    """pipeline.kernels.walk's pasted text with the module's own ``advance`` and
+    ``start``: called as the module's functions, not taken as arguments.  (A
+    function passed as an argument is, to numba, the address of a Python object
+    in this process: it would not cache the sweep's kernels that pass it.)"""
+    text, n = re.subn(r"\b(?:advance|start), K\b", "K", part("walk", "pipeline.kernels"))
+    if n == 0 or re.search(r"\b(?:advance|start),", text):
+        raise ValueError("pipeline.kernels.walk: advance or start left as an argument")
+    return text
 
 
 def defined_functions(src: str) -> list[str]:

@@ -43,6 +43,10 @@ JIT_ALLOC = dict(JIT, _nrt=True)
 # and links for every function (measured: a fifth of a new scene's compile time).
 # The machine code of the kernel itself is the same.
 JIT_INNER = dict(JIT, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+# JIT_FIRST_CLASS: a generated kernel that other kernels also take as an argument
+# (``advance`` and ``start``: pipeline.kernels.walk's revolution calls them through
+# their address, numba's first-class functions, which is the C wrapper's).
+JIT_FIRST_CLASS = dict(JIT, no_cpython_wrapper=True)
 
 # Candidates per block of the sweep's lock-step lane path (two AVX vectors).
 LANE_WIDTH = 8

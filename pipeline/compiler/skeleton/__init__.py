@@ -17,11 +17,12 @@ END = "# ---- end of the skeleton ----\n"
 
 
 @functools.cache
-def part(name: str) -> str:
+def part(name: str, package: str = __name__) -> str:
     """The text of skeleton file ``name``.py after its marker line (up to its end
-    marker, if it has one)."""
-    text = resources.files(__name__).joinpath(name + ".py").read_text(encoding="ascii")
+    marker, if it has one); of a library module of ``package`` that the
+    generated modules also hold (``pipeline.kernels.walk``)."""
+    text = resources.files(package).joinpath(name + ".py").read_text(encoding="ascii")
     head, found, body = text.partition(MARKER)
     if not found:
-        raise ValueError(f"skeleton {name}.py has no marker line")
+        raise ValueError(f"{package}.{name} has no marker line")
     return body.partition(END)[0]

@@ -7,9 +7,8 @@ readers, the names the generated module gives it."""
 
 from .header import (math, np, njit, JIT_ALLOC, OK, work, force_work)
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
-                         N_INPUTS, constants, advance, forces_at)
-from .careful import walk_start
-from .watch import watch, watch_work
+                         N_INPUTS, N_WATCH, WATCH_G, constants, start, advance, forces_at)
+from ...kernels.walk import walk_start, watch, watch_work
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 @njit(**JIT_ALLOC)
@@ -24,7 +23,7 @@ def batch(pars, lo, hi, phis, order, tols, point, with_forces, omega1, eps1, loa
     pos, d1, d2, margins, state, _ = work(N_POINTS, N_GROUPS, N_TRIADS)
     work_a, work_b, loads_out, r_out, slide_out = force_work(N_BODIES, N_JOINTS,
                                                              N_SLIDES + N_INPUTS)
-    ww = watch_work()
+    ww = watch_work(N_WATCH, N_TRIADS)
     for i in range(lo, hi):
         par = pars[i]
         K = constants(par)
@@ -50,7 +49,7 @@ def batch(pars, lo, hi, phis, order, tols, point, with_forces, omega1, eps1, loa
                     r = math.hypot(r_out[j, 0], r_out[j, 1])
                     finite = finite and math.isfinite(r)
                     peak = max(peak, r)
-            s = watch(K, k, phis[k], tols, state, pos, d1, d2, margins, ww)
+            s = watch(K, WATCH_G, k, phis[k], tols, state, pos, d1, d2, margins, ww)
             if s != OK:     # a failure between positions
                 st = s
                 break

@@ -17,15 +17,16 @@ import math
 import numpy as np
 from numba import njit
 
-from pipeline.kernels.config import (JIT, JIT_ALLOC, JIT_INNER, JIT_LANES, OK, BRANCH_JUMP,
+from pipeline.kernels.config import (JIT, JIT_ALLOC, JIT_INNER, JIT_FIRST_CLASS, JIT_LANES, OK, BRANCH_JUMP,
                                      NEWTON_MAXITER, SINGULAR, NO_ASSEMBLY, BAD_GEOMETRY, S_A, S_B,
                                      S_DET_SIGN, S_ITERS, S_MARGIN, S_HANDED, S_CA, S_SA, S_CB, S_SB,
                                      N_STATE, N_TOLS, T_SINGULAR,
                                      T_ASSEMBLY_SLACK, T_SUBSTEP,
                                      T_MIN_STEP, T_NEWTON_TOL, T_JUMP, T_STEP_CHANGE, T_CLOSE,
                                      T_WATCH, T_TOUCH, T_LOCATE)
-from pipeline.kernels.continuation import (accept, closes, copy2, fold_limit, may_stop, predict,
-                                           restore, start_triad, step_limit, work, wrap)
+from pipeline.kernels.continuation import (MARGIN_SLOTS, accept, closes, copy2, fold_limit,
+                                           may_stop, predict, restore, start_triad, step_limit,
+                                           work, wrap)
 from pipeline.kernels.dynamics import drive, lagrange_terms, potential
 from pipeline.kernels.forces import (applied_loads, equilibrium_residual, force_work, gauss_solve,
                                      kinetostatics, shaking)
@@ -48,12 +49,13 @@ from pipeline.kernels.sweep import (M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, 
                                     SET_WANT_LAW, SET_LAW0, LAW_BEST,
                                     SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING, SET_SCALAR_FORCES)
 from pipeline.kernels.triad import class3, class3_slider, ternary_angle
+from pipeline.kernels.walk import revolution as scene_revolution
 from pipeline.kernels.watch import (FOLD_BACK, LOCATE_MIN_STEP,
                                    LOCATE_NEWTON_TOL, RESOLVED, SUB, cubic_bound, fold_distance,
                                    third_difference, uniform_hit, window_score,
                                    window_vertex)
 # ---- end of the skeleton ----
-__all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_INNER', 'JIT_LANES', 'OK',
+__all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_INNER', 'JIT_FIRST_CLASS', 'JIT_LANES', 'OK',
            'BRANCH_JUMP', 'NEWTON_MAXITER', 'SINGULAR', 'NO_ASSEMBLY', 'BAD_GEOMETRY', 'S_A', 'S_B',
            'S_DET_SIGN', 'S_ITERS', 'S_MARGIN', 'S_HANDED', 'S_CA', 'S_SA', 'S_CB', 'S_SB',
            'N_STATE', 'N_TOLS', 'T_SINGULAR',
@@ -78,4 +80,5 @@ __all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_INNER', 'JIT_LANES', '
            'SET_WANT_EQUILIBRIUM', 'SET_WANT_SHAKING', 'SET_SCALAR_FORCES', 'class3',
            'class3_slider', 'ternary_angle', 'FOLD_BACK', 'LOCATE_MIN_STEP',
            'LOCATE_NEWTON_TOL', 'RESOLVED', 'SUB', 'cubic_bound', 'fold_distance',
-           'third_difference', 'uniform_hit', 'window_score', 'window_vertex', 'may_reach')
+           'third_difference', 'uniform_hit', 'window_score', 'window_vertex', 'may_reach',
+           'MARGIN_SLOTS', 'scene_revolution')

@@ -11,12 +11,11 @@ from .header import (math, np, njit, JIT_ALLOC, OK, work, force_work, dwell_lane
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, LANES, N_LANE_ROWS, THETA_COLS, THETA_IN,
                          R_margin, R_flag, R_first_flag, R_last_flag, setup_lane,
-                         block_walk, lanes_apply, constants)
+                         block_walk, lanes_apply, constants, N_WATCH)
 from ._mechanism import (HAS_LANE_FORCES, N_FROWS, FT_COLS, N_RCOLS, force_lane_in)
-from .careful import walk_angle
+from ...kernels.walk import walk_angle, watch_work
 from .sweep_stages import careful_tail, no_metrics, settle, LANE_METRICS, NEEDS_FORCES
 from .lane_forces import lane_forces_apply, force_flush, force_refused
-from .watch import watch_work
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 @njit(**JIT_ALLOC)
@@ -56,7 +55,7 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
     want_law = settings[SET_WANT_LAW] != 0.0
     wk = work(N_POINTS, N_GROUPS, N_TRIADS)
     fw = force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS)
-    ww = watch_work()
+    ww = watch_work(N_WATCH, N_TRIADS)
     pos, d1, d2, margins, state, _ = wk
     fast = lanes_apply(phis, tols)
     # the force lanes: candidates the lanes vouched for that reach the force stage

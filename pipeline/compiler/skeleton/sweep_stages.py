@@ -22,10 +22,9 @@ from .header import S_HANDED, S_CA, S_SA, S_CB, S_SB, start_triad
 from .header import M_SHAKING_F, M_SHAKING_M, shaking, may_reach
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, constants, position, advance, forces_at, transmission,
-                         ROCKER_PIVOT, ROCKER_POINT, NEWTON_STEPS)
+                         ROCKER_PIVOT, ROCKER_POINT, NEWTON_STEPS, N_WATCH, WATCH_G, start)
 from ._mechanism import BODY_COM, BODY_TURN, BODY_MASS_OFF, CRANK_PIVOT
-from .careful import walk_angle, walk_start, walk_steps
-from .watch import (locate, watch, watch_work)
+from ...kernels.walk import (walk_angle, walk_start, walk_steps, locate, watch, watch_work)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 # settle's ``vouched`` beyond the lane's 1 (and the careful path's <= 0): a lane's
@@ -52,7 +51,7 @@ def failed(K, k, phi_prev, phi, st, tols, out, wk, ww):
     pos, d1, d2, margins, state, _ = wk
     found = ww[7]
     if k > 0:    # located between the last good position and this one
-        st = locate(K, phi_prev, phi, st, margins[N_GROUPS], ww[2][(k - 1) & 3], tols,
+        st = locate(K, WATCH_G, phi_prev, phi, st, margins[N_GROUPS], ww[2][(k - 1) & 3], tols,
                     state, pos, d1, d2, margins, ww)
     else:
         found[1] = phi
@@ -74,7 +73,7 @@ def careful_step(K, k, phi_prev, phi, tols, out, wk, ww):
                  np.bool_(False))
     if st != OK:
         return failed(K, k, phi_prev, phi, st, tols, out, wk, ww)
-    st = watch(K, k, phi, tols, state, pos, d1, d2, margins, ww)
+    st = watch(K, WATCH_G, k, phi, tols, state, pos, d1, d2, margins, ww)
     if st != OK:
         out[M_FAIL_PHI] = found[1]
         out[M_FAIL_GROUP] = found[2]
@@ -126,7 +125,7 @@ def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww):
                 margin = min(margin, state[j, S_MARGIN])
                 iters += state[j, S_ITERS]
             theta[k] = relative_angle(x0, y0, rx, ry)
-        st = watch(K, k, phi, tols, state, pos, d1, d2, margins, ww)
+        st = watch(K, WATCH_G, k, phi, tols, state, pos, d1, d2, margins, ww)
         if st != OK:
             out[M_FAIL_PHI] = found[1]
             out[M_FAIL_GROUP] = found[2]
@@ -167,7 +166,7 @@ def careful_tail(K, phis, k0, k1, trail, tols, out, wk, ww):
     if advance(K, phis[k0], phis[k0], np.int64(0), tols, state, pos, d1, d2, margins,
                np.bool_(False)) != OK:
         return OK
-    watch(K, np.int64(0), phis[k0], tols, state, pos, d1, d2, margins, ww)   # (its history)
+    watch(K, WATCH_G, np.int64(0), phis[k0], tols, state, pos, d1, d2, margins, ww)   # (its history)
     for k in range(k0 + 1, k1):
         st = careful_step(K, k - k0, phis[k - 1], phis[k], tols, out, wk, ww)
         if st != OK:
@@ -185,7 +184,7 @@ def evaluate_careful(par, phis, phi_close, tols, settings, loads, theta, trail, 
     return settle(par, np.int64(-1), phis, phi_close, tols, settings, loads, theta,
                   trail, qmax, qmin, 0.0, np.int64(-1), 0.0, 0.0,
                   work(N_POINTS, N_GROUPS, N_TRIADS),
-                  force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS), watch_work(),
+                  force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS), watch_work(N_WATCH, N_TRIADS),
                   np.empty(phis.shape[0]), out)
 
 

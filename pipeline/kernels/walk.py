@@ -1,47 +1,64 @@
-"""The between-sample watch of a generated module: the groups' margins between
-two computed positions, where a failure begins (``locate``, ``refine``) and the
-walk's check at every step (``watch``).
+"""The careful walk over crank angles and its between-sample watch: the groups'
+margins between two computed positions, where a failure begins (``locate``,
+``refine``), the walk's check at every step (``watch``) and the scene's
+revolution (``revolution``).
 
-The text below the marker line is pasted into the generated module
-(``pipeline.compiler.generate``, before ``careful``); the imports above it
-declare, for linters and readers, the names the generated module gives it."""
+Each function takes the mechanism's ``advance`` (its continuation: one step
+of the crank, pipeline.compiler's generated module) and ``start`` as
+arguments, its constants ``K`` and the groups it watches (``watch_g``), so the
+same code serves every mechanism:
 
+* the text between the marker lines is pasted into every generated module,
+  whose careful stages and batch call it with the module's own ``advance``
+  (numba compiles it with the module, as today: the sweep's careful path keeps
+  the mechanism's code inline and its constants in registers);
+* imported as it is, ``revolution`` (below the end marker) is the scene's:
+  compiled once per installation (numba's cache) for ``advance`` and ``start``
+  as first-class functions (numba's FunctionType: called through their
+  address, not compiled into it) and the constants as an array, so a scene of
+  a new mechanism compiles its groups' code only.
+"""
 
-from .header import (math, np, njit, JIT_ALLOC, JIT_INNER, OK, SINGULAR, N_STATE, N_TOLS,
-                     T_MIN_STEP, T_NEWTON_TOL, T_WATCH, T_TOUCH, T_LOCATE, copy2, restore,
-                     FOLD_BACK, LOCATE_MIN_STEP, LOCATE_NEWTON_TOL, RESOLVED, SUB, cubic_bound,
-                     fold_distance, third_difference, uniform_hit, window_score, window_vertex)
-from ._mechanism import (N_GROUPS, N_TRIADS, N_WATCH, WATCH_G, advance)
+import math
+
+import numpy as np
+from numba import njit, types
+
+from .config import (JIT, JIT_ALLOC, JIT_INNER, OK, BRANCH_JUMP, SINGULAR, S_ITERS, N_STATE,
+                     N_TOLS, T_MIN_STEP, T_NEWTON_TOL, T_WATCH, T_TOUCH, T_LOCATE)
+from .continuation import MARGIN_SLOTS, closes, copy2, restore, work
+from .watch import (FOLD_BACK, LOCATE_MIN_STEP, LOCATE_NEWTON_TOL, RESOLVED, SUB, cubic_bound,
+                    fold_distance, third_difference, uniform_hit, window_score, window_vertex)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 @njit(**JIT_ALLOC)
-def watch_work():
+def watch_work(n_watch, n_triads):
     """Work arrays of the between-sample watch (pipeline.kernels.watch):
-    (hist_phi (4), hist_val (N_WATCH, 4), hist_state (4, N_TRIADS, N_STATE): the
-    last four positions of a walk; sub_phi (SUB + 1), sub_val (N_WATCH, SUB + 1),
-    sub_state (SUB + 1, N_TRIADS, N_STATE): an interval looked at closely; keep
-    (N_TRIADS, N_STATE); found (3): status, crank angle, group of a failure;
+    (hist_phi (4), hist_val (n_watch, 4), hist_state (4, n_triads, N_STATE): the
+    last four positions of a walk; sub_phi (SUB + 1), sub_val (n_watch, SUB + 1),
+    sub_state (SUB + 1, n_triads, N_STATE): an interval looked at closely; keep
+    (n_triads, N_STATE); found (3): status, crank angle, group of a failure;
     ltols (N_TOLS): the tolerances of ``locate``)."""
-    return (np.empty(4), np.empty((N_WATCH, 4)), np.empty((4, N_TRIADS, N_STATE)),
-            np.empty(SUB + 1), np.empty((N_WATCH, SUB + 1)),
-            np.empty((SUB + 1, N_TRIADS, N_STATE)), np.empty((N_TRIADS, N_STATE)),
+    return (np.empty(4), np.empty((n_watch, 4)), np.empty((4, n_triads, N_STATE)),
+            np.empty(SUB + 1), np.empty((n_watch, SUB + 1)),
+            np.empty((SUB + 1, n_triads, N_STATE)), np.empty((n_triads, N_STATE)),
             np.empty(3), np.empty(N_TOLS))
 
 
 @njit(**JIT_INNER)
-def watched_values(margins, vals, col):
+def watched_values(watch_g, margins, vals, col):
     """vals[w, col] = margin^2 of every watched group (D of pipeline.kernels.watch)."""
-    for w in range(N_WATCH):
-        m = margins[WATCH_G[w]]
+    for w in range(watch_g.shape[0]):
+        m = margins[watch_g[w]]
         vals[w, col] = m * m
 
 
 @njit(**JIT_INNER)
-def watched_min(margins):
+def watched_min(watch_g, margins):
     """The smallest margin^2 of the watched groups."""
     v = math.inf
-    for w in range(N_WATCH):
-        v = min(v, margins[WATCH_G[w]] * margins[WATCH_G[w]])
+    for w in range(watch_g.shape[0]):
+        v = min(v, margins[watch_g[w]] * margins[watch_g[w]])
     return v
 
 
@@ -58,7 +75,7 @@ def worst_window(phis, vals, j0, j1, n):
         q = j - 2 if j >= 2 else j - 1          # four positions around the window
         if q + 3 >= n:
             q = n - 4
-        for w in range(N_WATCH):
+        for w in range(vals.shape[0]):
             f3 = third_difference(phis[q], phis[q + 1], phis[q + 2], phis[q + 3],
                                   vals[w, q], vals[w, q + 1], vals[w, q + 2],
                                   vals[w, q + 3])
@@ -73,7 +90,7 @@ def worst_window(phis, vals, j0, j1, n):
 
 
 @njit(**JIT_INNER)
-def locate(K, good, bad, st_bad, g_bad, good_state, tols, state, pos, d1, d2, margins,
+def locate(advance, K, watch_g, good, bad, st_bad, g_bad, good_state, tols, state, pos, d1, d2, margins,
            ww):
     """Bisect between ``good`` (assembled: ``good_state`` is its solution) and
     ``bad`` (the walk from good to bad failed with st_bad at group g_bad) down to
@@ -81,13 +98,14 @@ def locate(K, good, bad, st_bad, g_bad, good_state, tols, state, pos, d1, d2, ma
     group).  Returns the status; ``state`` is the solution at the good end.
     Called right after the walk from good to bad failed (``state`` as it left
     it): its last accepted angle and the angle of its failing step
-    (margins[N_GROUPS + 1], margins[N_GROUPS + 2]) narrow the bracket, the state
+    (margins[fail_g + 1], margins[fail_g + 2]) narrow the bracket, the state
     before the failing step (``restore``) the solution there.
     Where a watched group's margin^2 on the good side has come down to
     tols[T_WATCH] or less the group folds there: a dead position the crank
     cannot pass, reported SINGULAR whatever the solver met beyond it."""
-    reached = margins[N_GROUPS + 1]
-    tried = margins[N_GROUPS + 2]
+    fail_g = margins.shape[0] - MARGIN_SLOTS     # margins: the groups', then 3 slots
+    reached = margins[fail_g + 1]
+    tried = margins[fail_g + 2]
     keep = ww[6]
     found = ww[7]
     # each trial a short walk from the good side with few halvings (a trial
@@ -108,7 +126,7 @@ def locate(K, good, bad, st_bad, g_bad, good_state, tols, state, pos, d1, d2, ma
         if advance(K, reached, reached, np.int64(0), ltols, state, pos, d1, d2, margins,
                    np.bool_(False)) == OK:
             good = reached
-            d_good = watched_min(margins)
+            d_good = watched_min(watch_g, margins)
         else:
             bad = reached
             copy2(good_state, state)
@@ -126,11 +144,11 @@ def locate(K, good, bad, st_bad, g_bad, good_state, tols, state, pos, d1, d2, ma
         if st == OK:
             good = mid
             copy2(state, keep)
-            d_good = watched_min(margins)
+            d_good = watched_min(watch_g, margins)
         else:
             bad = mid
             st_bad = st
-            g_bad = margins[N_GROUPS]
+            g_bad = margins[fail_g]
             copy2(keep, state)
         mid = 0.5 * (good + bad)
     at = bad
@@ -145,10 +163,10 @@ def locate(K, good, bad, st_bad, g_bad, good_state, tols, state, pos, d1, d2, ma
         copy2(keep, state)
         st1 = advance(K, good, good + back, np.int64(0), ltols, state, pos, d1, d2, margins,
                       np.bool_(False))
-        v1 = watched_min(margins)
+        v1 = watched_min(watch_g, margins)
         st2 = advance(K, good + back, good + 2.0 * back, np.int64(0), ltols, state, pos, d1, d2,
                       margins, np.bool_(False))
-        v2 = watched_min(margins)
+        v2 = watched_min(watch_g, margins)
         if st1 == OK and st2 == OK:
             x = fold_distance(d_good, v1, v2, FOLD_BACK)
             if math.isfinite(x) and x <= abs(bad - good) + 2.0 * FOLD_BACK:
@@ -161,7 +179,7 @@ def locate(K, good, bad, st_bad, g_bad, good_state, tols, state, pos, d1, d2, ma
 
 
 @njit(**JIT_INNER)
-def refine(K, lo, hi, tols, state, pos, d1, d2, margins, ww):
+def refine(advance, K, watch_g, lo, hi, tols, state, pos, d1, d2, margins, ww):
     """The walk from ``lo`` (``state``: its solution) to ``hi`` looked at closely:
     SUB sub-positions under the same certificate, zooming in on the worst
     window, until it is cleared (OK), a sub-position fails (its boundary
@@ -169,6 +187,7 @@ def refine(K, lo, hi, tols, state, pos, d1, d2, margins, ww):
     margin^2 at most tols[T_TOUCH] (SINGULAR there: a toggle passed between
     positions).  found = (status, crank angle, group).  Returns the status."""
     sub_phi, sub_val, sub_state, found = ww[3], ww[4], ww[5], ww[7]
+    fail_g = margins.shape[0] - MARGIN_SLOTS     # margins: the groups', then 3 slots
     for level in range(200):
         copy2(state, sub_state[0])
         st = advance(K, lo, lo, np.int64(0), tols, state, pos, d1, d2, margins,
@@ -176,23 +195,23 @@ def refine(K, lo, hi, tols, state, pos, d1, d2, margins, ww):
         if st != OK:    # cannot happen: lo was solved before
             found[0] = st
             found[1] = lo
-            found[2] = margins[N_GROUPS]
+            found[2] = margins[fail_g]
             return st
         sub_phi[0] = lo
-        watched_values(margins, sub_val, np.int64(0))
+        watched_values(watch_g, margins, sub_val, np.int64(0))
         for i in range(1, SUB + 1):
             t = hi if i == SUB else lo + (hi - lo) * i / SUB
             st = advance(K, sub_phi[i - 1], t, np.int64(0), tols, state, pos, d1, d2,
                          margins, np.bool_(False))
             if st != OK:
-                g = margins[N_GROUPS]
+                g = margins[fail_g]
                 if st == SINGULAR and i >= 3:
                     # the group says toggle: where its margin^2 touches zero, the
                     # quadratic through the three sub-positions before, resolved
                     # (their margins well above rounding), has its vertex; the
                     # positions at the toggle itself are only rounding noise
-                    for w in range(N_WATCH):
-                        if WATCH_G[w] == g:
+                    for w in range(watch_g.shape[0]):
+                        if watch_g[w] == g:
                             at, low = window_vertex(sub_phi[i - 3], sub_phi[i - 2],
                                                     sub_phi[i - 1], sub_val[w, i - 3],
                                                     sub_val[w, i - 2], sub_val[w, i - 1])
@@ -201,10 +220,10 @@ def refine(K, lo, hi, tols, state, pos, d1, d2, margins, ww):
                                 found[1] = at
                                 found[2] = g
                                 return SINGULAR
-                return locate(K, sub_phi[i - 1], t, st, g, sub_state[i - 1], tols, state,
+                return locate(advance, K, watch_g, sub_phi[i - 1], t, st, g, sub_state[i - 1], tols, state,
                               pos, d1, d2, margins, ww)
             sub_phi[i] = t
-            watched_values(margins, sub_val, i)
+            watched_values(watch_g, margins, sub_val, i)
             copy2(state, sub_state[i])
         best, j, w, f3 = worst_window(sub_phi, sub_val, 1, SUB, SUB + 1)
         wide = abs(hi - lo) > tols[T_LOCATE]
@@ -223,11 +242,11 @@ def refine(K, lo, hi, tols, state, pos, d1, d2, margins, ww):
                 st = advance(K, sub_phi[jj], at, np.int64(0), tols, state, pos, d1, d2, margins,
                              np.bool_(False))
                 if st != OK and st != SINGULAR:
-                    return locate(K, sub_phi[jj], at, st, margins[N_GROUPS],
+                    return locate(advance, K, watch_g, sub_phi[jj], at, st, margins[fail_g],
                                   sub_state[jj], tols, state, pos, d1, d2, margins, ww)
                 found[0] = SINGULAR
                 found[1] = at
-                found[2] = WATCH_G[w]
+                found[2] = watch_g[w]
                 return SINGULAR
         # a sub-position near a singular one (margin^2 at most T_WATCH): a fold
         # closer to it than any sub-step hides from the values, so the walk zooms
@@ -236,7 +255,7 @@ def refine(K, lo, hi, tols, state, pos, d1, d2, margins, ww):
         k_low = -1
         v_low = tols[T_WATCH]
         for i in range(SUB + 1):
-            for q in range(N_WATCH):
+            for q in range(watch_g.shape[0]):
                 if sub_val[q, i] <= v_low:
                     v_low = sub_val[q, i]
                     k_low = i
@@ -253,7 +272,7 @@ def refine(K, lo, hi, tols, state, pos, d1, d2, margins, ww):
 
 
 @njit(**JIT_INNER)
-def watch(K, k, phi, tols, state, pos, d1, d2, margins, ww):
+def watch(advance, K, watch_g, k, phi, tols, state, pos, d1, d2, margins, ww):
     """Position ``k`` of a walk is solved at ``phi`` (OK): into the watch's
     history (a ring of the last four positions), and the window it completes
     (centred at position k - 1; at k = 3 also the first one) is certified
@@ -266,9 +285,9 @@ def watch(K, k, phi, tols, state, pos, d1, d2, margins, ww):
     hist_phi, hist_val, hist_state = ww[0], ww[1], ww[2]
     slot = k & 3
     hist_phi[slot] = phi
-    watched_values(margins, hist_val, slot)
+    watched_values(watch_g, margins, hist_val, slot)
     copy2(state, hist_state[slot])     # (also the good end of a failure: locate)
-    if N_WATCH == 0 or k < 3:
+    if watch_g.shape[0] == 0 or k < 3:
         return OK
     st = OK
     for c in range(1 if k == 3 else k - 1, k):     # in order: the first failure met
@@ -279,7 +298,7 @@ def watch(K, k, phi, tols, state, pos, d1, d2, margins, ww):
         hit = False
         p0, p1, p2, p3 = hist_phi[i0], hist_phi[i1], hist_phi[i2], hist_phi[i3]
         even = abs((p2 - p1) - (p1 - p0)) <= 1e-9 * abs(p1 - p0)
-        for w in range(N_WATCH):
+        for w in range(watch_g.shape[0]):
             v0, v1, v2, v3 = hist_val[w, i0], hist_val[w, i1], hist_val[w, i2], hist_val[w, i3]
             if even:
                 hit = hit or uniform_hit(v0, v1, v2, v3, c < 2, tols[T_WATCH])
@@ -290,10 +309,127 @@ def watch(K, k, phi, tols, state, pos, d1, d2, margins, ww):
         if not hit:
             continue
         copy2(hist_state[i0], state)
-        st = refine(K, hist_phi[i0], hist_phi[i2], tols, state, pos, d1, d2, margins, ww)
+        st = refine(advance, K, watch_g, hist_phi[i0], hist_phi[i2], tols, state, pos, d1, d2, margins, ww)
         if st != OK:
             break
     copy2(hist_state[slot], state)
     return st
 
 
+@njit(**JIT_INNER)
+def walk_angle(phis, k, phi_close):
+    """Crank angle of step k of a watched walk: phis, then (a full revolution)
+    phi_close and two more positions past it, so that the watch's windows
+    wrap round the closing position."""
+    n = phis.shape[0]
+    return phis[k] if k < n else phi_close + (phis[k - n] - phis[0])
+
+
+@njit(**JIT_INNER)
+def walk_steps(phis, phi_close):
+    """Steps of a watched walk (see walk_angle)."""
+    n = phis.shape[0]
+    return n + 3 if (math.isfinite(phi_close) and n >= 3) else n
+
+
+@njit(**JIT_INNER)
+def walk_start(start, K, phi0, state):
+    """Crank angle where a walk to ``phi0`` starts."""
+    s = start(K, state)
+    return phi0 if math.isnan(s) else s
+# ---- end of the skeleton ----
+
+
+@njit(**JIT_ALLOC)
+def walk_revolution(advance, start, K, watch_g, n_triads, phis, phi_close, order, tols, pos_out,
+                    d1_out, d2_out, status_out, margin_out, iters_out, fail_out):
+    """The mechanism at the crank angles ``phis`` (rad) by continuation.
+
+    Outputs per position: pos_out/d1_out/d2_out (n_phi, n_points, 2),
+    status_out (n_phi) int8, margin_out (n_phi, n_groups), iters_out (n_phi)
+    Newton iterations summed over the n_triads class III groups.  With a finite
+    ``phi_close`` the continuation goes on to it and the revolution must
+    close on the state at phis[0] (BRANCH_JUMP otherwise).  Between positions
+    the watch looks for failures the positions do not show.  Returns the
+    first failure met along the walk, located between positions: fail_out =
+    (its crank angle, its group; -1: the closure); OK with fail_out = (NaN,
+    -1).  After a failure the walk goes on (a scene shows what can be shown)
+    without the watch."""
+    n_groups = margin_out.shape[1]
+    pos, d1, d2, margins, state, start_state = work(pos_out.shape[1], n_groups, n_triads)
+    ww = watch_work(watch_g.shape[0], n_triads)
+    found = ww[7]
+    keep = np.empty((n_triads, N_STATE))
+    n = phis.shape[0]
+    fail_out[0] = math.nan
+    fail_out[1] = -1.0
+    phi_prev = walk_start(start, K, phis[0], state)
+    overall = OK
+    for k in range(walk_steps(phis, phi_close)):
+        phi = walk_angle(phis, k, phi_close)
+        if k >= n and (overall != OK or (n_triads == 0 and watch_g.shape[0] == 0)):
+            break       # the closing position and past it: only for a whole walk
+        st = advance(K, phi_prev, phi, order if k < n else 0, tols, state, pos, d1, d2,
+                     margins, k < n)
+        if k == 0:
+            copy2(state, start_state)
+        if k < n:
+            status_out[k] = st
+            it = 0.0
+            for g in range(n_groups):
+                margin_out[k, g] = margins[g]
+            for j in range(n_triads):
+                it += state[j, S_ITERS]
+            iters_out[k] = it
+            copy2(pos, pos_out[k])
+            if order >= 1:
+                copy2(d1, d1_out[k])
+            if order >= 2:
+                copy2(d2, d2_out[k])
+        if overall == OK:
+            if st != OK:
+                overall = st
+                found[1] = phi
+                found[2] = margins[n_groups]
+                if k > 0:     # located between the last good position and this one
+                    copy2(state, keep)
+                    overall = locate(advance, K, watch_g, phi_prev, phi, st, margins[n_groups],
+                                     ww[2][(k - 1) & 3],
+                                     tols, state, pos, d1, d2, margins, ww)
+                    copy2(keep, state)
+                fail_out[0] = found[1]
+                fail_out[1] = found[2]
+            elif k == n and n_triads > 0 and not closes(state, start_state, tols):
+                overall = BRANCH_JUMP
+                fail_out[0] = phi_close
+                fail_out[1] = -1.0
+            else:
+                sw = watch(advance, K, watch_g, k, phi, tols, state, pos, d1, d2, margins, ww)
+                if sw != OK:
+                    overall = sw
+                    fail_out[0] = found[1]
+                    fail_out[1] = found[2]
+        phi_prev = phi
+    return overall
+
+
+# the signatures a generated module's advance and start have for the scene
+# (pipeline.compiler.skeleton.careful's revolution): the constants as an array
+_F1, _F2, _F3 = types.float64[::1], types.float64[:, ::1], types.float64[:, :, ::1]
+ADVANCE = types.FunctionType(types.int64(_F1, types.float64, types.float64, types.int64, _F1, _F2,
+                                         _F2, _F2, _F2, _F1, types.boolean))
+START = types.FunctionType(types.float64(_F1, _F2))
+REVOLUTION = types.int64(ADVANCE, START, _F1, types.int64[::1], types.int64, _F1,
+                         types.float64, types.int64, _F1, _F3, _F3, _F3, types.int8[::1], _F2,
+                         _F1, _F1)
+
+
+def revolution(advance, start, K, watch_g, n_triads, *args):
+    """``walk_revolution`` for a generated module's ``advance`` and ``start``
+    (their first-class function types ADVANCE, START) and constants ``K`` (an
+    array): compiled for these types once per installation (numba's cache) and
+    never again for them, not for each mechanism."""
+    if not walk_revolution.signatures:
+        walk_revolution.compile(REVOLUTION)
+        walk_revolution.disable_compile()
+    return walk_revolution(advance, start, K, watch_g, n_triads, *args)
