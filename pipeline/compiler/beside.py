@@ -30,7 +30,8 @@ def compile_standalone(mod) -> None:
     run has compiled ``position`` and ``advance`` (numba's cache), the ones
     that call them, in the order the run reaches them.  ``walk`` and
     ``force_lanes`` by running them on a few positions of dummy data, the others
-    (no Python wrapper) by ``compile`` with the types of such data."""
+    (no Python wrapper) by ``compile`` with the types of such data.  Last, the
+    scene's walk (``pipeline.kernels.walk``), which no mechanism's code is in."""
     from numba import typeof
     lanes, npos = mod.LANES, 4
     if not getattr(mod, "HAS_LANES", False):
@@ -67,6 +68,10 @@ def compile_standalone(mod) -> None:
     compile_("block_walk", a2, a2, a1, a1, a1, a1, a1)
     compile_("careful_tail", K, a1, i64, i64, a2, a1, a1, wk, ww)
     compile_("setup_lane", a2, i64, i64, a1, f64, a1, a2, a2, a2, a2, a2, a1, a2)
+    # and, once per installation, the scene's walk (no mechanism's: a first scene
+    # after this sweep then compiles its own groups' code only)
+    from pipeline.kernels.walk import compile_revolution
+    compile_revolution()
 
 
 def main(argv=None) -> int:

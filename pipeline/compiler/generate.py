@@ -172,7 +172,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
     w(_fn("start(K, state)",
           "Start every class III group from its declared guess; returns the crank\n"
           "angle where the guesses apply (NaN without class III groups: closed form).",
-          body, jit="**JIT_FIRST_CLASS"))
+          body, jit="**JIT_INNER"))
 
     w(_spaced(part("advance_newton" if n_triads else "advance_closed")))
     w(force_kernel(plan, n))

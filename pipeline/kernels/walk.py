@@ -424,12 +424,18 @@ REVOLUTION = types.int64(ADVANCE, START, _F1, types.int64[::1], types.int64, _F1
                          _F1, _F1)
 
 
-def revolution(advance, start, K, watch_g, n_triads, *args):
-    """``walk_revolution`` for a generated module's ``advance`` and ``start``
-    (their first-class function types ADVANCE, START) and constants ``K`` (an
-    array): compiled for these types once per installation (numba's cache) and
-    never again for them, not for each mechanism."""
+def compile_revolution() -> None:
+    """``walk_revolution`` compiled (or loaded from numba's cache) for the types
+    of REVOLUTION, and for no other: once per installation, not per mechanism
+    (``pipeline.compiler.beside`` does it while the first sweep compiles)."""
     if not walk_revolution.signatures:
         walk_revolution.compile(REVOLUTION)
         walk_revolution.disable_compile()
+
+
+def revolution(advance, start, K, watch_g, n_triads, *args):
+    """``walk_revolution`` for a generated module's ``advance`` and ``start``
+    (their first-class function types ADVANCE, START) and constants ``K`` (an
+    array)."""
+    compile_revolution()
     return walk_revolution(advance, start, K, watch_g, n_triads, *args)

@@ -4,11 +4,11 @@ The text below the marker line is pasted into the generated module
 (``pipeline.compiler.generate``); the imports above it declare, for linters and
 readers, the names the generated module gives it."""
 
-from .header import (njit, JIT_FIRST_CLASS)
+from .header import (njit, JIT_INNER)
 from ._mechanism import (N_GROUPS, position)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
-@njit(**JIT_FIRST_CLASS)   # (pipeline.kernels.walk: a first-class function for the scene)
+@njit(**JIT_INNER)
 def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, with_com):
     """Closed form (no class III group): one solve at ``phi_to`` (margins[N_GROUPS
     + 1], margins[N_GROUPS + 2]: where the walk was and where it went)."""

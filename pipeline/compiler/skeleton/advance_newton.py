@@ -5,12 +5,12 @@ The text below the marker line is pasted into the generated module
 (``pipeline.compiler.generate``); the imports above it declare, for linters and
 readers, the names the generated module gives it."""
 
-from .header import (njit, JIT_FIRST_CLASS, OK, BRANCH_JUMP, NEWTON_MAXITER, T_SUBSTEP, T_MIN_STEP,
+from .header import (njit, JIT_INNER, OK, BRANCH_JUMP, NEWTON_MAXITER, T_SUBSTEP, T_MIN_STEP,
                      accept, fold_limit, may_stop, predict, restore, step_limit)
 from ._mechanism import (N_GROUPS, position)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
-@njit(**JIT_FIRST_CLASS)   # (pipeline.kernels.walk: a first-class function for the scene)
+@njit(**JIT_INNER)
 def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, with_com):
     """Continuation from ``phi_from`` to ``phi_to``, then the solve at
     ``phi_to`` to ``order``: secant predictor, Newton corrector, steps bounded

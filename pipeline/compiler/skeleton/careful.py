@@ -7,11 +7,18 @@ The text below the marker line is pasted into the generated module
 for linters and readers, the names the generated module gives it."""
 
 
-from .header import (np, njit, JIT_ALLOC, force_work, scene_revolution)
+from .header import (np, njit, JIT_ALLOC, JIT_FIRST_CLASS, force_work, scene_revolution)
 from ._mechanism import (N_BODIES, N_JOINTS, N_SLIDES, N_INPUTS, N_TRIADS, WATCH_G, constants,
                          start, advance, forces_at)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
+# the scene's advance and start: the same functions with the C wrapper whose
+# address numba's first-class functions call (pipeline.kernels.walk); the
+# sweep's, which other kernels only call directly, have none (compile time)
+advance_first_class = njit(**JIT_FIRST_CLASS)(advance.py_func)
+start_first_class = njit(**JIT_FIRST_CLASS)(start.py_func)
+
+
 def revolution(par, phis, phi_close, order, tols, pos_out, d1_out, d2_out, status_out,
                margin_out, iters_out, fail_out):
     """The mechanism at the crank angles ``phis`` (rad) by continuation, watched
@@ -20,9 +27,9 @@ def revolution(par, phis, phi_close, order, tols, pos_out, d1_out, d2_out, statu
     ``advance`` and ``start`` as first-class functions and the constants of
     ``par`` as an array (for which numba compiles them once per mechanism)."""
     K = np.array(constants(par), dtype=np.float64)
-    return scene_revolution(advance, start, K, WATCH_G, N_TRIADS, phis, phi_close, order, tols,
-                            pos_out, d1_out, d2_out, status_out, margin_out, iters_out,
-                            fail_out)
+    return scene_revolution(advance_first_class, start_first_class, K, WATCH_G, N_TRIADS, phis,
+                            phi_close, order, tols, pos_out, d1_out, d2_out, status_out,
+                            margin_out, iters_out, fail_out)
 
 
 @njit(**JIT_ALLOC)
