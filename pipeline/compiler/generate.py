@@ -1,6 +1,6 @@
 """The generated module of one mechanism: the emitters' lines in plan order
 inside fixed loop skeletons (real Python files in pipeline/compiler/skeleton,
-pasted verbatim: header, advance_closed or advance_newton, the walk (pipeline.kernels.walk), careful,
+pasted verbatim: header, advance_closed or advance_newton, pipeline.kernels.walk, careful,
 crank_dynamics, batch, sweep_stages, no_lanes, parallel).  A sweep's module
 (with an output rocker) has the header, sweep_stages, its lanes and parallel,
 and imports the rest from the module of its mechanism (no rocker).

@@ -24,7 +24,7 @@ import math
 import numpy as np
 from numba import njit, types
 
-from .config import (JIT, JIT_ALLOC, JIT_INNER, OK, BRANCH_JUMP, SINGULAR, S_ITERS, N_STATE,
+from .config import (JIT_ALLOC, JIT_INNER, OK, BRANCH_JUMP, SINGULAR, S_ITERS, N_STATE,
                      N_TOLS, T_MIN_STEP, T_NEWTON_TOL, T_WATCH, T_TOUCH, T_LOCATE)
 from .continuation import MARGIN_SLOTS, closes, copy2, restore, work
 from .watch import (FOLD_BACK, LOCATE_MIN_STEP, LOCATE_NEWTON_TOL, RESOLVED, SUB, cubic_bound,
@@ -90,8 +90,8 @@ def worst_window(phis, vals, j0, j1, n):
 
 
 @njit(**JIT_INNER)
-def locate(advance, K, watch_g, good, bad, st_bad, g_bad, good_state, tols, state, pos, d1, d2, margins,
-           ww):
+def locate(advance, K, watch_g, good, bad, st_bad, g_bad, good_state, tols, state, pos, d1, d2,
+           margins, ww):
     """Bisect between ``good`` (assembled: ``good_state`` is its solution) and
     ``bad`` (the walk from good to bad failed with st_bad at group g_bad) down to
     tols[T_LOCATE]; found = (status, crank angle of the first failing position,
@@ -215,13 +215,14 @@ def refine(advance, K, watch_g, lo, hi, tols, state, pos, d1, d2, margins, ww):
                             at, low = window_vertex(sub_phi[i - 3], sub_phi[i - 2],
                                                     sub_phi[i - 1], sub_val[w, i - 3],
                                                     sub_val[w, i - 2], sub_val[w, i - 1])
-                            if (at - sub_phi[i - 1]) * (t - at) >= 0.0 and                                         low <= tols[T_TOUCH]:
+                            if ((at - sub_phi[i - 1]) * (t - at) >= 0.0
+                                    and low <= tols[T_TOUCH]):
                                 found[0] = SINGULAR
                                 found[1] = at
                                 found[2] = g
                                 return SINGULAR
-                return locate(advance, K, watch_g, sub_phi[i - 1], t, st, g, sub_state[i - 1], tols, state,
-                              pos, d1, d2, margins, ww)
+                return locate(advance, K, watch_g, sub_phi[i - 1], t, st, g, sub_state[i - 1], tols,
+                              state, pos, d1, d2, margins, ww)
             sub_phi[i] = t
             watched_values(watch_g, margins, sub_val, i)
             copy2(state, sub_state[i])
@@ -309,7 +310,8 @@ def watch(advance, K, watch_g, k, phi, tols, state, pos, d1, d2, margins, ww):
         if not hit:
             continue
         copy2(hist_state[i0], state)
-        st = refine(advance, K, watch_g, hist_phi[i0], hist_phi[i2], tols, state, pos, d1, d2, margins, ww)
+        st = refine(advance, K, watch_g, hist_phi[i0], hist_phi[i2], tols, state, pos, d1, d2,
+                    margins, ww)
         if st != OK:
             break
     copy2(hist_state[slot], state)

@@ -186,7 +186,8 @@ class GpuSweep:
         m, n, w = self.cpu, len(self.problem.phis), self.problem.dwell_w
         like = [np.empty(n), np.empty(n + w + 1, np.int64), np.empty(n + w + 1, np.int64),
                 np.empty(n), *work(m.N_POINTS, m.N_GROUPS, m.N_TRIADS),
-                *force_work(m.N_BODIES, m.N_JOINTS, m.N_SLIDES + m.N_INPUTS), *m.watch_work(m.N_WATCH, m.N_TRIADS)]
+                *force_work(m.N_BODIES, m.N_JOINTS, m.N_SLIDES + m.N_INPUTS),
+                *m.watch_work(m.N_WATCH, m.N_TRIADS)]
         if len(like) != len(self.mod.WORK_NAMES):
             raise RuntimeError(f"{self.mod.SOURCE_PATH}: the kernel takes "
                                f"{len(self.mod.WORK_NAMES)} work arrays, the CPU path "

@@ -7,7 +7,7 @@ readers, the names the generated module gives it."""
 
 from .header import (math, np, njit, JIT_ALLOC, OK, work, force_work)
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
-                         N_INPUTS, N_WATCH, WATCH_G, constants, start, advance, forces_at)
+                         N_INPUTS, N_WATCH, WATCH_G, constants, advance, forces_at)
 from ...kernels.walk import walk_start, watch, watch_work
 
 # ---- the skeleton: from here on, pasted into the generated module ----

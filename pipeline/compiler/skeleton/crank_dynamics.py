@@ -10,7 +10,7 @@ declare, for linters and readers, the names the generated module gives it."""
 from .header import (math, np, njit, JIT, JIT_ALLOC, OK, SINGULAR, work, drive, lagrange_terms,
                      potential)
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, GRAVITY, BODY_COM, BODY_TURN, BODY_MASS_OFF,
-                         LOAD_BODY, LOAD_POINT, constants, start, advance)
+                         LOAD_BODY, LOAD_POINT, constants, advance)
 from ...kernels.walk import walk_start
 
 # ---- the skeleton: from here on, pasted into the generated module ----

@@ -17,7 +17,8 @@ import math
 import numpy as np
 from numba import njit
 
-from pipeline.kernels.config import (JIT, JIT_ALLOC, JIT_INNER, JIT_FIRST_CLASS, JIT_LANES, OK, BRANCH_JUMP,
+from pipeline.kernels.config import (JIT, JIT_ALLOC, JIT_INNER, JIT_FIRST_CLASS, JIT_LANES, OK,
+                                     BRANCH_JUMP,
                                      NEWTON_MAXITER, SINGULAR, NO_ASSEMBLY, BAD_GEOMETRY, S_A, S_B,
                                      S_DET_SIGN, S_ITERS, S_MARGIN, S_HANDED, S_CA, S_SA, S_CB, S_SB,
                                      N_STATE, N_TOLS, T_SINGULAR,

@@ -22,7 +22,7 @@ from .header import S_HANDED, S_CA, S_SA, S_CB, S_SB, start_triad
 from .header import M_SHAKING_F, M_SHAKING_M, shaking, may_reach
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, constants, position, advance, forces_at, transmission,
-                         ROCKER_PIVOT, ROCKER_POINT, NEWTON_STEPS, N_WATCH, WATCH_G, start)
+                         ROCKER_PIVOT, ROCKER_POINT, NEWTON_STEPS, N_WATCH, WATCH_G)
 from ._mechanism import BODY_COM, BODY_TURN, BODY_MASS_OFF, CRANK_PIVOT
 from ...kernels.walk import (walk_angle, walk_start, walk_steps, locate, watch, watch_work)
 
@@ -166,7 +166,8 @@ def careful_tail(K, phis, k0, k1, trail, tols, out, wk, ww):
     if advance(K, phis[k0], phis[k0], np.int64(0), tols, state, pos, d1, d2, margins,
                np.bool_(False)) != OK:
         return OK
-    watch(K, WATCH_G, np.int64(0), phis[k0], tols, state, pos, d1, d2, margins, ww)   # (its history)
+    # (its history)
+    watch(K, WATCH_G, np.int64(0), phis[k0], tols, state, pos, d1, d2, margins, ww)
     for k in range(k0 + 1, k1):
         st = careful_step(K, k - k0, phis[k - 1], phis[k], tols, out, wk, ww)
         if st != OK:
@@ -184,7 +185,8 @@ def evaluate_careful(par, phis, phi_close, tols, settings, loads, theta, trail, 
     return settle(par, np.int64(-1), phis, phi_close, tols, settings, loads, theta,
                   trail, qmax, qmin, 0.0, np.int64(-1), 0.0, 0.0,
                   work(N_POINTS, N_GROUPS, N_TRIADS),
-                  force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS), watch_work(N_WATCH, N_TRIADS),
+                  force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS),
+                  watch_work(N_WATCH, N_TRIADS),
                   np.empty(phis.shape[0]), out)
 
 
