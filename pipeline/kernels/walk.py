@@ -430,6 +430,8 @@ def compile_revolution() -> None:
     """``walk_revolution`` compiled (or loaded from numba's cache) for the types
     of REVOLUTION, and for no other: once per installation, not per mechanism
     (``pipeline.compiler.beside`` does it while the first sweep compiles)."""
+    if not getattr(walk_revolution, "compile", None):
+        return          # numba's JIT disabled (NUMBA_DISABLE_JIT): Python calls Python
     if not walk_revolution.signatures:
         walk_revolution.compile(REVOLUTION)
         walk_revolution.disable_compile()

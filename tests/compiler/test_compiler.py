@@ -113,6 +113,38 @@ def test_every_kernel_of_the_sweep_compiles_once(problem, candidates):
     assert not {n: v for n, v in seen.items() if len(v) > 1}
 
 
+def test_the_scene_s_walk_is_compiled_once_for_every_mechanism():
+    """The scene's walk (pipeline.kernels.walk: revolution, the watch it calls) is
+    the library's, compiled once for ``advance`` and ``start`` as first-class
+    functions and the constants as an array, whatever the mechanism: scenes of
+    a closed-form mechanism and of a class III one leave one version of each
+    (in this process and in numba's cache), and each mechanism's module gives
+    the walk its own advance and start compiled for an array of constants; the
+    pasted copies the sweeps call are not the scene's."""
+    from numba import types
+    from pipeline.kernels import walk
+    plans = [load_study(STUDIES / f"{s}.toml").mechanism for s in ("warp_feed_fourbar",
+                                                                  "ov7_class3")]
+    for mech in plans:
+        plan = mech.compile()
+        phis = revolution_angles(mech.crank, 72)
+        c = solve_curves(plan, phis, kc.ACCELERATIONS,
+                         close_at=mech.crank.phi0 + mech.crank.rot * 2 * math.pi)
+        assert c.overall == kc.OK and np.all(c.status == kc.OK)
+        mod = kernels_for(plan)
+        for f in (mod.advance_first_class, mod.start_first_class):
+            assert [s[0] for s in f.signatures] == [types.float64[::1]], f
+
+    def versions(d):        # (an explicit signature is a key of its own: its arguments)
+        cached = d._cache._cache_file._load_index()
+        return ({str(tuple(s)) for s in d.signatures}
+                | {str(tuple(getattr(k[0], "args", k[0]))) for k in cached})
+    for f in (walk.walk_revolution, walk.watch, walk.locate, walk.refine, walk.walk_start):
+        v = versions(f)
+        assert len(v) == 1 and "FunctionType" in next(iter(v)), (f, v)
+    assert walk.walk_revolution.signatures == [walk.REVOLUTION.args]
+
+
 def test_no_exec_or_eval_in_the_compiler():
     here = Path(__file__).resolve().parents[2] / "pipeline" / "compiler"
     for f in here.rglob("*.py"):     # the skeleton files too

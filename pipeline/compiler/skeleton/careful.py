@@ -15,8 +15,8 @@ from ._mechanism import (N_BODIES, N_JOINTS, N_SLIDES, N_INPUTS, N_TRIADS, WATCH
 # the scene's advance and start: the same functions with the C wrapper whose
 # address numba's first-class functions call (pipeline.kernels.walk); the
 # sweep's, which other kernels only call directly, have none (compile time)
-advance_first_class = njit(**JIT_FIRST_CLASS)(advance.py_func)
-start_first_class = njit(**JIT_FIRST_CLASS)(start.py_func)
+advance_first_class = njit(**JIT_FIRST_CLASS)(getattr(advance, "py_func", advance))
+start_first_class = njit(**JIT_FIRST_CLASS)(getattr(start, "py_func", start))
 
 
 def revolution(par, phis, phi_close, order, tols, pos_out, d1_out, d2_out, status_out,
