@@ -116,20 +116,22 @@ def kernels_for(plan, rocker=None, watch=True):
     return mod
 
 
-def _compile_beside(mod) -> None:
-    """Where ``mod`` (a sweep's module) has a lane walk that numba's cache does
-    not hold yet and this process may use two cores or more: a process of their
-    own compiles its stand-alone kernels into the cache meanwhile
-    (``pipeline.compiler.beside``).  ``PIPELINE_COMPILE_BESIDE=0`` turns it off."""
+def _compile_beside(mod, kernel="walk", *what) -> None:
+    """Where ``mod``'s ``kernel`` (a sweep module's lane walk; with ``what`` =
+    ("scene",), a module's forces_curve) is not in numba's cache yet and this
+    process may use two cores or more: a process of its own compiles it, and
+    what goes with it, into the cache meanwhile (``pipeline.compiler.beside``).
+    ``PIPELINE_COMPILE_BESIDE=0`` turns it off."""
     if (os.environ.get("PIPELINE_COMPILE_BESIDE", "1") == "0"
             or os.environ.get("NUMBA_DISABLE_JIT", "0") not in ("", "0")
-            or not getattr(mod, "HAS_LANES", False)):
+            or not hasattr(mod, kernel)
+            or (kernel == "walk" and not getattr(mod, "HAS_LANES", False))):
         return
     from .parallel import default_jobs
     if default_jobs() < 2:
         return
-    try:        # the index numba's cache keeps of the lane walk's compiled versions
-        if Path(mod.walk._cache._cache_file._index_path).exists():
+    try:        # the index numba's cache keeps of the kernel's compiled versions
+        if Path(getattr(mod, kernel)._cache._cache_file._index_path).exists():
             return
     except AttributeError:      # another numba: look no further, compile beside
         pass
@@ -137,10 +139,20 @@ def _compile_beside(mod) -> None:
     path = Path(mod.SOURCE_PATH)
     try:
         subprocess.Popen([sys.executable, "-m", "pipeline.compiler.beside", mod.__name__,
-                          str(path.parent)], stdin=subprocess.DEVNULL,
+                          str(path.parent), *what], stdin=subprocess.DEVNULL,
                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     except OSError:         # no second process: the run compiles them itself
         pass
+
+
+def scene_kernels_for(plan, forces=False):
+    """``kernels_for(plan)`` for a scene: where it asks for forces and the
+    module's ``forces_curve`` is new, that compiles in a process beside the run
+    (``beside.compile_scene_forces``) while the run compiles the positions."""
+    mod = kernels_for(plan)
+    if forces:
+        _compile_beside(mod, "forces_curve", "scene")
+    return mod
 
 
 def gpu_kernels_for(plan, rocker=None):

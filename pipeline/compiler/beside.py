@@ -11,7 +11,10 @@ there instead of compiling them (``pipeline.compiler.kernels_for`` starts
 this where a new module has force lanes and their cache is empty).  The
 numbers are the same either way: the same source, the same flags.
 
-    python -m pipeline.compiler.beside MODULE FOLDER
+A scene's forces likewise: its ``forces_curve`` compiles in the process beside
+while the run compiles the mechanism's positions (``compile_scene_forces``).
+
+    python -m pipeline.compiler.beside MODULE FOLDER [scene]
 """
 
 from __future__ import annotations
@@ -74,10 +77,26 @@ def compile_standalone(mod) -> None:
     compile_revolution()
 
 
+def compile_scene_forces(mod) -> None:
+    """Compile (or load) the generated module ``mod``'s ``forces_curve`` for the
+    argument types a scene's forces pass it (``pipeline.solve.reactions``): it
+    calls nothing of the walk's, so it compiles while the scene's run compiles
+    its positions and walks the revolution."""
+    from numba import typeof
+    n = 2
+    pos = np.zeros((n, mod.N_POINTS, 2))
+    args = (np.ones(mod.N_PARAMS), pos, pos, pos, 1.0, 0.0,
+            np.zeros((n, len(mod.LOAD_BODY), 3)), np.zeros((n, mod.N_BODIES, 3)),
+            np.zeros((n, mod.N_JOINTS, 2)), np.zeros((n, mod.N_SLIDES + mod.N_INPUTS, 2)),
+            np.zeros(n))
+    mod.forces_curve.compile(tuple(typeof(x) for x in args))
+
+
 def main(argv=None) -> int:
-    name, folder = (argv or sys.argv[1:])[:2]
+    name, folder, *what = (argv or sys.argv[1:])
     sys.path.insert(0, folder)
-    compile_standalone(importlib.import_module(name))
+    mod = importlib.import_module(name)
+    (compile_scene_forces if what == ["scene"] else compile_standalone)(mod)
     return 0
 
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..kernels import config as kc
-from ..compiler import kernels_for
+from ..compiler import kernels_for, scene_kernels_for
 from ..kernels.geometry import link_angles
 from ..model.mechanism import Plan
 
@@ -110,6 +110,7 @@ def run_scene(study, tols=None) -> SceneResult:
     order = ORDER[out.analysis]
     tols = kc.default_tolerances() if tols is None else tols
     crank = study.mechanism.crank
+    scene_kernels_for(plan, forces=out.analysis == "forces")   # (forces compile beside)
     table = solve_curves(plan, revolution_angles(crank, out.table_positions, True), order, tols)
     dense_phis = revolution_angles(crank, out.dense_positions)
     dense = solve_curves(plan, dense_phis, order, tols,

@@ -543,6 +543,54 @@ def test_the_stand_alone_kernels_compile_beside_for_evaluate_s_types(problem, ca
         os.environ["PIPELINE_COMPILE_BESIDE"] = "0"
 
 
+def test_a_scene_s_forces_compile_beside_for_the_types_the_scene_passes(tmp_path):
+    """pipeline.compiler.beside.compile_scene_forces compiles a module's
+    forces_curve for the argument types a forces scene passes it: after the
+    scene (compiled here, or loaded from numba's cache), it compiles nothing
+    and the kernel has one compiled version; it runs as a process; and the
+    trigger starts it, with "scene", only where the kernel is not cached."""
+    from numba.core import event
+    from pipeline.compiler.beside import compile_scene_forces
+    from pipeline.solve.scene import run_scene
+    study = load_study(STUDIES / "feed_fivebar.toml")
+    assert study.output.analysis == "forces"
+    res = run_scene(study)
+    assert res.dense.forces is not None
+    k = kernels_for(study.mechanism.compile())
+    with event.install_recorder("numba:compile") as rec:
+        compile_scene_forces(k)
+    compiled = {e.data["dispatcher"].py_func.__name__ for _, e in rec.buffer}
+    assert "forces_curve" not in compiled and len(k.forces_curve.signatures) == 1
+    r = subprocess.run([sys.executable, "-m", "pipeline.compiler.beside", k.__name__,
+                        str(Path(k.SOURCE_PATH).parent), "scene"], env=child_env(),
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    import types
+
+    import pipeline.compiler as pc
+    import subprocess as sp
+    started, real = [], sp.Popen
+
+    def module(index):
+        cache = types.SimpleNamespace(_cache_file=types.SimpleNamespace(_index_path=index))
+        return types.SimpleNamespace(__name__="pipeline_mech_x", SOURCE_PATH=str(tmp_path / "m.py"),
+                                     forces_curve=types.SimpleNamespace(_cache=cache))
+    (tmp_path / "there.nbi").write_text("")
+    try:
+        sp.Popen = lambda argv, **kw: started.append(argv)
+        os.environ["PIPELINE_COMPILE_BESIDE"] = "1"
+        for index, n in (("none.nbi", 1), ("there.nbi", 0)):
+            started.clear()
+            pc._compile_beside(module(tmp_path / index), "forces_curve", "scene")
+            assert len(started) == n, index
+            if n:
+                assert started[0][1:] == ["-m", "pipeline.compiler.beside", "pipeline_mech_x",
+                                          str(tmp_path), "scene"]
+    finally:
+        sp.Popen = real
+        os.environ["PIPELINE_COMPILE_BESIDE"] = "0"
+
+
 # ----------------------------------------------------------------- generated force equations
 def _unrolled(m):
     """The generated lines of an m x m solve as a Python function of (a, b)."""
