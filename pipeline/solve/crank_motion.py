@@ -144,7 +144,8 @@ def build_drive(mechanism, M1, t_end=1.0, dt=1e-3, file="<study>") -> Drive:
 
 
 def _plan_args(plan, tols):
-    return (plan.par, tols)
+    """(par, K, tols) of the dynamics kernels: K the constants as an array."""
+    return (plan.par, kernels_for(plan).constants_array(plan.par), tols)
 
 
 # ----------------------------------------------------------------- helpers for tests
@@ -351,7 +352,7 @@ def _dop853(plan, drive, case, tols, out, tail):
     b = float(case.damping)
 
     def restart():
-        kern.begin(plan.par, float(case.phi_start), work["state"], work["last"])
+        kern.begin(pa[1], float(case.phi_start), work["state"], work["last"])
 
     def eps(t, phi, omega):
         st, e = kern.acceleration(*pa, *da, b, float(t), float(phi), float(omega),

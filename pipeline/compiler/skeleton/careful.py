@@ -19,6 +19,13 @@ advance_first_class = njit(**JIT_FIRST_CLASS)(getattr(advance, "py_func", advanc
 start_first_class = njit(**JIT_FIRST_CLASS)(getattr(start, "py_func", start))
 
 
+def constants_array(par):
+    """``constants(par)`` as an array: the constants of the scene's kernels (the
+    walk's first-class ``advance`` and ``start``, crank dynamics), for which
+    numba compiles the mechanism's positions once, whatever the scene asks."""
+    return np.array(constants(par), dtype=np.float64)
+
+
 def revolution(par, phis, phi_close, order, tols, pos_out, d1_out, d2_out, status_out,
                margin_out, iters_out, fail_out):
     """The mechanism at the crank angles ``phis`` (rad) by continuation, watched
@@ -26,8 +33,7 @@ def revolution(par, phis, phi_close, order, tols, pos_out, d1_out, d2_out, statu
     status).  The walk is compiled once per installation; this module gives it
     ``advance`` and ``start`` as first-class functions and the constants of
     ``par`` as an array (for which numba compiles them once per mechanism)."""
-    K = np.array(constants(par), dtype=np.float64)
-    return scene_revolution(advance_first_class, start_first_class, K, WATCH_G, N_TRIADS, phis,
+    return scene_revolution(advance_first_class, start_first_class, constants_array(par), WATCH_G, N_TRIADS, phis,
                             phi_close, order, tols, pos_out, d1_out, d2_out, status_out,
                             margin_out, iters_out, fail_out)
 

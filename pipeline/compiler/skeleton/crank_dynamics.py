@@ -10,24 +10,25 @@ declare, for linters and readers, the names the generated module gives it."""
 from .header import (math, np, njit, JIT, JIT_ALLOC, OK, SINGULAR, work, drive, lagrange_terms,
                      potential)
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, GRAVITY, BODY_COM, BODY_TURN, BODY_MASS_OFF,
-                         LOAD_BODY, LOAD_POINT, constants, advance)
+                         LOAD_BODY, LOAD_POINT)
+from .careful import advance_first_class
 from ...kernels.walk import walk_start
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 @njit(**JIT)
-def begin(par, phi, state, last):
+def begin(K, phi, state, last):
     """Start a dynamics continuation towards ``phi`` (last[0]: where the
-    first evaluation walks from)."""
-    last[0] = walk_start(constants(par), phi, state)
+    first evaluation walks from).  K: the constants as an array (constants_array:
+    the scene's positions, compiled once for the walk and the dynamics)."""
+    last[0] = walk_start(K, phi, state)
 
 
 @njit(**JIT)
-def acceleration(par, tols, const, tab_phi, h_phi, tab_t, h_t, damping, t, phi, omega,
+def acceleration(par, K, tols, const, tab_phi, h_phi, tab_t, h_t, damping, t, phi, omega,
                  state, last, pos, d1, d2, margins, loads_k):
     """eps1 = (Q + M1 - (1/2) J' omega^2 - b omega) / J at (t, phi, omega).
     Returns (status, eps1); walks the continuation from last[0] to phi."""
-    K = constants(par)
-    st = advance(K, last[0], phi, np.int64(2), tols, state, pos, d1, d2, margins,
+    st = advance_first_class(K, last[0], phi, np.int64(2), tols, state, pos, d1, d2, margins,
                  np.bool_(True))
     last[0] = phi
     if st != OK:
@@ -42,7 +43,7 @@ def acceleration(par, tols, const, tab_phi, h_phi, tab_t, h_t, damping, t, phi, 
 
 
 @njit(**JIT_ALLOC)
-def rk4(par, tols, const, tab_phi, h_phi, tab_t, h_t, damping, phi0, omega0, dt, n_sub,
+def rk4(par, K, tols, const, tab_phi, h_phi, tab_t, h_t, damping, phi0, omega0, dt, n_sub,
         out_t, out_phi, out_omega, out_eps, tail_t, tail_phi, tail_omega, tail_eps):
     """Classical fixed-step RK4 for y = (phi1, omega1) from t = 0.
 
@@ -58,7 +59,7 @@ def rk4(par, tols, const, tab_phi, h_phi, tab_t, h_t, damping, phi0, omega0, dt,
     n_steps = (n_samples - 1) * n_sub
     n_tail = tail_t.shape[0]
     tail0 = n_steps - n_tail + 1
-    begin(par, phi0, state, last)
+    begin(K, phi0, state, last)
     p = phi0
     w = omega0
     h = dt
@@ -85,7 +86,7 @@ def rk4(par, tols, const, tab_phi, h_phi, tab_t, h_t, damping, phi0, omega0, dt,
             w = w + h / 6.0 * sum_w
             n += 1
             ts, ps, ws = n * h, p, w
-        st, es = acceleration(par, tols, const, tab_phi, h_phi, tab_t, h_t, damping, ts, ps,
+        st, es = acceleration(par, K, tols, const, tab_phi, h_phi, tab_t, h_t, damping, ts, ps,
                               ws, state, last, pos, d1, d2, margins, loads_k)
         if st != OK:
             break
@@ -122,19 +123,18 @@ def rk4(par, tols, const, tab_phi, h_phi, tab_t, h_t, damping, phi0, omega0, dt,
 
 
 @njit(**JIT_ALLOC)
-def terms_curve(par, tols, const, tab_phi, h_phi, tab_t, h_t, phis, ts, out_J, out_half,
+def terms_curve(par, K, tols, const, tab_phi, h_phi, tab_t, h_t, phis, ts, out_J, out_half,
                 out_Q, out_M1, out_V, out_status):
     """J, (1/2) J', Q (without M1), M1 and V at the crank angles ``phis`` (and
     times ``ts`` for the drive channels), by continuation in the given order."""
     pos, d1, d2, margins, state, _ = work(N_POINTS, N_GROUPS, N_TRIADS)
     last = np.empty(1)
     loads_k = np.empty((LOAD_BODY.shape[0], 3))
-    K = constants(par)
     worst = OK
     if phis.shape[0] > 0:
         last[0] = walk_start(K, phis[0], state)
     for k in range(phis.shape[0]):
-        st = advance(K, last[0], phis[k], np.int64(2), tols, state, pos, d1, d2, margins,
+        st = advance_first_class(K, last[0], phis[k], np.int64(2), tols, state, pos, d1, d2, margins,
                      np.bool_(True))
         last[0] = phis[k]
         out_status[k] = st
