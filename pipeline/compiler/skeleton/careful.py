@@ -33,9 +33,9 @@ def revolution(par, phis, phi_close, order, tols, pos_out, d1_out, d2_out, statu
     status).  The walk is compiled once per installation; this module gives it
     ``advance`` and ``start`` as first-class functions and the constants of
     ``par`` as an array (for which numba compiles them once per mechanism)."""
-    return scene_revolution(advance_first_class, start_first_class, constants_array(par), WATCH_G, N_TRIADS, phis,
-                            phi_close, order, tols, pos_out, d1_out, d2_out, status_out,
-                            margin_out, iters_out, fail_out)
+    return scene_revolution(advance_first_class, start_first_class, constants_array(par),
+                            WATCH_G, N_TRIADS, phis, phi_close, order, tols, pos_out, d1_out,
+                            d2_out, status_out, margin_out, iters_out, fail_out)
 
 
 @njit(**JIT_ALLOC)

@@ -29,7 +29,7 @@ def acceleration(par, K, tols, const, tab_phi, h_phi, tab_t, h_t, damping, t, ph
     """eps1 = (Q + M1 - (1/2) J' omega^2 - b omega) / J at (t, phi, omega).
     Returns (status, eps1); walks the continuation from last[0] to phi."""
     st = advance_first_class(K, last[0], phi, np.int64(2), tols, state, pos, d1, d2, margins,
-                 np.bool_(True))
+                             np.bool_(True))
     last[0] = phi
     if st != OK:
         return st, math.nan
@@ -134,8 +134,8 @@ def terms_curve(par, K, tols, const, tab_phi, h_phi, tab_t, h_t, phis, ts, out_J
     if phis.shape[0] > 0:
         last[0] = walk_start(K, phis[0], state)
     for k in range(phis.shape[0]):
-        st = advance_first_class(K, last[0], phis[k], np.int64(2), tols, state, pos, d1, d2, margins,
-                     np.bool_(True))
+        st = advance_first_class(K, last[0], phis[k], np.int64(2), tols, state, pos, d1, d2,
+                                 margins, np.bool_(True))
         last[0] = phis[k]
         out_status[k] = st
         if worst == OK and st != OK:
