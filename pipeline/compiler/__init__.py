@@ -138,17 +138,36 @@ def _compile_beside(mod, kernel="walk", *what) -> None:
     import subprocess
     path = Path(mod.SOURCE_PATH)
     try:
-        subprocess.Popen([sys.executable, "-m", "pipeline.compiler.beside", mod.__name__,
-                          str(path.parent), *what], stdin=subprocess.DEVNULL,
-                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        _BESIDE[(mod.__name__, kernel)] = subprocess.Popen(
+            [sys.executable, "-m", "pipeline.compiler.beside", mod.__name__, str(path.parent),
+             *what], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL)
     except OSError:         # no second process: the run compiles them itself
         pass
+
+
+_BESIDE: dict[tuple, object] = {}     # (module, kernel): its process beside (Popen)
+
+
+def await_beside(mod, kernel, timeout=120.0) -> None:
+    """Where a process beside this one compiles ``mod``'s ``kernel`` (started by
+    this process: ``_compile_beside``), wait for it (at most ``timeout``
+    seconds): the kernel then loads from numba's cache, instead of compiling a
+    second time here."""
+    proc = _BESIDE.pop((getattr(mod, "__name__", None), kernel), None)
+    if proc is not None:
+        import subprocess
+        try:
+            proc.wait(timeout)
+        except subprocess.TimeoutExpired:   # (then this process compiles it)
+            pass
 
 
 def scene_kernels_for(plan, forces=False):
     """``kernels_for(plan)`` for a scene: where it asks for forces and the
     module's ``forces_curve`` is new, that compiles in a process beside the run
-    (``beside.compile_scene_forces``) while the run compiles the positions."""
+    (``beside.compile_scene_forces``) while the run compiles the positions; the
+    run's forces wait for it (``await_beside``)."""
     mod = kernels_for(plan)
     if forces:
         _compile_beside(mod, "forces_curve", "scene")

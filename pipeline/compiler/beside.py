@@ -20,6 +20,7 @@ while the run compiles the mechanism's positions (``compile_scene_forces``).
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 
 import numpy as np
@@ -34,7 +35,9 @@ def compile_standalone(mod) -> None:
     that call them, in the order the run reaches them.  ``walk`` and
     ``force_lanes`` by running them on a few positions of dummy data, the others
     (no Python wrapper) by ``compile`` with the types of such data.  Last, the
-    scene's walk (``pipeline.kernels.walk``), which no mechanism's code is in."""
+    scene's walk (``pipeline.kernels.walk``), the crank dynamics' integrator
+    (``pipeline.kernels.dynamics``) and the kernels of every group type
+    (``pipeline.compiler.warmup``), which no mechanism's code is in."""
     from numba import typeof
     lanes, npos = mod.LANES, 4
     if not getattr(mod, "HAS_LANES", False):
@@ -71,10 +74,18 @@ def compile_standalone(mod) -> None:
     compile_("block_walk", a2, a2, a1, a1, a1, a1, a1)
     compile_("careful_tail", K, a1, i64, i64, a2, a1, a1, wk, ww)
     compile_("setup_lane", a2, i64, i64, a1, f64, a1, a2, a2, a2, a2, a2, a1, a2)
-    # and, once per installation, the scene's walk (no mechanism's: a first scene
-    # after this sweep then compiles its own groups' code only)
+    # and, once per installation, the scene's walk, the crank dynamics'
+    # integrator and every group type's kernels (no mechanism's: a first scene
+    # after this sweep then compiles its own mechanism's code only), at the
+    # lowest priority: the run's sweep, on every core, goes first
+    from pipeline.compiler.warmup import compile_group_kernels
+    from pipeline.kernels.dynamics import compile_integrator
     from pipeline.kernels.walk import compile_revolution
+    if hasattr(os, "nice"):
+        os.nice(19)
     compile_revolution()
+    compile_integrator()
+    compile_group_kernels()
 
 
 def compile_scene_forces(mod) -> None:

@@ -499,7 +499,7 @@ class ClassIIIEmitter(Emitter):
                 f"{self.triad_row}",
                 f"st, m = class3(pos, d1, d2, {i2}, {i6}, {i7}, {i3}, {i4}, {i5}, {k('L23')}, "
                 f"{k('L34')}, {k('U435')}, {k('L35')}, {k('L46')}, {k('L57')}, state, "
-                f"{self.triad_row}, order, tols, {k('U435')}_cos, {k('U435')}_sin)"]
+                f"{_row(self)}, order, tols, {k('U435')}_cos, {k('U435')}_sin)"]
 
     def transmission_items(self):
         i2, i6, i7, i3, i4, i5 = self.ix[:6]
@@ -507,6 +507,15 @@ class ClassIIIEmitter(Emitter):
         return (f"leads {n(4)}-{n(1)} and {n(5)}-{n(2)}, each against the line to the meet of "
                 "the other two leads",
                 [("lead", (i4, i6, i2, i3, i5, i7)), ("lead", (i5, i7, i2, i3, i4, i6))])
+
+
+def _row(e):
+    """A class III group's row of the continuation state as its kernel's
+    argument: np.int64, not a literal (numba would compile the kernel once per
+    row: once for each class III group of a mechanism, and again for a
+    mechanism whose group has another row than the one the library warm-up
+    compiled, pipeline.compiler.warmup)."""
+    return f"np.int64({e.triad_row})"
 
 
 class ClassIIISliderEmitter(Emitter):
@@ -538,7 +547,7 @@ class ClassIIISliderEmitter(Emitter):
                 wrap_line(f"st, m = class3_slider(pos, d1, d2, {i2}, {i6}, {i7}, {i3}, {i4}, "
                            f"{i5}, {ga}, {gb}, {k('L23')}, {k('L34')}, {k('U435')}, "
                            f"{k('L35')}, {k('L46')}, {k('guide_angle')}, {k('guide_offset')}, "
-                           f"state, {self.triad_row}, order, tols, {k('U435')}_cos, "
+                           f"state, {_row(self)}, order, tols, {k('U435')}_cos, "
                            f"{k('U435')}_sin)")]
 
 

@@ -23,20 +23,24 @@ matching part and rejects the rest).  A table with zero intervals is absent.
 Spline tables are (n_channels, n_intervals, 4) with the coefficients of the
 local cubic in descending powers of (x - x_i), as scipy's ``CubicSpline.c``.
 
-The integrator itself (RK4 over the mechanism's exact kinematics) is a
-generated kernel of the mechanism (``pipeline.compiler``): class III groups
-keep their continuation state there, so the integrator's small steps never
-jump branch, and a kinematic failure (or a non-finite acceleration) stops the
-integration with its status.
+The integrator (RK4 over the mechanism's exact kinematics: ``rk4``, with
+``acceleration``, ``begin`` and ``terms_curve``) is compiled once for every
+mechanism: it calls the mechanism's continuation (its generated ``advance``,
+pipeline.compiler) through its address.  Class III groups keep their
+continuation state there, so the integrator's small steps never jump branch,
+and a kinematic failure (or a non-finite acceleration) stops the integration
+with its status.
 """
 
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, types
 
-from .config import JIT
+from .config import JIT, JIT_ALLOC, OK, SINGULAR
+from .continuation import work
 from .geometry import angle_analogs
+from .walk import ADVANCE, START, walk_start
 
 MM = 1e-3
 
@@ -130,3 +134,183 @@ def potential(pos, gravity, par, body_com, body_mass_off):
     for i in range(body_com.shape[0]):
         v += par[body_mass_off[i]] * gravity * pos[body_com[i], 1] * MM
     return v
+
+
+# ----------------------------------------------------------------- the integrator
+# Compiled once per installation, for every mechanism: the mechanism's
+# continuation comes as first-class functions (``advance``, ``start``: the
+# generated module's advance_first_class and start_first_class, called through
+# their address), its constants as an array ``K`` (constants_array), its sizes
+# and its mass model and loads as arguments: ``sizes`` = (n_points, n_groups,
+# n_triads), ``masses`` = (gravity, body_com, body_turn, body_mass_off,
+# load_body, load_point).  The generated module's begin, acceleration, rk4 and
+# terms_curve pass them (pipeline.compiler.skeleton.crank_dynamics).
+
+@njit(**JIT)
+def begin(start, K, phi, state, last):
+    """Start a dynamics continuation towards ``phi`` (last[0]: where the
+    first evaluation walks from)."""
+    last[0] = walk_start(start, K, phi, state)
+
+
+@njit(**JIT)
+def acceleration(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t, damping, t,
+                 phi, omega, state, last, pos, d1, d2, margins, loads_k):
+    """eps1 = (Q + M1 - (1/2) J' omega^2 - b omega) / J at (t, phi, omega).
+    Returns (status, eps1); walks the continuation from last[0] to phi."""
+    gravity, body_com, body_turn, body_mass_off, load_body, load_point = masses
+    st = advance(K, last[0], phi, np.int64(2), tols, state, pos, d1, d2, margins, True)
+    last[0] = phi
+    if st != OK:
+        return st, math.nan
+    m1 = drive(const, tab_phi, h_phi, tab_t, h_t, phi, t, loads_k)
+    J, half, Q = lagrange_terms(pos, d1, d2, gravity, par, body_com, body_turn, body_mass_off,
+                                load_body, load_point, loads_k)
+    eps = (Q + m1 - half * omega * omega - damping * omega) / J
+    if not math.isfinite(eps):
+        return SINGULAR, math.nan
+    return OK, eps
+
+
+@njit(**JIT_ALLOC)
+def rk4(advance, start, K, sizes, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t, damping,
+        phi0, omega0, dt, n_sub, out_t, out_phi, out_omega, out_eps, tail_t, tail_phi,
+        tail_omega, tail_eps):
+    """Classical fixed-step RK4 for y = (phi1, omega1) from t = 0.
+
+    Records (t, phi1, omega1, eps1) every ``n_sub`` steps into the out_*
+    arrays (n_samples = out_t.shape[0]; the run has (n_samples - 1) n_sub
+    steps) and at every one of the last tail_t.shape[0] steps into the tail_*
+    arrays.  eps1 of a sample is the first stage of the following step.
+    Returns (status, samples recorded)."""
+    n_points, n_groups, n_triads = sizes
+    pos, d1, d2, margins, state, _ = work(n_points, n_groups, n_triads)
+    last = np.empty(1)
+    loads_k = np.empty((masses[4].shape[0], 3))       # (load_body: the loads)
+    n_samples = out_t.shape[0]
+    n_steps = (n_samples - 1) * n_sub
+    n_tail = tail_t.shape[0]
+    tail0 = n_steps - n_tail + 1
+    begin(start, K, phi0, state, last)
+    p = phi0
+    w = omega0
+    h = dt
+    e = 0.0
+    st = OK
+    recorded = 0
+    # one call site of ``acceleration``: evaluation s = 0 is the start, s = 1..3
+    # are RK4 stages 2..4, s = 4 is the new state (= stage 1 of the next step)
+    n = 0
+    s = 0
+    kp = 0.0
+    kw = 0.0
+    sum_p = 0.0
+    sum_w = 0.0
+    while True:
+        if s == 0:
+            ts, ps, ws = 0.0, p, w
+        elif s < 4:
+            c = 0.5 if s < 3 else 1.0
+            ts, ps, ws = n * h + c * h, p + c * h * kp, w + c * h * kw
+        else:
+            p = p + h / 6.0 * sum_p
+            w = w + h / 6.0 * sum_w
+            n += 1
+            ts, ps, ws = n * h, p, w
+        st, es = acceleration(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t,
+                              damping, ts, ps, ws, state, last, pos, d1, d2, margins, loads_k)
+        if st != OK:
+            break
+        if 0 < s < 4:
+            weight = 2.0 if s < 3 else 1.0
+            sum_p += weight * ws
+            sum_w += weight * es
+            kp = ws
+            kw = es
+            s += 1
+            continue
+        e = es
+        if n % n_sub == 0:
+            k = n // n_sub
+            out_t[k] = n * h
+            out_phi[k] = p
+            out_omega[k] = w
+            out_eps[k] = e
+            recorded = k + 1
+        if n >= tail0:
+            j = n - tail0
+            tail_t[j] = n * h
+            tail_phi[j] = p
+            tail_omega[j] = w
+            tail_eps[j] = e
+        if n == n_steps:
+            break
+        kp = w
+        kw = e
+        sum_p = w
+        sum_w = e
+        s = 1
+    return st, recorded
+
+
+@njit(**JIT_ALLOC)
+def terms_curve(advance, start, K, sizes, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t,
+                phis, ts, out_J, out_half, out_Q, out_M1, out_V, out_status):
+    """J, (1/2) J', Q (without M1), M1 and V at the crank angles ``phis`` (and
+    times ``ts`` for the drive channels), by continuation in the given order."""
+    gravity, body_com, body_turn, body_mass_off, load_body, load_point = masses
+    n_points, n_groups, n_triads = sizes
+    pos, d1, d2, margins, state, _ = work(n_points, n_groups, n_triads)
+    last = np.empty(1)
+    loads_k = np.empty((load_body.shape[0], 3))
+    worst = OK
+    if phis.shape[0] > 0:
+        last[0] = walk_start(start, K, phis[0], state)
+    for k in range(phis.shape[0]):
+        st = advance(K, last[0], phis[k], np.int64(2), tols, state, pos, d1, d2, margins, True)
+        last[0] = phis[k]
+        out_status[k] = st
+        if worst == OK and st != OK:
+            worst = st
+        m1 = drive(const, tab_phi, h_phi, tab_t, h_t, phis[k], ts[k], loads_k)
+        J, half, Q = lagrange_terms(pos, d1, d2, gravity, par, body_com, body_turn,
+                                    body_mass_off, load_body, load_point, loads_k)
+        out_J[k] = J
+        out_half[k] = half
+        out_Q[k] = Q
+        out_M1[k] = m1
+        out_V[k] = potential(pos, gravity, par, body_com, body_mass_off)
+    return worst
+
+
+# their types, for which they are compiled once (compile_integrator)
+_F1, _F2 = types.float64[::1], types.float64[:, ::1]
+_I1, _I2 = types.int64[::1], types.int64[:, ::1]
+SIZES = types.UniTuple(types.int64, 3)
+MASSES = types.Tuple((types.float64, _I1, _I2, _I1, _I1, _I1))
+_TAB = types.float64[:, :, ::1]
+_DRIVE = (_F1, _TAB, types.float64, _TAB, types.float64)     # Drive.args()
+SIGNATURES = {
+    begin: types.void(START, _F1, types.float64, _F2, _F1),
+    acceleration: types.Tuple((types.int64, types.float64))(
+        ADVANCE, _F1, MASSES, _F1, _F1, *_DRIVE, types.float64, types.float64, types.float64,
+        types.float64, _F2, _F1, _F2, _F2, _F2, _F1, _F2),
+    rk4: types.Tuple((types.int64, types.int64))(
+        ADVANCE, START, _F1, SIZES, MASSES, _F1, _F1, *_DRIVE, types.float64, types.float64,
+        types.float64, types.float64, types.int64, *[_F1] * 8),
+    terms_curve: types.int64(ADVANCE, START, _F1, SIZES, MASSES, _F1, _F1, *_DRIVE, _F1, _F1,
+                             *[_F1] * 5, types.int8[::1]),
+}
+
+
+def compile_integrator() -> None:
+    """begin, acceleration, rk4 and terms_curve compiled (or loaded from
+    numba's cache) for their SIGNATURES and no other: once per installation,
+    not per mechanism (``pipeline.compiler.beside`` does it while the first
+    sweep compiles)."""
+    for kernel, sig in SIGNATURES.items():
+        if not getattr(kernel, "compile", None):
+            return      # numba's JIT disabled (NUMBA_DISABLE_JIT): Python calls Python
+        if not kernel.signatures:
+            kernel.compile(sig)
+            kernel.disable_compile()

@@ -146,8 +146,9 @@ def scene_forces(mechanism, plan, curves, omega1=None, eps1=None, t=None) -> Rea
     R = np.zeros((n, nj, 2))
     S = np.zeros((n, ns + plan.n_inputs, 2))
     M = np.zeros(n)
-    from ..compiler import kernels_for
+    from ..compiler import await_beside, kernels_for
     kern = kernels_for(plan)
+    await_beside(kern, "forces_curve")    # where a process beside compiles it: loaded, not compiled
     if not along:
         kern.forces_curve(plan.par, curves.pos, curves.d1, curves.d2, crank.omega1, crank.eps1,
                           loads, body_loads, R, S, M)

@@ -145,6 +145,104 @@ def test_the_scene_s_walk_is_compiled_once_for_every_mechanism():
     assert walk.walk_revolution.signatures == [walk.REVOLUTION.args]
 
 
+def test_the_crank_dynamics_integrator_is_compiled_once_for_every_mechanism():
+    """The crank dynamics' kernels (pipeline.kernels.dynamics: begin,
+    acceleration, rk4, terms_curve) are the library's, compiled once for the
+    mechanism's advance and start as first-class functions: the dynamics of two
+    mechanisms (a crank-slider take-up with a coulisse, a cam's rocker), by RK4,
+    by scipy's DOP853 (acceleration from Python) and along a list of angles,
+    leave one version of each, its SIGNATURES one."""
+    from numba import types
+    from pipeline.kernels import dynamics
+    from pipeline.solve import crank_motion as dy
+    case = dy.with_changes(load_study(STUDIES / "takeup_dynamics.toml").dynamics.cases[0],
+                           t_end=0.02)
+    for name in ("takeup_dynamics", "cam_rocker_input"):
+        mech = load_study(STUDIES / f"{name}.toml").mechanism
+        plan = mech.compile()
+        for method in ("rk4", "dop853"):
+            res = dy.integrate(plan, mech, case, method)
+            assert res.status == kc.OK and np.isfinite(res.omega1).all(), (name, method)
+        J, half, Q = dy.reduced_terms(plan, np.linspace(0.0, 2 * math.pi, 9), mechanism=mech)
+        assert np.all(J > 0.0) and np.isfinite(half).all() and np.isfinite(Q).all(), name
+    for kernel, sig in dynamics.SIGNATURES.items():
+        assert kernel.signatures == [sig.args], kernel
+        assert isinstance(sig.args[0], types.FunctionType)
+
+
+def test_the_library_warm_up_has_every_group_type_and_input_law():
+    """pipeline.compiler.warmup's mechanism, which compiles the library's group
+    kernels once per installation, has every group type (either class III
+    kind) and every input law, and compiles to a plan."""
+    from pipeline.compiler.warmup import mechanism
+    from pipeline.model.groups import GROUP_CLASSES, LAW_TYPES
+    mech = mechanism()
+    assert {type(g) for g in mech.groups} | {type(mech.crank)} >= set(GROUP_CLASSES)
+    assert {g.law.kind for g in mech.groups if hasattr(g, "law")} == set(LAW_TYPES)
+    assert mech.compile().n_groups > len(mech.groups)
+
+
+def test_a_generated_module_passes_library_kernels_no_literal_numbers():
+    """Every call of a library kernel in a generated module passes points, rows
+    and sizes as np.int64 values, never as a literal number: numba compiles a
+    kernel once per literal value, so a literal would compile it again for a
+    mechanism whose group sits at another row than the warm-up's (a class III
+    group's row did), and again per group of one mechanism."""
+    import ast
+    from pipeline.compiler.generate import defined_functions
+    from pipeline.compiler.warmup import mechanism
+    import pipeline.kernels as kernels_pkg
+    library = set()
+    for f in Path(kernels_pkg.__file__).parent.glob("*.py"):
+        library |= set(re.findall(r"^def (\w+)\(", f.read_text(), re.M))
+    plans = [mechanism().compile()] + [load_study(STUDIES / f"{s}.toml").mechanism.compile()
+                                       for s in ("ov7_class3_slider", "takeup_dynamics",
+                                                 "actuator_slider_input")]
+    calls = 0
+    for plan in plans:
+        src = source_for(plan)
+        imported = library - set(defined_functions(src))   # (not the walk's pasted text)
+        for node in ast.walk(ast.parse(src)):
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+                    and node.func.id in imported):
+                calls += 1
+                for a in node.args:
+                    lit = a.operand if isinstance(a, ast.UnaryOp) else a
+                    assert not (isinstance(lit, ast.Constant) and type(lit.value) is int), \
+                        ast.unparse(node)
+    assert calls > 50
+
+
+def test_a_scene_s_forces_wait_for_the_process_beside_that_compiles_them():
+    """A forces scene waits for the process beside that compiles its
+    forces_curve (then loads it from numba's cache instead of compiling it a
+    second time): await_beside waits once for the process the trigger started,
+    and not for a kernel no process compiles."""
+    import types
+    import pipeline.compiler as pc
+    import subprocess as sp
+    waited = []
+
+    class Proc:
+        def wait(self, timeout):
+            waited.append(timeout)
+    mod = types.SimpleNamespace(__name__="pipeline_mech_y", SOURCE_PATH="/nowhere/m.py",
+                                forces_curve=types.SimpleNamespace())
+    real = sp.Popen
+    try:
+        sp.Popen = lambda argv, **kw: Proc()
+        os.environ["PIPELINE_COMPILE_BESIDE"] = "1"
+        pc._compile_beside(mod, "forces_curve", "scene")
+    finally:
+        sp.Popen = real
+        os.environ["PIPELINE_COMPILE_BESIDE"] = "0"
+    pc.await_beside(mod, "walk")
+    assert waited == []
+    pc.await_beside(mod, "forces_curve")
+    pc.await_beside(mod, "forces_curve")
+    assert len(waited) == 1
+
+
 def test_no_exec_or_eval_in_the_compiler():
     here = Path(__file__).resolve().parents[2] / "pipeline" / "compiler"
     for f in here.rglob("*.py"):     # the skeleton files too

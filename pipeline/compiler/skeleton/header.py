@@ -28,7 +28,7 @@ from pipeline.kernels.config import (JIT, JIT_ALLOC, JIT_INNER, JIT_FIRST_CLASS,
 from pipeline.kernels.continuation import (MARGIN_SLOTS, accept, closes, copy2, fold_limit,
                                            may_stop, predict, restore, start_triad, step_limit,
                                            work, wrap)
-from pipeline.kernels.dynamics import drive, lagrange_terms, potential
+from pipeline.kernels import dynamics
 from pipeline.kernels.forces import (applied_loads, equilibrium_residual, force_work, gauss_solve,
                                      kinetostatics, shaking)
 from pipeline.kernels.geometry import may_reach
@@ -65,7 +65,7 @@ __all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_INNER', 'JIT_FIRST_CLA
            'T_STEP_CHANGE', 'T_CLOSE', 'T_WATCH', 'T_TOUCH', 'T_LOCATE', 'accept', 'fold_limit',
            'may_stop',
            'closes', 'copy2', 'predict', 'restore', 'start_triad', 'step_limit', 'work',
-           'wrap', 'drive', 'lagrange_terms', 'potential', 'applied_loads',
+           'wrap', 'dynamics', 'applied_loads',
            'equilibrium_residual', 'force_work',
            'gauss_solve', 'kinetostatics', 'shaking', 'attach', 'crank', 'prp', 'rpp', 'rpr', 'rrp',
            'rrr', 'linear_law', 'rise_return', 'rotary_input', 'slider_input', 'table_law',
