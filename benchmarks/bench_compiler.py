@@ -450,10 +450,14 @@ def main(argv=None):
               f"for the process{against}.", ""]
     # the main job first (every cache empty: the first run after installing), then
     # scenes of mechanisms no study before them has (ov7_class3 is the default
-    # study's own mechanism: its kernels are that study's, not a new mechanism's)
-    studies = [STUDIES / f"{s}.toml" for s in ("ov7_synthesis", "ov7_base",
-                                                "warp_feed_fourbar", "takeup_dynamics")]
-    ct = {} if a.smoke else compile_times(studies[:3] if a.quick else studies)
+    # study's own mechanism: its kernels are that study's, not a new mechanism's):
+    # closed-form groups, crank dynamics, then (not --quick) group types the
+    # studies before them do not have (PRP, a cam's rotary input, RPP, the class
+    # III group with a slider)
+    studies = [STUDIES / f"{s}.toml" for s in (
+        "ov7_synthesis", "ov7_base", "warp_feed_fourbar", "takeup_dynamics",
+        "slotted_rocker_prp", "cam_rocker_input", "scotch_yoke_rpp", "ov7_class3_slider")]
+    ct = {} if a.smoke else compile_times(studies[:4] if a.quick else studies)
     if ct:
         lines += ["Compile time, each in a fresh process, numba's cache and the generated "
                   "modules' empty at the start (issue 27: the main job <= 8 s, a new "

@@ -8,8 +8,6 @@ DataFrames), ``tolerance`` (how a design holds up when it is made), ``compare``
 leaves matplotlib's backend alone.
 """
 
-from .api import (candidates, compare, load_study, open, run, scene_tables,  # noqa: A004
-                  solve_scene, tolerance, with_units)
 from .base.version import __version__
 from .old_paths import install as _install_old_paths
 
@@ -17,3 +15,18 @@ _install_old_paths()    # the flat package's import paths, kept for one release 
 
 __all__ = ["__version__", "load_study", "run", "solve_scene", "open", "tolerance", "compare",
            "candidates", "scene_tables", "with_units"]
+
+
+def __getattr__(name):
+    """The API's functions, imported from ``pipeline.api`` when first asked for:
+    a process that imports a part of the package only (the kernels, as the
+    compiler's process beside a run does) does not import the API's
+    dependencies (pandas, h5py, the study reader: half a second)."""
+    if name in __all__:
+        from . import api
+        return getattr(api, name)
+    raise AttributeError(f"module 'pipeline' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
