@@ -18,7 +18,8 @@ signatures carry candidates, crank angles, loads, settings and outputs):
   a batch (lock-step lanes where the groups have a lane form, the careful
   path for every lane the fast path cannot vouch for);
 * ``batch``: full kinematics (and forces) of many candidates, reduced to peaks;
-* ``begin``/``acceleration``/``rk4``/``terms_curve``: crank dynamics.
+* ``begin``/``acceleration``/``rk4``/``terms_curve``: crank dynamics (pipeline.kernels.dynamics's,
+  compiled once per installation: the module gives it ``advance`` and ``start``).
 """
 
 from __future__ import annotations
