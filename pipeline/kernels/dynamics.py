@@ -158,11 +158,22 @@ def acceleration(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h_
                  phi, omega, state, last, pos, d1, d2, margins, loads_k):
     """eps1 = (Q + M1 - (1/2) J' omega^2 - b omega) / J at (t, phi, omega).
     Returns (status, eps1); walks the continuation from last[0] to phi."""
-    gravity, body_com, body_turn, body_mass_off, load_body, load_point = masses
     st = advance(K, last[0], phi, np.int64(2), tols, state, pos, d1, d2, margins, True)
     last[0] = phi
     if st != OK:
         return st, math.nan
+    gravity, body_com, body_turn, body_mass_off, load_body, load_point = masses
+    return eps_at(gravity, body_com, body_turn, body_mass_off, load_body, load_point, par, const,
+                  tab_phi, h_phi, tab_t, h_t, damping, t, phi, omega, pos, d1, d2, loads_k)
+
+
+@njit(**JIT)
+def eps_at(gravity, body_com, body_turn, body_mass_off, load_body, load_point, par, const,
+           tab_phi, h_phi, tab_t, h_t, damping, t, phi, omega, pos, d1, d2, loads_k):
+    """(status, eps1) from the mechanism's analogs at crank angle ``phi``
+    (pos/d1/d2 of order 2): the drive at (phi, t), the Lagrange terms, and
+    eps1 = (Q + M1 - (1/2) J' omega^2 - b omega) / J (SINGULAR where it is not
+    finite)."""
     m1 = drive(const, tab_phi, h_phi, tab_t, h_t, phi, t, loads_k)
     J, half, Q = lagrange_terms(pos, d1, d2, gravity, par, body_com, body_turn, body_mass_off,
                                 load_body, load_point, loads_k)
@@ -307,10 +318,17 @@ def compile_integrator() -> None:
     """begin, acceleration, rk4 and terms_curve compiled (or loaded from
     numba's cache) for their SIGNATURES and no other: once per installation,
     not per mechanism (``pipeline.compiler.beside`` does it while the first
-    sweep compiles)."""
+    sweep compiles).  Cheap once done (DOP853 calls acceleration from Python
+    at every step)."""
+    if _COMPILED:
+        return
     for kernel, sig in SIGNATURES.items():
         if not getattr(kernel, "compile", None):
             return      # numba's JIT disabled (NUMBA_DISABLE_JIT): Python calls Python
         if not kernel.signatures:
             kernel.compile(sig)
             kernel.disable_compile()
+    _COMPILED.append(True)
+
+
+_COMPILED: list = []       # (not empty once compile_integrator has run)

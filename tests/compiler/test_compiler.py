@@ -32,7 +32,7 @@ from pipeline.study.sweep_spec import draw_candidates, parameter_rows
 from support.checkout import child_env
 from support.lanes import (assert_lanes_agree, evaluate_with, packed_force_lane_ops,
                            scalar_forces)
-from support.tolerances import FAIL_ANGLE_TRIAD_RAD
+from support.tolerances import FAIL_ANGLE_TRIAD_RAD, RK4_VS_DOP853_RAD
 
 STUDIES = Path(__file__).resolve().parents[2] / "studies"
 
@@ -150,8 +150,9 @@ def test_the_crank_dynamics_integrator_is_compiled_once_for_every_mechanism():
     acceleration, rk4, terms_curve) are the library's, compiled once for the
     mechanism's advance and start as first-class functions: the dynamics of two
     mechanisms (a crank-slider take-up with a coulisse, a cam's rocker), by RK4,
-    by scipy's DOP853 (acceleration from Python) and along a list of angles,
-    leave one version of each, its SIGNATURES one."""
+    by scipy's DOP853 (which calls the module's own acceleration from Python:
+    the same numbers) and along a list of angles, leave one version of each,
+    its SIGNATURES one, and the two integrators agree."""
     from numba import types
     from pipeline.kernels import dynamics
     from pipeline.solve import crank_motion as dy
@@ -160,9 +161,10 @@ def test_the_crank_dynamics_integrator_is_compiled_once_for_every_mechanism():
     for name in ("takeup_dynamics", "cam_rocker_input"):
         mech = load_study(STUDIES / f"{name}.toml").mechanism
         plan = mech.compile()
-        for method in ("rk4", "dop853"):
-            res = dy.integrate(plan, mech, case, method)
-            assert res.status == kc.OK and np.isfinite(res.omega1).all(), (name, method)
+        res = {m: dy.integrate(plan, mech, case, m) for m in ("rk4", "dop853")}
+        for method, r in res.items():
+            assert r.status == kc.OK and np.isfinite(r.omega1).all(), (name, method)
+        assert np.max(np.abs(res["rk4"].phi1 - res["dop853"].phi1)) <= RK4_VS_DOP853_RAD, name
         J, half, Q = dy.reduced_terms(plan, np.linspace(0.0, 2 * math.pi, 9), mechanism=mech)
         assert np.all(J > 0.0) and np.isfinite(half).all() and np.isfinite(Q).all(), name
     for kernel, sig in dynamics.SIGNATURES.items():

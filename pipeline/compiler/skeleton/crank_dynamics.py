@@ -9,7 +9,7 @@ The text below the marker line is pasted into the generated module
 declare, for linters and readers, the names the generated module gives it."""
 
 
-from .header import dynamics
+from .header import math, np, njit, JIT, OK, dynamics
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, GRAVITY, BODY_COM, BODY_TURN, BODY_MASS_OFF,
                          LOAD_BODY, LOAD_POINT)
 from .careful import advance_first_class, start_first_class
@@ -26,11 +26,22 @@ def begin(K, phi, state, last):
     dynamics.begin(start_first_class, K, phi, state, last)
 
 
-def acceleration(par, K, tols, *args):
-    """(status, eps1) at (t, phi, omega) (pipeline.kernels.dynamics.acceleration:
-    its arguments after tols)."""
-    dynamics.compile_integrator()
-    return dynamics.acceleration(advance_first_class, K, MASSES, par, tols, *args)
+@njit(**JIT)
+def acceleration(par, K, tols, const, tab_phi, h_phi, tab_t, h_t, damping, t, phi, omega,
+                 state, last, pos, d1, d2, margins, loads_k):
+    """(status, eps1) at (t, phi, omega), walking the continuation from last[0]
+    to phi (pipeline.kernels.dynamics.acceleration's numbers).  The reference
+    integrator (scipy's DOP853) calls it from Python at every stage: a kernel
+    of the module's own, so numba's dispatch takes 3 us, not the 45 us of the
+    library's with a function for argument; compiled only where it is used."""
+    st = advance_first_class(K, last[0], phi, np.int64(2), tols, state, pos, d1, d2, margins,
+                             np.bool_(True))
+    last[0] = phi
+    if st != OK:
+        return st, math.nan
+    return dynamics.eps_at(GRAVITY, BODY_COM, BODY_TURN, BODY_MASS_OFF, LOAD_BODY, LOAD_POINT,
+                           par, const, tab_phi, h_phi, tab_t, h_t, damping, t, phi, omega, pos,
+                           d1, d2, loads_k)
 
 
 def rk4(par, K, tols, *args):
