@@ -143,6 +143,7 @@ class Stage:
 
 def _rate(fn, n_cand, positions, repeat):
     fn()                                       # warm-up: compile, caches
+    _beside_done()      # (a new module's process beside would share the cores)
     return n_cand * positions / best_of(fn, repeat) / 1e6
 
 
@@ -182,6 +183,7 @@ def measure(quick=False, n=None, interpreter=True, with_stage_a=True):
     stage_b = Stage(syn_file, tuple(syn.output.rocker), problem=pb)
     status, _ = stage_b.run(pars_b, 1)
     status_raw, _ = stage_b.run(pars_raw, 1)
+    _beside_done()
     ok_b = np.ascontiguousarray(pars_b[status == 0])
     for label, pars, note in (
             ("B positions stage, the default study's raw draws (as issue 11 measured)",
