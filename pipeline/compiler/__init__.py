@@ -137,6 +137,9 @@ def _compile_beside(mod, kernel="walk", *what) -> None:
         pass
     import subprocess
     path = Path(mod.SOURCE_PATH)
+    for key, proc in list(_BESIDE.items()):     # (those that ended: reaped, forgotten)
+        if proc is None or proc.poll() is not None:
+            del _BESIDE[key]
     try:
         _BESIDE[(mod.__name__, kernel)] = subprocess.Popen(
             [sys.executable, "-m", "pipeline.compiler.beside", mod.__name__, str(path.parent),

@@ -13,6 +13,8 @@ numbers are the same either way: the same source, the same flags.
 
 A scene's forces likewise: its ``forces_curve`` compiles in the process beside
 while the run compiles the mechanism's positions (``compile_scene_forces``).
+After a sweep's kernels, the process beside compiles the library once per
+installation, at the lowest priority (``compile_library``).
 
     python -m pipeline.compiler.beside MODULE FOLDER [scene]
 """
@@ -34,10 +36,7 @@ def compile_standalone(mod) -> None:
     run has compiled ``position`` and ``advance`` (numba's cache), the ones
     that call them, in the order the run reaches them.  ``walk`` and
     ``force_lanes`` by running them on a few positions of dummy data, the others
-    (no Python wrapper) by ``compile`` with the types of such data.  Last, the
-    scene's walk (``pipeline.kernels.walk``), the crank dynamics' integrator
-    (``pipeline.kernels.dynamics``) and the kernels of every group type
-    (``pipeline.compiler.warmup``), which no mechanism's code is in."""
+    (no Python wrapper) by ``compile`` with the types of such data."""
     from numba import typeof
     lanes, npos = mod.LANES, 4
     if not getattr(mod, "HAS_LANES", False):
@@ -74,15 +73,17 @@ def compile_standalone(mod) -> None:
     compile_("block_walk", a2, a2, a1, a1, a1, a1, a1)
     compile_("careful_tail", K, a1, i64, i64, a2, a1, a1, wk, ww)
     compile_("setup_lane", a2, i64, i64, a1, f64, a1, a2, a2, a2, a2, a2, a1, a2)
-    # and, once per installation, the scene's walk, the crank dynamics'
-    # integrator and every group type's kernels (no mechanism's: a first scene
-    # after this sweep then compiles its own mechanism's code only), at the
-    # lowest priority: the run's sweep, on every core, goes first
+
+
+def compile_library() -> None:
+    """Compile (or load) what no mechanism's code is in, once per installation:
+    the scene's walk (``pipeline.kernels.walk``), the crank dynamics'
+    integrator (``pipeline.kernels.dynamics``) and the kernels of every group
+    type (``pipeline.compiler.warmup``).  A first scene after the first sweep
+    then compiles its own mechanism's code only."""
     from pipeline.compiler.warmup import compile_group_kernels
     from pipeline.kernels.dynamics import compile_integrator
     from pipeline.kernels.walk import compile_revolution
-    if hasattr(os, "nice"):
-        os.nice(19)
     compile_revolution()
     compile_integrator()
     compile_group_kernels()
@@ -107,7 +108,14 @@ def main(argv=None) -> int:
     name, folder, *what = (argv or sys.argv[1:])
     sys.path.insert(0, folder)
     mod = importlib.import_module(name)
-    (compile_scene_forces if what == ["scene"] else compile_standalone)(mod)
+    if what == ["scene"]:
+        compile_scene_forces(mod)
+        return 0
+    compile_standalone(mod)
+    # then the library, at the lowest priority: the run's sweep, on every core, goes first
+    if hasattr(os, "nice"):
+        os.nice(19)
+    compile_library()
     return 0
 
 

@@ -9,13 +9,14 @@ constants are int64 and float64 values, pipeline.compiler.generate), so one
 mechanism that has every group type and every input law compiles them all,
 into numba's cache, for every later mechanism: ``mechanism()``.  It is a
 structure, not a design (it is compiled, never solved), and the process beside
-the first sweep compiles it (``pipeline.compiler.beside``), at the lowest
-priority.
+the first sweep compiles it (``pipeline.compiler.beside.compile_library``), at
+the lowest priority.  By hand:
 
-    python -m pipeline.compiler.warmup      (what the process beside runs)
+    python -m pipeline.compiler.warmup
 """
 
 from __future__ import annotations
+
 
 def mechanism():
     """Every group type (pipeline.model.groups) and input law, each on points of

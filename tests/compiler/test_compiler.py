@@ -228,6 +228,9 @@ def test_a_scene_s_forces_wait_for_the_process_beside_that_compiles_them():
     class Proc:
         def wait(self, timeout):
             waited.append(timeout)
+
+        def poll(self):
+            return None     # (still running)
     mod = types.SimpleNamespace(__name__="pipeline_mech_y", SOURCE_PATH="/nowhere/m.py",
                                 forces_curve=types.SimpleNamespace())
     real = sp.Popen
