@@ -13,8 +13,9 @@ numbers are the same either way: the same source, the same flags.
 
 A scene's forces likewise: its ``forces_curve`` compiles in the process beside
 while the run compiles the mechanism's positions (``compile_scene_forces``).
-After a sweep's kernels, the process beside compiles the library once per
-installation, at the lowest priority (``compile_library``).
+After a sweep's kernels, the process beside compiles, at the lowest priority,
+the scene's kernels of the sweep's mechanism (``compile_scene_of``) and the
+library once per installation (``compile_library``).
 
     python -m pipeline.compiler.beside MODULE FOLDER [scene]
 """
@@ -89,6 +90,21 @@ def compile_library() -> None:
     compile_group_kernels()
 
 
+def compile_scene_of(mod) -> None:
+    """Compile (or load) the scene's kernels of the sweep module ``mod``'s
+    mechanism (its module without a rocker, which ``mod`` imports from): the
+    first-class ``advance`` and ``start`` the scene's walk calls, and
+    ``forces_curve``.  A design of the sweep re-run as a scene (``pipeline
+    show``, the report: ``pipeline.analysis.candidate``) then compiles nothing."""
+    from pipeline.kernels.walk import ADVANCE, START
+    base = sys.modules[mod.position.py_func.__module__]
+    if not getattr(base.advance_first_class, "compile", None):
+        return          # numba's JIT disabled (NUMBA_DISABLE_JIT)
+    base.advance_first_class.compile(ADVANCE.signature)
+    base.start_first_class.compile(START.signature)
+    compile_scene_forces(base)
+
+
 def compile_scene_forces(mod) -> None:
     """Compile (or load) the generated module ``mod``'s ``forces_curve`` for the
     argument types a scene's forces pass it (``pipeline.solve.reactions``): it
@@ -112,9 +128,13 @@ def main(argv=None) -> int:
         compile_scene_forces(mod)
         return 0
     compile_standalone(mod)
-    # then the library, at the lowest priority: the run's sweep, on every core, goes first
+    # then, at the lowest priority (the run's sweep, on every core, goes first),
+    # the scene of the sweep's own mechanism, and the library
     if hasattr(os, "nice"):
         os.nice(19)
+    from pipeline.kernels.walk import compile_revolution
+    compile_revolution()
+    compile_scene_of(mod)
     compile_library()
     return 0
 

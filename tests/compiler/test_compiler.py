@@ -248,6 +248,31 @@ def test_a_scene_s_forces_wait_for_the_process_beside_that_compiles_them():
     assert len(waited) == 1
 
 
+def test_the_process_beside_compiles_the_scene_of_the_sweep_s_own_mechanism(problem, synthesis):
+    """After a sweep's kernels the process beside compiles the scene's kernels of
+    the sweep's mechanism (``beside.compile_scene_of``: its first-class advance
+    and start, forces_curve) for the types a scene passes them, so a design of
+    the sweep re-run as a scene (pipeline.analysis.candidate) compiles none of
+    them: after such a scene, with forces, each has one compiled version."""
+    import sys as _sys
+    from numba.core import event
+    from pipeline.compiler.beside import compile_scene_of
+    from pipeline.solve.reactions import scene_forces
+    mod = problem.kernels
+    compile_scene_of(mod)
+    base = _sys.modules[mod.position.py_func.__module__]
+    mech = synthesis.mechanism
+    with event.install_recorder("numba:compile") as rec:
+        c = solve_curves(problem.plan, revolution_angles(mech.crank, 36), kc.ACCELERATIONS,
+                         close_at=mech.crank.phi0 + mech.crank.rot * 2 * math.pi)
+        r = scene_forces(mech, problem.plan, c)
+    assert c.overall == kc.OK and np.isfinite(r.M_bal).all()
+    compiled = {e.data["dispatcher"].py_func.__name__ for _, e in rec.buffer}
+    assert not compiled & {"advance", "start", "position", "forces_curve"}, compiled
+    for f in (base.advance_first_class, base.start_first_class, base.forces_curve):
+        assert len(f.signatures) == 1, f
+
+
 def test_no_exec_or_eval_in_the_compiler():
     here = Path(__file__).resolve().parents[2] / "pipeline" / "compiler"
     for f in here.rglob("*.py"):     # the skeleton files too
