@@ -132,8 +132,6 @@ def main(argv=None) -> int:
     # the scene of the sweep's own mechanism, and the library
     if hasattr(os, "nice"):
         os.nice(19)
-    from pipeline.kernels.walk import compile_revolution
-    compile_revolution()
     compile_scene_of(mod)
     compile_library()
     return 0
