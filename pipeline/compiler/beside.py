@@ -96,13 +96,10 @@ def compile_scene_of(mod) -> None:
     first-class ``advance`` and ``start`` the scene's walk calls, and
     ``forces_curve``.  A design of the sweep re-run as a scene (``pipeline
     show``, the report: ``pipeline.analysis.candidate``) then compiles nothing."""
-    from pipeline.kernels.walk import ADVANCE, START
+    from pipeline.compiler.warmup import compile_first_class
     base = sys.modules[mod.position.py_func.__module__]
-    if not getattr(base.advance_first_class, "compile", None):
-        return          # numba's JIT disabled (NUMBA_DISABLE_JIT)
-    base.advance_first_class.compile(ADVANCE.signature)
-    base.start_first_class.compile(START.signature)
-    compile_scene_forces(base)
+    if compile_first_class(base):
+        compile_scene_forces(base)
 
 
 def compile_scene_forces(mod) -> None:

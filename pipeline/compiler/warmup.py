@@ -74,14 +74,10 @@ def compile_group_kernels() -> None:
 
     from ..kernels.forces import equilibrium_residual, shaking
     from ..kernels.geometry import link_angles
-    from ..kernels.walk import ADVANCE, START
     from . import kernels_for
     plan = mechanism().compile()
-    mod = kernels_for(plan)
-    if not getattr(mod.advance_first_class, "compile", None):
+    if not compile_first_class(kernels_for(plan)):
         return          # numba's JIT disabled (NUMBA_DISABLE_JIT)
-    mod.advance_first_class.compile(ADVANCE.signature)
-    mod.start_first_class.compile(START.signature)
     curve = np.zeros((1, plan.n_points, 2))
     link_angles(curve, curve, curve, plan.link_a, plan.link_b, 2,
                 np.zeros((1, len(plan.link_a), 3)))
@@ -90,6 +86,20 @@ def compile_group_kernels() -> None:
                          plan.body_turn)
     shaking(pos, pos, pos, 0.0, 0.0, plan.par, plan.body_com, plan.body_turn,
             plan.body_mass_off, plan.crank_pivot)
+
+
+def compile_first_class(mod) -> bool:
+    """Compile (or load) the generated module ``mod``'s first-class ``advance``
+    and ``start`` for the types the scene's walk and the crank dynamics call
+    them with (``pipeline.kernels.walk``: ADVANCE, START), and with them its
+    ``position`` and the library kernels it calls.  False where numba's JIT is
+    disabled (NUMBA_DISABLE_JIT: nothing to compile)."""
+    from ..kernels.walk import ADVANCE, START
+    if not getattr(mod.advance_first_class, "compile", None):
+        return False
+    mod.advance_first_class.compile(ADVANCE.signature)
+    mod.start_first_class.compile(START.signature)
+    return True
 
 
 if __name__ == "__main__":
