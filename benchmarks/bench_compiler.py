@@ -21,7 +21,9 @@ and is held as a ratio against:
 Compile time is measured apart, each study in a fresh process: the default
 study first with numba's cache and the generated modules' both empty (the first
 run after installing), then scenes of mechanisms new to the cache, then each
-again, cached.
+again, cached.  Then where the default study's first compile goes, kernel by
+kernel and phase by phase of numba's compiler (``CompileProfile``: one process,
+nothing beside it; --smoke: a scene's, its library kernels from numba's cache).
 
 Jobs (360 positions per revolution):
   B positions stage   dwell-only sweep stage of mechanism B (class III Newton to 1e-12,
@@ -356,6 +358,122 @@ def compile_times(studies):
         return {s.stem: (new[s.stem], once(s)) for s in studies}
 
 
+class CompileProfile:
+    """Where a process's compile time goes: exclusive seconds per kernel and per
+    phase of numba's compiler (numba's event API: ``numba:compile`` per kernel,
+    ``numba:run_pass`` per compiler pass, ``numba:llvm_lock`` around every call
+    into LLVM).  Phases: ``typing`` (type inference), ``lowering`` (numba's
+    LLVM IR, without the LLVM calls in it), ``llvm`` (LLVM's optimisation and
+    machine code, and IR parsing: where a kernel links its callees, LLVM
+    optimises and emits their code once more in it) and ``other`` (numba's other
+    passes: bytecode, SSA, inlining).  Exclusive: a kernel compiled while
+    another is typed counts for itself, not for the one that calls it."""
+
+    PHASES = {"nopython_type_inference": "typing", "native_lowering": "lowering"}
+    KINDS = ("numba:compile", "numba:run_pass", "numba:llvm_lock")
+
+    def __init__(self):
+        self.stack = []     # [kind, name, start, seconds of the frames within]
+        self.kernels = []   # the kernels being compiled, innermost last
+        self.seconds = {}   # (kernel, phase): exclusive seconds
+
+    def install(self):
+        from numba.core import event
+
+        profile = self
+
+        class Listener(event.Listener):
+            def on_start(self, ev):
+                profile.start(ev)
+
+            def on_end(self, ev):
+                profile.end(ev)
+
+        listener = Listener()
+        for kind in self.KINDS:
+            event.register(kind, listener)
+        return self
+
+    def start(self, ev):
+        if ev.kind == "numba:compile":
+            name = getattr(ev.data["dispatcher"], "py_func", ev.data["dispatcher"]).__name__
+            self.kernels.append(name)
+        elif ev.kind == "numba:run_pass":      # (its name: "PASS [function]")
+            name = self.PHASES.get(ev.data["name"].split(" [")[0], "other")
+        else:
+            name = "llvm"
+        self.stack.append([ev.kind, name, time.perf_counter(), 0.0])
+
+    def end(self, ev):
+        kind, name, t0, within = self.stack.pop()
+        took = time.perf_counter() - t0
+        if self.stack:
+            self.stack[-1][3] += took
+        if kind == "numba:compile":
+            self.kernels.pop()
+            key = (name, "other")
+        elif self.kernels:
+            key = (self.kernels[-1], name)
+        else:
+            return          # LLVM outside any compile (numba's start-up)
+        self.seconds[key] = self.seconds.get(key, 0.0) + took - within
+
+    def table(self, top=12):
+        """{"phases": {phase: s}, "kernels": [[kernel, total, typing, lowering,
+        llvm, other], ...] the ``top`` slowest, "n": kernels compiled}."""
+        phases = ("typing", "lowering", "llvm", "other")
+        per = {}
+        for (k, ph), s in self.seconds.items():
+            per.setdefault(k, dict.fromkeys(phases, 0.0))[ph] += s
+        rows = sorted(([k, sum(v.values())] + [v[ph] for ph in phases]
+                       for k, v in per.items()), key=lambda r: -r[1])
+        return {"phases": {ph: sum(v[ph] for v in per.values()) for ph in phases},
+                "kernels": rows[:top], "n": len(per)}
+
+
+def _profile_child(study):
+    """(In a process of its own: --profile-child.)  Compile ``study`` as `pipeline
+    compile` does, every kernel in this process, and print its CompileProfile."""
+    import json
+    from pipeline.compile import compile_study
+    from pipeline.study.reader import load_study
+    profile = CompileProfile().install()
+    t = time.perf_counter()
+    compile_study(load_study(study))
+    print(json.dumps(dict(profile.table(), seconds=time.perf_counter() - t)))
+
+
+def compile_profile(study, empty_numba_cache=True):
+    """CompileProfile of ``study``'s compile in a fresh process, the generated
+    modules' cache empty and (``empty_numba_cache``) numba's: the first run after
+    installing, all in that one process (no process beside it: every kernel is
+    timed where it compiles).  Table lines."""
+    import json
+    with tempfile.TemporaryDirectory() as d, tempfile.TemporaryDirectory() as nb:
+        env = dict(os.environ, PIPELINE_CACHE_DIR=d, PIPELINE_COMPILE_BESIDE="0")
+        if empty_numba_cache:
+            env["NUMBA_CACHE_DIR"] = nb
+        p = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--profile-child",
+                            str(study)], env=env, capture_output=True, text=True, check=True,
+                           cwd=ROOT)
+    r = json.loads(p.stdout.strip().splitlines()[-1])
+    ph = r["phases"]
+    if r["n"] and not (ph["typing"] > 0 and ph["lowering"] > 0):
+        # (a numba whose passes are named otherwise: say so, never a table of zeros)
+        raise RuntimeError(f"compile profile of {study}: {r['n']} kernels compiled but no "
+                           f"time in numba's {', '.join(CompileProfile.PHASES)} passes")
+    lines = [f"Where the compile of `{Path(study).stem}` goes: one process, nothing beside "
+             f"it, {r['seconds']:.1f} s for {r['n']} kernels (numba's compile events; "
+             "exclusive seconds, a kernel's callees apart): typing "
+             f"{ph['typing']:.1f} s, lowering {ph['lowering']:.1f} s, LLVM {ph['llvm']:.1f} s "
+             f"(optimisation and machine code, its callees' code again in each caller), other "
+             f"passes {ph['other']:.1f} s.", "",
+             "| kernel | s | typing | lowering | LLVM | other |", "|---|---|---|---|---|---|"]
+    for k, tot, *rest in r["kernels"]:
+        lines.append(f"| {k} | {tot:.2f} | " + " | ".join(f"{x:.2f}" for x in rest) + " |")
+    return lines + [""]
+
+
 # the sweeps issue 27 holds to half the default study's rate per candidate-position
 OTHER_SWEEPS = ("cam_rocker_input_sweep", "ov7_class3_slider_sweep",
                 "slotted_rocker_prp_sweep", "ppr_cross_slide_sweep")
@@ -392,7 +510,11 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--smoke", action="store_true", help="that it runs, at tiny sizes")
     ap.add_argument("-o", "--out", default=str(ROOT / "results" / "bench"))
+    ap.add_argument("--profile-child", help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
+    if a.profile_child:
+        _profile_child(a.profile_child)
+        return ""
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     lines = ["# Mechanism compiler: speed against the yardstick", "",
@@ -469,6 +591,11 @@ def main(argv=None):
             what = ("the first run after installing" if i == 0 else
                     "a new mechanism afterwards")
             lines.append(f"| {k} ({what}) | {v[0]:.1f} s | {v[1]:.2f} s |")
+        lines.append("")
+    # the smoke run: a scene whose library kernels the suite has compiled (numba's
+    # cache kept), so only its mechanism's own kernels compile
+    lines += compile_profile(STUDIES / ("ov7_base.toml" if a.smoke else "ov7_synthesis.toml"),
+                             empty_numba_cache=not a.smoke)
     text = "\n".join(lines) + "\n"
     print(text)
     write_text(out / "compiler.md", text)

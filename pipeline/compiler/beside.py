@@ -33,9 +33,10 @@ def compile_standalone(mod) -> None:
     """Compile (or load) the kernels of the generated sweep module ``mod`` that
     call nothing of ``settle``'s careful stages, and ``careful_tail``, for the
     argument types ``evaluate`` and ``settle`` give them: first those that call
-    nothing the run compiles (the force lanes, the lane walk), then, once the
-    run has compiled ``position`` and ``advance`` (numba's cache), the ones
-    that call them, in the order the run reaches them.  ``walk`` and
+    nothing the run compiles (the force lanes, the lane walk, the library's
+    metrics: ``compile_metrics``), then, once the run has compiled ``position``
+    and ``advance`` (numba's cache), the ones that call them, in the order the
+    run reaches them.  ``walk`` and
     ``force_lanes`` by running them on a few positions of dummy data, the others
     (no Python wrapper) by ``compile`` with the types of such data."""
     from numba import typeof
@@ -66,14 +67,33 @@ def compile_standalone(mod) -> None:
     theta = np.zeros((npos, lanes * mod.THETA_COLS))
     c = np.cos(np.arange(float(npos)))
     mod.walk(s.reshape(-1), lanes, theta, c, c, 2, 1, 1e-12, 0.1, 0.05, 1e-3, 1e-7, 1e-6)
+    compile_metrics(mod)
     # (by now the run has usually compiled position and advance: numba's cache)
     compile_("force_stage", par, K, a1, a1, a1, loads, a1, a2, b, wk, fw)
+    compile_("block_walk", a2, a2, a1, a1, a1, a1, a1)
+    compile_("careful_tail", K, a1, i64, i64, a2, a1, a1, wk, ww)
     if getattr(mod, "HAS_LANE_FORCES", False):
         compile_("force_flush", ix, i64, a1, a2, a2, a1, a1, a1, loads, status, a2)
         compile_("force_lane_in", par, i64, a2, a1, a2, a1, a2)
-    compile_("block_walk", a2, a2, a1, a1, a1, a1, a1)
-    compile_("careful_tail", K, a1, i64, i64, a2, a1, a1, wk, ww)
     compile_("setup_lane", a2, i64, i64, a1, f64, a1, a2, a2, a2, a2, a2, a1, a2)
+
+
+def compile_metrics(mod) -> None:
+    """Compile (or load) the library's metric kernels that ``settle`` and
+    ``evaluate`` call, for the argument types they give them (the lane width
+    and the law's column are literal constants there): the dwell error, in
+    lanes and alone, and the law error.  They call nothing of the mechanism's,
+    so the process beside has them in numba's cache before the run reaches
+    them."""
+    from numba import typeof, types
+    from pipeline.kernels import metrics
+    from pipeline.kernels.sweep import SET_LAW0
+    f1, i1 = typeof(np.zeros(1)), typeof(np.zeros(1, np.int64))
+    metrics.dwell_error.compile((f1, types.int64, i1, i1))
+    metrics.law_error.compile((f1, f1, types.literal(SET_LAW0), types.boolean, f1))
+    metrics.dwell_lanes.compile((typeof(np.zeros((1, 1))), types.int64, types.int64,
+                                 types.literal(mod.LANES), typeof(np.zeros((1, 1, 1))), f1, i1,
+                                 f1))
 
 
 def compile_library() -> None:

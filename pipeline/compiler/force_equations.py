@@ -155,8 +155,11 @@ def force_kernel(plan, names) -> str:
         return "\n".join(general) + "\n"
 
     body, m = eliminated(plan, names)
-    src = ["# inline='always': one call site in the sweep; as its own function numba would", '# build and link a library of everything it calls once more (compile time)',
-           "@njit(inline='always', **JIT)", sig,
+    # its own function, not inline='always' in the force stage's loop: numba types a
+    # function's every statement once per round of its type inference, and the force
+    # stage's loop-carried maxima take several (measured: the default study's
+    # force_stage 8.4 s of compile inlined, 2.5 s + 1.0 s apart)
+    src = ["@njit(**JIT)", sig,
            '    """Kinetostatics at one position: reactions r_out (n_joints, 2) [N], slides',
            "    (N [N], C [N*m]), loads at the centres of mass; returns M_bal [N*m] (NaN",
            "    everywhere when the system is singular or the kinematics is NaN).  The",

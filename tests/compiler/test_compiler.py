@@ -634,7 +634,8 @@ def test_the_stand_alone_kernels_compile_beside_for_evaluate_s_types(problem, ca
         compile_standalone(k)
     compiled = {e.data["dispatcher"].py_func.__name__ for _, e in rec.buffer}
     assert not compiled & {"force_lanes", "walk", "force_flush", "force_stage", "force_lane_in",
-                           "block_walk", "careful_tail", "setup_lane"}, compiled
+                           "block_walk", "careful_tail", "setup_lane", "dwell_error",
+                           "dwell_lanes", "law_error"}, compiled
     assert k.force_lanes.signatures and k.walk.signatures      # called (loaded, or there)
     r = subprocess.run([sys.executable, "-m", "pipeline.compiler.beside", k.__name__,
                         str(Path(k.SOURCE_PATH).parent)], env=child_env(),
