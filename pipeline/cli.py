@@ -197,6 +197,18 @@ def cmd_compare(a):
             print(f"picture: {p}")
     return EXIT_OK
 
+def cmd_bodies(a):
+    from .study.cad_report import read_parts
+    parts = [p.describe() for report in a.reports for p in read_parts(report)]
+    if a.format == "json":
+        _say(json.dumps(parts, indent=2))
+    else:
+        for k, info in enumerate(parts):
+            if k:
+                print()
+            _print(info, a.format)
+    return EXIT_OK
+
 
 def build_parser():
     p = argparse.ArgumentParser(prog="pipeline", description=(
@@ -353,6 +365,21 @@ def build_parser():
         "<name>_vs_<name>_compare.png, or <name>_candidate<ID>_vs_reference_compare.png)"))
     cp.add_argument("--no-pictures", action="store_true", help="print the table only")
     cp.set_defaults(func=cmd_compare)
+
+    bd = sub.add_parser("bodies", parents=[common], help=(
+        "what a CAD mass properties report holds, in the study's units: m (kg), the centre "
+        "of mass (x, y mm in the part's frame; as lS, US from the part's origin and x axis), "
+        "J_S (kg*m^2, Lzz at the centre of mass), and a warning where the part is not "
+        "symmetric about the mechanism's plane"), description=(
+        "Read CAD mass properties reports as a body's cad = { report = ..., origin = ..., "
+        "x_axis = [...] } in [[mechanism.bodies]] reads them, and print what they hold in "
+        "the study's units. A report is the text SolidWorks' Mass Properties dialog saves "
+        "(any of its units; a decimal comma reads as a point) or a CSV with one row per "
+        "part: name, mass, unit, x, y, z, length unit, Lzz, inertia unit. A bad report ends "
+        "in one line naming the file, the line and what was expected."))
+    bd.add_argument("reports", nargs="+", metavar="REPORT", help=(
+        "a SolidWorks mass properties report (.txt) or a .csv of parts"))
+    bd.set_defaults(func=cmd_bodies)
 
     bn = sub.add_parser("bench", parents=[common], help=(
         "speed and accuracy: run time against error and the throughput table, "

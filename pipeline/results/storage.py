@@ -5,6 +5,7 @@ every dataset carries ``units`` and ``long_name``."""
 from __future__ import annotations
 
 import datetime as _dt
+import json
 import os
 from contextlib import contextmanager
 from pathlib import Path
@@ -41,6 +42,8 @@ def write_root_attrs(f, kind, study, **extra):
     f.attrs["study_title"] = study.title
     f.attrs["study_file"] = str(study.path)
     f.attrs["study_toml"] = study.text
+    if getattr(study, "cad_reports", None):    # the CAD reports its bodies read
+        f.attrs["cad_reports"] = json.dumps(study.cad_reports)
     for k, v in extra.items():
         f.attrs[k] = v
 

@@ -82,6 +82,9 @@ class Study:
     tolerance: object = None  # pipeline.study.tolerance_spec.ToleranceSpec: [tolerance]
     cycle: object = None     # pipeline.model.cycle.Cycle: [cycle], the machine's cyclogram
     extra: dict = field(default_factory=dict)
+    # the CAD reports its bodies read (cad = { report = ... }): {as written: text},
+    # kept in a results file beside the study's text
+    cad_reports: dict = field(default_factory=dict)
 
 
 KINDS = ("scene", "sweep")
@@ -111,7 +114,10 @@ def load_study(path) -> Study:
     return parse_study(text, path)
 
 
-def parse_study(text: str, path="<study>") -> Study:
+def parse_study(text: str, path="<study>", cad_reports=None) -> Study:
+    """A study from its text; ``cad_reports``: the CAD reports its bodies read
+    ({as written: text}, a results file's copies), else they are read from the
+    study file's folder."""
     if len(text) > MAX_STUDY_BYTES or len(text.encode("utf-8", "surrogatepass")) > MAX_STUDY_BYTES:
         raise StudyError(path, "", f"a study file is at most {MAX_STUDY_BYTES:,} bytes "
                                    f"({STUDY_BYTES_WHY}); this one is larger")
@@ -126,7 +132,9 @@ def parse_study(text: str, path="<study>") -> Study:
     title = head.name("title", default=name, maximum=MAX_TITLE_LENGTH, why=TITLE_WHY,
                       empty=True)
     head.done()
-    mech = parse_mechanism(root.table("mechanism"), name)
+    from .cad_report import CadReports
+    cad = CadReports(Path(str(path)).parent, cad_reports, origin=path)
+    mech = parse_mechanism(root.table("mechanism"), name, cad)
     output = parse_output(root.table("output", default={}), mech)
     mech = replace(mech, links=output.links)
     dynamics = None
@@ -155,9 +163,10 @@ def parse_study(text: str, path="<study>") -> Study:
         from .tolerance_spec import parse_tolerance
         tolerance = parse_tolerance(root, mech, output, sweep)
     root.done()
+    cad.check(mech)
     return Study(path=Path(path), text=text, kind=kind, name=name, title=title,
                  mechanism=mech, output=output, dynamics=dynamics, sweep=sweep, search=search,
-                 tolerance=tolerance, cycle=cycle)
+                 tolerance=tolerance, cycle=cycle, cad_reports=cad.texts)
 
 
 # ----------------------------------------------------------------- mechanism
@@ -202,7 +211,12 @@ class Fields:
         return s.integer(key, choices=(-1, 1))
 
 
-def parse_mechanism(sec: Section, name: str) -> Mechanism:
+def parse_mechanism(sec: Section, name: str, cad=None) -> Mechanism:
+    """``cad``: where bodies with cad = { report = ... } read their reports
+    (``cad_report.CadReports``; default: the study file's folder)."""
+    if cad is None:
+        from .cad_report import CadReports
+        cad = CadReports(Path(str(sec.file)).parent)
     fixed = {}
     fx = sec.table("fixed")
     for p in list(fx.data):
@@ -284,20 +298,25 @@ def parse_mechanism(sec: Section, name: str) -> Mechanism:
             joints = b.names("joints")
             for p in joints:
                 need(b, "joints", p)
-            cm = b.table("com")
-            base = cm.name("base")
-            need(cm, "base", base)
-            along = cm.names("along", n=2, default=None)
-            for p in along or ():
-                need(cm, "along", p)
-            com = CentreOfMass(base, along, cm.number("lS", 0.0, within=lim.OFFSET),
-                               math.radians(cm.number("US", 0.0, within=lim.ANGLE)))
-            cm.done()
+            cad_sec = b.table("cad", default=None)
+            if cad_sec is not None:         # mass data from a CAD report
+                mass, J_S, com = cad.body_data(b, cad_sec, need, sec.file)
+            else:
+                cm = b.table("com")
+                base = cm.name("base")
+                need(cm, "base", base)
+                along = cm.names("along", n=2, default=None)
+                for p in along or ():
+                    need(cm, "along", p)
+                com = CentreOfMass(base, along, cm.number("lS", 0.0, within=lim.OFFSET),
+                                   math.radians(cm.number("US", 0.0, within=lim.ANGLE)))
+                cm.done()
+                mass = b.number("mass", positive=True, within=lim.MASS)
+                J_S = b.number("J_S", 0.0)
             turns = b.names("turns_with", n=2, default=None)
             for p in turns or ():
                 need(b, "turns_with", p)
-            body = Body(bname, joints, b.number("mass", positive=True, within=lim.MASS),
-                        b.number("J_S", 0.0), com, turns)
+            body = Body(bname, joints, mass, J_S, com, turns)
             if body.J_S < 0:
                 raise b.error("J_S", "must not be negative")
             b.check_range("J_S", body.J_S, lim.INERTIA)
@@ -572,5 +591,9 @@ def stored_study(attrs, results_path=None):
     # is not one printable line (a message stays one line)
     shown = origin if origin.isprintable() and len(origin) <= 4096 else _quote(origin, 200)
     label = f"{results_path} (the study stored from {shown})" if results_path else shown
-    study = parse_study(str(attr_text(text)), label)
+    # the CAD reports its bodies read, kept beside it (none kept: none read now either)
+    reports = attrs.get("cad_reports")
+    import json
+    reports = json.loads(attr_text(reports)) if reports is not None else {}
+    study = parse_study(str(attr_text(text)), label, cad_reports=reports)
     return replace(study, path=Path(origin))
