@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .base.errors import ResultsError
-from .base.files import RunLock, safe_name, save_figure
+from .base.files import RunLock, check_output, check_output_folder, safe_name, save_figure
 from .solve.scene_study import solve_scene  # noqa: F401  (runner.solve_scene: the API's)
 from .study.reader import load_study
 
@@ -40,6 +40,11 @@ def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
     study = path if isinstance(path, Study) else load_study(path)
     path = study.path
     out = Path(out) if out else default_output(study)
+    from .results.storage import results_output
+    # before anything is computed: never over the study or the --from file, a folder, a
+    # file that is not a results file, nor through a link to nothing (an existing results
+    # file: the run's own checks below, which know --overwrite, --resume and journals)
+    results_output(out, inputs=(path, seed_from), overwrite=True)
     if study.kind == "scene":
         if candidates is not None or resume or scheduler or seed_from or device or store:
             raise ValueError(f"{path}: --candidates, --resume, --scheduler, --from, --device "
@@ -134,6 +139,13 @@ def run_scene_study(study, out, pictures=True, overwrite=False) -> RunOutcome:
     scene takes the run lock of its file and replaces an earlier file only with
     ``overwrite`` (and never an unfinished run's)."""
     out = Path(out)
+    if pictures:
+        if out.suffix.lower() == ".png":
+            raise ResultsError(out, "a scene's picture is named after its results file "
+                                    f"({out.stem}.png): it would replace the results; give -o "
+                                    "a name ending in .h5 (or --no-pictures)")
+        for pic in (out.with_suffix(".png"), out.with_name(f"{out.stem}_kinematics.png")):
+            check_output(pic, inputs=(study.path,))
     with RunLock(out):
         from .results.journal import Journal
         if Journal(out).exists():
@@ -308,15 +320,22 @@ def run_tolerance(source, candidate=None, out=None, *, samples=None, pictures=Tr
 
 
 def _run_tolerance(source, candidate, out, *, samples, pictures, overwrite, n_jobs, metrics):
+    from .results.storage import results_output
     from .results.tolerance_file import write_tolerance
     from .runs.tolerance import analyse
+
+    def check(out):     # before the builds: never the source, nor a file not a results file
+        results_output(out, inputs=(source,), overwrite=overwrite)
+        if pictures:
+            for suffix in ("histograms", "tornado"):
+                check_output(out.with_name(f"{out.stem}_{suffix}.png"), inputs=(source,))
+    if out is not None:
+        check(Path(out))
     study, mech, label, sweep, origin, spec = tolerance_setup(source, candidate,
                                                               samples=samples, metrics=metrics)
     out = Path(out) if out else tolerance_output(source, origin)
     with RunLock(out):
-        if out.exists() and not overwrite:
-            raise ResultsError(out, "already exists; --overwrite replaces it, -o writes "
-                                    "another file")
+        check(out)          # again under the lock (the default name is known only now)
         log.info("tolerance analysis of the %s: %s builds", label,
                  f"{samples or spec.samples:,}")
         a = analyse(study, mech, spec, label=label, sweep_spec=sweep, samples=samples,
@@ -410,8 +429,15 @@ def run_compare(paths, candidate=None, out_dir=None, *, pictures=True):
     """`pipeline compare`: the comparison (``comparison``) and its picture;
     returns (Comparison, [picture paths]).  The picture is replaced like
     `pipeline show`'s (written to a temporary name and renamed)."""
-    if out_dir is not None and Path(out_dir).exists() and not Path(out_dir).is_dir():
-        raise ResultsError(out_dir, "is a file; -o names the folder of the picture")
+    if out_dir is not None:
+        if Path(out_dir).exists() and not Path(out_dir).is_dir():
+            raise ResultsError(out_dir, "is a file; -o names the folder of the picture")
+        check_output_folder(out_dir)
+    if pictures and not (candidate is not None and not str(candidate).strip().isdigit()):
+        # the picture's name is known before the designs are read ('knee' resolves later:
+        # save_figure checks that one): never over an input or a results file
+        number = None if candidate is None else int(candidate)
+        check_output(compare_output(paths, number, out_dir), inputs=paths)
     from .base.progress import ticking
     with ticking("compare"):        # a live line while it re-runs the designs and draws
         return _run_compare(paths, candidate, out_dir, pictures)

@@ -35,7 +35,6 @@ the same numbers ``pipeline run`` would store for each.
 from __future__ import annotations
 
 import math
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -82,30 +81,35 @@ def read_design(path, label=None, source=None) -> Design:
             raise ResultsError(path, f"is a {kind} result; `pipeline compare` reads scene "
                                      "results files (`pipeline run` of a scene study)")
     with open_results(path, "scene") as f:
-        m = f["mechanism"]
-        wp = str(attr_text(m.attrs["working_point"]))
-        names = [str(attr_text(x)) for x in m.attrs["point_names"]]
-        d = f["dense"]
-        phi = d["phi1"][()]
-        pos = d["position"][:, names.index(wp)]
-        peaks = peaks_table(f) if "peaks" in f else _no_peaks()
-        motion, dwell = {}, math.nan
-        if "motion" in f:
-            g = f["motion"]
-            motion = {k: float(g[k][()]) for k in ("stroke", "dwell_error") if k in g}
-            dwell = float(g.attrs.get("dwell_deg", math.nan))
-        joints, reaction, M_bal, pins = [], None, None, {}
-        if "reactions" in d:
-            R = d["reactions"][()]
-            joints = [str(attr_text(x)) for x in d["reactions"].attrs["joints"]]
-            reaction = np.hypot(R[..., 0], R[..., 1])
-            M_bal = d["M_bal"][()]
-            if "peaks/pin_length" in f:
-                pins = dict(zip(joints, zip(f["peaks/pin_length"][()].tolist(),
-                                            f["peaks/pin_sigma"][()].tolist())))
-        status = str(attr_text(f.attrs.get("status", "?")))
-        return Design(label or path.stem, str(source or path), status, float(m.attrs["omega1"]),
-                      wp, dwell, motion, peaks, pins, phi, pos, joints, reaction, M_bal)
+        return design_of(f, label or path.stem, source or path)
+
+
+def design_of(f, label, source) -> Design:
+    """One design from an open scene results file ``f``."""
+    m = f["mechanism"]
+    wp = str(attr_text(m.attrs["working_point"]))
+    names = [str(attr_text(x)) for x in m.attrs["point_names"]]
+    d = f["dense"]
+    phi = d["phi1"][()]
+    pos = d["position"][:, names.index(wp)]
+    peaks = peaks_table(f) if "peaks" in f else _no_peaks()
+    motion, dwell = {}, math.nan
+    if "motion" in f:
+        g = f["motion"]
+        motion = {k: float(g[k][()]) for k in ("stroke", "dwell_error") if k in g}
+        dwell = float(g.attrs.get("dwell_deg", math.nan))
+    joints, reaction, M_bal, pins = [], None, None, {}
+    if "reactions" in d:
+        R = d["reactions"][()]
+        joints = [str(attr_text(x)) for x in d["reactions"].attrs["joints"]]
+        reaction = np.hypot(R[..., 0], R[..., 1])
+        M_bal = d["M_bal"][()]
+        if "peaks/pin_length" in f:
+            pins = dict(zip(joints, zip(f["peaks/pin_length"][()].tolist(),
+                                        f["peaks/pin_sigma"][()].tolist())))
+    status = str(attr_text(f.attrs.get("status", "?")))
+    return Design(label, str(source), status, float(m.attrs["omega1"]),
+                  wp, dwell, motion, peaks, pins, phi, pos, joints, reaction, M_bal)
 
 
 def _no_peaks():
@@ -361,20 +365,19 @@ def compare_files(paths) -> Comparison:
 def candidate_designs(path, candidate) -> list:
     """A sweep's reference design and its design ``candidate`` (a number or
     'knee'), each re-run as a scene (``candidate.candidate_scene``) and read
-    back through a scene file written to a temporary folder (deleted after)."""
-    from ..results.scene_file import write_scene
+    back from a scene file in memory (nothing on the disk for a kill to leave)."""
+    from ..results.scene_file import scene_in_memory
     from ..solve.scene_study import solve_scene
     from .candidate import candidate_scene
     if str(candidate).strip().lower() in ("reference", "ref"):
         raise ValueError("--candidate reference: the reference design is what a candidate is "
                          "compared with; give a candidate number or 'knee'")
     out = []
-    with tempfile.TemporaryDirectory(prefix="pipeline-compare-") as tmp:
-        for k, cid in enumerate(("reference", candidate)):
-            study, label, number = candidate_scene(path, cid)
-            f = write_scene(solve_scene(study), Path(tmp) / f"design{k}.h5")
-            out.append(read_design(f, label=label, source=f"{path} {label}"))
-            out[-1].candidate = number
+    for cid in ("reference", candidate):
+        study, label, number = candidate_scene(path, cid)
+        with scene_in_memory(solve_scene(study)) as f:
+            out.append(design_of(f, label, f"{path} {label}"))
+        out[-1].candidate = number
     return out
 
 

@@ -38,7 +38,7 @@ from ..base.files import RunLock, replacing
 from ..kernels import config as kc
 from ..kernels.pareto import crowding_distance, knee_point, nondominated_rank
 from ..results.storage import (ResultsError, attr_text, candidate_ids, coordinate, hdf5_image, open_results, put,
-                               read_units, remove_group, variables)
+                               read_units, remove_group, results_output, variables)
 from ..study.reader import stored_study
 
 log = logging.getLogger("pipeline")
@@ -452,6 +452,9 @@ def analyze(path, n_representatives=5, *, max_samples=MAX_MODEL_SAMPLES, n_jobs=
         raise ValueError(f"--max-samples must be at least {2 * MIN_MODEL_SAMPLES}")
     if n_jobs is None or n_jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {n_jobs}")
+    # the analysis is written into the file itself: only into a results file, never
+    # through a link to nothing (one to a sweep's file updates that file)
+    results_output(path, overwrite=True)
     from ..base.progress import ticking
     t0 = time.perf_counter()
     with ticking("analyze") as stage:

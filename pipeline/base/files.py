@@ -106,6 +106,91 @@ def _remove_stale(target: Path):
             continue
 
 
+# ----------------------------------------------------------------- output paths
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+def is_hdf5(path) -> bool:
+    """Whether ``path`` (a link followed) holds an HDF5 file: its signature at
+    the start or after a user block (512 bytes, 1 KiB, 2 KiB, ...)."""
+    try:
+        with open(path, "rb") as fh:
+            size, at = os.fstat(fh.fileno()).st_size, 0
+            while at + 8 <= size:
+                fh.seek(at)
+                if fh.read(8) == HDF5_SIGNATURE:
+                    return True
+                at = 512 if at == 0 else 2 * at
+    except OSError:
+        return False
+    return False
+
+
+def _same_file(a, b) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:          # one of them is not there (or not reachable)
+        return False
+
+
+def check_output(path, *, inputs=(), replaces=None, overwrite=False) -> Path:
+    """Refuse, before anything is computed, an output path whose write would
+    lose something (ResultsError, one line naming ``path`` and what to do):
+    a folder, a symbolic link to nothing (the write would create its target
+    wherever it points), a file the command reads (``inputs``, links and hard
+    links included; even with --overwrite).
+
+    ``replaces``: for a command that writes results files, the test that an
+    existing file is one (``results.storage.is_results_file``, by its format):
+    only such a file is replaced, and only with ``overwrite`` (a link is
+    followed only to one).  None for pictures, pages and tables: they replace
+    an earlier one of theirs, never an HDF5 file (a results file) and never
+    through a symbolic link, whose target would be an unrelated file."""
+    path = Path(path)
+    if path.is_symlink() and not path.exists():
+        raise ResultsError(path, f"is a symbolic link to nothing ({os.readlink(path)}); "
+                                 "refusing to create a file through it: delete the link or "
+                                 "give another name")
+    if path.is_dir():
+        raise ResultsError(path, "is a folder; give a file name")
+    for p in inputs:
+        if p is not None and _same_file(path, p):
+            same = "" if Path(p) == path else f" ({p})"
+            raise ResultsError(path, f"is a file this command reads{same}; its output would "
+                                     "replace it: give another output name")
+    if not path.exists():
+        return path
+    if replaces is None:
+        if path.is_symlink():
+            raise ResultsError(path, f"is a symbolic link (to {os.readlink(path)}); refusing "
+                                     "to write through it: delete the link or give another "
+                                     "name")
+        if is_hdf5(path):
+            raise ResultsError(path, "is an HDF5 file (a results file); this command's output "
+                                     "would replace it: give another name")
+        return path
+    if not replaces(path):
+        raise ResultsError(path, "is not a pipeline results file (by its format); refusing "
+                                 "to replace it, as every command does: give another name")
+    if not overwrite:
+        raise ResultsError(path, "already exists; --overwrite replaces it, -o writes "
+                                 "another file")
+    return path
+
+
+def check_output_folder(folder) -> Path:
+    """Refuse a folder for outputs that is a file, or a symbolic link to
+    nothing (the folder would be made wherever it points)."""
+    folder = Path(folder)
+    if folder.is_symlink() and not folder.exists():
+        raise ResultsError(folder, f"is a symbolic link to nothing ({os.readlink(folder)}); "
+                                   "refusing to make a folder through it: delete the link or "
+                                   "give another folder")
+    if folder.exists() and not folder.is_dir():
+        raise ResultsError(folder, "is a file; give a folder for the outputs")
+    return folder
+
+
 def refuse_link(path, what="a results file"):
     """A symbolic link where a run writes its own files (a journal folder, a
     lock) is refused: it would send the run's writes elsewhere."""
@@ -188,12 +273,15 @@ def replacing(target, copy_of=None):
     """Yield a temporary path to write ``target`` to; on success it is flushed
     and renamed over ``target``, on any error (or interruption) removed.  A
     target that is a symbolic link is written through: the file it leads to is
-    replaced, the link stays.  An operating-system error names ``target``.
+    replaced, the link stays (a link to nothing is refused: ``check_output``).
+    An operating-system error names ``target``.
 
     ``copy_of``: start from a copy of that file (an in-place update, such as
     the analysis of a sweep, is made on the copy and swapped in)."""
     target = Path(target)
     if target.is_symlink():
+        if not target.exists():
+            check_output(target)        # a link to nothing: refused, its target not made
         target = Path(os.path.realpath(target))
     if target.is_dir():
         raise ResultsError(target, "is a folder; give a file name")
@@ -231,7 +319,9 @@ def write_text(target, text: str):
 
 
 def save_figure(fig, target, **kw):
-    """``fig.savefig`` to ``target`` atomically; returns the path."""
+    """``fig.savefig`` to ``target`` atomically (``check_output``: never over a
+    results file, never through a link); returns the path."""
+    check_output(target)
     with replacing(target) as tmp:
         fig.savefig(tmp, **kw)
     return Path(target)

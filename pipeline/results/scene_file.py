@@ -6,7 +6,9 @@ only this module writes them."""
 
 from __future__ import annotations
 
+import io
 import math
+from contextlib import contextmanager
 from pathlib import Path
 
 import h5py
@@ -354,53 +356,71 @@ def _cyclogram(f, cg):
 
 def write_scene(res, path):
     """Write a scene result; returns the path."""
-    study = res.study
     path = Path(path)
-    plan = res.plan
     with replacing(path) as tmp, hdf5_image(tmp) as f:
-        write_root_attrs(f, "scene", study, status=kc.STATUS_NAMES[res.status])
-        m = f.create_group("mechanism")
-        m.attrs["point_names"] = list(plan.point_names[:plan.n_visible])
-        m.attrs["link_labels"] = list(study.output.link_labels)
-        m.attrs["working_point"] = study.output.working_point
-        m.attrs["omega1"] = study.mechanism.crank.omega1
-        m.attrs["eps1"] = study.mechanism.crank.eps1
-        _coordinates(f, plan, study)
-        put(m, "parameters", plan.par, [parameter_units(n) for n in plan.par_names],
-            "compiled parameter vector", dims=("parameter",), names=list(plan.par_names))
-        put(m, "tolerances", res.tolerances, [u for _, u in TOLERANCES], "solver tolerances",
-            dims=("tolerance",))
-        for name, curves in (("table", res.table), ("dense", res.dense)):
-            _curves(f.create_group(name), res, curves, study)
-        if res.dynamics:
-            for case in res.dynamics:
-                _dynamics_case(f.require_group("dynamics"), case,
-                               (res.motion_forces or {}).get(case.name))
-        if res.peaks:
-            _peaks(f.create_group("peaks"), res.peaks, study.output)
-        if res.reduced is not None:
-            _reduced(f.create_group("reduced_dynamics"), res.reduced)
-        if res.counterweight is not None:
-            _counterweight(f.create_group("counterweight"), res.counterweight)
-        if getattr(res, "flywheel", None) is not None:
-            _flywheel(f.create_group("flywheel"), res.flywheel)
-        if res.motion:
-            g = f.create_group("motion")
-            g.attrs["long_name"] = ("the output rocker's dwell and stroke (DOMAIN.md section "
-                                    "9), and its law error with [output.motion_law]")
-            g.attrs["dwell_deg"] = res.motion["dwell_deg"]
-            put(g, "dwell_error", np.float64(res.motion["dwell_error"]), "1",
-                "dwell error: best window range / revolution range")
-            put(g, "dwell_start", np.float64(res.motion["dwell_start"]), "deg",
-                "crank angle phi1 where the best dwell window starts")
-            put(g, "stroke", np.float64(res.motion["stroke"]), "mm",
-                "stroke of the working point: radius x rocker swing")
-            if "law_error" in res.motion:      # [output.motion_law]
-                from ..study.sweep_spec import METRICS
-                g.attrs["law_align"] = res.motion["law_align"]
-                for key in ("law_error", "law_error_max", "law_shift"):
-                    put(g, key, np.float64(res.motion[key]), METRICS[key][0], METRICS[key][1])
-        cg = getattr(res, "cyclogram", None)
-        if cg is not None and cg.error is not None:
-            _cyclogram(f, cg)
+        _scene_into(f, res)
     return path
+
+
+@contextmanager
+def scene_in_memory(res):
+    """The scene result as an HDF5 file in memory, opened read-only: what a
+    command reads back from a scene it solved for itself (``pipeline compare
+    --candidate``, the report's comparison) leaves nothing on the disk, so a
+    kill leaves nothing behind."""
+    buf = io.BytesIO()
+    with h5py.File(buf, "w") as f:
+        _scene_into(f, res)
+    with h5py.File(buf, "r") as f:
+        yield f
+
+
+def _scene_into(f, res):
+    """The scene result's groups and attributes, written into the open file ``f``."""
+    study = res.study
+    plan = res.plan
+    write_root_attrs(f, "scene", study, status=kc.STATUS_NAMES[res.status])
+    m = f.create_group("mechanism")
+    m.attrs["point_names"] = list(plan.point_names[:plan.n_visible])
+    m.attrs["link_labels"] = list(study.output.link_labels)
+    m.attrs["working_point"] = study.output.working_point
+    m.attrs["omega1"] = study.mechanism.crank.omega1
+    m.attrs["eps1"] = study.mechanism.crank.eps1
+    _coordinates(f, plan, study)
+    put(m, "parameters", plan.par, [parameter_units(n) for n in plan.par_names],
+        "compiled parameter vector", dims=("parameter",), names=list(plan.par_names))
+    put(m, "tolerances", res.tolerances, [u for _, u in TOLERANCES], "solver tolerances",
+        dims=("tolerance",))
+    for name, curves in (("table", res.table), ("dense", res.dense)):
+        _curves(f.create_group(name), res, curves, study)
+    if res.dynamics:
+        for case in res.dynamics:
+            _dynamics_case(f.require_group("dynamics"), case,
+                           (res.motion_forces or {}).get(case.name))
+    if res.peaks:
+        _peaks(f.create_group("peaks"), res.peaks, study.output)
+    if res.reduced is not None:
+        _reduced(f.create_group("reduced_dynamics"), res.reduced)
+    if res.counterweight is not None:
+        _counterweight(f.create_group("counterweight"), res.counterweight)
+    if getattr(res, "flywheel", None) is not None:
+        _flywheel(f.create_group("flywheel"), res.flywheel)
+    if res.motion:
+        g = f.create_group("motion")
+        g.attrs["long_name"] = ("the output rocker's dwell and stroke (DOMAIN.md section "
+                                "9), and its law error with [output.motion_law]")
+        g.attrs["dwell_deg"] = res.motion["dwell_deg"]
+        put(g, "dwell_error", np.float64(res.motion["dwell_error"]), "1",
+            "dwell error: best window range / revolution range")
+        put(g, "dwell_start", np.float64(res.motion["dwell_start"]), "deg",
+            "crank angle phi1 where the best dwell window starts")
+        put(g, "stroke", np.float64(res.motion["stroke"]), "mm",
+            "stroke of the working point: radius x rocker swing")
+        if "law_error" in res.motion:      # [output.motion_law]
+            from ..study.sweep_spec import METRICS
+            g.attrs["law_align"] = res.motion["law_align"]
+            for key in ("law_error", "law_error_max", "law_shift"):
+                put(g, key, np.float64(res.motion[key]), METRICS[key][0], METRICS[key][1])
+    cg = getattr(res, "cyclogram", None)
+    if cg is not None and cg.error is not None:
+        _cyclogram(f, cg)

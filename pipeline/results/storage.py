@@ -309,6 +309,25 @@ def hdf5_image(target, start=None):
         out.write(buf.getbuffer())
 
 
+def is_results_file(path, kind=None) -> bool:
+    """Whether ``path`` (a link followed) is a results file of this package
+    (of ``kind`` if given): an HDF5 file whose root says ``format = FORMAT``.
+    Read without HDF5's file lock, so a file a run is writing is still known."""
+    try:
+        with h5py.File(path, "r", locking=False) as f:
+            return (attr_text(f.attrs.get("format")) == FORMAT
+                    and (kind is None or attr_text(f.attrs.get("kind")) == kind))
+    except (OSError, RuntimeError, ValueError):     # not HDF5, unreadable, damaged
+        return False
+
+
+def results_output(path, *, inputs=(), overwrite=False):
+    """``files.check_output`` for a command that writes a results file: an
+    existing file is replaced only if it is a results file, with ``overwrite``."""
+    from ..base.files import check_output
+    return check_output(path, inputs=inputs, replaces=is_results_file, overwrite=overwrite)
+
+
 def open_results(path, kind=None):
     """Open a results file read-only, checking that it is ours (and of ``kind``)."""
     path = Path(path)

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..base.files import replacing
+from ..base.files import check_output, replacing
 
 MAX_FRAMES = 120        # frames per revolution, at most
 FPS = 20                # frames per second: 120 frames = one revolution in 6 s
@@ -332,6 +332,8 @@ def animate(path, candidate=None, out=None, frames=MAX_FRAMES) -> dict:
 
 
 def _animate(path, candidate, out, frames):
+    if out is not None:     # before the motion is computed: never over a results file
+        _writer(check_output(out, inputs=(path,)))
     kind = results_kind(path)
     if kind == "scene":
         if candidate is not None:
@@ -354,5 +356,5 @@ def _animate(path, candidate, out, frames):
         info = {"candidate": run.index, "status": kc.STATUS_NAMES.get(run.status, run.status)}
     else:
         raise ValueError(f"{path}: a {kind} results file has nothing to animate")
-    info.update(write_animation(motion, out, frames=frames))
+    info.update(write_animation(motion, check_output(out, inputs=(path,)), frames=frames))
     return info

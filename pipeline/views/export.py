@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..base.files import replacing
+from ..base.files import check_output, check_output_folder, replacing
 from ..base.numbers import signless_zeros
 from ..results.storage import attr_text, open_results
 from .tables import candidates, scene_tables, with_units
@@ -23,6 +23,7 @@ from .tables import candidates, scene_tables, with_units
 def export(path, outdir, *, every=1, feasible=False, front=None, parquet=False) -> list[Path]:
     """Write the tables of the results file ``path`` into ``outdir``; returns
     the files written."""
+    check_output_folder(outdir)
     with open_results(path) as f:
         kind = attr_text(f.attrs["kind"])
     if kind == "scene":
@@ -35,8 +36,12 @@ def export(path, outdir, *, every=1, feasible=False, front=None, parquet=False) 
         frames = {candidates_name(feasible, front): candidates(path, feasible=feasible,
                                                                front=front)}
     outdir = Path(outdir)
+    names = [outdir / f"{name}.csv" for name in frames]
+    names = [p.with_suffix(".parquet") for p in names] if parquet else names
+    for p in names:         # all checked before the first is written
+        check_output(p, inputs=(path,))
     outdir.mkdir(parents=True, exist_ok=True)
-    return [_write(df, outdir / f"{name}.csv", parquet) for name, df in frames.items()]
+    return [_write(df, p, parquet) for df, p in zip(frames.values(), names)]
 
 
 def candidates_name(feasible=False, front=None) -> str:
@@ -52,10 +57,87 @@ def _write(df, path, parquet):
             import pyarrow  # noqa: F401
         except ImportError:
             raise ValueError("--parquet needs pyarrow: pip install pyarrow") from None
-        path = path.with_suffix(".parquet")
         with replacing(path) as tmp:
             df.to_parquet(tmp, index=False)
         return path
     with replacing(path) as tmp:
         with_units(signless_zeros(df)).to_csv(tmp, index=False, float_format="%.12g")
     return path
+
+
+# ----------------------------------------------------------------- one design out
+def _design_of(results, candidate):
+    """(kind, label) of the results file: a scene's design needs no
+    --candidate, a sweep's (or a search's) needs one."""
+    with open_results(results) as f:
+        kind = attr_text(f.attrs["kind"])
+    if kind == "scene" and candidate is not None:
+        raise ValueError(f"{results} is a scene result: it has one design, no --candidate")
+    if kind != "scene" and candidate is None:
+        raise ValueError(f"{results} is a {kind}: say which design with --candidate ID (a "
+                         "number, 'knee' or 'reference')")
+    return kind
+
+
+def export_drawing(results, outdir, *, candidate=None, phis=None, paths=False,
+                   svg=False) -> list[Path]:
+    """`pipeline export RESULTS [--candidate ID] --dxf DIR`: the design as a
+    DXF drawing (and SVG) in ``outdir`` (``views.drawing_dxf``); a sweep's
+    design is re-run as a scene first (``candidate_scene``, as `pipeline show
+    --candidate` and `pipeline compare` do).  Returns the files written."""
+    import tempfile
+
+    from .drawing_dxf import write_drawing
+    if _design_of(results, candidate) == "scene":
+        return write_drawing(results, outdir, phis=phis, paths=paths, svg=svg)
+    from ..analysis.candidate import candidate_scene
+    from ..results.scene_file import write_scene
+    from ..solve.scene_study import solve_scene
+    study, label, number = candidate_scene(results, candidate)
+    tag = "reference" if number == "reference" else f"candidate{number}"
+    with tempfile.TemporaryDirectory(prefix="pipeline-drawing-") as tmp:
+        scene = write_scene(solve_scene(study), Path(tmp) / "design.h5")
+        return write_drawing(scene, outdir, phis=phis, paths=paths, svg=svg,
+                             stem=f"{study.name or Path(results).stem}_{tag}",
+                             origin_lines=[f"From: {results}, {label}"])
+
+
+def export_study(results, candidate, out) -> Path:
+    """`pipeline export RESULTS --candidate ID --study OUT.toml`: the sweep's
+    design as a scene study of its own (``study.writer``)."""
+    from ..analysis.candidate import load_study_from_results, resolve_candidate
+    from ..results.storage import candidate_ids
+    from ..study.writer import design_study_text
+    if _design_of(results, candidate) == "scene":
+        raise ValueError(f"{results} is a scene result: its study is stored in it already; "
+                         "--study writes a sweep's design (--candidate ID) as a scene study")
+    out = Path(out)
+    _refuse_results_path(results, out)
+    with open_results(results) as f:
+        i = resolve_candidate(f, candidate)
+        study = load_study_from_results(f)
+        x = f["reference/params"][()] if i == "reference" else f["candidates/params"][i]
+        number = "reference" if i == "reference" else int(candidate_ids(f)[i])
+    if not np.isfinite(x).all():
+        raise ValueError(f"{results}: candidate {number} was never evaluated (unfinished sweep)")
+    label = "the reference design" if number == "reference" else f"candidate #{number}"
+    tag = "reference" if number == "reference" else f"candidate{number}"
+    text = design_study_text(study, x, origin=f"{label} of {results}",
+                             name=f"{study.name or 'design'}_{tag}")
+    return write_text(out, text)
+
+
+def _refuse_results_path(results, out):
+    """--study never replaces a results file (the one read, or any other)."""
+    import os
+    if out.exists() and (os.path.samefile(out, results) or _is_results_file(out)):
+        raise ValueError(f"--study {out}: is a results file; give the study's own .toml name")
+
+
+def _is_results_file(path) -> bool:
+    from ..study.reader import HDF5_SIGNATURE
+    try:
+        with open(path, "rb") as f:
+            return f.read(8) == HDF5_SIGNATURE
+    except OSError:
+        return False

@@ -27,7 +27,7 @@ import numpy as np
 from ..base.version import __version__
 from ..analysis.fronts import analyze, has_analysis, read_analysis, read_sweep
 from ..analysis.candidate import rerun_candidate
-from ..base.files import write_text
+from ..base.files import check_output, write_text
 from ..analysis.ranking import design_table, ranking
 from .explorer import EXPLORER_DRAWINGS, explorer_section
 from .explorer_designs import design_key
@@ -443,6 +443,8 @@ def write_report(path, out=None, top=20, drawings=None) -> dict:
         raise ValueError(f"--top must be at least 1, got {top}")
     if drawings is not None and drawings < 0:
         raise ValueError(f"--drawings must be at least 0, got {drawings}")
+    out = Path(out) if out else default_report_output(path)
+    check_output(out, inputs=(path,))      # before the analysis: never over a results file
     with open_results(path, "sweep") as f:
         analyzed = has_analysis(f)
     info = {}
@@ -453,7 +455,6 @@ def write_report(path, out=None, top=20, drawings=None) -> dict:
     from ..base.progress import ticking
     with ticking("report"):         # a live line while the parts are built
         page = build_html(path, top=top, drawings=drawings)
-    out = Path(out) if out else default_report_output(path)
-    write_text(out, page)
+    write_text(check_output(out, inputs=(path,)), page)
     info.update(report=str(out), size=f"{out.stat().st_size / 1024:.0f} KiB")
     return info

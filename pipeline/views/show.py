@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..analysis.candidate import STATUS_HELP, CandidateRun, rerun_candidate
-from ..base.files import save_figure
+from ..base.files import check_output, save_figure
 from ..kernels import config as kc
 from ..results.storage import open_results
 
@@ -193,8 +193,11 @@ def show(path, cid, out=None) -> dict:
 
 
 def _show(path, cid, out):
+    if out is not None:         # before the design is re-run: never over a results file
+        check_output(out, inputs=(path,))
     run = rerun_candidate(path, cid)
-    out = Path(out) if out else default_show_output(path, run.index)
+    out = check_output(Path(out) if out else default_show_output(path, run.index),
+                       inputs=(path,))
     with open_results(path, "sweep") as f:
         stored = None
         if run.index != "reference":
