@@ -71,13 +71,21 @@ def _loading(name):
 
 
 def cmd_export(a):
-    from .views.export import export
-    if (a.csv is None) == (a.parquet is None):
-        raise ValueError("give the output folder with --csv DIR or --parquet DIR")
+    from .views.export import export, export_design
+    wanted = [a.csv, a.parquet, a.dxf, a.study]
+    if sum(w is not None for w in wanted) != 1:
+        raise ValueError("give one output: --csv DIR, --parquet DIR, --dxf DIR or --study "
+                         "OUT.toml")
+    if a.dxf is None and a.study is None and (a.candidate or a.phi or a.paths or a.svg):
+        raise ValueError("--candidate, --phi, --paths and --svg go with --dxf or --study")
     from .base.progress import ticking
     with ticking("export", after=0.5, say_done=False):    # a big sweep takes seconds
-        files = export(a.results, a.csv or a.parquet, every=a.every, feasible=a.feasible,
-                       front=a.front, parquet=a.parquet is not None)
+        if a.dxf is not None or a.study is not None:       # one design: a drawing, a study
+            files = export_design(a.results, dxf=a.dxf, study=a.study, candidate=a.candidate,
+                                  phis=a.phi, paths=a.paths, svg=a.svg)
+        else:
+            files = export(a.results, a.csv or a.parquet, every=a.every, feasible=a.feasible,
+                           front=a.front, parquet=a.parquet is not None)
     if not a.quiet:
         for f in files:
             print(f)
@@ -245,7 +253,7 @@ def build_parser():
 
     e = sub.add_parser("export", parents=[common], help=(
         "a results file's tables: a scene's points, links, reactions (every computed "
-        "position), a sweep's candidates"))
+        "position), a sweep's candidates; or one design as a DXF drawing or a scene study"))
     e.add_argument("results", help="results HDF5 file (scene or sweep)")
     e.add_argument("--csv", metavar="DIR", help="write CSV files (headers with units) into DIR")
     e.add_argument("--parquet", metavar="DIR", help="write Parquet files into DIR (pyarrow)")
@@ -254,6 +262,21 @@ def build_parser():
     e.add_argument("--feasible", action="store_true", help="sweep: the feasible candidates only")
     e.add_argument("--front", type=int, metavar="N",
                    help="sweep: the candidates of Pareto fronts 1 .. N only")
+    e.add_argument("--dxf", metavar="DIR", help=(
+        "write the design as a DXF drawing (R2013, mm) into DIR: the mechanism at --phi's "
+        "crank angles, a layer per link, pins, ground, guides, the working point's path, "
+        "link-length dimensions and the design's parameters"))
+    e.add_argument("--svg", action="store_true", help="with --dxf: the same drawing as SVG")
+    e.add_argument("--paths", action="store_true",
+                   help="with --dxf: every moving point's path, not only the working point's")
+    e.add_argument("--phi", type=float, nargs="+", metavar="DEG", help=(
+        "with --dxf: crank angles phi1 to draw (default: the first table position and the "
+        "positions of the output's two extremes)"))
+    e.add_argument("--candidate", metavar="ID", help=(
+        "--dxf, --study: a design of a sweep or search: a number, 'knee' or 'reference'"))
+    e.add_argument("--study", metavar="OUT.toml", help=(
+        "write a sweep's design (--candidate) as a scene study of its own: `pipeline run "
+        "OUT.toml` gives `pipeline show --candidate`'s numbers"))
     e.set_defaults(func=cmd_export)
 
     c = sub.add_parser("compile", parents=[common], help=(
