@@ -104,7 +104,10 @@ def toml_text(data: dict, comment_lines=()) -> str:
 # ----------------------------------------------------------------- the design's study
 def degrees_exact(rad: float) -> float:
     """An angle in degrees that the study reader (``math.radians``) turns back
-    into ``rad`` exactly, where one is within a few ulps of ``math.degrees``."""
+    into ``rad`` exactly, where one is within a few ulps of ``math.degrees``
+    (every angle a study gave in degrees has one; an angle from elsewhere, a
+    CAD report's, may have none: then the nearest, and ``_check_reproduces``
+    says so)."""
     d = math.degrees(rad)
     up = down = d
     for _ in range(8):
