@@ -44,6 +44,11 @@ from .walk import ADVANCE, START, walk_start
 
 MM = 1e-3
 
+# the integrator's own outcome (a status of a dynamics case only, never of a position:
+# beyond kernels.config's kinematic statuses, and in no sweep's status column)
+TOO_FAST = 16       # |omega1| passed omega_limit (the study's limit on a crank speed)
+OMEGA_STOP = 10.0   # rk4 stops at once where |omega1| exceeds this many times omega_limit
+
 
 # ----------------------------------------------------------------- drive channels
 @njit(**JIT)
@@ -185,15 +190,19 @@ def eps_at(gravity, body_com, body_turn, body_mass_off, load_body, load_point, p
 
 @njit(**JIT_ALLOC)
 def rk4(advance, start, K, sizes, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t, damping,
-        phi0, omega0, dt, n_sub, out_t, out_phi, out_omega, out_eps, tail_t, tail_phi,
-        tail_omega, tail_eps):
+        phi0, omega0, dt, n_sub, omega_limit, out_t, out_phi, out_omega, out_eps, tail_t,
+        tail_phi, tail_omega, tail_eps):
     """Classical fixed-step RK4 for y = (phi1, omega1) from t = 0.
 
     Records (t, phi1, omega1, eps1) every ``n_sub`` steps into the out_*
     arrays (n_samples = out_t.shape[0]; the run has (n_samples - 1) n_sub
     steps) and at every one of the last tail_t.shape[0] steps into the tail_*
     arrays.  eps1 of a sample is the first stage of the following step.
-    Returns (status, samples recorded)."""
+    The first step that ends with |omega1| > omega_limit (the crossing) ends
+    the run with TOO_FAST at the next sample, recorded (the state past the
+    crossing that a second run checks), or at once where |omega1| (of the
+    state or of a stage) exceeds OMEGA_STOP omega_limit or is not finite
+    before it.  Returns (status, the crossing's step or -1)."""
     n_points, n_groups, n_triads = sizes
     pos, d1, d2, margins, state, _ = work(n_points, n_groups, n_triads)
     last = np.empty(1)
@@ -208,7 +217,7 @@ def rk4(advance, start, K, sizes, masses, par, tols, const, tab_phi, h_phi, tab_
     h = dt
     e = 0.0
     st = OK
-    recorded = 0
+    crossing = -1
     # one call site of ``acceleration``: evaluation s = 0 is the start, s = 1..3
     # are RK4 stages 2..4, s = 4 is the new state (= stage 1 of the next step)
     n = 0
@@ -223,10 +232,22 @@ def rk4(advance, start, K, sizes, masses, par, tols, const, tab_phi, h_phi, tab_
         elif s < 4:
             c = 0.5 if s < 3 else 1.0
             ts, ps, ws = n * h + c * h, p + c * h * kp, w + c * h * kw
+            if not abs(ws) <= OMEGA_STOP * omega_limit:     # a stage runs away: so does
+                st = TOO_FAST                                # the step
+                if crossing < 0:
+                    crossing = n + 1
+                break
         else:
             p = p + h / 6.0 * sum_p
             w = w + h / 6.0 * sum_w
             n += 1
+            if not abs(w) <= OMEGA_STOP * omega_limit:
+                st = TOO_FAST
+                if crossing < 0:
+                    crossing = n
+                break
+            if crossing < 0 and abs(w) > omega_limit:
+                crossing = n
             ts, ps, ws = n * h, p, w
         st, es = acceleration(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t,
                               damping, ts, ps, ws, state, last, pos, d1, d2, margins, loads_k)
@@ -247,21 +268,22 @@ def rk4(advance, start, K, sizes, masses, par, tols, const, tab_phi, h_phi, tab_
             out_phi[k] = p
             out_omega[k] = w
             out_eps[k] = e
-            recorded = k + 1
+            if crossing >= 0:
+                st = TOO_FAST
         if n >= tail0:
             j = n - tail0
             tail_t[j] = n * h
             tail_phi[j] = p
             tail_omega[j] = w
             tail_eps[j] = e
-        if n == n_steps:
+        if n == n_steps or st == TOO_FAST:
             break
         kp = w
         kw = e
         sum_p = w
         sum_w = e
         s = 1
-    return st, recorded
+    return st, crossing
 
 
 @njit(**JIT_ALLOC)
@@ -308,7 +330,7 @@ SIGNATURES = {
         types.float64, _F2, _F1, _F2, _F2, _F2, _F1, _F2),
     rk4: types.Tuple((types.int64, types.int64))(
         ADVANCE, START, _F1, SIZES, MASSES, _F1, _F1, *_DRIVE, types.float64, types.float64,
-        types.float64, types.float64, types.int64, *[_F1] * 8),
+        types.float64, types.float64, types.int64, types.float64, *[_F1] * 8),
     terms_curve: types.int64(ADVANCE, START, _F1, SIZES, MASSES, _F1, _F1, *_DRIVE, _F1, _F1,
                              *[_F1] * 5, types.int8[::1]),
 }

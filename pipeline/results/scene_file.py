@@ -18,6 +18,7 @@ from ..kernels import config as kc
 from ..base.files import replacing
 from ..solve.reactions import slide_action
 from ..solve.scene import real_motion
+from ..solve.crank_motion import ACCEPTED_ERROR_RAD, STATUS_NAMES
 from .storage import (STATUS_ENUM, attr_text, coordinate, hdf5_image, put, status_table,
                       variables, write_root_attrs)
 
@@ -109,7 +110,13 @@ def _dynamics_case(group, res, motion_forces=None):
     g = group.create_group(res.name)
     c = res.case
     g.attrs["method"] = res.method
-    g.attrs["status"] = kc.STATUS_NAMES[res.status]
+    g.attrs["status"] = STATUS_NAMES[res.status]
+    # the motion's own error estimate (crank_motion.integrate) and the step it was run with
+    g.attrs["dt_used"] = res.dt
+    g.attrs["error_phi1_rad"] = res.error_phi1
+    g.attrs["error_omega1_rad_per_s"] = res.error_omega1
+    g.attrs["accepted_error_phi1_rad"] = ACCEPTED_ERROR_RAD
+    g.attrs["note"] = res.note
     g.attrs["M1"] = c.M1.text
     g.attrs["damping"] = c.damping
     g.attrs["phi_start_deg"] = math.degrees(c.phi_start)
@@ -194,6 +201,9 @@ def _flywheel(group, fw):
                                 f"steady rotation of case {fw.case!r} to have the target "
                                 "coefficient of non-uniformity")
     group.attrs["case"] = fw.case
+    if fw.refused:             # none sized: why (one line naming the study file and field)
+        group.attrs["not_sized"] = fw.refused
+        return
     group.attrs["body"] = fw.J_body
     put(group, "J_add", np.float64(fw.J_add), "kg*m^2",
         "moment of inertia added on the crank shaft (to the crank body's J_S)")

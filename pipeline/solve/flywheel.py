@@ -17,6 +17,13 @@ as ``CaseResult.steady`` measures it).  J_f is then found by Brent's method on
 delta(J_f) = target: delta falls as J_f grows.  Needs M1 and the loads to be
 constants or functions of phi (a steady rotation has no clock), and a net
 positive work per revolution in the direction of rotation.
+
+No flywheel is sized (``flywheel_of``: a ``Flywheel`` whose ``refused`` says
+why, in one line naming the study file and its field) on a case whose motion
+is not a result (a kinematic failure, refused for its error, past the speed
+limit), nor where no steady rotation exists: with no damping the crank
+speeds up forever, against too much damping or gravity it stops, and a
+rotation beyond the study's speed limit is no result either.
 """
 
 from __future__ import annotations
@@ -26,10 +33,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .crank_motion import reduced_terms
+from ..base import limits as lim
+from ..kernels import config as kc
+from .crank_motion import STATUS_NAMES, reduced_terms
 
 ORBIT_STEPS = 1440          # RK4 steps over the revolution (0.25 deg)
 XTOL = 1e-12                # Brent's method, relative to the bracket
+BRACKET_TRIES = 200         # factors of 4 tried for a bracket (4^200: every float)
+
+
+class NoSteadyRotation(ValueError):
+    """The case has no steady rotation to size a flywheel for (the reason)."""
 
 
 @dataclass
@@ -43,8 +57,16 @@ class Flywheel:
     omega_max: float
     omega_mean: float
     J_body: str                 # the body that carries it (the crank's)
+    refused: str = ""           # why none was sized: "<file>: <field>: <reason>"
+
+    @classmethod
+    def not_sized(cls, case, target, why):
+        nan = math.nan
+        return cls(case, target, nan, nan, nan, nan, nan, nan, "", refused=why)
 
     def summary(self) -> dict:
+        if self.refused:
+            return {f"{self.case} flywheel": f"not sized: {self.refused}"}
         if self.J_add == 0.0:
             return {f"{self.case} flywheel": (
                 f"none needed: delta {self.delta_without:.4g} is already at most "
@@ -88,12 +110,16 @@ class _Orbit:
         drive = np.asarray(M1, float) + np.asarray(Q, float)
         J = np.asarray(J, float)
         if not (np.isfinite(J).all() and np.isfinite(drive).all()):
-            raise ValueError(f"case {case.name!r}: the mechanism cannot be assembled over the "
-                             "whole revolution")
+            raise NoSteadyRotation("the mechanism cannot be assembled over the whole "
+                                   "revolution")
         net = float(np.mean(drive[:-1]))
         if not net != 0.0:
-            raise ValueError(f"case {case.name!r}: M1 and the loads do no net work over a "
-                             "revolution; there is no steady rotation to size a flywheel for")
+            raise NoSteadyRotation("M1 and the loads do no net work over a revolution; there "
+                                   "is no steady rotation to size a flywheel for")
+        if not case.damping > 0.0:
+            raise NoSteadyRotation("with no damping nothing balances the net work of M1 and "
+                                   "the loads: the crank speeds up forever, there is no "
+                                   "steady rotation")
         self.s = 1.0 if net > 0.0 else -1.0
         order = slice(None) if self.s > 0 else slice(None, None, -1)
         self.phi = case.phi_start + self.s * self.h * 0.5 * np.arange(2 * n + 1)
@@ -132,18 +158,31 @@ class _Orbit:
             K = self.run(K0, J_add)
             return -K0 if K is None else K[-1] - K0
 
-        # bracket: K0 where the revolution gains energy (gap > 0) and where it loses it
-        lo = hi = 0.5 * J0 * (abs(np.mean(self.drive)) / max(self.b, 1e-300)) ** 2
+        # bracket: K0 where the revolution gains energy (gap > 0) and where it loses it;
+        # K of the mean speed M / b (M the mean drive) to start from
+        with np.errstate(over="ignore"):
+            lo = hi = min(0.5 * J0 * (abs(np.mean(self.drive)) / self.b) ** 2, 1e300)
         lo = min(lo, 1.0)
-        for _ in range(200):
+        for _ in range(BRACKET_TRIES):
             if gap(lo) > 0.0:
                 break
             lo *= 0.25
-        for _ in range(200):
-            if gap(hi) < 0.0:
-                break
+        else:
+            raise NoSteadyRotation(
+                f"the crank stops within a revolution from every speed: M1 and the loads "
+                f"cannot carry it round against gravity and the damping b = {self.b:g} N*m*s")
+        fastest = 10.0 * lim.MAX_OMEGA
+        while not gap(hi) < 0.0:
             hi *= 4.0
-        K0 = brentq(gap, lo, hi, xtol=1e-300, rtol=4 * np.finfo(float).eps, maxiter=500)
+            if not math.sqrt(2.0 * hi / J0) <= fastest:
+                raise NoSteadyRotation(
+                    f"the steady rotation would turn faster than {fastest:g} rad/s, beyond "
+                    f"the study's limit ({lim.OMEGA.words()})")
+        try:
+            K0 = brentq(gap, lo, hi, xtol=1e-300, rtol=4 * np.finfo(float).eps, maxiter=500)
+        except RuntimeError:
+            raise NoSteadyRotation("the energy of the steady rotation could not be found (no "
+                                   "convergence)") from None
         K = self.run(K0, J_add)
         return np.sqrt(2.0 * K / (self.J[::2] + J_add))
 
@@ -167,11 +206,38 @@ def size_flywheel(plan, mech, case, target) -> Flywheel:
                            .index(crank_inertia(plan, mech))]
     orbit = _Orbit(plan, mech, case)
     d0 = orbit.delta(0.0)
+    fastest = max(abs(d0[1]), abs(d0[2]))
+    if not fastest <= lim.MAX_OMEGA:
+        raise NoSteadyRotation(f"the steady rotation reaches |omega1| = {fastest:.4g} rad/s, "
+                               f"beyond the study's limit ({lim.OMEGA.words()})")
     if d0[0] <= target:
         return Flywheel(case.name, target, 0.0, d0[0], d0[0], *d0[1:], body)
     hi = max(float(np.mean(orbit.J)), 1e-12)
-    while orbit.delta(hi)[0] > target:
+    for _ in range(BRACKET_TRIES):
+        if not orbit.delta(hi)[0] > target:
+            break
         hi *= 4.0
+    else:
+        raise NoSteadyRotation(f"no flywheel up to {hi:.3g} kg m^2 brings delta to {target:g}")
     J_add = brentq(lambda j: orbit.delta(j)[0] - target, 0.0, hi, xtol=XTOL * hi, rtol=1e-12)
     d = orbit.delta(J_add)
     return Flywheel(case.name, target, float(J_add), d[0], d0[0], *d[1:], body)
+
+
+def flywheel_of(study, plan, cases) -> Flywheel:
+    """The flywheel [dynamics.flywheel] of ``study`` asks for, on its case's
+    integrated motion (``cases``: crank_motion.CaseResult); not sized (its
+    ``refused`` saying why, naming the file and the field) on a motion that
+    is not a result or where no steady rotation exists."""
+    name, target = study.dynamics.flywheel
+    run = next(c for c in cases if c.name == name)
+    where = f"{study.path}: dynamics.flywheel"
+    if run.status != kc.OK:
+        return Flywheel.not_sized(name, target, (
+            f"{where}: case {name!r} ended {STATUS_NAMES[run.status]}"
+            f"{' (' + run.note + ')' if run.note else ''}: no flywheel is sized on a motion "
+            "that is not a result"))
+    try:
+        return size_flywheel(plan, study.mechanism, run.case, target)
+    except NoSteadyRotation as e:
+        return Flywheel.not_sized(name, target, f"{where}: case {name!r}: {e}")

@@ -32,9 +32,7 @@ def solve_scene(study):
             from .motion_forces import case_forces
             res.motion_forces = {c.name: case_forces(study.mechanism, res.plan, c)
                                  for c in res.dynamics}
-        if study.dynamics.flywheel is not None:
-            from .flywheel import size_flywheel
-            name, target = study.dynamics.flywheel
-            case = next(c for c in study.dynamics.cases if c.name == name)
-            res.flywheel = size_flywheel(res.plan, study.mechanism, case, target)
+        if study.dynamics.flywheel is not None:   # not on a refused case (its reason)
+            from .flywheel import flywheel_of
+            res.flywheel = flywheel_of(study, res.plan, res.dynamics)
     return res

@@ -514,12 +514,14 @@ def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
     method = sec.string("method", "rk4", choices=("rk4", "dop853"))
     cases = []
     names = set()
+    sections = {}
     for c in sec.tables("cases"):
         name = c.name("name")
         if name in names or not name.replace("_", "").isalnum():
             raise c.error("name", f"case name {name!r} must be unique and made of letters, "
                                   "digits and _")
         names.add(name)
+        sections[name] = c
         t_end = c.number("t_end", 10.0, positive=True, within=lim.DURATION)
         # RK4 step: 1e-4 s keeps phi1 within 1e-7 rad of DOP853 over 10 s at ~125 rad/s
         dt = c.number("dt", 1e-4, positive=True, within=lim.DURATION)
@@ -571,6 +573,11 @@ def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
                 raise fw.error("case", f"case {case!r} has a driving moment that depends on "
                                        "time: a steady rotation (for a flywheel) needs M1 "
                                        "constant or a function of phi")
+            if c.name == case and c.damping == 0.0:
+                raise sections[case].error("damping", (
+                    "0 in the case [dynamics.flywheel] sizes a flywheel for: with no damping "
+                    "nothing balances the work of M1 and the loads, the crank speeds up "
+                    "forever and there is no steady rotation"))
         fw.done()
         flywheel = (case, delta)
     sec.done()

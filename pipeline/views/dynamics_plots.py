@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..kernels import config as kc
-from ..solve.crank_motion import TAIL_SECONDS
+from ..solve.crank_motion import STATUS_NAMES, TAIL_SECONDS
 from .labels import unit_text
 
 BAND_WINDOW_S = 0.1     # s: the time window of a drawn band (a long series' min and max in it)
@@ -85,7 +85,7 @@ def dynamics_figure(case):
         head += (f"\noscillation about {o['phi_mid_deg']:.2f} deg, amplitude "
                  f"{o['amplitude_deg']:.3g} deg, period {o['period_s']:.4g} s")
     if case.status != kc.OK:
-        head += f"\nstopped: {kc.STATUS_NAMES[case.status]}"
+        head += f"\nstopped: {STATUS_NAMES[case.status]}"
     fig, axs = plt.subplots(2, 2, figsize=(12, 7.5), layout="constrained")
     rows = [(np.rad2deg(case.phi1), None, "phi1 [deg]"),
             (case.omega1, case.tail_omega1, "omega1 [rad/s]"),
