@@ -152,10 +152,11 @@ DYNAMICS_SAMPLES_WHY = "every sample is a row of the results file and of its pic
 # an input law must be resolved by the crank positions that sample it (the scene's dense
 # revolution, a sweep's positions): a rise or return (harmonic, cycloidal) spans at least
 # this many position steps, a geared crank (linear law) makes at most one turn per this
-# many steps; the largest sample of the law's acceleration is then within an eighth of
-# its swing of the peak, which the refinement between positions (pipeline.solve.peaks) brackets.
-# A table law's spline pieces each span at least TABLE_LAW_MIN_POSITIONS steps (its
-# acceleration is linear on a piece: every piece is sampled)
+# many steps; the dense curves (tables, pictures, a sweep's metrics) then show the law's
+# swing.  A table law's spline pieces each span at least TABLE_LAW_MIN_POSITIONS steps (its
+# acceleration is linear on a piece: every piece is sampled).  The scene's refined peaks
+# (pipeline.solve.peaks) divide the steps further round such a law and search each of its
+# pieces apart: exact to 1e-6 at these limits (tests/solve/test_law_peaks.py)
 LAW_MIN_POSITIONS = 8
 TABLE_LAW_MIN_POSITIONS = 2
 LAW_POSITIONS_WHY = ("a law steeper than the positions sample it passes between them "

@@ -10,6 +10,14 @@ largest sample of the dense revolution and its two neighbours, then found by
 a bounded 1-D maximiser (SciPy's Brent) on the exact kinematics: the
 continuation is walked from the first position to the trial angle, so the
 peak lies on the revolution's own assembly branch.
+
+An input law (``pipeline.model.groups.law``) may swing within a few dense
+positions (a short rise, a geared crank's turn) and its derivatives jump at
+its breaks (a rise's ends, a table's knots): the brackets are then found on
+the dense positions divided until each of the law's pieces holds
+PIECE_POSITIONS, with the breaks as positions of their own, each side of a
+break searched apart, and every hump whose sample may lie below its top
+refined too (``bracket_positions``, ``_rivals``).
 """
 
 from __future__ import annotations
@@ -161,18 +169,27 @@ def scene_peaks(res) -> list[Peak]:
         return []      # a scene that does not assemble everywhere has no peaks to refine
     crank = study.mechanism.crank
     phis = dense.phi
-    n = len(phis)
     order = 2
     with_forces = dense.forces is not None
     grid = _magnitudes(study, plan, dense, dense.forces)
+    nodes, walked, breaks = bracket_positions(study.mechanism, phis)
+    if len(nodes) == len(phis):
+        samples = grid            # no input law steeper than the dense revolution resolves
+    else:
+        c = solve_curves(plan, nodes, order, res.tolerances)
+        samples = _magnitudes(study, plan, c, scene_forces(study.mechanism, plan, c)
+                              if with_forces else None)
+        bad = c.status != 0       # (a position the walk between dense ones failed: unsampled)
+        samples = {k: np.where(bad, np.nan, v) for k, v in samples.items()}
+    n = len(nodes)
     phi_end = crank.phi0 + crank.rot * 2.0 * math.pi
     cache = {}
 
-    def at(k, phi):
-        """The magnitudes at ``phi``, walked from phis[0] through phis[:k]."""
-        key = (k, float(phi))
+    def at(m, phi):
+        """The magnitudes at ``phi``, walked from phis[0] through phis[:m]."""
+        key = (m, float(phi))
         if key not in cache:
-            path = np.concatenate([phis[:k], [phi]])
+            path = np.concatenate([phis[:m], [phi]])
             c = solve_curves(plan, path, order, res.tolerances)
             row = _row(c, -1)
             f = scene_forces(study.mechanism, plan, row) if with_forces else None
@@ -180,18 +197,16 @@ def scene_peaks(res) -> list[Peak]:
         return cache[key]
 
     out = []
-    for key, values in grid.items():
+    for key, values in samples.items():
         if not np.isfinite(values).any():
             continue     # not computed at the study's analysis level (velocities, ...)
         kmax = int(np.nanargmax(values))
-        best_phi, best = phis[kmax], float(values[kmax])
-        for k in _rivals(values):
-            lo = phis[k - 1] if k > 0 else phis[0]
-            hi = phis[k + 1] if k + 1 < n else phi_end
-            start = max(k - 1, 0)
+        best_phi, best = nodes[kmax], float(values[kmax])
+        for lo, hi, m in _brackets(_rivals(values), n, breaks, walked):
+            lo, hi = nodes[lo], nodes[hi] if hi < n else phi_end
 
-            def neg(phi, key=key, start=start):
-                st, mags = at(start, phi)
+            def neg(phi, key=key, m=m):
+                st, mags = at(m, phi)
                 v = mags[key][0]
                 return -v if st == 0 and math.isfinite(v) else math.inf
 
@@ -202,13 +217,82 @@ def scene_peaks(res) -> list[Peak]:
                                     method="bounded", options={"xatol": XATOL})
             if r.success and -r.fun > best:
                 best_phi, best = float(r.x), float(-r.fun)
+        top = float(np.nanmax(grid[key]))     # the largest sample of the dense revolution
         if key[0] == "transmission_deviation":     # stored as what designers read
             out.append(Peak("min_transmission_angle", key[1], 90.0 - best, key[2],
-                            math.degrees(best_phi), 90.0 - float(values[kmax])))
+                            math.degrees(best_phi), 90.0 - top))
         else:
-            out.append(Peak(key[0], key[1], best, key[2], math.degrees(best_phi),
-                            float(values[kmax])))
+            out.append(Peak(key[0], key[1], best, key[2], math.degrees(best_phi), top))
     return out
+
+
+# positions within each piece of an input law (a rise, a return, a spline piece, a geared
+# crank's turn) at which the peaks are bracketed: the dense revolution's steps that a
+# shorter piece overlaps are divided until it has as many (at the reader's steepest laws,
+# limits.LAW_MIN_POSITIONS and TABLE_LAW_MIN_POSITIONS, into 8 or 32)
+PIECE_POSITIONS = 64
+BREAK_FUZZ = 1e-12      # rad: a law's break this close to a position is at that position
+
+
+def bracket_positions(mech, phis):
+    """(nodes, walked, breaks) where the peaks are bracketed: the dense
+    revolution ``phis`` (its step 2 pi / n), each step that a piece of an
+    input law shorter than PIECE_POSITIONS steps overlaps divided in equal
+    parts until the piece holds that many (``Law.pieces``), and the crank
+    angles where a law's derivatives jump added as positions of their own.
+    ``walked[j]``: how many dense positions lie before node j (the walk to a
+    trial angle between nodes goes through those); ``breaks``: the nodes at
+    a law's break, each side of which is refined apart (a peak on a jump is a
+    one-sided limit).  The dense revolution itself (and no breaks) without
+    input laws."""
+    crank = mech.crank
+    n = len(phis)
+    step = 2.0 * math.pi / n
+    parts = np.ones(n, np.int64)         # per dense step
+    cuts = []
+    for g in mech.groups:
+        law = getattr(g, "law", None)
+        if law is None:
+            continue
+        where, pieces = law.pieces()
+        # along the revolution: the distance from phis[0] (rad, [0, 2 pi))
+        cuts += [crank.rot * (c - crank.phi0) % (2.0 * math.pi) for c in where]
+        for start, length in pieces:
+            need = math.ceil(PIECE_POSITIONS * step / length * (1.0 - 1e-9))
+            if need <= 1:
+                continue
+            # the piece, in the revolution's direction (a backward crank meets it end first)
+            first = (crank.rot * (start - crank.phi0) if crank.rot > 0 else
+                     -(start + length - crank.phi0)) % (2.0 * math.pi)
+            k = np.arange(math.floor(first / step), math.ceil((first + length) / step)) % n
+            parts[k] = np.maximum(parts[k], need)
+    dense_at = np.arange(n) * step
+    within = np.concatenate([np.arange(p) / p for p in parts]) if parts.max() > 1 else \
+        np.zeros(n)
+    owner = np.repeat(np.arange(n), parts)
+    sub = dense_at[owner] + within * step
+    nodes = phis[owner] + crank.rot * within * step
+    first_of = np.concatenate([[0], np.cumsum(parts)[:-1]])
+    sub[first_of], nodes[first_of] = dense_at, phis      # the dense positions themselves, exactly
+    is_break = np.zeros(len(sub), bool)
+    extra = []
+    for s in sorted(set(cuts)):
+        j = int(np.searchsorted(sub, s))
+        j = j if j < len(sub) and (j == 0 or sub[j] - s < s - sub[j - 1]) else j - 1
+        if abs(sub[j] - s) <= BREAK_FUZZ:
+            is_break[j] = True
+        elif 2.0 * math.pi - s <= BREAK_FUZZ:
+            is_break[0] = True
+        else:
+            extra.append(s)
+    if extra:
+        extra = np.array(extra)
+        order = np.argsort(np.concatenate([sub, extra]), kind="stable")
+        sub = np.concatenate([sub, extra])[order]
+        nodes = np.concatenate([nodes, crank.phi0 + crank.rot * extra])[order]
+        is_break = np.concatenate([is_break, np.ones(len(extra), bool)])[order]
+    walked = np.searchsorted(dense_at, sub, side="left")
+    return nodes, walked, frozenset(np.flatnonzero(is_break).tolist())
 
 
 def scene_motion(res) -> dict:
@@ -240,17 +324,46 @@ def scene_motion(res) -> dict:
 
 RIVALS = 4            # local maxima refined per quantity (two humps of nearly one height)
 RIVAL_SHARE = 0.999   # ... those within 0.1 % of the largest sample
+RISERS = 8            # and at most this many more whose top may rise above the largest sample
 
 
 def _rivals(values):
     """Indices of the grid's local maxima (cyclic) within RIVAL_SHARE of the
-    largest sample, the largest first: the true peak lies next to one of them."""
+    largest sample, the largest first, then those whose top may lie above the
+    largest sample, the most promising first: the true peak lies next to one
+    of them.  A sharp hump (a geared crank's turn, a short rise) may be
+    sampled well below its top: a parabola through a sample and its two
+    neighbours rises above the sample by at most an eighth of their second
+    difference; a hump counts as a riser if twice that lifts it to the
+    largest sample."""
     v = np.nan_to_num(np.asarray(values, float), nan=-np.inf)
     if not np.isfinite(v).any() or np.nanmax(v) <= 0.0:
         return [int(np.argmax(v))]
-    local = (v >= np.roll(v, 1)) & (v >= np.roll(v, -1)) & (v >= RIVAL_SHARE * v.max())
-    idx = np.nonzero(local)[0]
-    return [int(i) for i in idx[np.argsort(-v[idx])][:RIVALS]] or [int(np.argmax(v))]
+    before, after = np.roll(v, 1), np.roll(v, -1)
+    local = (v >= before) & (v >= after)
+    near = local & (v >= RIVAL_SHARE * v.max())
+    idx = np.nonzero(near)[0]
+    out = [int(i) for i in idx[np.argsort(-v[idx])][:RIVALS]] or [int(np.argmax(v))]
+    with np.errstate(invalid="ignore"):
+        reach = v + (2.0 * v - before - after) / 4.0
+        rise = local & ~near & np.isfinite(reach) & (reach >= v.max())
+    idx = np.nonzero(rise)[0]
+    return out + [int(i) for i in idx[np.argsort(-reach[idx])][:RISERS]]
+
+
+def _brackets(rivals, n, breaks, walked):
+    """(lo, hi, m) per search: the nodes (of ``n``; hi = n is the revolution's
+    end) that bracket each rival node k, k - 1 to k + 1, or each side apart
+    where k is a law's break; the first node also from the last (the
+    revolution is closed).  m: the dense positions walked before the search."""
+    out = []
+    for k in rivals:
+        if k in breaks:
+            sides = [(k - 1, k), (k, k + 1)] if k > 0 else [(n - 1, n), (0, 1)]
+        else:
+            sides = [(max(k - 1, 0), k + 1)] + ([(n - 1, n)] if k == 0 else [])
+        out += [(lo, hi, int(walked[lo])) for lo, hi in sides]
+    return out
 
 
 def _row(curves, k):

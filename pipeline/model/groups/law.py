@@ -66,6 +66,27 @@ class Law:
         s = CubicSpline(t, v, bc_type="periodic")
         return s.x.copy(), np.ascontiguousarray(s.c)
 
+    def pieces(self):
+        """(breaks, pieces) of the law against the cycle angle phi1: the cycle
+        angles (rad, in [0, 2 pi)) where its derivatives jump, the ends of its
+        smooth pieces (a rise's start and end, a table's knots; none for a
+        geared crank), and (start, length) of each piece (rad; a geared
+        crank's turns, which repeat its motion).  The peaks' refinement
+        (``pipeline.solve.peaks``) brackets each piece on its own, at enough
+        positions within it."""
+        two_pi = 2.0 * math.pi
+        if self.kind == "linear":
+            turn = two_pi / abs(self.ratio)
+            return (), tuple((k * turn, turn) for k in range(int(abs(self.ratio))))
+        if self.kind == "table":
+            knots = [c for c, _ in self.table]
+            gaps = [b - a for a, b in zip(knots, knots[1:] + [knots[0] + two_pi])]
+            starts = [(self.phase + c) % two_pi for c in knots]
+            return tuple(starts), tuple(zip(starts, gaps))
+        rise_end = (self.phase + self.rise) % two_pi
+        return ((self.phase % two_pi, rise_end),
+                ((self.phase % two_pi, self.rise), (rise_end, two_pi - self.rise)))
+
 
 
 def parse_law(s, rotary: bool) -> Law:
@@ -133,8 +154,10 @@ def law_grid_problem(law: Law, positions: int):
     None: a rise or a return over fewer than LAW_MIN_POSITIONS steps, a geared
     crank turning once in fewer, a table whose shortest spline piece spans
     fewer than TABLE_LAW_MIN_POSITIONS steps.  Between positions such a law
-    swings unseen, and the peaks refined from the positions' samples would be
-    wrong (an OK with a peak acceleration a thousand times too small)."""
+    swings unseen: the curves and a sweep's metrics would miss it (a 1 deg
+    rise gave a peak acceleration a thousand times too small, with OK).  At
+    the limit the scene's refined peaks are exact (``pipeline.solve.peaks``
+    divides the positions round the law)."""
     step = 360.0 / positions                                    # deg
     fuzz = 1.0 - 1e-9          # the angles went through radians: 8 steps is 8 steps
     need = lim.LAW_MIN_POSITIONS
