@@ -196,7 +196,9 @@ def links(study) -> list:
     carriers = [(b.name, _carries(b, m.groups)) for b in m.bodies]
     out, loose = {}, []
     for a, b in segs:
-        owner = next((name for name, pts in carriers if a in pts and b in pts), None)
+        owner = next((b_.name for b_ in m.bodies if a in b_.joints and b in b_.joints),
+                     None)                    # jointed at both ends first, then carried
+        owner = owner or next((name for name, pts in carriers if a in pts and b in pts), None)
         if owner is None:
             loose.append((a, b))
         else:
