@@ -139,3 +139,33 @@ def test_peaks_at_the_steepest_law_allowed_match_a_dense_reference(studies, case
         if not abs(got - want) <= REL * abs(want) + FLOOR * scale[key[0]]:
             bad.append(f"{key}: {got!r} against {want!r} ({(got - want) / want:.2e})")
     assert not bad, "\n".join(bad)
+
+
+@pytest.mark.parametrize("case", ["harmonic-rise-backwards", "linear", "table"])
+def test_the_brackets_hold_the_dense_positions_the_breaks_and_each_piece(studies, case):
+    """The positions the peaks are bracketed on: the dense ones, bit for bit and
+    in order, the law's breaks among them, and PIECE_POSITIONS within each of
+    the law's pieces; without a law, the dense revolution itself."""
+    from pipeline.solve.peaks import PIECE_POSITIONS, bracket_positions
+    from pipeline.study.reader import load_study
+    plain = load_study(studies / "ov7_class3.toml").mechanism
+    phis = revolution_angles(plain.crank, N)
+    nodes, walked, breaks = bracket_positions(plain, phis)
+    assert nodes.tolist() == phis.tolist() and not breaks
+    (name, steepest), _ = CASES[case]
+    mech = parse_study(_text(studies, name, steepest), "steepest.toml").mechanism
+    crank, law = mech.crank, mech.groups[0].law
+    phis = revolution_angles(crank, N)
+    nodes, walked, breaks = bracket_positions(mech, phis)
+    along = crank.rot * (nodes - crank.phi0)             # along the revolution, rad
+    assert (np.diff(along) > 0).all() and along[0] == 0.0 and along[-1] < 2 * math.pi
+    dense = np.flatnonzero(np.isin(nodes, phis))
+    assert nodes[dense].tolist() == phis.tolist() and walked[dense].tolist() == list(range(N))
+    cuts, pieces = law.pieces()
+    at = crank.rot * (np.array(cuts) - crank.phi0) % (2 * math.pi)
+    assert sorted(at.round(9).tolist()) == sorted(along[sorted(breaks)].round(9).tolist())
+    for start, length in pieces:
+        u = (crank.rot * (nodes - crank.phi0) - crank.rot * (start - crank.phi0)) \
+            % (2 * math.pi) if crank.rot > 0 else \
+            (-(nodes - crank.phi0) + (start + length - crank.phi0)) % (2 * math.pi)
+        assert (u < length).sum() >= min(PIECE_POSITIONS, length / (2 * math.pi / N))
