@@ -396,6 +396,9 @@ def _run_once(plan, mechanism, case, method, tols, file, dt, tol) -> CaseResult:
     n_sub, n_samples, n_tail = _grid(stepped)
     out = [np.full(n_samples, np.nan) for _ in range(4)]
     tail = [np.full(n_tail, np.nan) for _ in range(4)]
+    n_steps = (n_samples - 1) * n_sub      # the times of every record, as rk4 writes them
+    out[0][:] = np.arange(n_samples) * n_sub * dt
+    tail[0][:] = np.arange(n_steps - n_tail + 1, n_steps + 1) * dt
     if method == "rk4":
         status, crossing = kernels_for(plan).rk4(
             *_plan_args(plan, tols), *drive.args(), float(case.damping), float(case.phi_start),
@@ -443,6 +446,8 @@ def _check(a, b, factor) -> _Check:
         check.problem = (f"|omega1| passed the limit of {lim.MAX_OMEGA:g} rad/s at t = "
                          f"{a.t_cross:.6g} s, with {other} at {b.t_cross:.6g} s: the step "
                          "does not resolve the motion there")
+    if check.problem:        # the runs part ways: their differences up to there are no estimate
+        check.error_phi1 = check.error_omega1 = math.nan
     elif check.error_phi1 > ACCEPTED_ERROR_RAD:
         check.problem = (f"the estimated error of phi1 was {check.error_phi1:.2g} rad, above "
                          f"the accepted {ACCEPTED_ERROR_RAD:g} rad")
@@ -569,9 +574,9 @@ def _dop853(plan, drive, case, tols, out, tail, tol=DOP853_TOL):
             t_last = min(t_last, past[0]) if past.size else t_last
         restart()
         for times, dest in ((ts, out), (tt, tail)):
+            dest[0][:] = times
             times = times[times <= t_last]
             y = sol.sol(times)
-            dest[0][:times.size] = times
             dest[1][:times.size] = y[0]
             dest[2][:times.size] = y[1]
             dest[3][:times.size] = [eps(t, p, w) for t, p, w in zip(times, y[0], y[1])]

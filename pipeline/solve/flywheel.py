@@ -234,9 +234,8 @@ def flywheel_of(study, plan, cases) -> Flywheel:
     where = f"{study.path}: dynamics.flywheel"
     if run.status != kc.OK:
         return Flywheel.not_sized(name, target, (
-            f"{where}: case {name!r} ended {STATUS_NAMES[run.status]}"
-            f"{' (' + run.note + ')' if run.note else ''}: no flywheel is sized on a motion "
-            "that is not a result"))
+            f"{where}: case {name!r} ended {STATUS_NAMES[run.status]} (its note says why): "
+            "no flywheel is sized on a motion that is not a result"))
     try:
         return size_flywheel(plan, study.mechanism, run.case, target)
     except NoSteadyRotation as e:

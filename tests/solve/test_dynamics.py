@@ -281,3 +281,116 @@ def test_cli_run_and_export_motion_tables(studies, tmp_path):
         np.testing.assert_allclose(df["t [s]"], np.arange(1001) * 0.01, atol=1e-9)
         assert df["phi1 [deg]"][0] == pytest.approx(phi0) and df["omega1 [rad/s]"][0] == 0.0
         assert np.isfinite(df.to_numpy()).all()
+
+
+# ----------------------------------------------------------------- (g) every motion's error estimate
+# Issue 58: a step nothing checked gave wrong motions with status OK (RK4 locked onto a tenth of
+# a turn per step).  Every motion now carries its error estimate; above the README's figure it
+# is re-run with halved steps or refused, and a speed past the study's limit is a status.
+from pipeline.base import limits as lim
+
+REFUSED = (dy.INACCURATE, dy.TOO_FAST)
+
+
+@pytest.fixture(scope="module")
+def runup_dop853(study, plan, cases):
+    return dy.integrate(plan, study.mechanism, cases["runup"], "dop853")
+
+
+def test_the_accepted_error_is_the_readmes_figure():
+    assert dy.ACCEPTED_ERROR_RAD == RK4_VS_DOP853_RAD
+
+
+def test_the_shipped_runup_carries_an_estimate_of_its_error(runup_rk4, runup_dop853):
+    r, ref = runup_rk4, runup_dop853
+    assert r.status == ref.status == kc.OK and r.dt == RK4_DT_S and r.note == ""
+    assert 0.0 < r.error_phi1 <= dy.ACCEPTED_ERROR_RAD
+    assert 0.0 < ref.error_phi1 <= dy.ACCEPTED_ERROR_RAD
+    # the estimate has the size of the error against the reference (less the reference's own)
+    actual = max(np.max(np.abs(r.phi1 - ref.phi1)), np.max(np.abs(r.tail_phi1 - ref.tail_phi1)))
+    assert 0.5 * r.error_phi1 <= actual - ref.error_phi1 <= 2.0 * r.error_phi1
+    s = r.summary()
+    assert s["error_phi1"] == pytest.approx(r.error_phi1, rel=0.01) and s["dt"] == RK4_DT_S
+    assert "accepted: 8e-08 rad" in r.summary_lines()["error_phi1"]
+
+
+@pytest.mark.parametrize("changes", [dict(dt=1e-2, sample_dt=1e-2),
+                                     dict(dt=10.0, sample_dt=10.0)],
+                         ids=["dt=1e-2", "dt=t_end"])
+def test_a_coarse_step_is_refined_to_the_converged_motion(study, plan, cases, runup_dop853,
+                                                          changes):
+    """The study's step is too coarse (104.6 rad/s with status OK at 1e-2 s; -6.4e10 rad/s at
+    dt = t_end): halved until the estimate is within the figure, or refused."""
+    case = dy.with_changes(cases["runup"], **changes)
+    res = dy.integrate(plan, study.mechanism, case)
+    if res.status in REFUSED:
+        assert res.note.startswith("refused") and not np.isfinite(res.phi1).any()
+        return
+    assert res.status == kc.OK and res.dt < case.dt and res.error_phi1 <= dy.ACCEPTED_ERROR_RAD
+    assert res.note.startswith(f"re-run with dt = {res.dt:g} s, the study's {case.dt:g} s halved")
+    assert math.log2(case.dt / res.dt) == int(math.log2(case.dt / res.dt))
+    # the converged motion: DOP853's at its samples, within the figure and DOP853's own error
+    ref = runup_dop853
+    k = np.searchsorted(ref.t, res.t[-1] - 1e-9)
+    assert abs(res.phi1[-1] - ref.phi1[k]) <= dy.ACCEPTED_ERROR_RAD + ref.error_phi1
+    # (omega_mean interpolates the time linearly between steps at the revolutions' ends: its
+    # own error is O(dt^2 eps1 / omega1), about 1e-8 relative at either run's step)
+    assert res.steady()["omega_mean"] == pytest.approx(ref.steady()["omega_mean"], rel=1e-7)
+
+
+@pytest.mark.parametrize("changes, converged", [
+    (dict(M1=2.5), 12_428.9), (dict(M1=50.0), 53_387.0), (dict(M1=-5.0), -23_963.0),
+    (dict(omega_start=1e4), 173.1), (dict(M1=1e6), None), (dict(M1=1e300), None),
+    (dict(damping=1e4), None)],
+    ids=["M1=2.5", "M1=50", "M1=-5", "omega_start=1e4", "M1=1e6", "M1=1e300", "damping=1e4"])
+def test_a_motion_beyond_the_step_or_the_speed_limit_is_refused(study, plan, cases, changes,
+                                                                converged):
+    """The audit's cases (the converged mean speeds at dt = 1e-5 s, beyond the study's limit of
+    10^4 rad/s for all but omega_start = 1e4): never a wrong number with status OK."""
+    res = dy.integrate(plan, study.mechanism, dy.with_changes(cases["runup"], **changes))
+    if res.status == kc.OK:       # only the converged motion may be a result
+        assert converged is not None and abs(converged) < lim.MAX_OMEGA
+        assert res.error_phi1 <= dy.ACCEPTED_ERROR_RAD
+        assert res.steady()["omega_mean"] == pytest.approx(converged, rel=1e-3)
+        return
+    assert res.status in REFUSED, dy.STATUS_NAMES[res.status]
+    s = res.summary()
+    assert s["status"] in ("INACCURATE", "TOO_FAST") and "omega_mean" not in s
+    if res.status == dy.INACCURATE:
+        assert s["note"].startswith("refused: at dt = ") and not np.isfinite(res.phi1).any()
+        assert not np.isfinite(res.tail_omega1).any() and np.isfinite(res.t).all()
+    else:
+        kept = np.isfinite(res.omega1)
+        assert kept[0] and np.all(np.abs(res.omega1[kept]) <= lim.MAX_OMEGA)
+        assert "passed 10000 rad/s" in s["note"]
+
+
+def test_a_speed_past_the_limit_is_a_status(study, plan, cases):
+    """M1 = 50 over 0.1 s: the crank passes 10^4 rad/s (at about 0.075 s), resolved at a
+    refined step: TOO_FAST, the motion kept up to the crossing and nothing after it.  The
+    crossing's time against DOP853's (its event, an independent route)."""
+    case = dy.with_changes(cases["runup"], M1=50.0, t_end=0.1)
+    res = dy.integrate(plan, study.mechanism, case)
+    ref = dy.integrate(plan, study.mechanism, case, "dop853")
+    assert res.status == ref.status == dy.TOO_FAST, (res.note, ref.note)
+    assert res.t_cross == pytest.approx(ref.t_cross, abs=2 * res.dt)
+    assert res.error_phi1 <= dy.ACCEPTED_ERROR_RAD and res.dt < case.dt
+    before = res.t < res.t_cross
+    assert np.isfinite(res.phi1[before]).all() and not np.isfinite(res.phi1[~before]).any()
+    assert np.all(np.abs(res.omega1[before]) <= lim.MAX_OMEGA)
+    tail = res.tail_t < res.t_cross
+    assert np.all(np.abs(res.tail_omega1[tail]) <= lim.MAX_OMEGA)
+    assert not np.isfinite(res.tail_omega1[~tail]).any()
+    assert f"passed 10000 rad/s at t = {res.t_cross:.6g} s" in res.summary()["note"]
+    k = np.flatnonzero(before)[-1]
+    assert abs(res.phi1[k] - ref.phi1[k]) <= dy.ACCEPTED_ERROR_RAD + ref.error_phi1
+
+
+def test_the_estimate_is_stored_beside_the_case(tmp_path, study, plan, cases, runup_rk4):
+    import h5py
+    from pipeline.results.scene_file import _dynamics_case
+    with h5py.File(tmp_path / "d.h5", "w") as f:
+        g = _dynamics_case(f, runup_rk4)
+        assert g.attrs["error_phi1_rad"] == runup_rk4.error_phi1 > 0.0
+        assert g.attrs["accepted_error_phi1_rad"] == dy.ACCEPTED_ERROR_RAD
+        assert g.attrs["dt_used"] == RK4_DT_S and g.attrs["summary_error_phi1"] > 0.0

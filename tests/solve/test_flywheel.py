@@ -84,8 +84,13 @@ def test_the_scene_reports_and_stores_the_flywheel(tmp_path, capsys):
     out = tmp_path / "takeup.h5"
     assert main(["run", str(STUDIES / "takeup_dynamics.toml"), "-o", str(out),
                  "--no-pictures"]) == 0
-    line = [ln for ln in capsys.readouterr().out.splitlines() if "runup flywheel" in ln]
+    text = capsys.readouterr().out
+    line = [ln for ln in text.splitlines() if "runup flywheel" in ln]
     assert len(line) == 1 and "kg m^2 added on the crank shaft" in line[0]
+    # every motion's summary prints its error estimate (issue 58)
+    for case in ("runup", "free"):
+        line = [ln for ln in text.splitlines() if f"{case} error_phi1:" in ln]
+        assert len(line) == 1 and "rad estimated (accepted: 8e-08 rad" in line[0], text
     with h5py.File(out, "r") as f:
         g = f["flywheel"]
         assert g["J_add"].attrs["units"] == "kg*m^2" and g["J_add"][()] > 0
@@ -107,3 +112,61 @@ def test_a_wrong_flywheel_section_is_one_line(section, field, words):
     with pytest.raises(StudyError) as e:
         parse_study(text, "s.toml")
     assert field in str(e.value) and words in str(e.value) and "\n" not in str(e.value)
+
+
+# ----------------------------------------------------------------- no steady rotation (issue 58)
+def _takeup_with(line_old, line_new):
+    text = (STUDIES / "takeup_dynamics.toml").read_text()
+    assert text.count(line_old) >= 1
+    return text.replace(line_old, line_new, 1)
+
+
+def test_no_damping_under_the_flywheels_case_is_one_line_when_read():
+    """damping = 0: brentq's "Failed to converge after 500 iterations" with a traceback."""
+    with pytest.raises(StudyError) as e:
+        parse_study(_takeup_with("damping = 2e-4", "damping = 0.0"), "s.toml")
+    msg = str(e.value)
+    assert msg.startswith("s.toml: dynamics.cases[0].damping: ") and "\n" not in msg
+    assert "speeds up forever" in msg and "flywheel" in msg
+
+
+@pytest.mark.parametrize("changes, words", [
+    (dict(damping=0.0), "speeds up forever"),
+    (dict(damping=1e4), "stops within a revolution"),
+    (dict(M1=1e300), "beyond the study's limit"),
+    (dict(M1=2.5), "beyond the study's limit"),        # M1 / b = 12,500 rad/s
+], ids=["damping=0", "damping=1e4", "M1=1e300", "M1=2.5"])
+def test_without_a_steady_rotation_no_flywheel_is_sized(changes, words):
+    """The sizing itself, asked directly: its reason, never scipy's words (brentq's
+    "f(a) and f(b) must have different signs", "Failed to converge")."""
+    from pipeline.solve.crank_motion import with_changes
+    from pipeline.solve.flywheel import NoSteadyRotation
+    study = takeup()
+    plan, mech = study.mechanism.compile(), study.mechanism
+    case = with_changes(next(c for c in study.dynamics.cases if c.name == "runup"), **changes)
+    with pytest.raises(NoSteadyRotation) as e:
+        size_flywheel(plan, mech, case, 0.02)
+    assert words in str(e.value) and "f(a)" not in str(e.value) and "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize("line_new", ['M1 = 1e6', 'M1 = "1e300"', "damping = 1e4"])
+def test_a_refused_case_gets_no_flywheel(tmp_path, capsys, line_new):
+    """M1 = 1e6 (a SINGULAR run-up, yet a flywheel sized for 5.0e9 rad/s), M1 = "1e300" and
+    damping = 1e4 (tracebacks): the run-up is refused, and the flywheel line says so in one
+    line naming the study file and the field."""
+    study = tmp_path / "s.toml"
+    old = "damping = 2e-4" if line_new.startswith("damping") else "M1 = 0.025"
+    study.write_text(_takeup_with(old, line_new))
+    out = tmp_path / "s.h5"
+    assert main(["run", str(study), "-o", str(out), "--no-pictures"]) == 0
+    text = capsys.readouterr().out
+    status = [ln for ln in text.splitlines() if "runup status:" in ln]
+    assert len(status) == 1 and status[0].split()[-1] in ("INACCURATE", "TOO_FAST")
+    line = [ln for ln in text.splitlines() if "runup flywheel" in ln]
+    assert len(line) == 1, text
+    assert f"not sized: {study}: dynamics.flywheel: case 'runup' ended " in line[0]
+    assert "omega_mean" not in text.split("runup status")[1].split("free status")[0]
+    with h5py.File(out, "r") as f:
+        assert "J_add" not in f["flywheel"] and "not sized" not in f["flywheel"].attrs["case"]
+        assert f["flywheel"].attrs["not_sized"].startswith(f"{study}: dynamics.flywheel: ")
+        assert f["dynamics/runup"].attrs["status"] in ("INACCURATE", "TOO_FAST")
