@@ -78,11 +78,16 @@ class SweepProblem:
         state.pop("_gpu", None)
         return state
 
-    def evaluate_rows(self, pars, parallel=True, n_jobs=None):
+    def evaluate_rows(self, pars, parallel=True, n_jobs=None, watch=None):
         """Status and metric rows (N_METRICS) of the parameter rows ``pars``: on
         the GPU (device 'gpu'), else on ``n_jobs`` threads (all cores by
         default), or on the calling thread only (``parallel=False``: a Dask
-        task)."""
+        task).  ``watch`` (``builds.Watch``): told of the rows done as the
+        work goes (the robust metrics' builds, slice by slice), and asked
+        between two slices whether to stop."""
+        share = None if watch is None else watch.share(len(pars))
+        if share is not None:
+            share.check()
         if self.device == "gpu":
             status, metrics = self.gpu().evaluate_rows(pars)
         else:
@@ -98,14 +103,16 @@ class SweepProblem:
             metrics = np.concatenate([metrics, np.full((len(status), N_ROW - ks.N_METRICS),
                                                        np.nan)], axis=1)
             self.robust.fill(np.ascontiguousarray(pars, float), status, metrics, n_jobs,
-                             parallel)
+                             parallel, share)
+        if share is not None:
+            share.reached(1.0)
         return status, metrics
 
-    def evaluate_chunk(self, chunk, parallel=True, n_jobs=None):
+    def evaluate_chunk(self, chunk, parallel=True, n_jobs=None, watch=None):
         """(chunk, x, status, metrics, rejected draws per triangle)."""
         x, rejected = draw_checked(self.spec, chunk)
         status, metrics = self.evaluate_rows(parameter_rows(self.plan, self.spec, x), parallel,
-                                             n_jobs)
+                                             n_jobs, watch)
         return chunk, x, status, metrics, rejected
 
 

@@ -48,6 +48,7 @@ from ..kernels import sweep as ks
 from ..kernels.pareto import crowding_distance, nondominated_rank
 from ..model.metric_catalogue import ROBUST_OF
 from ..results.search_file import SearchFile, search_summary
+from .builds import Watch
 from .search_problem import FrontTracker, SweepBlackBox, TriangleRepair, _broken, hv_scale
 from ..study.search_spec import METHODS, SearchSpec
 from ..results.storage import ResultsError, attr_text, hdf5_writing, open_results
@@ -174,13 +175,16 @@ class _InPymoo:
 
 # ----------------------------------------------------------------- evaluation engines
 class _Local:
-    def __init__(self, problem: SweepProblem, n_jobs):
+    """All cores of this machine; ``watch`` (``builds.Watch``) is told of the
+    progress within a generation (its robust builds, slice by slice)."""
+
+    def __init__(self, problem: SweepProblem, n_jobs, watch=None):
         if n_jobs is not None and n_jobs < 1:
             raise ValueError(f"--jobs must be at least 1, got {n_jobs}")
-        self.problem, self.n_jobs = problem, n_jobs
+        self.problem, self.n_jobs, self.watch = problem, n_jobs, watch
 
     def __call__(self, pars):
-        return self.problem.evaluate_rows(pars, True, self.n_jobs)
+        return self.problem.evaluate_rows(pars, True, self.n_jobs, self.watch)
 
 
 def evaluate_rows_task(problem, pars):
@@ -330,13 +334,14 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
     done = set(journal.done())
     if done:
         log.info("resuming: %d of %d generations already done", len(done), len(planned))
-    evaluate = _Dask(problem, client) if client is not None else _Local(problem, n_jobs)
     repair = TriangleRepair(problem.spec)
     algorithm = make_algorithm(search, x0, repair, box)
     tracker = FrontTracker(scale)
     sizes, history = [], []
     computed = evaluated = 0
     bar = _progress(search, progress)
+    watch = Watch(bar.update) if client is None else None     # told as a generation goes
+    evaluate = _Dask(problem, client) if client is not None else _Local(problem, n_jobs, watch)
     t0 = time.perf_counter()
     unsaved = []                # generations evaluated, not yet journalled
     journalled = time.monotonic()
@@ -368,6 +373,7 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
 
             for gen in range(len(planned)):
                 repair.count = 0
+                told = False
                 X = algorithm.ask()
                 if len(X) == 0:
                     log.info("generation %d: the algorithm proposes nothing new; the search "
@@ -383,6 +389,7 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
                                            "file")
                 else:
                     status, metrics = evaluate(parameter_rows(problem.plan, problem.spec, X))
+                    told = watch is not None        # the bar was told of these as they went
                     unsaved.append((gen, X, status, metrics,
                                     np.array([repair.count], np.int64)))
                     computed += len(X)
@@ -402,7 +409,8 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
                         write_pending()
                 if time.monotonic() - journalled > JOURNAL_EVERY_S:
                     save_unsaved()
-                bar.update(len(X))
+                if not told:
+                    bar.update(len(X))
                 bar.set_postfix_str(f"generation {gen}/{len(planned) - 1}, "
                                     f"hypervolume {hv:.4f}", refresh=False)
                 if on_generation is not None:

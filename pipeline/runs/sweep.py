@@ -30,6 +30,7 @@ from ..study.sweep_spec import SweepSpec, parameter_rows  # noqa: F401
 # the problem a worker evaluates has a module of its own (problem.py); its names stay
 # importable from here
 from .problem import SweepProblem, compile_notice, plain_problem  # noqa: E402,F401
+from .builds import Watch  # noqa: E402
 # the journal, the objectives and the results file have modules of their own; their
 # names stay importable from here (search, browse, report and the tests use them)
 from ..results.journal import JOURNAL_VERSION, MANIFEST_DEFAULTS, Journal, manifest_for  # noqa: F401
@@ -267,14 +268,18 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
     if finished:
         log.info("resuming: %d of %d chunks already done", len(finished), spec.n_chunks)
     bar = _progress(spec, len(finished), progress)
+    # locally the bar is told as a chunk's work goes (its robust builds slice by slice)
+    watch = Watch(bar.update) if client is None else None
     computed = 0
     try:
         with hdf5_writing(work, expendable=False) as f:
             d = sf.datasets(f)
             flushed = time.monotonic()
-            for c, x, status, metrics, rejected in _chunks(problem, todo, client, n_jobs):
+            for c, x, status, metrics, rejected in _chunks(problem, todo, client, n_jobs,
+                                                           watch):
                 computed += len(status)
-                bar.update(len(status))
+                if watch is None:
+                    bar.update(len(status))
                 kept = sf.kept(c, x, status, metrics)     # store = feasible: those rows only
                 if kept is not None:
                     x, status, metrics, index, counts = kept
@@ -344,8 +349,10 @@ def _progress(spec, done, enabled):
                desc="sweep", enabled=enabled, unit_scale=True, smoothing=0.1)
 
 
-def _chunks(problem, todo, client, n_jobs):
-    """Yield (chunk, x, status, metrics) as chunks finish."""
+def _chunks(problem, todo, client, n_jobs, watch=None):
+    """Yield (chunk, x, status, metrics) as chunks finish.  Locally, when the
+    caller stops (an interruption, a failure), the chunk at work stops at its
+    next slice (``watch``) and the one queued behind it never starts."""
     if client is not None:
         yield from _dask_chunks(problem, todo, client)
         return
@@ -354,15 +361,22 @@ def _chunks(problem, todo, client, n_jobs):
     # the next chunk is drawn and evaluated while the caller journals and writes
     # this one (the kernels run on the worker threads, HDF5 on this one)
     from concurrent.futures import ThreadPoolExecutor
-    with ThreadPoolExecutor(1, thread_name_prefix="pipeline-chunks") as ahead:
+    watch = Watch() if watch is None else watch
+    ahead = ThreadPoolExecutor(1, thread_name_prefix="pipeline-chunks")
+    try:
         pending = None
         for c in todo:
-            nxt = ahead.submit(problem.evaluate_chunk, c, True, n_jobs)
+            nxt = ahead.submit(problem.evaluate_chunk, c, True, n_jobs, watch)
             if pending is not None:
                 yield pending.result()
             pending = nxt
         if pending is not None:
             yield pending.result()
+    except BaseException:       # KeyboardInterrupt, or the caller's own end (GeneratorExit)
+        watch.stop()
+        raise
+    finally:
+        ahead.shutdown(wait=True, cancel_futures=True)
 
 
 CONNECT_TIMEOUT = "20s"     # how long to wait for a Dask scheduler to answer
