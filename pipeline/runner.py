@@ -339,7 +339,7 @@ def _run_tolerance(source, candidate, out, *, samples, pictures, overwrite, n_jo
         log.info("tolerance analysis of the %s: %s builds", label,
                  f"{samples or spec.samples:,}")
         a = analyse(study, mech, spec, label=label, sweep_spec=sweep, samples=samples,
-                    n_jobs=n_jobs)
+                    n_jobs=n_jobs, source=source)
         write_tolerance(a, study, out, **origin)
     pics = []
     if pictures:

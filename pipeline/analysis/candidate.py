@@ -162,7 +162,7 @@ def tolerance_design(source, candidate=None):
         if candidate is not None:
             raise ValueError(f"{source} is a scene result: it has one design, no --candidate")
         with open_results(source, "scene") as f:
-            study = stored_study(f.attrs, source)
+            study = load_study_from_results(f)
         return study, study.mechanism, study.name or "design", None, {"source": str(source)}
     if kind != "sweep":
         raise ResultsError(source, f"is a {kind} result; give a scene or a sweep result")

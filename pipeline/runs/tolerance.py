@@ -131,16 +131,21 @@ class ToleranceAnalysis:
 
 # ----------------------------------------------------------------- the analysis
 def analyse(study, mech, spec: ToleranceSpec, *, label="design", sweep_spec=None,
-            samples=None, n_jobs=None) -> ToleranceAnalysis:
+            samples=None, n_jobs=None, source=None) -> ToleranceAnalysis:
     """The tolerance analysis of design ``mech`` of ``study`` (a scene's own
     mechanism or a sweep candidate's, ``sweep.apply_design``); ``sweep_spec``:
-    the sweep whose constraints the builds must meet."""
+    the sweep whose constraints the builds must meet.  A design that does not
+    assemble is refused (its builds deviate from nothing): ``source``, the
+    file it came from, names it."""
     t0 = time.perf_counter()
     if sweep_spec is not None:      # a build has no builds of its own: robust bounds apart
         sweep_spec = sweep_spec.nominal()
     with compile_notice():
         ev = BuildEvaluator(study, mech, _wanted(spec, sweep_spec, mech))
-        nom_status, nom_values, _ = ev(ev.plan.par[None, :], n_jobs)
+        nom_status, nom_values, nom_rows = ev(ev.plan.par[None, :], n_jobs)
+    if nom_status[0] != kc.OK:
+        why = failure_text(label, ev.plan, nom_status[0], nom_rows[0])
+        raise ValueError(f"{source or study.path}: {why}")
     n = spec.samples if samples is None else int(samples)
     dims = spec.dimensions(mech)
     deltas = deviations(drawn(dims), n, spec.seed)
@@ -150,6 +155,19 @@ def analyse(study, mech, spec: ToleranceSpec, *, label="design", sweep_spec=None
     return ToleranceAnalysis(label, spec, dims, ev.metrics, nom_values[0], int(nom_status[0]),
                              deltas, status, values, meets, bounds, sens, checked, oat,
                              time.perf_counter() - t0)
+
+
+def failure_text(label, plan, status, row):
+    """'the DESIGN does not assemble: STATUS at phi1 = X deg in group G; ...'
+    from a kernel's metric row of the design."""
+    from ..kernels import sweep as ks
+    phi, group = row[ks.M_FAIL_PHI], row[ks.M_FAIL_GROUP]
+    where = f" at phi1 = {math.degrees(phi):.2f} deg" if math.isfinite(phi) else ""
+    if math.isfinite(group):
+        where += f" in group {plan.group_names[int(group)]}"
+    return (f"the {label} does not assemble: {kc.STATUS_NAMES.get(int(status), int(status))}"
+            f"{where}; a tolerance analysis needs a design that assembles over the whole "
+            "revolution (its builds deviate from it)")
 
 
 def _wanted(spec, sweep_spec, mech):
