@@ -403,7 +403,15 @@ def compare_output(paths, candidate=None, out_dir=None) -> Path:
         name = f"{safe_name(first.stem)}_candidate{safe_name(str(candidate))}_vs_reference"
     else:
         name = "_vs_".join(safe_name(Path(p).stem) for p in paths)
+    if len(name) > COMPARE_NAME:    # many or long names: cut, and told apart by a hash of all
+        import hashlib
+        digest = hashlib.sha256(name.encode()).hexdigest()[:12]
+        name = f"{name[:COMPARE_NAME - 13]}_{digest}"
     return folder / f"{name}_compare.png"
+
+
+COMPARE_NAME = 160      # characters of a comparison picture's name before '_compare.png': a
+                        # file name (and its temporary name while written) within 255 bytes
 
 
 def comparison(paths, candidate=None):

@@ -81,7 +81,13 @@ def read_design(path, label=None, source=None) -> Design:
             raise ResultsError(path, f"is a {kind} result; `pipeline compare` reads scene "
                                      "results files (`pipeline run` of a scene study)")
     with open_results(path, "scene") as f:
-        return design_of(f, label or path.stem, source or path)
+        try:
+            return design_of(f, label or path.stem, source or path)
+        except ResultsError:
+            raise
+        except (OSError, ValueError, KeyError, TypeError, IndexError) as e:   # h5py's words
+            why = " ".join(str(e).split()) or type(e).__name__
+            raise ResultsError(path, f"is damaged: {why}") from None
 
 
 def design_of(f, label, source) -> Design:
