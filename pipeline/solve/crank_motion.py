@@ -318,8 +318,9 @@ class CaseResult:
         out = {k: (f"{v:g}{SUMMARY_UNITS.get(k, '')}" if isinstance(v, float) else str(v))
                for k, v in self.summary().items()}
         if "error_phi1" in out:
-            out["error_phi1"] += (f" estimated (accepted: {ACCEPTED_ERROR_RAD:g} rad; "
-                                  f"{'dt against dt/2' if self.method == 'rk4' else 'against a tolerance ten times tighter'})")
+            how = ("dt against dt/2" if self.method == "rk4"
+                   else "against a tolerance ten times tighter")
+            out["error_phi1"] += f" estimated (accepted: {ACCEPTED_ERROR_RAD:g} rad; {how})"
         return out
 
     def summary(self):

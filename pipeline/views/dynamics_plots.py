@@ -7,6 +7,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -140,7 +141,8 @@ def _band(ax, t, y, colour, label, window=BAND_WINDOW_S):
     edges = np.linspace(0, t.size, columns + 1).astype(int)
     spans = list(zip(edges[:-1], edges[1:]))
     tc = np.array([t[a:b].mean() for a, b in spans])
-    with np.errstate(all="ignore"):
+    with warnings.catch_warnings():     # a span with no motion (a stopped or refused case)
+        warnings.simplefilter("ignore", RuntimeWarning)
         lo = np.array([np.nanmin(y[a:b]) for a, b in spans])
         hi = np.array([np.nanmax(y[a:b]) for a, b in spans])
         mid = np.array([np.nanmean(y[a:b]) for a, b in spans])

@@ -283,7 +283,7 @@ def test_cli_run_and_export_motion_tables(studies, tmp_path):
         assert np.isfinite(df.to_numpy()).all()
 
 
-# ----------------------------------------------------------------- (g) every motion's error estimate
+# ---------------------------------------------------------------- (g) every motion's error estimate
 # Issue 58: a step nothing checked gave wrong motions with status OK (RK4 locked onto a tenth of
 # a turn per step).  Every motion now carries its error estimate; above the README's figure it
 # is re-run with halved steps or refused, and a speed past the study's limit is a status.
