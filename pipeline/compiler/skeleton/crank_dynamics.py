@@ -46,7 +46,7 @@ def acceleration(par, K, tols, const, tab_phi, h_phi, tab_t, h_t, damping, t, ph
 
 def rk4(par, K, tols, *args):
     """RK4 of the crank's motion (pipeline.kernels.dynamics.rk4: its arguments
-    after tols; its status and the samples recorded)."""
+    after tols; its status and the step where |omega1| passed the limit, or -1)."""
     dynamics.compile_integrator()
     return dynamics.rk4(advance_first_class, start_first_class, K, SIZES, MASSES, par, tols,
                         *args)
