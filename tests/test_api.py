@@ -118,7 +118,7 @@ def test_export_options_that_do_not_apply_are_refused(sweep, tmp_path, capsys):
     assert main(["export", str(sweep), "--csv", str(tmp_path), "--every", "3"]) == 2
     assert "--every" in capsys.readouterr().err
     assert main(["export", str(sweep)]) == 2
-    assert "--csv DIR or --parquet DIR" in capsys.readouterr().err
+    assert "--csv DIR, --parquet DIR, --dxf DIR or --study OUT.toml" in capsys.readouterr().err
 
 
 def test_pictures_are_figures_the_caller_saves(studies, tmp_path):

@@ -369,7 +369,48 @@ def _checked(f, path, kind):
         f.close()
         what = f"missing {', '.join(missing)}" if missing else "datasets of different lengths"
         raise ResultsError(path, f"damaged or incomplete results file ({what})")
+    bad = unknown_status(f)
+    if bad:
+        f.close()
+        raise ResultsError(path, f"damaged results file: {bad}")
     return f
+
+
+STATUS_BLOCK = 1 << 22      # status codes checked per read (4 MiB of int8)
+
+
+def unknown_status(f) -> str | None:
+    """The first status code in ``f`` that is not one of the package's, as
+    "DATASET[row] = code (known: ...)", else None.  Every status dataset is
+    checked (an HDF5 enumeration, or a dataset named status): a code a reader
+    would take for some status, or fail on, means the bytes were damaged or
+    written by another program."""
+    found = []
+
+    def visit(name, obj):
+        if not isinstance(obj, h5py.Dataset) or obj.dtype.kind not in "iu":
+            return
+        enum = h5py.check_enum_dtype(obj.dtype)
+        if enum is not None or name.rsplit("/", 1)[-1] == "status":
+            known = (set(enum.values()) if enum is not None else set(kc.STATUS_NAMES))
+            found.append((name, obj, known))
+
+    f.visititems(visit)
+    for name, d, known in found:
+        if d.size == 0:
+            continue
+        codes = np.array(sorted(known))
+        rows = d.shape[0] if d.ndim else 1
+        step = max(1, STATUS_BLOCK // max(1, d.size // rows))
+        for lo in range(0, rows, step):
+            block = np.atleast_1d(np.asarray(d[lo:lo + step] if d.ndim else d[()]))
+            if block.min() >= codes[0] and block.max() <= codes[-1] and (
+                    codes.size == codes[-1] - codes[0] + 1 or np.isin(block, codes).all()):
+                continue
+            at = np.argwhere(~np.isin(block, codes))[0]
+            return (f"{name}[{lo + int(at[0])}] = {int(block[tuple(at)])}, not a status code "
+                    f"of the package (known: {', '.join(str(c) for c in codes)})")
+    return None
 
 
 # what every reader of a kind of results file relies on

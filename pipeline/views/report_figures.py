@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from ..base.files import literal_text
 from .labels import unit_text
 
 MAX_GREY = 60_000       # infeasible points drawn in the Pareto plot (seeded subsample)
@@ -19,7 +20,8 @@ MAX_FRONT_POINTS = 200_000
 def _png(fig, dpi=100) -> str:
     import matplotlib.pyplot as plt
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
+    with literal_text(fig):
+        fig.savefig(buf, format="png", dpi=dpi)
     plt.close(fig)
     return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
 
