@@ -4,7 +4,6 @@ the run completes (``--resume`` rebuilds the results file from it)."""
 
 from __future__ import annotations
 
-import hashlib
 import json
 import re
 import shutil
@@ -16,6 +15,7 @@ import numpy as np
 from ..base.errors import ResultsError
 from ..base.files import refuse_link, replacing
 from ..kernels import sweep as ks
+from .storage import study_digest
 from ..study.sweep_spec import SweepSpec
 
 _BLOCK = re.compile(r"block_(\d{7})_(\d{7})\.npz")
@@ -132,8 +132,8 @@ class Journal:
 
 
 def manifest_for(study, spec: SweepSpec):
-    return {"journal_version": JOURNAL_VERSION, "study_sha256":
-            hashlib.sha256(study.text.encode()).hexdigest(), "study_file": str(study.path),
+    return {"journal_version": JOURNAL_VERSION, **study_digest(study),
+            "study_file": str(study.path),
             "candidates": spec.candidates, "chunk_size": spec.chunk_size, "seed": spec.seed,
             "sampler": spec.sampler, "positions": spec.positions, "store": spec.store,
             "metric_columns": ks.N_METRICS}
@@ -141,4 +141,4 @@ def manifest_for(study, spec: SweepSpec):
 
 # what a journal written before a manifest key existed meant by it (18 metric
 # columns: journal version 3's)
-MANIFEST_DEFAULTS = {"store": "all", "metric_columns": 18}
+MANIFEST_DEFAULTS = {"store": "all", "metric_columns": 18, "cad_reports_sha256": ""}

@@ -43,9 +43,34 @@ def write_root_attrs(f, kind, study, **extra):
     f.attrs["study_file"] = str(study.path)
     f.attrs["study_toml"] = study.text
     if getattr(study, "cad_reports", None):    # the CAD reports its bodies read
-        f.attrs["cad_reports"] = json.dumps(study.cad_reports)
+        f.attrs["cad_reports"] = cad_reports_text(study)
     for k, v in extra.items():
         f.attrs[k] = v
+
+
+def cad_reports_text(study) -> str:
+    """The CAD reports a study's bodies read, as the results file keeps them
+    ("" for a study without)."""
+    reports = getattr(study, "cad_reports", None)
+    return json.dumps(reports) if reports else ""
+
+
+def study_digest(study) -> dict:
+    """What identifies the study a run computes, for a journal's manifest:
+    its text and the CAD reports its bodies read (the same text with an edited
+    report is another mechanism; "" where there is none, as before reports)."""
+    import hashlib
+    reports = cad_reports_text(study)
+    return {"study_sha256": hashlib.sha256(study.text.encode()).hexdigest(),
+            "cad_reports_sha256": hashlib.sha256(reports.encode()).hexdigest() if reports
+            else ""}
+
+
+def same_study(f, study) -> bool:
+    """Whether the results file ``f`` was computed from ``study``: the same
+    text and the same CAD reports."""
+    return (attr_text(f.attrs.get("study_toml")) == study.text
+            and attr_text(f.attrs.get("cad_reports", "")) == cad_reports_text(study))
 
 
 # Compression of every chunked dataset: byte shuffle + gzip (deflate) at a low

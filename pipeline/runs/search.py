@@ -51,7 +51,8 @@ from ..results.search_file import SearchFile, search_summary
 from .builds import Watch
 from .search_problem import FrontTracker, SweepBlackBox, TriangleRepair, _broken, hv_scale
 from ..study.search_spec import METHODS, SearchSpec
-from ..results.storage import ResultsError, attr_text, hdf5_writing, open_results
+from ..results.storage import (ResultsError, attr_text, hdf5_writing, open_results, same_study,
+                                study_digest)
 from ..results.journal import MANIFEST_DEFAULTS, Journal
 from .sweep import (SweepInterrupted, SweepOutcome, SweepProblem, _connect, aside_or_done,
                     build_problem, check_existing, compile_notice, finish_run,
@@ -216,7 +217,7 @@ class _Dask:
 def manifest_for(study, search: SearchSpec, x0, seeded_from, n_seeded):
     import pymoo
     return {"journal_kind": JOURNAL_KIND, "journal_version": JOURNAL_VERSION,
-            "study_sha256": hashlib.sha256(study.text.encode()).hexdigest(),
+            **study_digest(study),
             "study_file": str(study.path), "method": search.method,
             "population": search.population, "offspring": search.offspring,
             "generations": search.generations, "seed": search.seed,
@@ -253,7 +254,7 @@ def _check_existing(out: Path, journal: Journal, study, want, resume, overwrite)
                 and man.get(k, MANIFEST_DEFAULTS.get(k)) != want[k]]
 
     check_existing(out, journal, resume, overwrite, journal_diff=journal_diff,
-                   same_results=lambda f: (f.attrs.get("study_toml") == study.text and
+                   same_results=lambda f: (same_study(f, study) and
                                            attr_text(f.attrs.get("kind_detail", "")) == "search"),
                    what="search", other="or a Monte-Carlo sweep")
 

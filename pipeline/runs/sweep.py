@@ -24,7 +24,7 @@ import h5py
 
 from ..base.files import RunLock, fault_point, replacing
 from ..base.limits import CHUNK_WHY, MAX_CHUNK
-from ..results.storage import FORMAT, ResultsError, hdf5_writing, room_for
+from ..results.storage import FORMAT, ResultsError, hdf5_writing, room_for, same_study
 from ..study.sampling import draw_checked  # noqa: F401 (importable from here)
 from ..study.sweep_spec import SweepSpec, parameter_rows  # noqa: F401
 # the problem a worker evaluates has a module of its own (problem.py); its names stay
@@ -131,7 +131,7 @@ def _check_existing(out: Path, journal: Journal, study, spec, resume: bool,
         out, journal, resume, overwrite,
         journal_diff=lambda man: [k for k in want if k != "study_file"
                                   and man.get(k, MANIFEST_DEFAULTS.get(k)) != want[k]],
-        same_results=lambda f: (f.attrs.get("study_toml") == study.text
+        same_results=lambda f: (same_study(f, study)
                                 and int(f.attrs.get("n_candidates", -1)) == spec.candidates),
         what="sweep", other="or another candidate count")
 
