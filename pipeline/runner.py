@@ -44,7 +44,7 @@ def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
     # before anything is computed: never over the study or the --from file, a folder, a
     # file that is not a results file, nor through a link to nothing (an existing results
     # file: the run's own checks below, which know --overwrite, --resume and journals)
-    results_output(out, inputs=(path, seed_from), overwrite=True)
+    out = results_output(out, inputs=(path, seed_from), overwrite=True)
     if study.kind == "scene":
         if candidates is not None or resume or scheduler or seed_from or device or store:
             raise ValueError(f"{path}: --candidates, --resume, --scheduler, --from, --device "
@@ -325,12 +325,13 @@ def _run_tolerance(source, candidate, out, *, samples, pictures, overwrite, n_jo
     from .runs.tolerance import analyse
 
     def check(out):     # before the builds: never the source, nor a file not a results file
-        results_output(out, inputs=(source,), overwrite=overwrite)
+        out = results_output(out, inputs=(source,), overwrite=overwrite)
         if pictures:
             for suffix in ("histograms", "tornado"):
                 check_output(out.with_name(f"{out.stem}_{suffix}.png"), inputs=(source,))
+        return out
     if out is not None:
-        check(Path(out))
+        out = check(Path(out))
     study, mech, label, sweep, origin, spec = tolerance_setup(source, candidate,
                                                               samples=samples, metrics=metrics)
     out = Path(out) if out else tolerance_output(source, origin)
@@ -440,7 +441,7 @@ def run_compare(paths, candidate=None, out_dir=None, *, pictures=True):
     if out_dir is not None:
         if Path(out_dir).exists() and not Path(out_dir).is_dir():
             raise ResultsError(out_dir, "is a file; -o names the folder of the picture")
-        check_output_folder(out_dir)
+        out_dir = check_output_folder(out_dir)
     if pictures and not (candidate is not None and not str(candidate).strip().isdigit()):
         # the picture's name is known before the designs are read ('knee' resolves later:
         # save_figure checks that one): never over an input or a results file

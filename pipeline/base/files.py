@@ -130,7 +130,20 @@ def _same_file(a, b) -> bool:
     try:
         return os.path.samefile(a, b)
     except OSError:          # one of them is not there (or not reachable)
-        return False
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def _where(path) -> Path:
+    """Where a write to ``path`` lands: ``path`` if it is there (a file, a
+    folder or a link), else, since the folders on the way that are missing are
+    made as folders ("new/../x.h5" is x.h5), the tidy name of that place (the
+    links in the folders that are there followed only where needed)."""
+    path = Path(path)
+    if os.path.lexists(path):
+        return path
+    real = Path(os.path.realpath(path.parent)) / path.name
+    tidy = Path(os.path.normpath(path))
+    return tidy if Path(os.path.realpath(tidy.parent)) / tidy.name == real else real
 
 
 def check_output(path, *, inputs=(), replaces=None, overwrite=False) -> Path:
@@ -145,49 +158,52 @@ def check_output(path, *, inputs=(), replaces=None, overwrite=False) -> Path:
     only such a file is replaced, and only with ``overwrite`` (a link is
     followed only to one).  None for pictures, pages and tables: they replace
     an earlier one of theirs, never an HDF5 file (a results file) and never
-    through a symbolic link, whose target would be an unrelated file."""
-    path = Path(path)
+    through a symbolic link, whose target would be an unrelated file.
+
+    Returns the path to write: ``path`` itself, or where it leads when a
+    folder on the way is not there yet ("new/../x.h5" is x.h5)."""
+    given, path = Path(path), _where(path)
     if path.is_symlink() and not path.exists():
-        raise ResultsError(path, f"is a symbolic link to nothing ({os.readlink(path)}); "
-                                 "refusing to create a file through it: delete the link or "
-                                 "give another name")
+        raise ResultsError(given, f"is a symbolic link to nothing ({os.readlink(path)}); "
+                                  "refusing to create a file through it: delete the link or "
+                                  "give another name")
     if path.is_dir():
-        raise ResultsError(path, "is a folder; give a file name")
+        raise ResultsError(given, "is a folder; give a file name")
     for p in inputs:
         if p is not None and _same_file(path, p):
-            same = "" if Path(p) == path else f" ({p})"
-            raise ResultsError(path, f"is a file this command reads{same}; its output would "
-                                     "replace it: give another output name")
+            same = "" if Path(p) == given else f" ({p})"
+            raise ResultsError(given, f"is a file this command reads{same}; its output would "
+                                      "replace it: give another output name")
     if not path.exists():
         return path
     if replaces is None:
         if path.is_symlink():
-            raise ResultsError(path, f"is a symbolic link (to {os.readlink(path)}); refusing "
-                                     "to write through it: delete the link or give another "
-                                     "name")
+            raise ResultsError(given, f"is a symbolic link (to {os.readlink(path)}); refusing "
+                                      "to write through it: delete the link or give another "
+                                      "name")
         if is_hdf5(path):
-            raise ResultsError(path, "is an HDF5 file (a results file); this command's output "
-                                     "would replace it: give another name")
+            raise ResultsError(given, "is an HDF5 file (a results file); this command's output "
+                                      "would replace it: give another name")
         return path
     if not replaces(path):
-        raise ResultsError(path, "is not a pipeline results file (by its format); refusing "
-                                 "to replace it, as every command does: give another name")
+        raise ResultsError(given, "is not a pipeline results file (by its format); refusing "
+                                  "to replace it, as every command does: give another name")
     if not overwrite:
-        raise ResultsError(path, "already exists; --overwrite replaces it, -o writes "
-                                 "another file")
+        raise ResultsError(given, "already exists; --overwrite replaces it, -o writes "
+                                  "another file")
     return path
 
 
 def check_output_folder(folder) -> Path:
     """Refuse a folder for outputs that is a file, or a symbolic link to
     nothing (the folder would be made wherever it points)."""
-    folder = Path(folder)
+    given, folder = Path(folder), _where(folder)
     if folder.is_symlink() and not folder.exists():
-        raise ResultsError(folder, f"is a symbolic link to nothing ({os.readlink(folder)}); "
-                                   "refusing to make a folder through it: delete the link or "
-                                   "give another folder")
+        raise ResultsError(given, f"is a symbolic link to nothing ({os.readlink(folder)}); "
+                                  "refusing to make a folder through it: delete the link or "
+                                  "give another folder")
     if folder.exists() and not folder.is_dir():
-        raise ResultsError(folder, "is a file; give a folder for the outputs")
+        raise ResultsError(given, "is a file; give a folder for the outputs")
     return folder
 
 

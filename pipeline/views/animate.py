@@ -269,7 +269,6 @@ def write_animation(motion: Motion, out, frames=MAX_FRAMES, dpi=DPI) -> dict:
     matplotlib's ffmpeg writer when ``out`` ends in .mp4 and ffmpeg is
     installed.  Returns {animation, frames, size, pixels, duration}."""
     import matplotlib.pyplot as plt
-    from PIL import Image
     out = Path(out)
     writer = _writer(out)
     idx = frame_indices(motion, frames)
@@ -278,12 +277,7 @@ def write_animation(motion: Motion, out, frames=MAX_FRAMES, dpi=DPI) -> dict:
         w, h = fig.canvas.get_width_height()
         with replacing(out) as tmp:
             if writer is None:
-                images = list(_gif_frames(fig, draw, changing, idx))
-                palette = images[0].quantize(colors=128, method=Image.Quantize.MEDIANCUT)
-                images = [im.quantize(palette=palette, dither=Image.Dither.NONE)
-                          for im in images]
-                images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
-                               duration=round(1000 / FPS), loop=0)
+                _save_gif(fig, draw, changing, idx, tmp)
             else:
                 with writer.saving(fig, str(tmp), dpi):
                     for k in idx:
@@ -297,13 +291,30 @@ def write_animation(motion: Motion, out, frames=MAX_FRAMES, dpi=DPI) -> dict:
                 " per revolution" if motion.solved < 0 else ", up to where it fails")}
 
 
+def _save_gif(fig, draw, changing, idx, dest):
+    """The frames ``idx`` as a looping GIF (one palette of at most 128 colours
+    for all frames) into ``dest``, a path or a file object."""
+    from PIL import Image
+    images = list(_gif_frames(fig, draw, changing, idx))
+    palette = images[0].quantize(colors=128, method=Image.Quantize.MEDIANCUT)
+    images = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in images]
+    images[0].save(dest, format="GIF", save_all=True, append_images=images[1:],
+                   duration=round(1000 / FPS), loop=0)
+
+
 def gif_bytes(motion: Motion, frames=60, dpi=60) -> bytes:
-    """The animation as GIF bytes (for a page that embeds it)."""
-    import tempfile
-    with tempfile.TemporaryDirectory() as d:
-        path = Path(d) / "animation.gif"
-        write_animation(motion, path, frames=frames, dpi=dpi)
-        return path.read_bytes()
+    """The animation as GIF bytes (for a page that embeds it), made in memory:
+    no temporary file for a kill to leave behind."""
+    import io
+
+    import matplotlib.pyplot as plt
+    fig, draw, changing = animation_figure(motion, dpi)
+    buf = io.BytesIO()
+    try:
+        _save_gif(fig, draw, changing, frame_indices(motion, frames), buf)
+    finally:
+        plt.close(fig)
+    return buf.getvalue()
 
 
 def results_kind(path) -> str:
@@ -333,7 +344,8 @@ def animate(path, candidate=None, out=None, frames=MAX_FRAMES) -> dict:
 
 def _animate(path, candidate, out, frames):
     if out is not None:     # before the motion is computed: never over a results file
-        _writer(check_output(out, inputs=(path,)))
+        out = check_output(out, inputs=(path,))
+        _writer(out)
     kind = results_kind(path)
     if kind == "scene":
         if candidate is not None:

@@ -25,7 +25,7 @@ from .tables import candidates, scene_tables, with_units
 def export(path, outdir, *, every=1, feasible=False, front=None, parquet=False) -> list[Path]:
     """Write the tables of the results file ``path`` into ``outdir``; returns
     the files written."""
-    check_output_folder(outdir)
+    outdir = check_output_folder(outdir)
     with open_results(path) as f:
         kind = attr_text(f.attrs["kind"])
     if kind == "scene":
@@ -40,8 +40,7 @@ def export(path, outdir, *, every=1, feasible=False, front=None, parquet=False) 
     outdir = Path(outdir)
     names = [outdir / f"{name}.csv" for name in frames]
     names = [p.with_suffix(".parquet") for p in names] if parquet else names
-    for p in names:         # all checked before the first is written
-        check_output(p, inputs=(path,))
+    names = [check_output(p, inputs=(path,)) for p in names]   # all before the first write
     outdir.mkdir(parents=True, exist_ok=True)
     return [_write(df, p, parquet) for df, p in zip(frames.values(), names)]
 

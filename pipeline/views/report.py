@@ -444,7 +444,7 @@ def write_report(path, out=None, top=20, drawings=None) -> dict:
     if drawings is not None and drawings < 0:
         raise ValueError(f"--drawings must be at least 0, got {drawings}")
     out = Path(out) if out else default_report_output(path)
-    check_output(out, inputs=(path,))      # before the analysis: never over a results file
+    out = check_output(out, inputs=(path,))    # before the analysis: never over results
     with open_results(path, "sweep") as f:
         analyzed = has_analysis(f)
     info = {}

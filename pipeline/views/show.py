@@ -185,6 +185,16 @@ def default_show_output(path, index) -> Path:
     return path.with_name(f"{path.stem}_{tag}.png")
 
 
+def _picture_format(out: Path):
+    """Refuse a picture name whose suffix matplotlib does not write (a results
+    file's .h5, a page's .html), before anything is computed."""
+    from matplotlib.backend_bases import FigureCanvasBase
+    kinds = FigureCanvasBase.get_supported_filetypes()
+    if out.suffix.lower().lstrip(".") not in kinds:
+        raise ValueError(f"{out}: a picture is written as .png (or {', '.join(sorted(kinds))}); "
+                         f"got {out.suffix or 'no suffix'!r}")
+
+
 def show(path, cid, out=None) -> dict:
     """`pipeline show`: re-run a candidate and draw it; returns a summary."""
     from ..base.progress import ticking
@@ -194,7 +204,8 @@ def show(path, cid, out=None) -> dict:
 
 def _show(path, cid, out):
     if out is not None:         # before the design is re-run: never over a results file
-        check_output(out, inputs=(path,))
+        out = check_output(out, inputs=(path,))
+        _picture_format(out)
     run = rerun_candidate(path, cid)
     out = check_output(Path(out) if out else default_show_output(path, run.index),
                        inputs=(path,))
