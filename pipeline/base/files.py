@@ -338,9 +338,24 @@ def save_figure(fig, target, **kw):
     """``fig.savefig`` to ``target`` atomically (``check_output``: never over a
     results file, never through a link); returns the path."""
     check_output(target)
-    with replacing(target) as tmp:
+    with replacing(target) as tmp, literal_text(fig):
         fig.savefig(tmp, **kw)
     return Path(target)
+
+
+@contextmanager
+def literal_text(fig):
+    """Draw ``fig`` with every text as written: a study's names and titles are
+    the user's text, and a '$' in them is a dollar sign, not the start of a
+    formula (matplotlib's mathtext fails on an unclosed one, after the whole
+    computation).  The texts drawn so far are switched over, and the tick
+    labels made while drawing follow the setting."""
+    import matplotlib
+    from matplotlib.text import Text
+    for t in fig.findobj(Text):
+        t.set_parse_math(False)
+    with matplotlib.rc_context({"text.parse_math": False}):
+        yield fig
 
 
 def os_error_text(e: OSError) -> str:

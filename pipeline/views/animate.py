@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..base.files import check_output, replacing
+from ..base.files import check_output, literal_text, replacing
 
 MAX_FRAMES = 120        # frames per revolution, at most
 FPS = 20                # frames per second: 120 frames = one revolution in 6 s
@@ -279,7 +279,7 @@ def write_animation(motion: Motion, out, frames=MAX_FRAMES, dpi=DPI) -> dict:
             if writer is None:
                 _save_gif(fig, draw, changing, idx, tmp)
             else:
-                with writer.saving(fig, str(tmp), dpi):
+                with writer.saving(fig, str(tmp), dpi), literal_text(fig):
                     for k in idx:
                         draw(int(k))
                         writer.grab_frame()
@@ -295,7 +295,8 @@ def _save_gif(fig, draw, changing, idx, dest):
     """The frames ``idx`` as a looping GIF (one palette of at most 128 colours
     for all frames) into ``dest``, a path or a file object."""
     from PIL import Image
-    images = list(_gif_frames(fig, draw, changing, idx))
+    with literal_text(fig):
+        images = list(_gif_frames(fig, draw, changing, idx))
     palette = images[0].quantize(colors=128, method=Image.Quantize.MEDIANCUT)
     images = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in images]
     images[0].save(dest, format="GIF", save_all=True, append_images=images[1:],
