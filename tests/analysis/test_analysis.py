@@ -470,6 +470,14 @@ class _Page:
             await asyncio.sleep(0.1)
         raise AssertionError(f"{what} within {seconds} s")
 
+    async def moved(self, before, what):
+        """The plot's area (_PLOT_AREA) once its axes' ranges differ from ``before``'s."""
+        was = json.dumps(before["x"] + before["y"])
+        await self.until(f"(function (a, b) {{ return a.x.concat(a.y).some("
+                         f"function (v, i) {{ return v !== b[i]; }}); }})({_PLOT_AREA}, {was})",
+                         what, 20)
+        return await self.js(_PLOT_AREA)
+
     async def mouse(self, kind, x, y, **kw):
         await self.call("Input.dispatchMouseEvent", type=kind, x=x, y=y, **kw)
 
@@ -609,15 +617,14 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
         a = await page.js(_PLOT_AREA)
         await page.drag(a["l"] + 0.05 * a["w"], a["t"] + 0.05 * a["h"],
                         a["l"] + 0.6 * a["w"], a["t"] + 0.7 * a["h"])
-        await asyncio.sleep(0.3)
-        b = await page.js(_PLOT_AREA)
+        # (each read once the plot's ranges have moved: no fixed wait, a loaded machine
+        # draws late)
+        b = await page.moved(a, "the drag's zoom")
         await page.mouse("mouseWheel", a["l"] + 0.3 * a["w"], a["t"] + 0.3 * a["h"],
                          deltaX=0, deltaY=-240)
-        await asyncio.sleep(0.6)
-        c = await page.js(_PLOT_AREA)
+        c = await page.moved(b, "the wheel's zoom")
         await page.click(a["l"] + 0.5 * a["w"], a["t"] + 0.5 * a["h"], count=2)
-        await asyncio.sleep(0.6)
-        seen["ranges"] = (a, b, c, await page.js(_PLOT_AREA))
+        seen["ranges"] = (a, b, c, await page.moved(c, "the double-click's whole range"))
 
         # box selection: the tool bar's box tool, then a box over the whole plot
         await page.mouse("mouseMoved", a["l"] + 0.5 * a["w"], a["t"] + 0.5 * a["h"])

@@ -1,5 +1,15 @@
 """Run a command on a pseudo-terminal (an 80x24 one, as a person's) and note
-when each piece of its output arrives."""
+when each piece of its output arrives, on the command's own pace.
+
+The command's own pace: the seconds since its start less the time it waited
+for a processor (on a machine loaded beyond its cores a command waits its turn,
+and a silence that a quiet machine would not have is the machine's, not the
+command's).  Linux counts each thread's wait on the run queue
+(/proc/PID/task/TID/schedstat, its second field, in ns); over each short
+interval the wait of the command's most delayed thread (of it and of any
+process it started) is taken off its clock, and the wait of this reader before
+it saw an output is taken off that output's time.  Where Linux gives no such
+counts, the pace is the wall clock's."""
 
 import fcntl
 import os
@@ -9,19 +19,27 @@ import subprocess
 import termios
 import time
 
+POLL_S = 0.05       # the reader's look at the command and at its waits
+
 
 def run_on_terminal(argv, env=None, cwd=None, timeout=300.0):
-    """(exit code, [seconds of each output], seconds to exit, the text)."""
+    """(exit code, [seconds of each output], seconds to exit, the text): the
+    seconds on the command's own pace (the module's doc); ``timeout`` is a hang
+    guard in wall seconds."""
     master, slave = os.openpty()
     fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 80, 0, 0))
     t0 = time.perf_counter()
     p = subprocess.Popen(argv, stdin=slave, stdout=slave, stderr=slave, env=env, cwd=cwd,
                          close_fds=True)
     os.close(slave)
-    times, chunks = [], []
+    pace = Pace(p.pid, t0)
+    times, chunks, late = [], [], 0.0
     try:
         while time.perf_counter() - t0 < timeout:
-            ready, _, _ = select.select([master], [], [], 0.05)
+            mine = own_wait()
+            ready, _, _ = select.select([master], [], [], POLL_S)
+            late = own_wait() - mine            # this reader's wait for a processor
+            pace.look()
             if ready:
                 try:
                     b = os.read(master, 4096)
@@ -29,19 +47,80 @@ def run_on_terminal(argv, env=None, cwd=None, timeout=300.0):
                     break
                 if not b:
                     break
-                times.append(time.perf_counter() - t0)
+                times.append(pace.now(late, after=times[-1] if times else 0.0))
                 chunks.append(b)
             elif p.poll() is not None:
                 break
+        end = pace.now(late, after=times[-1] if times else 0.0)
     finally:
         if p.poll() is None:
             p.kill()
         p.wait()
         os.close(master)
-    return p.returncode, times, time.perf_counter() - t0, b"".join(chunks).decode(errors="replace")
+    return p.returncode, times, end, b"".join(chunks).decode(errors="replace")
 
 
 def longest_silence(times, end):
     """The longest wait between two outputs, or after the last one (the start
     of the interpreter, before the first, left out)."""
     return max(b - a for a, b in zip(times, times[1:] + [end]))
+
+
+def run_queue_wait(path) -> float:
+    """Seconds the thread of /proc/.../schedstat ``path`` has waited for a
+    processor (0 where Linux does not say)."""
+    try:
+        with open(path) as f:
+            return int(f.read().split()[1]) * 1e-9
+    except (OSError, IndexError, ValueError):
+        return 0.0
+
+
+def own_wait() -> float:
+    return run_queue_wait("/proc/thread-self/schedstat")
+
+
+def thread_waits(pid) -> dict:
+    """{(pid, tid): seconds waited} of every thread of ``pid`` and of the
+    processes it started, theirs too ({} once it is gone)."""
+    waits = {}
+    todo = [pid]
+    while todo:
+        proc = todo.pop()
+        try:
+            tids = os.listdir(f"/proc/{proc}/task")
+        except OSError:
+            continue
+        for tid in tids:
+            waits[proc, tid] = run_queue_wait(f"/proc/{proc}/task/{tid}/schedstat")
+            try:
+                with open(f"/proc/{proc}/task/{tid}/children") as f:
+                    todo += [int(c) for c in f.read().split()]
+            except (OSError, ValueError):
+                pass
+    return waits
+
+
+class Pace:
+    """The command's clock: wall seconds since ``t0`` less, for each interval
+    between two looks, the largest wait for a processor of one of its threads
+    in it."""
+
+    def __init__(self, pid, t0):
+        self.pid, self.t0 = pid, t0
+        self.last_look = t0
+        self.waits = {}             # (pid, tid) -> its wait at the last look
+        self.waited = 0.0
+
+    def look(self):
+        now = time.perf_counter()
+        waits = thread_waits(self.pid)
+        grew = max((w - self.waits.get(k, 0.0) for k, w in waits.items()), default=0.0)
+        self.waited += min(max(grew, 0.0), now - self.last_look)
+        self.waits.update(waits)
+        self.last_look = now
+
+    def now(self, late=0.0, after=0.0) -> float:
+        """Seconds on the command's clock now, less ``late`` (the reader's own
+        wait before it saw what it notes), never before ``after``."""
+        return max(time.perf_counter() - self.t0 - self.waited - max(late, 0.0), after)
