@@ -23,8 +23,9 @@ SILENCE_S = 2.0        # tests/base/test_progress.py
 
 def test_bench_quick_writes_tables_and_plots(capsys, tmp_path):
     """On a pseudo-terminal (where the platform has one), as a person runs it: it
-    says something at least every 2 s (tests/base/test_progress.py holds the other
-    commands to that); elsewhere in this process, -q printing only the folder."""
+    says something at least every 2 s of its own pace (support.terminal: less its
+    waits for a processor on a loaded machine; tests/base/test_progress.py holds the
+    other commands to that); elsewhere in this process, -q printing only the folder."""
     out = tmp_path / "bench"
     before = snapshot(BENCH_OUT)
     argv = ["bench", "--quick", "-o", str(out), "--benchmarks", str(BENCHMARKS)]
