@@ -218,6 +218,9 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
         from .study.sweep_spec import geometry_problems
         summary["reason"] = "; ".join(geometry_problems(res.plan, res.plan.par))
     summary.update(peak_summary(res))
+    fr = getattr(res.dense.forces, "friction", None)
+    if fr is not None:      # [mechanism.friction]: losses, efficiency, the bearings' p and p*v
+        summary.update(fr.summary(res.dense.phi))
     for case in res.dynamics or ():
         for k, v in case.summary_lines().items():
             summary[f"{case.name} {k}"] = v

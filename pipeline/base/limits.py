@@ -128,6 +128,23 @@ GRAVITY = Range("gravity", -100.0, 100.0, "m/s^2", "ten times the Earth's")
 STRESS = Range("an allowable stress", 0.0, 1e4, "MPa",
                "five times the strongest steels", low_open=True)
 
+# Coulomb friction coefficients ([mechanism.friction]): lubricated steel on bronze about
+# 0.05-0.1, dry steel on steel about 0.6; a coefficient of 2 is a slip (a percentage)
+FRICTION = Range("a friction coefficient", 0.0, 2.0, "",
+                 "dry steel on steel is about 0.6; more is a slip of units")
+# MPa: the allowed pressure of a plain bearing (sintered bronze about 10-15, hardened steel
+# on bronze about 25-60)
+PRESSURE = Range("a bearing pressure", 0.0, 1e4, "MPa", "five times the strongest steels",
+                 low_open=True)
+# MPa*m/s: the allowed p*v of a plain bearing (bronze bushings about 1.5-3; PTFE composites
+# to about 3.5)
+PV = Range("a p*v limit", 0.0, 1e3, "MPa*m/s", "a hundred times the best plain bearings",
+           low_open=True)
+# mm: a slider's length along its guide (0: no length given, the couple carried without
+# edge loads)
+BLOCK_LENGTH = Range("a block length", 0.0, MAX_LENGTH, "mm",
+                     "10 m: ten times the largest linkage of these machines")
+
 # N*m*s: the crank's viscous damping (a motor's torque of tens of N*m over 100 rad/s is
 # about 0.1 N*m*s)
 DAMPING = Range("a damping coefficient", 0.0, 1e4, "N*m*s",

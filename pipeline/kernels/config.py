@@ -59,6 +59,7 @@ SINGULAR = 3          # toggle / dead position: the velocity analogs do not exis
 BRANCH_JUMP = 4       # assembly branch switched, or the revolution does not close
 BAD_GEOMETRY = 5      # impossible ternary triangle, non-positive length
 NOT_EVALUATED = 6     # sweep: stage skipped because the candidate already failed
+FRICTION_LOCK = 7     # friction: a self-locking joint, or the friction does not converge
 
 STATUS_NAMES = {
     OK: "OK",
@@ -68,6 +69,7 @@ STATUS_NAMES = {
     BRANCH_JUMP: "BRANCH_JUMP",
     BAD_GEOMETRY: "BAD_GEOMETRY",
     NOT_EVALUATED: "NOT_EVALUATED",
+    FRICTION_LOCK: "FRICTION_LOCK",
 }
 
 # ---- group codes of the compiled plan ---------------------------------------

@@ -175,13 +175,26 @@ def _add_force(a, row_body, col, fx_coef, fy_coef, lever_x, lever_y):
 
 
 @njit(**JIT)
-def kinetostatics(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn, body_mass_off,
-                  joint_point, joint_bodies, slide_bodies, slide_dir, slide_angle, crank_body,
-                  load_body, load_point, loads_k, work_a, work_b, loads_out, r_out, slide_out):
-    """Reactions at one position.  Writes r_out (n_joints, 2) [N], slide_out
-    (n_slides, 2) = (N [N], C [N*m]), loads_out (n_bodies, 3); returns M_bal
-    [N*m] (NaN, with NaN reactions, if the system is singular or the
-    kinematics is NaN)."""
+def slide_direction(pos, slide_dir, slide_angle, k):
+    """The angle [rad] of slide ``k``'s direction u (its guide link's angle plus
+    the slide's angle, or the slide's fixed angle)."""
+    if slide_dir[k, 0] >= 0:
+        a = slide_dir[k, 0]
+        b = slide_dir[k, 1]
+        return math.atan2(pos[b, 1] - pos[a, 1], pos[b, 0] - pos[a, 0]) + slide_angle[k]
+    return slide_angle[k]
+
+
+@njit(**JIT)
+def assemble_forces(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn, body_mass_off,
+                    joint_point, joint_bodies, slide_bodies, slide_dir, slide_angle, crank_body,
+                    load_body, load_point, loads_k, work_a, work_b, loads_out):
+    """The kinetostatic system of one position, work_a[:n, :n] x = work_b[:n]
+    (n = 3 bodies): the columns (Rx, Ry) per joint, (N, C) per slide, then
+    M_bal; the rows the x, y force and the moment balance of every body about
+    its centre of mass (work_b: minus its applied and inertia loads, which
+    loads_out keeps).  Returns the column of M_bal (the system is square
+    where it is n - 1)."""
     nb = body_com.shape[0]
     nj = joint_point.shape[0]
     ns = slide_bodies.shape[0]
@@ -211,12 +224,7 @@ def kinetostatics(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn, 
     for k in range(ns):
         q = slide_bodies[k, 1]
         sq = body_com[q]
-        if slide_dir[k, 0] >= 0:
-            a = slide_dir[k, 0]
-            b = slide_dir[k, 1]
-            th = math.atan2(pos[b, 1] - pos[a, 1], pos[b, 0] - pos[a, 0]) + slide_angle[k]
-        else:
-            th = slide_angle[k]
+        th = slide_direction(pos, slide_dir, slide_angle, k)
         nx = -math.sin(th)
         ny = math.cos(th)
         col = 2 * nj + 2 * k
@@ -232,6 +240,24 @@ def kinetostatics(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn, 
     col_m = 2 * nj + 2 * ns
     if crank_body >= 0 and col_m < n:
         work_a[3 * crank_body + 2, col_m] = 1.0
+    return col_m
+
+
+@njit(**JIT)
+def kinetostatics(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn, body_mass_off,
+                  joint_point, joint_bodies, slide_bodies, slide_dir, slide_angle, crank_body,
+                  load_body, load_point, loads_k, work_a, work_b, loads_out, r_out, slide_out):
+    """Reactions at one position.  Writes r_out (n_joints, 2) [N], slide_out
+    (n_slides, 2) = (N [N], C [N*m]), loads_out (n_bodies, 3); returns M_bal
+    [N*m] (NaN, with NaN reactions, if the system is singular or the
+    kinematics is NaN)."""
+    nj = joint_point.shape[0]
+    ns = slide_bodies.shape[0]
+    n = 3 * body_com.shape[0]
+    col_m = assemble_forces(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn,
+                            body_mass_off, joint_point, joint_bodies, slide_bodies, slide_dir,
+                            slide_angle, crank_body, load_body, load_point, loads_k, work_a,
+                            work_b, loads_out)
     ok = col_m + 1 == n and gauss_solve(work_a, work_b, n)
     for j in range(nj):
         r_out[j, 0] = work_b[2 * j] if ok else math.nan

@@ -103,6 +103,7 @@ class Mechanism:
     slides: tuple = ()
     loads: tuple = ()
     gravity: float = 9.81
+    friction: object = None   # model.friction.Friction: [mechanism.friction]; None: frictionless
 
     def compile(self) -> "Plan":
         return compile_mechanism(self)

@@ -91,6 +91,8 @@ def _reactions(g, r, along="phi1"):
         put(g, "equilibrium_residual", r.residual, "1",
             "relative virtual-power residual: |M_bal omega1 + sum over moving links (F . v_S + "
             "M omega)| / its largest term (0 where every term is 0)", dims=(along,))
+    if getattr(r, "friction", None) is not None:
+        _friction_curves(g, r, along)
     if r.shaking is not None:
         put(g, "shaking_force", r.shaking[:, :2], "N",
             "shaking force on the frame: the moving links' inertia forces sum(-m a_S) = "
@@ -364,6 +366,93 @@ def _cyclogram(f, cg):
         dims=("boundary",))
 
 
+def _friction_curves(g, r, along):
+    """The friction of a scene's positions ([mechanism.friction], ``solve.friction``):
+    per joint and slide its friction load, relative speed and loss, per pin its
+    bearing pressure, sliding speed and p*v, and M_bal without friction."""
+    fr = r.friction
+    nj = len(r.joint_names)
+    pj = (along, "joint")
+    put(g, "friction_status", fr.status.astype(STATUS_ENUM), "1",
+        "friction status (FRICTION_LOCK: a self-locking joint or slide, or the friction's "
+        "Newton iteration does not converge; its forces NaN)", dims=(along,),
+        codes=status_table())
+    put(g, "M_bal_frictionless", fr.M_bal_frictionless, "N*m",
+        "balancing moment without friction (M_bal is with it)", dims=(along,))
+    put(g, "friction_moment", fr.moment, "N*m",
+        "friction moment on the joint's second body, f (d/2) |R| against its rotation "
+        "relative to the first", dims=pj)
+    put(g, "relative_omega_analog", fr.speed_analog[:, :nj], "1",
+        "relative angular velocity analog of the joint's second body against its first "
+        "(omega_rel / omega1, from the kinematics)", dims=pj)
+    put(g, "friction_loss", fr.loss[:, :nj], "W",
+        "power lost in the joint: -friction moment x relative angular velocity", dims=pj)
+    put(g, "bearing_pressure", fr.pressure, "MPa", "pin bearing pressure p = |R| / (d l)",
+        dims=pj)
+    put(g, "sliding_speed", fr.sliding_speed, "m/s",
+        "sliding speed at the pin's surface v = |omega_rel| d / 2", dims=pj)
+    put(g, "pv", fr.pv, "MPa*m/s", "bearing p*v", dims=pj)
+    if r.slide.shape[1]:
+        ps = (along, "slide")
+        put(g, "slide_friction_force", fr.force, "N",
+            "friction force on the slider along the slide's direction, f |N| (or f times "
+            "the block's two end loads) against its sliding", dims=ps,
+            slides=list(r.slide_names))
+        put(g, "sliding_analog", fr.speed_analog[:, nj:], "mm/rad",
+            "sliding velocity analog of the slider against its guide along the slide's "
+            "direction (from the kinematics)", dims=ps, slides=list(r.slide_names))
+        put(g, "slide_friction_loss", fr.loss[:, nj:], "W",
+            "power lost in the slide: -friction force x relative sliding velocity", dims=ps,
+            slides=list(r.slide_names))
+    put(g, "friction_loss_total", fr.total_loss, "W", "power lost in every joint and slide",
+        dims=(along,))
+
+
+def _friction_summary(f, res):
+    """/friction: the scene's friction over its dense revolution: the data, the mean
+    loss and efficiency, each pin's peaks of p, v and p*v and their crank angles."""
+    fr = res.dense.forces.friction
+    spec = fr.spec
+    g = f.create_group("friction")
+    g.attrs["long_name"] = ("Coulomb friction in the joints ([mechanism.friction]) over the "
+                            "dense revolution at the operating speed")
+    g.attrs["status"] = kc.STATUS_NAMES[fr.overall]
+    if fr.overall != kc.OK:
+        g.attrs["lock_phi1_deg"] = np.degrees(fr.fail_phi)
+        g.attrs["lock_element"] = fr.element_names[fr.fail_element] \
+            if fr.fail_element >= 0 else ""
+    put(g, "revolute_coefficient", np.float64(spec.revolute), "1",
+        "Coulomb coefficient at the revolute joints")
+    put(g, "slide_coefficient", np.float64(spec.slide), "1",
+        "Coulomb coefficient at the prismatic pairs")
+    for key, value, unit, what in (("p_max", spec.p_max, "MPa", "allowed bearing pressure"),
+                                   ("pv_max", spec.pv_max, "MPa*m/s", "allowed p*v")):
+        if value is not None:
+            put(g, key, np.float64(value), unit, what)
+    put(g, "pin_diameter", np.asarray(spec.diameters(), float), "mm", "pin diameter d",
+        dims=("joint",))
+    put(g, "pin_length", np.asarray(spec.lengths(), float), "mm", "pin bearing length l",
+        dims=("joint",))
+    if spec.blocks:
+        put(g, "block_length", np.asarray(spec.block_lengths(), float), "mm",
+            "block length along its guide (0: not given)", dims=("slide",))
+    put(g, "mean_loss", np.float64(fr.mean_loss()), "W",
+        "mean power lost in friction over the revolution")
+    put(g, "efficiency", np.float64(fr.efficiency()), "1",
+        "mean power to the external loads / mean power the drive delivers (NaN: the loads "
+        "do no work over a revolution)")
+    rows = np.array([b[1:] for b in fr.bearings(res.dense.phi)], float).reshape(-1, 7)
+    for c, (key, unit, what) in enumerate((
+            ("peak_pressure", "MPa", "peak bearing pressure p"),
+            ("peak_pressure_phi1", "deg", "crank angle phi1 of the peak p"),
+            ("peak_sliding_speed", "m/s", "peak sliding speed v"),
+            ("peak_sliding_speed_phi1", "deg", "crank angle phi1 of the peak v"),
+            ("peak_pv", "MPa*m/s", "peak p*v"),
+            ("peak_pv_phi1", "deg", "crank angle phi1 of the peak p*v"),
+            ("mean_pv", "MPa*m/s", "mean p*v over the revolution"))):
+        put(g, key, rows[:, c], unit, what, dims=("joint",))
+
+
 def write_scene(res, path):
     """Write a scene result; returns the path."""
     path = Path(path)
@@ -411,6 +500,8 @@ def _scene_into(f, res):
         _peaks(f.create_group("peaks"), res.peaks, study.output)
     if res.reduced is not None:
         _reduced(f.create_group("reduced_dynamics"), res.reduced)
+    if getattr(res.dense.forces, "friction", None) is not None:
+        _friction_summary(f, res)
     if res.counterweight is not None:
         _counterweight(f.create_group("counterweight"), res.counterweight)
     if getattr(res, "flywheel", None) is not None:

@@ -163,8 +163,12 @@ def scene_peaks(res) -> list[Peak]:
     """Every peak of the scene ``res`` (pipeline.solve.scene.SceneResult), refined."""
     from scipy.optimize import minimize_scalar
 
-    from .reactions import scene_forces
+    from .friction import scene_forces_with_friction
     study, plan, dense = res.study, res.plan, res.dense
+
+    def forces_of(c):        # (with the mechanism's friction, where it has some)
+        return scene_forces_with_friction(study.mechanism, plan, c, lambda phis: solve_curves(
+            plan, phis, 2, res.tolerances))
     if dense.overall != 0 or not np.isfinite(dense.pos).all():
         return []      # a scene that does not assemble everywhere has no peaks to refine
     crank = study.mechanism.crank
@@ -177,8 +181,7 @@ def scene_peaks(res) -> list[Peak]:
         samples = grid            # no input law steeper than the dense revolution resolves
     else:
         c = solve_curves(plan, nodes, order, res.tolerances)
-        samples = _magnitudes(study, plan, c, scene_forces(study.mechanism, plan, c)
-                              if with_forces else None)
+        samples = _magnitudes(study, plan, c, forces_of(c) if with_forces else None)
         bad = c.status != 0       # (a position the walk between dense ones failed: unsampled)
         samples = {k: np.where(bad, np.nan, v) for k, v in samples.items()}
     n = len(nodes)
@@ -192,7 +195,7 @@ def scene_peaks(res) -> list[Peak]:
             path = np.concatenate([phis[:m], [phi]])
             c = solve_curves(plan, path, order, res.tolerances)
             row = _row(c, -1)
-            f = scene_forces(study.mechanism, plan, row) if with_forces else None
+            f = forces_of(row) if with_forces else None
             cache[key] = (c.status[-1], _magnitudes(study, plan, row, f))
         return cache[key]
 

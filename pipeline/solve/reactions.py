@@ -105,6 +105,9 @@ class Reactions:
     # M [N*m] about the point ``shaking_about``, the crank's pivot): kernels.forces.shaking
     shaking: np.ndarray = None
     shaking_about: str = ""
+    # with [mechanism.friction] at the constant crank speed: solve.friction.FrictionForces
+    # (R, slide, M_bal, body_loads and residual are then the friction-inclusive ones)
+    friction: object = None
 
     @property
     def magnitude(self):
@@ -134,7 +137,9 @@ def scene_forces(mechanism, plan, curves, omega1=None, eps1=None, t=None) -> Rea
     """Reactions at every position of ``curves`` (which must carry second
     analogs), at the crank's constant omega1 and eps1, or along a crank
     motion: ``omega1``, ``eps1`` (rad/s, rad/s^2) and ``t`` (s, for the
-    loads) one per position (``pipeline.solve.motion_forces``)."""
+    loads) one per position (``pipeline.solve.motion_forces``).  Without
+    friction: ``pipeline.solve.friction.scene_forces_with_friction`` adds the
+    mechanism's [mechanism.friction] at the constant crank speed."""
     crank = mechanism.crank
     n = curves.phi.shape[0]
     along = omega1 is not None

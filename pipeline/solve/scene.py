@@ -84,8 +84,19 @@ class SceneResult:
 
     @property
     def status(self):
-        """The scene's status: the dense revolution (which also checks closure)."""
-        return self.dense.overall if self.dense.overall != kc.OK else self.table.overall
+        """The scene's status: the dense revolution (which also checks closure),
+        then the friction's (FRICTION_LOCK)."""
+        kin = self.dense.overall if self.dense.overall != kc.OK else self.table.overall
+        return kin if kin != kc.OK else self._locked()[0]
+
+    def _locked(self):
+        """(status, the curves' friction) of the first curves whose friction
+        locks: the dense revolution's, then the table's."""
+        for c in (self.dense, self.table):
+            fr = getattr(c.forces, "friction", None)
+            if fr is not None and fr.overall != kc.OK:
+                return fr.overall, fr
+        return kc.OK, None
 
     @property
     def failure(self):
@@ -94,7 +105,15 @@ class SceneResult:
         points (the group's points)}."""
         c = self.dense if self.dense.overall != kc.OK else self.table
         if c.overall == kc.OK:
-            return None
+            st, fr = self._locked()
+            if st == kc.OK:
+                return None
+            e = fr.fail_element          # a joint, or a slide after the joints
+            nj = len(self.plan.joint_names)
+            where = ([self.plan.point_names[int(self.plan.joint_point[e])]] if 0 <= e < nj
+                     else [])
+            return {"status": kc.STATUS_NAMES[st], "phi_deg": math.degrees(fr.fail_phi),
+                    "group": fr.element_names[e] if e >= 0 else "friction", "points": where}
         g = c.fail_group
         names = self.plan.point_names
         return {"status": kc.STATUS_NAMES[c.overall], "phi_deg": math.degrees(c.fail_phi),
@@ -116,9 +135,12 @@ def run_scene(study, tols=None) -> SceneResult:
     dense = solve_curves(plan, dense_phis, order, tols,
                          close_at=crank.phi0 + crank.rot * 2.0 * math.pi)
     if out.analysis == "forces":
-        from .reactions import scene_forces
-        table.forces = scene_forces(study.mechanism, plan, table)
-        dense.forces = scene_forces(study.mechanism, plan, dense)
+        from .friction import scene_forces_with_friction
+
+        def kinematics(phis):
+            return solve_curves(plan, phis, kc.ACCELERATIONS, tols)
+        table.forces = scene_forces_with_friction(study.mechanism, plan, table, kinematics)
+        dense.forces = scene_forces_with_friction(study.mechanism, plan, dense, kinematics)
     return SceneResult(study, plan, table, dense, tols)
 
 

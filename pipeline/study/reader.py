@@ -139,6 +139,10 @@ def parse_study(text: str, path="<study>", cad_reports=None) -> Study:
     mech = replace(mech, links=output.links)
     dynamics = None
     if root.has("dynamics"):
+        if mech.friction is not None:
+            raise root.error("dynamics", "the crank's motion with [mechanism.friction] is not "
+                                         "computed yet (its friction moment is implicit in "
+                                         "each step's omega1 and eps1): remove one of them")
         dynamics = parse_dynamics(root.table("dynamics"), mech)
     sweep = None
     if kind == "sweep":
@@ -359,10 +363,15 @@ def parse_mechanism(sec: Section, name: str, cad=None) -> Mechanism:
                               where=f"{ld.file}: {ld.where}"))
             ld.done()
     gravity = sec.number("gravity", 9.81, within=lim.GRAVITY)
+    friction = sec.table("friction", default=None)
     sec.done()
-    return Mechanism(name=name, fixed=fixed, crank=crank, groups=tuple(groups),
+    mech = Mechanism(name=name, fixed=fixed, crank=crank, groups=tuple(groups),
                      bodies=tuple(bodies), slides=tuple(slides), loads=tuple(loads),
                      gravity=gravity)
+    if friction is not None:        # [mechanism.friction]: absent, the frictionless forces
+        from .friction_spec import parse_friction
+        mech = replace(mech, friction=parse_friction(friction, mech))
+    return mech
 
 
 def _check_law_grids(path, mech, output, sweep):
@@ -493,6 +502,9 @@ def parse_output(sec: Section, mech: Mechanism) -> OutputSpec:
     analysis = sec.string("analysis", default, choices=ANALYSES)
     if analysis == "forces" and not mech.bodies:
         raise sec.error("analysis", "force analysis needs mass data: declare [[mechanism.bodies]]")
+    if mech.friction is not None and analysis != "forces":
+        raise sec.error("analysis", "[mechanism.friction] acts on the forces: "
+                                    f"analysis = \"forces\", got {_quote(analysis)}")
     out = OutputSpec(working_point=wp, links=links, link_labels=tuple(labels),
                      table_positions=sec.integer("table_positions", 12, minimum=2,
                                                  maximum=MAX_POSITIONS, why=POSITIONS_WHY),

@@ -1500,3 +1500,69 @@ def naive_forces_slider(chain, phi1, omega1, eps1):
               ("R5", "ternary 3-4-5", "block", P["P5"]), ("R6", None, "lead 4-6", P["P6"])]
     slides = [("slide[block]", None, "block", chain.d["ga"])]
     return _kinetostatics(bodies, joints, omega1, eps1, slides)
+
+
+# ---------------------------------------------------------------------------
+# kinetostatics with Coulomb friction in the revolute joints (issue 52)
+# ---------------------------------------------------------------------------
+
+
+def naive_friction_newton(bodies, joints, f, radius, omega1, tol=1e-14, max_iter=60):
+    """The whole nonlinear force system of ``_kinetostatics``'s ``bodies`` and
+    ``joints`` (no slides) with a Coulomb friction moment f r_j |R_j| at every
+    joint j against the rotation of its second body relative to its first
+    (``radius``: per joint, m; the bodies' ``omega`` gives the senses), solved
+    by a plain dense Newton iteration from zero with the complex-step Jacobian
+    of the residual.  Returns {joint: R, "M_bal": ..., joint + " friction":
+    the friction moment on the second body}."""
+    nb, nj = len(bodies), len(joints)
+    idx = {b["name"]: i for i, b in enumerate(bodies)}
+    omega = {b["name"]: b["omega"] for b in bodies}
+    sense = []
+    for _name, first, second, _pt in joints:
+        w = omega[second] - (omega[first] if first is not None else 0.0)
+        sense.append(float(np.sign(w)))
+
+    def loads(b):
+        F = b["m"] * (np.array([0.0, -G]) - b["aS"])
+        M = -b["J"] * b["eps"]
+        for (pt, fe) in b["ext"]:
+            F = F + fe
+            M += cross(pt - b["S"], fe)
+        return F, M
+
+    def residual(x):
+        res = [None] * (3 * nb)
+        for b in bodies:
+            i = idx[b["name"]]
+            F, M = loads(b)
+            res[3 * i], res[3 * i + 1], res[3 * i + 2] = F[0], F[1], M
+            if b["crank"]:
+                res[3 * i + 2] = res[3 * i + 2] + x[2 * nj]
+        for j, (_name, first, second, pt) in enumerate(joints):
+            R = np.array([x[2 * j], x[2 * j + 1]])
+            mf = -sense[j] * f * radius[j] * np.sqrt(R[0] ** 2 + R[1] ** 2)
+            for body, sgn in ((first, -1.0), (second, 1.0)):
+                if body is None:
+                    continue
+                i = idx[body]
+                r = pt - bodies[i]["S"]
+                res[3 * i] = res[3 * i] + sgn * R[0]
+                res[3 * i + 1] = res[3 * i + 1] + sgn * R[1]
+                res[3 * i + 2] = res[3 * i + 2] + sgn * (cross(r, R) + mf)
+        return np.array(res)
+
+    x = np.zeros(2 * nj + 1)
+    for _ in range(max_iter):
+        step = np.linalg.solve(_complex_step_jacobian(residual, x), -np.real(residual(x)))
+        x = x + step
+        if np.abs(step).max() <= tol * np.abs(x).max():
+            break
+    else:
+        raise ValueError("the friction Newton iteration did not converge")
+    out = {"M_bal": float(x[2 * nj])}
+    for j, (name, *_r) in enumerate(joints):
+        R = x[2 * j: 2 * j + 2]
+        out[name] = R.copy()
+        out[name + " friction"] = -sense[j] * f * radius[j] * math.hypot(R[0], R[1])
+    return out

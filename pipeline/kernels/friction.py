@@ -1,0 +1,303 @@
+"""Kinetostatics with Coulomb friction in the joints, per crank position.
+
+The frictionless system of ``kernels.forces.assemble_forces``, A x = b, with
+the friction loads added to the bodies: G(x) = A x - b + L(x) = 0.
+
+* Revolute joint j between bodies p and q (R_j: the force of p on q): a
+  moment f_r r_j |R_j| on q against the rotation of q relative to p, and its
+  opposite on p (r_j the pin's radius, m).
+* Prismatic pair k (the guide p, the slider q): a force f_s |N_f| on q along
+  the slide's direction u, against the sliding of q relative to p, on the
+  line of the guide through the slider's centre of mass S, and its opposite
+  on p at S; |N_f| = |N|, or max(|N|, 2000 |C| / l) for a block of length l
+  [mm] bearing on its guide at its two ends (``model.friction``).
+
+The direction of each friction load is the kinematics' (the sign of the
+relative velocity analog times omega1): L is then piecewise linear in the
+normal forces and smooth in |R|, and Newton's method from the frictionless
+solution converges in a few steps.  At a relative speed of exactly zero the
+friction is zero (the joint sticks).
+
+Self-locking: the friction-inclusive system is solvable for any load only
+while det(dG/dx) has the sign of det(A) (at f = 0 their ratio is 1; it falls
+to 0 as the drive needed grows without bound).  A position where the ratio
+is not positive, or where Newton does not converge, is FRICTION_LOCK, with
+the joint or slide (index nj + k) whose friction alone takes the ratio
+lowest.
+"""
+
+import math
+
+from numba import njit
+
+from .config import FRICTION_LOCK, JIT, OK
+from .forces import MM, assemble_forces, body_motion, gauss_solve, slide_direction
+
+
+@njit(**JIT)
+def relative_speeds(pos, d1, d2, body_com, body_turn, joint_bodies, slide_bodies, slide_dir,
+                    slide_angle, out):
+    """The relative speed analogs: out[j] (rad/rad) of body q against body p
+    at revolute joint j; out[nj + k] (mm/rad) the sliding of the slider's
+    centre of mass S along the slide's direction u against the guide's point
+    at S (v_G + omega_G x (S - G), G the guide's centre of mass)."""
+    nj = joint_bodies.shape[0]
+    for j in range(nj):
+        w = 0.0
+        for side in range(2):
+            b = joint_bodies[j, side]
+            if b >= 0:
+                wb, _ = body_motion(pos, d1, d2, body_turn[b, 0], body_turn[b, 1], 1.0, 0.0)
+                w += wb if side == 1 else -wb
+        out[j] = w
+    for k in range(slide_bodies.shape[0]):
+        s = body_com[slide_bodies[k, 1]]
+        vx = d1[s, 0]
+        vy = d1[s, 1]
+        g = slide_bodies[k, 0]
+        if g >= 0:
+            c = body_com[g]
+            wg, _ = body_motion(pos, d1, d2, body_turn[g, 0], body_turn[g, 1], 1.0, 0.0)
+            vx -= d1[c, 0] - wg * (pos[s, 1] - pos[c, 1])
+            vy -= d1[c, 1] + wg * (pos[s, 0] - pos[c, 0])
+        th = slide_direction(pos, slide_dir, slide_angle, k)
+        out[nj + k] = vx * math.cos(th) + vy * math.sin(th)
+
+
+@njit(**JIT)
+def _sense(analog, omega1):
+    """The direction of a relative motion: +1, -1, or 0 at rest."""
+    v = analog * omega1
+    return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
+
+
+@njit(**JIT)
+def add_friction(x, only, pos, body_com, joint_bodies, slide_bodies, slide_dir, slide_angle,
+                 f_rev, radius, f_slide, block, sense, jac, res, friction_out):
+    """Add the friction loads at the unknowns ``x`` to the residual ``res`` and
+    their derivatives to ``jac`` (every joint and slide, or the element
+    ``only`` alone where it is >= 0); friction_out[e]: the friction moment
+    [N*m] on a joint's second body, the friction force [N] along u on a
+    slider."""
+    nj = joint_bodies.shape[0]
+    for j in range(nj):
+        if only >= 0 and only != j:
+            continue
+        rx = x[2 * j]
+        ry = x[2 * j + 1]
+        mag = math.hypot(rx, ry)
+        c = -sense[j] * f_rev * radius[j]          # the moment on q is c |R|
+        friction_out[j] = c * mag
+        dx = c * rx / mag if mag > 0.0 else 0.0
+        dy = c * ry / mag if mag > 0.0 else 0.0
+        for side in range(2):
+            b = joint_bodies[j, side]
+            if b < 0:
+                continue
+            sgn = 1.0 if side == 1 else -1.0
+            res[3 * b + 2] += sgn * c * mag
+            jac[3 * b + 2, 2 * j] += sgn * dx
+            jac[3 * b + 2, 2 * j + 1] += sgn * dy
+    for k in range(slide_bodies.shape[0]):
+        e = nj + k
+        if only >= 0 and only != e:
+            continue
+        cn = 2 * nj + 2 * k
+        n = x[cn]
+        cc = x[cn + 1]
+        mag = abs(n)
+        dn = 1.0 if n > 0.0 else (-1.0 if n < 0.0 else 0.0)
+        dc = 0.0
+        if block[k] > 0.0 and 2000.0 * abs(cc) / block[k] > mag:   # wedged: edge loads
+            mag = 2000.0 * abs(cc) / block[k]
+            dn = 0.0
+            dc = (2000.0 / block[k]) * (1.0 if cc > 0.0 else -1.0)
+        c = -sense[e] * f_slide                    # the force on the slider: c |N_f| u
+        friction_out[e] = c * mag
+        th = slide_direction(pos, slide_dir, slide_angle, k)
+        ux = math.cos(th)
+        uy = math.sin(th)
+        s = body_com[slide_bodies[k, 1]]
+        for side in range(2):
+            b = slide_bodies[k, side]
+            if b < 0:
+                continue
+            sgn = 1.0 if side == 1 else -1.0
+            lx = (pos[s, 0] - pos[body_com[b], 0]) * MM
+            ly = (pos[s, 1] - pos[body_com[b], 1]) * MM
+            arm = lx * uy - ly * ux                # (S - S_b) x u
+            for r, coef in ((3 * b, ux), (3 * b + 1, uy), (3 * b + 2, arm)):
+                res[r] += sgn * c * coef * mag
+                jac[r, cn] += sgn * c * coef * dn
+                jac[r, cn + 1] += sgn * c * coef * dc
+
+
+@njit(**JIT)
+def determinant(a, n):
+    """det(a[:n, :n]) by elimination with partial pivoting (``a`` destroyed)."""
+    det = 1.0
+    for c in range(n):
+        p = c
+        best = abs(a[c, c])
+        for r in range(c + 1, n):
+            if abs(a[r, c]) > best:
+                best = abs(a[r, c])
+                p = r
+        if not (best > 0.0):
+            return 0.0
+        if p != c:
+            det = -det
+            for k in range(c, n):
+                t = a[c, k]
+                a[c, k] = a[p, k]
+                a[p, k] = t
+        det *= a[c, c]
+        inv = 1.0 / a[c, c]
+        for r in range(c + 1, n):
+            f = a[r, c] * inv
+            if f != 0.0:
+                for k in range(c + 1, n):
+                    a[r, k] -= f * a[c, k]
+    return det
+
+
+@njit(**JIT)
+def _residual(a0, b0, x, n, jac, res):
+    """res = A x - b, jac = A."""
+    for r in range(n):
+        s = -b0[r]
+        for c in range(n):
+            s += a0[r, c] * x[c]
+            jac[r, c] = a0[r, c]
+        res[r] = s
+
+
+@njit(**JIT)
+def _lock_ratio(a0, x, n, only, pos, body_com, joint_bodies, slide_bodies, slide_dir,
+                slide_angle, f_rev, radius, f_slide, block, sense, jac, res, friction_out,
+                det_a):
+    """det(dG/dx) / det(A) at ``x`` with the friction of every element (only
+    = -1) or of one element alone."""
+    for r in range(n):
+        res[r] = 0.0
+        for c in range(n):
+            jac[r, c] = a0[r, c]
+    add_friction(x, only, pos, body_com, joint_bodies, slide_bodies, slide_dir, slide_angle,
+                 f_rev, radius, f_slide, block, sense, jac, res, friction_out)
+    return determinant(jac, n) / det_a
+
+
+@njit(**JIT)
+def friction_forces(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn, body_mass_off,
+                    joint_point, joint_bodies, slide_bodies, slide_dir, slide_angle, crank_body,
+                    load_body, load_point, loads_k, f_rev, radius, f_slide, block, rel_tol,
+                    max_iter, a0, b0, jac, res, x, sense, loads_out, r_out, slide_out,
+                    friction_out, speed_out, found):
+    """Reactions with friction at one position (``kernels.forces.kinetostatics``'s
+    r_out, slide_out and loads_out), per joint and slide the friction load
+    (``add_friction``) and the relative speed analog (``relative_speeds``).
+    found[0:4] = (status, M_bal [N*m], the locking element or -1, Newton's
+    iterations).  Newton stops where its step is at most ``rel_tol`` times the
+    largest unknown, or the residual of every equation at most ``rel_tol``
+    times the sum of its terms' magnitudes (the friction's terms are then
+    within it too).  NaN with OK where the frictionless system has no
+    solution (NaN kinematics or a singular system: as without friction);
+    NaN with FRICTION_LOCK where the friction locks or does not converge.
+    Work arrays: a0, jac (n, n), b0, res, x (n), sense (joints + slides)."""
+    nj = joint_point.shape[0]
+    ns = slide_bodies.shape[0]
+    ne = nj + ns
+    n = 3 * body_com.shape[0]
+    for j in range(nj):
+        r_out[j, 0] = r_out[j, 1] = math.nan
+    for k in range(ns):
+        slide_out[k, 0] = slide_out[k, 1] = math.nan
+    found[0] = OK
+    found[1] = math.nan
+    found[2] = -1.0
+    found[3] = 0.0
+    relative_speeds(pos, d1, d2, body_com, body_turn, joint_bodies, slide_bodies, slide_dir,
+                    slide_angle, speed_out)
+    for e in range(ne):
+        friction_out[e] = math.nan
+        sense[e] = _sense(speed_out[e], omega1)
+    col_m = assemble_forces(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn,
+                            body_mass_off, joint_point, joint_bodies, slide_bodies, slide_dir,
+                            slide_angle, crank_body, load_body, load_point, loads_k, a0, b0,
+                            loads_out)
+    if col_m + 1 != n:
+        return
+    for r in range(n):          # the frictionless solution: Newton's start
+        x[r] = b0[r]
+        for c in range(n):
+            jac[r, c] = a0[r, c]
+    if not gauss_solve(jac, x, n):
+        return
+    converged = False
+    for it in range(1, max_iter + 1):
+        _residual(a0, b0, x, n, jac, res)
+        add_friction(x, -1, pos, body_com, joint_bodies, slide_bodies, slide_dir, slide_angle,
+                     f_rev, radius, f_slide, block, sense, jac, res, friction_out)
+        for r in range(n):
+            res[r] = -res[r]
+        found[3] = it
+        if not gauss_solve(jac, res, n):
+            break
+        step = 0.0
+        size = 0.0
+        for r in range(n):
+            x[r] += res[r]
+            step = max(step, abs(res[r]))
+            size = max(size, abs(x[r]))
+        if not math.isfinite(step + size):
+            break
+        if step <= rel_tol * size:
+            converged = True
+            break
+        # near a lock the system is ill-conditioned and the steps stall at its
+        # rounding: converged where the residual is within rel_tol of its terms
+        _residual(a0, b0, x, n, jac, res)
+        add_friction(x, -1, pos, body_com, joint_bodies, slide_bodies, slide_dir, slide_angle,
+                     f_rev, radius, f_slide, block, sense, jac, res, friction_out)
+        worst = 0.0
+        for r in range(n):
+            terms = abs(b0[r])
+            for c in range(n):
+                terms += abs(a0[r, c] * x[c])
+            worst = max(worst, abs(res[r]) / terms if terms > 0.0 else abs(res[r]))
+        if worst <= rel_tol:
+            converged = True
+            break
+    # the friction loads at the solution (and det(dG/dx) there)
+    for r in range(n):
+        for c in range(n):
+            jac[r, c] = a0[r, c]
+    det_a = determinant(jac, n)
+    ratio = math.nan
+    if converged:
+        ratio = _lock_ratio(a0, x, n, -1, pos, body_com, joint_bodies, slide_bodies, slide_dir,
+                            slide_angle, f_rev, radius, f_slide, block, sense, jac, res,
+                            friction_out, det_a)
+    if not (ratio > 0.0):
+        # the element whose friction alone takes the ratio lowest
+        worst = math.inf
+        for e in range(ne):
+            if sense[e] == 0.0:
+                continue
+            r_e = _lock_ratio(a0, x, n, e, pos, body_com, joint_bodies, slide_bodies,
+                              slide_dir, slide_angle, f_rev, radius, f_slide, block, sense, jac,
+                              res, friction_out, det_a)
+            if r_e < worst:
+                worst = r_e
+                found[2] = e
+        for e in range(ne):
+            friction_out[e] = math.nan
+        found[0] = FRICTION_LOCK
+        return
+    for j in range(nj):
+        r_out[j, 0] = x[2 * j]
+        r_out[j, 1] = x[2 * j + 1]
+    for k in range(ns):
+        slide_out[k, 0] = x[2 * nj + 2 * k]
+        slide_out[k, 1] = x[2 * nj + 2 * k + 1]
+    found[1] = x[col_m]
