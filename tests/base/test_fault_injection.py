@@ -441,7 +441,7 @@ def test_status_codes_out_of_range_are_refused(sweep, capsys):
         del f["candidates/status"]
         f.create_dataset("candidates/status", data=raw)
     assert main(["browse", str(sweep)]) == 2
-    one_line_error(capsys, sweep, "3 candidates have a status code outside")
+    one_line_error(capsys, sweep, "candidates/status[0] = 42, not a status code")
 
 
 # ------------------------------------------------------------ messages that name the file
