@@ -25,6 +25,7 @@ STATUS_HELP = {
     kc.BRANCH_JUMP: "jumps assembly branch, or the revolution does not close on its start",
     kc.BAD_GEOMETRY: "impossible ternary triangle or non-positive length",
     kc.NOT_EVALUATED: "not evaluated (unfinished sweep)",
+    kc.FRICTION_LOCK: "a joint or slide locks by friction, or the friction does not converge",
 }
 
 
@@ -117,8 +118,10 @@ def rerun_candidate(path, cid, *, forces=True, n_table=12, positions=None) -> Ca
     dense = solve_curves(plan, revolution_angles(crank, n), kc.ACCELERATIONS, close_at=close)
     table = solve_curves(plan, revolution_angles(crank, n_table), kc.POSITIONS)
     if forces and dense.overall == kc.OK and mech.bodies:
-        from ..solve.reactions import scene_forces
-        dense.forces = scene_forces(mech, plan, dense)
+        # with the design's [mechanism.friction], as its scene would have them
+        from ..solve.friction import scene_forces_with_friction
+        dense.forces = scene_forces_with_friction(
+            mech, plan, dense, lambda phis: solve_curves(plan, phis, kc.ACCELERATIONS))
     a, b = (plan.point(q) for q in study.output.rocker)
     v = dense.pos[:, b] - dense.pos[:, a]
     ang = np.arctan2(v[:, 1], v[:, 0])

@@ -12,7 +12,11 @@ happens and the point, joint or dyad it belongs to):
 * the peak |M_bal| [N*m];
 * the smallest pin diameter d_min of every joint and the largest [mm]
   (``/peaks/pin_d_min``: (32 R_max l / (pi sigma))^(1/3), DOMAIN.md section 5);
-* the peak shaking force [N] and moment [N*m] on the frame.
+* the peak shaking force [N] and moment [N*m] on the frame;
+* with joint friction ([mechanism.friction], ``/friction``): the mean power lost
+  in friction over a revolution [W] and the largest peak p*v of the pins
+  [MPa*m/s] (the reactions and M_bal above are then the friction-inclusive
+  ones; a note says so where the designs differ in friction).
 
 Matching.  A row is compared (with the change against the first design) only
 where every design has it.  Joints are matched by their position in the list
@@ -63,6 +67,9 @@ class Design:
     reaction: np.ndarray | None = None   # (n, n_joints) |R|, N
     M_bal: np.ndarray | None = None      # (n,) N*m
     candidate: str | None = None         # a sweep's design: its candidate number
+    # with [mechanism.friction]: {"mean_loss": (W, None, None), "peak_pv": (MPa*m/s, phi1
+    # deg, joint)}; None: frictionless
+    friction: dict | None = None
 
     @property
     def has_forces(self):
@@ -116,7 +123,22 @@ def design_of(f, label, source) -> Design:
                                         f["peaks/pin_sigma"][()].tolist())))
     status = str(attr_text(f.attrs.get("status", "?")))
     return Design(label, str(source), status, float(m.attrs["omega1"]),
-                  wp, dwell, motion, peaks, pins, phi, pos, joints, reaction, M_bal)
+                  wp, dwell, motion, peaks, pins, phi, pos, joints, reaction, M_bal,
+                  friction=_friction(f, joints))
+
+
+def _friction(f, joints):
+    """What a comparison reads of a scene's /friction (None: frictionless): the
+    mean loss and the largest of the pins' peak p*v, with its crank angle and pin."""
+    if "friction" not in f:
+        return None
+    g = f["friction"]
+    out = {"mean_loss": (float(g["mean_loss"][()]), None, None)}
+    pv = g["peak_pv"][()]
+    if pv.size and np.isfinite(pv).any():
+        j = int(np.nanargmax(pv))
+        out["peak_pv"] = (float(pv[j]), float(g["peak_pv_phi1"][j]), joints[j])
+    return out
 
 
 def _no_peaks():
@@ -220,6 +242,7 @@ FAMILY_WHY = {
     "transmission": "no dyad or class III lead",
     "reactions": "no force analysis ([output] analysis = \"forces\" needs [[mechanism.bodies]])",
     "shaking": "no shaking force stored",
+    "friction": "no joint friction ([mechanism.friction])",
 }
 
 
@@ -249,6 +272,10 @@ def compare_designs(designs) -> Comparison:
                      [_peak(d, "shaking_force") for d in designs]))
     rows.append(_row("shaking_moment", "shaking", "peak shaking moment", "N*m",
                      [_peak(d, "shaking_moment") for d in designs]))
+    for key, quantity, unit in (("mean_loss", "mean friction loss", "W"),
+                                ("peak_pv", "largest peak p*v", "MPa*m/s")):
+        rows.append(_row(f"friction_{key}", "friction", quantity, unit,
+                         [(d.friction or {}).get(key) for d in designs]))
     rows = [r for r in rows if any(v is not None for v in r.values)]
     if not any(r.compared for r in rows):
         have = "; ".join(f"{d.source} ({d.status}): " + (", ".join(
@@ -326,7 +353,8 @@ def _left_out(designs, rows):
         if not all(r.compared for r in rs):
             lacking[fam] = [d for k, d in enumerate(designs)
                             if all(r.values[k] is None for r in rs)]
-    what = {"reactions": "reactions, pin diameters and M_bal", "motion": "stroke and dwell error"}
+    what = {"reactions": "reactions, pin diameters and M_bal", "motion": "stroke and dwell error",
+            "friction": "friction loss and p*v"}
     if lacking.get("shaking") and set(map(id, lacking["shaking"])) <= set(
             map(id, lacking.get("reactions", []))):      # no forces: no shaking either
         what["reactions"] = "reactions, pin diameters, M_bal and the shaking force and moment"
@@ -357,6 +385,10 @@ def _context(designs):
         out.append("pins in bending: " + ", ".join(f"l = {ln:g} mm, sigma = {sg:g} MPa"
                                                    for ln, sg in sorted(pins))
                    + " (d_min = (32 R_max l / (pi sigma))^(1/3))")
+    rubbing = [d.label for d in designs if d.friction is not None]
+    if rubbing and len(rubbing) < len(designs):
+        out.append("the reactions and M_bal of " + ", ".join(rubbing) + " include joint "
+                   "friction ([mechanism.friction]), the others' do not")
     bad = [d for d in designs if d.status != "OK"]
     for d in bad:
         out.append(f"{d.label}: status {d.status}, only what it stores is compared")

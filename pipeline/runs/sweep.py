@@ -145,7 +145,9 @@ def run_sweep(study, out, *, candidates=None, resume=False, overwrite=False, sch
     file.  ``device`` (cpu | gpu | auto) and ``store`` (all | feasible)
     override the study's [sweep] device and store."""
     from dataclasses import replace
+    from ..study.friction_spec import refuse_friction
     from ..study.sweep_spec import DEVICES, STORES
+    refuse_friction(study, "a sweep's metrics (peak_reaction, peak_M_bal, ...) would be")
     spec: SweepSpec = study.sweep
     for name, value, allowed in (("device", device, DEVICES), ("store", store, STORES)):
         if value is not None and value not in allowed:

@@ -138,6 +138,7 @@ def analyse(study, mech, spec: ToleranceSpec, *, label="design", sweep_spec=None
     assemble is refused (its builds deviate from nothing): ``source``, the
     file it came from, names it."""
     t0 = time.perf_counter()
+    _refuse_friction(study, mech, spec, sweep_spec, source)
     if sweep_spec is not None:      # a build has no builds of its own: robust bounds apart
         sweep_spec = sweep_spec.nominal()
     with compile_notice():
@@ -168,6 +169,25 @@ def failure_text(label, plan, status, row):
     return (f"the {label} does not assemble: {kc.STATUS_NAMES.get(int(status), int(status))}"
             f"{where}; a tolerance analysis needs a design that assembles over the whole "
             "revolution (its builds deviate from it)")
+
+
+def _refuse_friction(study, mech, spec, sweep_spec, source):
+    """A design with [mechanism.friction] whose builds' force metrics would be
+    frictionless is refused; its kinematic metrics (stroke, dwell, law, margin,
+    transmission, acceleration) do not depend on friction and are analysed."""
+    if mech.friction is None:
+        return
+    from dataclasses import replace
+
+    from ..model.metric_catalogue import TOLERANCED_METRICS
+    from ..study.friction_spec import refuse_friction
+    forces = [m for m in _wanted(spec, sweep_spec, mech) or TOLERANCED_METRICS
+              if BY_NAME[m].stage == "forces"]
+    if forces:
+        refuse_friction(replace(study, mechanism=mech),
+                        f"a tolerance analysis's {', '.join(forces)} would be", source=source,
+                        hint="--metrics without them analyses the kinematic metrics, which "
+                             "friction does not change")
 
 
 def _wanted(spec, sweep_spec, mech):

@@ -18,6 +18,7 @@ the block without edge loads).  Read into ``model.friction.Friction``."""
 from __future__ import annotations
 
 from ..base import limits as lim
+from ..base.errors import StudyError
 from ..model.friction import Friction
 from .section import Section, _quote
 
@@ -85,3 +86,19 @@ def _per_joint(sec: Section, key, default, joints, points):
         out[j] = t.number(k, within=lim.LENGTH)
     t.done()
     return out
+
+
+# what computes friction today: the paths that do not refuse a study with [mechanism.friction]
+WITH_FRICTION = ("friction is computed for scene studies (study.kind = \"scene\": `pipeline "
+                 "run` gives the losses, M_bal with friction and the bearings' p and p*v)")
+
+
+def refuse_friction(study, what, source=None, hint="remove the section for a frictionless run"):
+    """Refuse a study with [mechanism.friction] on a path whose numbers would be
+    frictionless: one line naming the file (``source``, else the study's), the
+    field, ``what`` would be frictionless and what computes friction."""
+    if study.mechanism.friction is None:
+        return
+    raise StudyError(source or study.path, "mechanism.friction",
+                     f"{what} frictionless (friction is not computed there yet): {WITH_FRICTION}; "
+                     f"{hint}")
