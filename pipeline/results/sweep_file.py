@@ -23,6 +23,22 @@ from ..study.sweep_spec import METRICS
 COUNTED = tuple(kc.STATUS_NAMES.values()) + ("feasible",)
 
 
+def full_counts(counts):
+    """A chunk's counts (COUNTED) in today's columns: a journal or a file
+    written before a status was added (FRICTION_LOCK, the 8th) has fewer
+    status columns before its feasible one; the statuses it did not know it
+    never gave, so they count 0."""
+    counts = np.asarray(counts, np.int64)
+    missing = len(COUNTED) - counts.shape[-1]
+    if missing < 0:
+        raise ValueError(f"{counts.shape[-1]} counts where there are {len(COUNTED)} columns "
+                         f"({', '.join(COUNTED)})")
+    if not missing:
+        return counts
+    zeros = np.zeros(counts.shape[:-1] + (missing,), np.int64)
+    return np.concatenate([counts[..., :-1], zeros, counts[..., -1:]], axis=-1)
+
+
 def _counts(status, feasible):
     """Candidates per status code, then the feasible ones (COUNTED)."""
     return np.append(np.bincount(status.astype(np.int64), minlength=len(kc.STATUS_NAMES))
@@ -209,7 +225,7 @@ class SweepFile:
         self._write_rows(d, lo, hi, x, status, metrics)
         if len(rejected):
             d["progress/rejected"][chunk] = rejected
-        d["progress/status_counts"][chunk] = counts
+        d["progress/status_counts"][chunk] = full_counts(counts)  # (an older journal's, too)
         d["progress/chunk_done"][chunk] = True
 
     def write_chunks(self, d, chunks, x, status, metrics, rejected):
@@ -272,12 +288,29 @@ class SweepFile:
         return {n: f[n] for n in names}
 
 
+def _stored_counts(d):
+    """progress/status_counts in today's columns (COUNTED), by the names of its
+    ``columns``: a file written before a status was added has its count as 0."""
+    c = d[()].astype(np.int64)
+    names = [str(attr_text(x)) for x in d.attrs.get("columns", ())]
+    if len(names) != c.shape[1]:
+        return full_counts(c)
+    unknown = [x for x in names if x not in COUNTED]
+    if unknown:
+        raise ResultsError(d.file.filename, f"progress/status_counts counts {unknown[0]!r}, "
+                                            "which this version does not know; a newer "
+                                            "version of the package wrote it")
+    out = np.zeros((c.shape[0], len(COUNTED)), np.int64)
+    out[:, [COUNTED.index(x) for x in names]] = c
+    return out
+
+
 def status_counts(f) -> dict:
     """Candidates per status, OK-but-infeasible and feasible: count and percent."""
     if attr_text(f.attrs.get("store", "all")) == "feasible":
         # only the feasible rows are stored: the counts of every chunk written
         done = f["progress/chunk_done"][()]
-        c = f["progress/status_counts"][()][done].sum(axis=0)
+        c = _stored_counts(f["progress/status_counts"])[done].sum(axis=0)
         by_status, n_feasible = c[:-1], int(c[-1])
     else:
         st = f["candidates/status"][()].astype(np.int64)
