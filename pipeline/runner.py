@@ -185,6 +185,10 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
                 from .views.shaking_plots import shaking_figure
                 figures.append((lambda: shaking_figure(res),
                                 out.with_name(out.stem + "_shaking.png")))
+            if getattr(res.dense.forces, "friction", None) is not None:
+                from .views.friction_plots import friction_figure
+                figures.append((lambda: friction_figure(res),
+                                out.with_name(out.stem + "_friction.png")))
         for case in res.dynamics or ():
             name = safe_name(case.name, "case")
             figures.append((lambda case=case: dynamics_figure(case),

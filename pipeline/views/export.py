@@ -1,6 +1,6 @@
 """The users' tables from a results file (`pipeline export OUT.h5 --csv DIR`).
 
-A scene gives points.csv, links.csv (and reactions.csv, peaks.csv,
+A scene gives points.csv, links.csv (and reactions.csv, friction.csv, peaks.csv,
 motion_<case>.csv) at every computed position (``every``: every N-th); a sweep
 gives candidates.csv (all candidates), candidates_feasible.csv (the feasible
 ones) or candidates_front1.csv, candidates_fronts1-N.csv (the first Pareto

@@ -6,8 +6,11 @@
 * a scene: its points, links, reactions (the joints' Rx, Ry, |R|; each
   slide's normal force N, couple C and the point of action e = C/N of
   ``reactions.slide_action``; the shaking force and moment on the frame; the
-  equilibrium residual; M_bal), peaks and dynamics motion tables, at every
-  computed position.
+  equilibrium residual; M_bal), with joint friction its friction table (per
+  joint the friction moment, relative angular velocity analog, loss, bearing
+  pressure p, sliding speed v and p*v; per slide its friction force, sliding
+  analog and loss; the total loss and M_bal without friction), peaks and
+  dynamics motion tables, at every computed position.
 
 Column names are plain (``L12``, ``P8_x``); the units of every column are in
 ``df.attrs["units"]``, and ``with_units(df)`` gives headers such as
@@ -164,6 +167,8 @@ def scene_tables(path, every=1) -> dict:
                                      columns=["joint", "R_max", "phi1", "d_min"])
                 peaks.attrs["units"] = {"joint": "", "R_max": "N", "phi1": "deg", "d_min": "mm"}
                 out["peaks"] = peaks
+        if "friction_status" in d:     # [mechanism.friction]: the joints' friction
+            out["friction"] = friction_table(d, rows)
         if "peaks" in f:
             out["peaks"] = peaks_table(f)
         if "counterweight" in f:      # one row: m_c r_c, its angle, the peaks before and after
@@ -189,6 +194,42 @@ def scene_tables(path, every=1) -> dict:
             out["reduced"] = _frame(cols, {c: str(attr_text(g[c].attrs["units"]))
                                            for c in cols})
     return out
+
+
+# a scene's friction datasets per joint (then per slide): (dataset, column's name)
+FRICTION_JOINT_COLUMNS = (("friction_moment", "M_f"), ("relative_omega_analog", "omega_rel'"),
+                          ("friction_loss", "loss"), ("bearing_pressure", "p"),
+                          ("sliding_speed", "v"), ("pv", "pv"))
+FRICTION_SLIDE_COLUMNS = (("slide_friction_force", "F_f"), ("sliding_analog", "s_rel'"),
+                          ("slide_friction_loss", "loss"))
+
+
+def friction_table(d, rows) -> pd.DataFrame:
+    """A scene's friction at the rows ``rows`` of its dense curves ``d``
+    (``results.scene_file._friction_curves``): the status, per joint and per
+    slide its columns (``M_f[R2]``, ``pv[R2]``, ``F_f[slider]``), the total
+    loss and M_bal without friction, each with its dataset's units."""
+    from ..solve.reactions import slide_label
+    cols = {"phi1": d["phi1"][rows],
+            "friction_status": [kc.STATUS_NAMES.get(int(s), str(int(s)))
+                                for s in d["friction_status"][rows]]}
+    units = {"phi1": "deg", "friction_status": ""}
+    joints = [str(attr_text(x)) for x in d["reactions"].attrs["joints"]]
+    groups = [(joints, FRICTION_JOINT_COLUMNS)]
+    if "slide_friction_force" in d:
+        slides = [slide_label(str(attr_text(x)))
+                  for x in d["slide_friction_force"].attrs["slides"]]
+        groups.append((slides, FRICTION_SLIDE_COLUMNS))
+    for names, columns in groups:
+        for key, short in columns:
+            data, unit = d[key][rows], str(attr_text(d[key].attrs.get("units", "")))
+            for j, name in enumerate(names):
+                cols[f"{short}[{name}]"] = data[:, j]
+                units[f"{short}[{name}]"] = unit
+    for key in ("friction_loss_total", "M_bal_frictionless"):
+        cols[key] = d[key][rows]
+        units[key] = str(attr_text(d[key].attrs.get("units", "")))
+    return _frame(cols, units)
 
 
 def joint_headers(f, joints) -> dict:
