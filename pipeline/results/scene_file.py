@@ -443,11 +443,11 @@ def _friction_summary(f, res):
         "do no work over a revolution)")
     rows = np.array([b[1:] for b in fr.bearings(res.dense.phi)], float).reshape(-1, 7)
     for c, (key, unit, what) in enumerate((
-            ("peak_pressure", "MPa", "peak bearing pressure p"),
+            ("peak_pressure", "MPa", "peak bearing pressure p (refined between positions)"),
             ("peak_pressure_phi1", "deg", "crank angle phi1 of the peak p"),
-            ("peak_sliding_speed", "m/s", "peak sliding speed v"),
+            ("peak_sliding_speed", "m/s", "peak sliding speed v (refined between positions)"),
             ("peak_sliding_speed_phi1", "deg", "crank angle phi1 of the peak v"),
-            ("peak_pv", "MPa*m/s", "peak p*v"),
+            ("peak_pv", "MPa*m/s", "peak p*v (refined between positions)"),
             ("peak_pv_phi1", "deg", "crank angle phi1 of the peak p*v"),
             ("mean_pv", "MPa*m/s", "mean p*v over the revolution"))):
         put(g, key, rows[:, c], unit, what, dims=("joint",))

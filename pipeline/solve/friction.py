@@ -49,6 +49,9 @@ class FrictionForces:
     element_names: tuple        # joints, then slides
     fail_phi: float = math.nan  # rad: the first locking angle, located between positions
     fail_element: int = -1
+    # the bearings' peaks refined between the positions (``solve.peaks``, with the
+    # scene's other peaks): {(quantity, joint): peaks.Peak}; None where not refined
+    peaks: dict | None = None
 
     @property
     def pv(self):
@@ -72,13 +75,21 @@ class FrictionForces:
 
     def bearings(self, phi):
         """Per revolute joint: (name, peak p [MPa], phi1 there [deg], peak v [m/s],
-        phi1 there, peak p*v [MPa*m/s], phi1 there, mean p*v)."""
+        phi1 there, peak p*v [MPa*m/s], phi1 there, mean p*v over the positions).
+        The peaks are those refined between the positions (``peaks``) where the
+        scene's peaks were refined, else the largest of the positions ``phi``."""
         deg = np.rad2deg(phi)
         rows = []
         pv = self.pv
         for j, (name, _, _) in enumerate(self.spec.pins):
             row = [name]
-            for col in (self.pressure[:, j], self.sliding_speed[:, j], pv[:, j]):
+            for q, col in (("bearing_pressure", self.pressure[:, j]),
+                           ("sliding_speed", self.sliding_speed[:, j]),
+                           ("bearing_pv", pv[:, j])):
+                peak = (self.peaks or {}).get((q, name))
+                if peak is not None:
+                    row += [peak.value, peak.phi1]
+                    continue
                 k = int(np.nanargmax(col)) if np.isfinite(col).any() else 0
                 row += [float(col[k]), float(deg[k])]
             row.append(float(np.mean(pv[:, j])))

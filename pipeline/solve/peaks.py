@@ -5,7 +5,9 @@ peak |omega| and |eps| of every link, the smallest transmission angle of every
 dyad and class III lead, and, with forces, the peak reaction of every joint,
 the peak normal force |N| and couple |C| of every slide, the peak
 |balancing moment| and the peak |shaking force| and |shaking moment| on the
-frame (``kernels.forces.shaking``).  Each peak is bracketed by the
+frame (``kernels.forces.shaking``), and with [mechanism.friction] the
+reactions and M_bal with friction and each plain bearing's pressure p,
+sliding speed v and p*v (``solve.friction``).  Each peak is bracketed by the
 largest sample of the dense revolution and its two neighbours, then found by
 a bounded 1-D maximiser (SciPy's Brent) on the exact kinematics: the
 continuation is walked from the first position to the trial angle, so the
@@ -36,7 +38,8 @@ XATOL = 1e-9          # rad: where a peak is, to about 6e-8 deg
 class Peak:
     quantity: str       # velocity, acceleration, omega, eps, reaction, slide_normal,
                         # slide_couple, M_bal, shaking_force, shaking_moment,
-                        # min_transmission_angle
+                        # min_transmission_angle; with friction bearing_pressure,
+                        # sliding_speed, bearing_pv (BEARING_PEAKS)
     item: str           # the point, link, joint, slide or dyad
     value: float        # the peak magnitude
     unit: str
@@ -82,7 +85,26 @@ def _magnitudes(study, plan, curves, forces=None):
         if forces.shaking is not None:      # on the frame (kernels.forces.shaking)
             out[("shaking_force", "frame", "N")] = forces.shaking_magnitude
             out[("shaking_moment", "frame", "N*m")] = np.abs(forces.shaking[:, 2])
+        fr = forces.friction
+        if fr is not None:      # [mechanism.friction]: each plain bearing's p, v and p*v
+            pv = fr.pv
+            for j, (name, _, _) in enumerate(fr.spec.pins):
+                out[("bearing_pressure", name, "MPa")] = fr.pressure[:, j]
+                out[("sliding_speed", name, "m/s")] = fr.sliding_speed[:, j]
+                out[("bearing_pv", name, "MPa*m/s")] = pv[:, j]
     return out
+
+
+# the plain bearings' peaks (with [mechanism.friction]): the scene keeps them with its
+# friction (``solve.friction.FrictionForces.peaks``, the results file's /friction), not
+# among the peaks of /peaks
+BEARING_PEAKS = ("bearing_pressure", "sliding_speed", "bearing_pv")
+
+
+def split_bearing_peaks(peaks):
+    """(the peaks but the bearings', {(quantity, joint): Peak} of the bearings')."""
+    return ([p for p in peaks if p.quantity not in BEARING_PEAKS],
+            {(p.quantity, p.item): p for p in peaks if p.quantity in BEARING_PEAKS})
 
 
 def transmission_items(mech):

@@ -15,11 +15,13 @@ from __future__ import annotations
 def solve_scene(study):
     """The scene study ``study`` solved: a ``solve.scene.SceneResult`` with its
     peaks, counterweight, motion and (if the study asks) dynamics."""
-    from .peaks import scene_motion, scene_peaks
+    from .peaks import scene_motion, scene_peaks, split_bearing_peaks
     from .scene import run_scene
     from .shaking import scene_counterweight
     res = run_scene(study)
-    res.peaks = scene_peaks(res)
+    res.peaks, bearings = split_bearing_peaks(scene_peaks(res))
+    if bearings:        # [mechanism.friction]: the plain bearings' refined p, v and p*v
+        res.dense.forces.friction.peaks = bearings
     res.counterweight = scene_counterweight(res)
     res.motion = scene_motion(res)
     from .cyclogram import scene_cyclogram

@@ -387,7 +387,8 @@ def test_four_bar_with_friction_at_every_joint_against_a_dense_newton(studies):
 def test_one_bearing_of_mechanism_b_by_hand_from_the_results_file(studies, tmp_path):
     """R5 (ternary / rocker at P5, d = 10 mm, l = 12 mm): p = |R| / (d l), v =
     |omega_rocker - omega_ternary| d / 2 from the stored link omegas (links 3_4 and
-    7_5 are the ternary's and the rocker's), p*v, their peaks and the mean p*v."""
+    7_5 are the ternary's and the rocker's), p*v, their peaks (no smaller than the
+    positions' largest: refined between them) and the mean p*v."""
     out = tmp_path / "f.h5"
     assert main(["run", str(studies / "ov7_friction.toml"), "-o", str(out), "-q",
                  "--no-pictures"]) == 0
@@ -403,9 +404,14 @@ def test_one_bearing_of_mechanism_b_by_hand_from_the_results_file(studies, tmp_p
         np.testing.assert_allclose(g["sliding_speed"][:, j], v, rtol=1e-12)
         np.testing.assert_allclose(g["pv"][:, j], p * v, rtol=1e-12)
         s = f["friction"]
-        assert s["peak_pressure"][j] == pytest.approx(p.max(), rel=1e-14)
-        assert s["peak_pressure_phi1"][j] == g["phi1"][int(np.argmax(p))]
-        assert s["peak_pv"][j] == pytest.approx((p * v).max(), rel=1e-12)
+        # the peaks, refined between the positions (tests/solve/test_friction_peaks.py):
+        # no smaller than the positions' largest, on the same hump (within a step)
+        step = abs(g["phi1"][1] - g["phi1"][0])
+        for key, by_hand in (("peak_pressure", p), ("peak_sliding_speed", v),
+                             ("peak_pv", p * v)):
+            k = int(np.argmax(by_hand))
+            assert s[key][j] >= by_hand[k]
+            assert abs(s[f"{key}_phi1"][j] - g["phi1"][k]) <= step
         assert s["mean_pv"][j] == pytest.approx(np.mean(p * v), rel=1e-12)
         assert g["pv"].attrs["units"] == "MPa*m/s" and g["friction_loss"].attrs["units"] == "W"
         assert f.attrs["status"] == "OK"
