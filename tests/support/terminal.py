@@ -38,8 +38,8 @@ def run_on_terminal(argv, env=None, cwd=None, timeout=300.0):
         while time.perf_counter() - t0 < timeout:
             mine = own_wait()
             ready, _, _ = select.select([master], [], [], POLL_S)
-            late = own_wait() - mine            # this reader's wait for a processor
             pace.look()
+            late = own_wait() - mine            # this reader's wait for a processor
             if ready:
                 try:
                     b = os.read(master, 4096)
@@ -103,24 +103,23 @@ def thread_waits(pid) -> dict:
 
 class Pace:
     """The command's clock: wall seconds since ``t0`` less, for each interval
-    between two looks, the largest wait for a processor of one of its threads
-    in it."""
+    between two looks, the largest wait for a processor that one of its threads
+    was given in it (Linux adds a wait when the thread gets its turn: one wait may
+    span many looks, and is counted whole at the look after it)."""
 
     def __init__(self, pid, t0):
         self.pid, self.t0 = pid, t0
-        self.last_look = t0
         self.waits = {}             # (pid, tid) -> its wait at the last look
         self.waited = 0.0
 
     def look(self):
-        now = time.perf_counter()
         waits = thread_waits(self.pid)
         grew = max((w - self.waits.get(k, 0.0) for k, w in waits.items()), default=0.0)
-        self.waited += min(max(grew, 0.0), now - self.last_look)
+        self.waited += max(grew, 0.0)
         self.waits.update(waits)
-        self.last_look = now
 
     def now(self, late=0.0, after=0.0) -> float:
         """Seconds on the command's clock now, less ``late`` (the reader's own
         wait before it saw what it notes), never before ``after``."""
-        return max(time.perf_counter() - self.t0 - self.waited - max(late, 0.0), after)
+        wall = time.perf_counter() - self.t0
+        return max(wall - min(self.waited + max(late, 0.0), wall), after)
