@@ -22,6 +22,7 @@ from support.terminal import longest_silence, run_on_terminal
 
 SILENCE_S = 2.0
 HANG_GUARD_S = 120.0
+on_linux = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a pseudo-terminal")
 
 
 def wait_for(what, holds):
@@ -30,7 +31,6 @@ def wait_for(what, holds):
     while not holds():
         assert time.monotonic() < guard, f"no {what} within {HANG_GUARD_S} s"
         time.sleep(0.01)
-on_linux = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a pseudo-terminal")
 
 
 def test_plain_lines_off_a_terminal(caplog, monkeypatch):
