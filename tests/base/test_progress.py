@@ -91,6 +91,47 @@ def test_compile_estimate_is_the_last_compile_measured(caplog, monkeypatch, tmp_
 
 CLI = [sys.executable, "-m", "pipeline.cli"]
 
+# on processor 0 only: a busy loop, and a child that works BUSY_S of its own processor
+# time (or sleeps as long) between two prints
+_ON_CPU0 = "import os, sys, time\nos.sched_setaffinity(0, {0})\n"
+_LOOP = _ON_CPU0 + "print('on', flush=True)\nwhile True:\n    pass\n"
+_CHILD = _ON_CPU0 + """print("start", flush=True)
+t = time.process_time()
+while sys.argv[1] == "works" and time.process_time() - t < float(sys.argv[2]):
+    pass
+if sys.argv[1] == "sleeps":
+    time.sleep(float(sys.argv[2]))
+print("end", flush=True)
+"""
+BUSY_S = 0.6
+
+
+@on_linux
+def test_a_command_s_pace_leaves_out_only_its_waits_for_a_processor():
+    """support.terminal's clock: a child that shares processor 0 with two busy
+    loops waits about twice as long as it works; its silence while it works is
+    its work's (not the waits), and its silence while it sleeps is the sleep's
+    (nothing taken off)."""
+    loops = [subprocess.Popen([sys.executable, "-c", _LOOP], stdout=subprocess.PIPE, text=True)
+             for _ in range(2)]
+    try:
+        assert [loop.stdout.readline() for loop in loops] == ["on\n"] * 2
+        gaps, walls = {}, {}
+        for what in ("works", "sleeps"):
+            t0 = time.perf_counter()
+            code, times, end, text = run_on_terminal(
+                [sys.executable, "-c", _CHILD, what, str(BUSY_S)])
+            walls[what] = time.perf_counter() - t0
+            assert code == 0 and text.split() == ["start", "end"], text
+            gaps[what] = times[-1] - times[0]
+    finally:
+        for loop in loops:
+            loop.kill()
+            loop.wait()
+    assert walls["works"] > 2 * BUSY_S      # it did wait: the loops took their turns
+    for what, gap in gaps.items():
+        assert BUSY_S * 0.9 <= gap <= BUSY_S + 0.4, (what, gaps, walls)
+
 
 @pytest.fixture(scope="module")
 def help_time():
