@@ -358,10 +358,15 @@ def _grid(case):
     return n_sub, n_samples, n_tail
 
 
-def integrate(plan, mechanism, case, method="rk4", tols=None, file="<study>") -> CaseResult:
+def integrate(plan, mechanism, case, method="rk4", tols=None, file="<study>",
+              checked=True) -> CaseResult:
     """Integrate one dynamics case (study.DynamicsCase) of the compiled ``plan``
     with its error estimate: re-run with smaller steps, or refused, where the
-    estimate exceeds ACCEPTED_ERROR_RAD (the module docstring)."""
+    estimate exceeds ACCEPTED_ERROR_RAD (the module docstring).
+
+    ``checked=False``: one integration at the case's own step (or tolerance),
+    no estimate, no refinement: what the integrator alone does at that step
+    (the accuracy benchmark's error against the step; never a study's result)."""
     if method not in METHODS:
         raise ValueError(f"unknown integration method {method!r}; known: {', '.join(METHODS)}")
     tols = kc.default_tolerances() if tols is None else tols
@@ -370,7 +375,9 @@ def integrate(plan, mechanism, case, method="rk4", tols=None, file="<study>") ->
     def run(dt, tol=DOP853_TOL):
         return _run_once(plan, mechanism, case, method, tols, file, dt, tol)
 
-    if method == "dop853":       # tolerance-proportional: error(tol) = 10/9 |y(tol) - y(tol/10)|
+    if not checked:
+        res = run(case.dt)
+    elif method == "dop853":       # tolerance-proportional: error(tol) = 10/9 |y(tol) - y(tol/10)|
         a = run(case.dt)
         res = _judged(a, _check(a, run(case.dt, DOP853_CHECK_TOL), 10.0 / 9.0), "", False)
     else:                        # fourth order: error(dt) = 16/15 |y(dt) - y(dt/2)|
