@@ -453,7 +453,9 @@ def analyze(path, n_representatives=5, *, max_samples=MAX_MODEL_SAMPLES, n_jobs=
     if n_jobs is None or n_jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {n_jobs}")
     # the analysis is written into the file itself: only into a results file, never
-    # through a link to nothing (one to a sweep's file updates that file)
+    # through a link to nothing (one to a sweep's file updates that file); read as the
+    # input first, so that a file that is no sweep's is said as such
+    open_results(path, "sweep").close()
     results_output(path, overwrite=True)
     from ..base.progress import ticking
     t0 = time.perf_counter()
