@@ -470,12 +470,25 @@ class _Page:
             await asyncio.sleep(0.1)
         raise AssertionError(f"{what} within {seconds} s")
 
-    async def moved(self, before, what):
-        """The plot's area (_PLOT_AREA) once its axes' ranges differ from ``before``'s."""
+    async def relayouts(self):
+        """How many relayouts the explorer's plot has finished (counted from the
+        first call): plotly.js applies a wheel's zoom a moment after the wheel,
+        and an input sent before that is undone by it."""
+        return await self.js("""(function () {
+            var gd = document.getElementById('ex-plot');
+            if (window.__relayouts === undefined) {
+                window.__relayouts = 0;
+                gd.on('plotly_relayout', function () { window.__relayouts += 1; });
+            }
+            return window.__relayouts; })()""")
+
+    async def moved(self, before, what, relayouts):
+        """The plot's area (_PLOT_AREA) once its axes' ranges differ from ``before``'s
+        and a relayout has finished since ``relayouts`` were counted."""
         was = json.dumps(before["x"] + before["y"])
-        await self.until(f"(function (a, b) {{ return a.x.concat(a.y).some("
-                         f"function (v, i) {{ return v !== b[i]; }}); }})({_PLOT_AREA}, {was})",
-                         what, 20)
+        await self.until(f"window.__relayouts > {relayouts} && (function (a, b) {{ return "
+                         f"a.x.concat(a.y).some(function (v, i) {{ return v !== b[i]; }}); "
+                         f"}})({_PLOT_AREA}, {was})", what, 20)
         return await self.js(_PLOT_AREA)
 
     async def mouse(self, kind, x, y, **kw):
@@ -615,16 +628,19 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
         # a double-click gives the whole range back
         await page.centre("#ex-plot")
         a = await page.js(_PLOT_AREA)
+        n = await page.relayouts()
         await page.drag(a["l"] + 0.05 * a["w"], a["t"] + 0.05 * a["h"],
                         a["l"] + 0.6 * a["w"], a["t"] + 0.7 * a["h"])
-        # (each read once the plot's ranges have moved: no fixed wait, a loaded machine
-        # draws late)
-        b = await page.moved(a, "the drag's zoom")
+        # (each read once the plot's ranges have moved and its relayout has finished: no
+        # fixed wait, a loaded machine draws late)
+        b = await page.moved(a, "the drag's zoom", n)
+        n = await page.relayouts()
         await page.mouse("mouseWheel", a["l"] + 0.3 * a["w"], a["t"] + 0.3 * a["h"],
                          deltaX=0, deltaY=-240)
-        c = await page.moved(b, "the wheel's zoom")
+        c = await page.moved(b, "the wheel's zoom", n)
+        n = await page.relayouts()
         await page.click(a["l"] + 0.5 * a["w"], a["t"] + 0.5 * a["h"], count=2)
-        seen["ranges"] = (a, b, c, await page.moved(c, "the double-click's whole range"))
+        seen["ranges"] = (a, b, c, await page.moved(c, "the double-click's whole range", n))
 
         # box selection: the tool bar's box tool, then a box over the whole plot
         await page.mouse("mouseMoved", a["l"] + 0.5 * a["w"], a["t"] + 0.5 * a["h"])
