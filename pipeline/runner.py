@@ -449,7 +449,7 @@ def run_compare(paths, candidate=None, out_dir=None, *, pictures=True):
         if Path(out_dir).exists() and not Path(out_dir).is_dir():
             raise ResultsError(out_dir, "is a file; -o names the folder of the picture")
         out_dir = check_output_folder(out_dir)
-    if pictures and not (candidate is not None and not str(candidate).strip().isdigit()):
+    if pictures and (candidate is None or str(candidate).strip().isdigit()):
         # the picture's name is known before the designs are read ('knee' resolves later:
         # save_figure checks that one): never over an input or a results file
         number = None if candidate is None else int(candidate)
