@@ -419,11 +419,25 @@ def build_parser():
         "what numba.cuda sees on this machine (package, driver, toolkit, GPUs) and whether "
         "--device gpu can run"))
     dr.set_defaults(func=cmd_doctor)
+    p.commands = tuple(sub.choices)
     return p
+
+
+def _unknown_command(parser, argv):
+    """Refuse a misspelt command with the nearest one (argparse 3.11 lists them
+    all): `pipeline analyse` -> did you mean 'analyze'?"""
+    import difflib
+    cmd = next((a for a in argv if not a.startswith("-")), None)
+    if cmd is None or cmd in parser.commands:
+        return
+    near = difflib.get_close_matches(cmd, parser.commands, n=1)
+    parser.error(f"unknown command {cmd!r}" + (f"; did you mean {near[0]!r}?" if near else
+                                               f"; commands: {', '.join(parser.commands)}"))
 
 
 def main(argv=None) -> int:
     parser = build_parser()
+    _unknown_command(parser, sys.argv[1:] if argv is None else list(argv))
     args = parser.parse_args(argv)
     import matplotlib
     matplotlib.use("Agg")      # pictures go to files; a notebook keeps its own backend

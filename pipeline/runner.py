@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .base.errors import ResultsError
+from .base.units import unit_text
 from .base.files import RunLock, check_output, check_output_folder, safe_name, save_figure
 from .solve.scene_study import solve_scene  # noqa: F401  (runner.solve_scene: the API's)
 from .study.reader import load_study
@@ -89,7 +90,7 @@ def peak_summary(res) -> dict:
         elif p.quantity == "slide_normal":
             slides.append(p)
         elif p.quantity == "M_bal":
-            moment["peak_M_bal"] = f"{p.value:.3f} N*m at phi1 = {p.phi1:.4f} deg"
+            moment["peak_M_bal"] = f"{p.value:.3f} N·m at phi1 = {p.phi1:.4f} deg"
         elif p.quantity in ("shaking_force", "shaking_moment"):
             about = (f" about {res.dense.forces.shaking_about}"
                      if p.quantity == "shaking_moment" else "")
@@ -272,10 +273,10 @@ def motion_force_summary(name, records, constant) -> dict:
             line += f"; constant speed: {cj[1]:.1f} N at {cj[0]}, phi1 = {cj[2]:g} deg"
         out[f"{name} peak_reaction"] = line
     mb, t, phi = rec.peak_M_bal()
-    line = f"{mb:.4g} N*m at t = {t:.4f} s, phi1 = {phi:.1f} deg ({where})"
+    line = f"{mb:.4g} N·m at t = {t:.4f} s, phi1 = {phi:.1f} deg ({where})"
     if constant is not None and np.isfinite(constant.M_bal).any():
         k = int(np.nanargmax(np.abs(constant.M_bal)))
-        line += (f"; constant speed: {constant.M_bal[k]:.4g} N*m at phi1 = "
+        line += (f"; constant speed: {constant.M_bal[k]:.4g} N·m at phi1 = "
                  f"{np.rad2deg(constant.phi[k]):g} deg")
     out[f"{name} peak_M_bal"] = line
     out[f"{name} equilibrium_residual"] = f"{rec.worst_residual():.2g} at worst"
@@ -369,11 +370,13 @@ def tolerance_summary(a) -> dict:
     metric the design's value, the spread and the dimension that moves it most."""
     import numpy as np
     out = {"design": a.label, "builds": f"{len(a.status):,} (scrambled Sobol, seed "
-                                         f"{a.spec.seed}, ISO 2768-{a.spec.iso_class} defaults)",
+                                         f"{a.spec.seed}; ISO 2768-{a.spec.iso_class} "
+                                         "at this design's own sizes, where a robust search "
+                                         "takes the reference design's)",
            "yield": f"{100 * a.yield_:.2f} % assemble" + (
                " and meet " + ", ".join(_bound_text(*b) for b in a.constraints)
-               if a.constraints else " (no constraints: a scene's [tolerance.constraints] "
-                                     "bound its metrics)")}
+               if a.constraints else " (no constraints given: a sweep's [sweep.constraints] "
+                                     "or a scene's [tolerance.constraints] bound its metrics)")}
     counts = a.status_counts()
     if set(counts) != {"OK"}:
         out["statuses"] = ", ".join(f"{k} {v:,}" for k, v in counts.items())
@@ -381,7 +384,7 @@ def tolerance_summary(a) -> dict:
     p05, p95 = a.quantiles(0.05), a.quantiles(0.95)
     share = a.contributions()
     for k, (m, u) in enumerate(zip(a.metrics, a.units)):
-        unit = "" if u == "1" else f" {u}"
+        unit = "" if u == "1" else f" {unit_text(u)}"
         j = int(np.nanargmax(share[k])) if np.isfinite(share[k]).any() else 0
         top = a.dimensions[j]
         part = (share[k, j] / lin[k]) ** 2 if lin[k] > 0 else float("nan")

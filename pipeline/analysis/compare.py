@@ -6,13 +6,13 @@ The rows, in order (each with its unit; a peak with the crank angle where it
 happens and the point, joint or dyad it belongs to):
 
 * the output rocker's stroke [mm] and dwell error [1] (``/motion``);
-* the working point's peak |v| [m/s] and |a| [m/s^2] (``/peaks``);
+* the working point's peak |v| [m/s] and |a| [m/s²] (``/peaks``);
 * the smallest transmission angle over every dyad and class III lead [deg];
 * the peak |R| of every joint and the largest of them [N];
-* the peak |M_bal| [N*m];
+* the peak |M_bal| [N·m];
 * the smallest pin diameter d_min of every joint and the largest [mm]
   (``/peaks/pin_d_min``: (32 R_max l / (pi sigma))^(1/3), DOMAIN.md section 5);
-* the peak shaking force [N] and moment [N*m] on the frame;
+* the peak shaking force [N] and moment [N·m] on the frame;
 * with joint friction ([mechanism.friction], ``/friction``): the mean power lost
   in friction over a revolution [W] and the largest peak p*v of the pins
   [MPa*m/s] (the reactions and M_bal above are then the friction-inclusive
@@ -65,7 +65,7 @@ class Design:
     path: np.ndarray              # (n, 2) working point's position, mm
     joints: list = field(default_factory=list)
     reaction: np.ndarray | None = None   # (n, n_joints) |R|, N
-    M_bal: np.ndarray | None = None      # (n,) N*m
+    M_bal: np.ndarray | None = None      # (n,) N·m
     candidate: str | None = None         # a sweep's design: its candidate number
     # with [mechanism.friction]: {"mean_loss": (W, None, None), "peak_pv": (MPa*m/s, phi1
     # deg, joint)}; None: frictionless
@@ -257,7 +257,7 @@ def compare_designs(designs) -> Comparison:
         cells = [(d.motion[key], None, f"{d.dwell_deg:g} deg window" if key == "dwell_error"
                   else None) if key in d.motion else None for d in designs]
         rows.append(_row(key, "motion", quantity, unit, cells))
-    for q, unit in (("velocity", "m/s"), ("acceleration", "m/s^2")):
+    for q, unit in (("velocity", "m/s"), ("acceleration", "m/s²")):
         rows.append(_row(f"working_point_{q}", "working point",
                          f"peak |{'v' if q == 'velocity' else 'a'}| working point", unit,
                          [_peak(d, q, d.working_point) for d in designs]))
@@ -266,14 +266,14 @@ def compare_designs(designs) -> Comparison:
                              for d in designs]))
     notes = []
     rows += _joint_rows(designs, notes)
-    rows.append(_row("M_bal", "reactions", "peak |M_bal|", "N*m",
+    rows.append(_row("M_bal", "reactions", "peak |M_bal|", "N·m",
                      [_peak(d, "M_bal") for d in designs]))
     rows.append(_row("shaking_force", "shaking", "peak shaking force", "N",
                      [_peak(d, "shaking_force") for d in designs]))
-    rows.append(_row("shaking_moment", "shaking", "peak shaking moment", "N*m",
+    rows.append(_row("shaking_moment", "shaking", "peak shaking moment", "N·m",
                      [_peak(d, "shaking_moment") for d in designs]))
     for key, quantity, unit in (("mean_loss", "mean friction loss", "W"),
-                                ("peak_pv", "largest peak p*v", "MPa*m/s")):
+                                ("peak_pv", "largest peak p*v", "MPa·m/s")):
         rows.append(_row(f"friction_{key}", "friction", quantity, unit,
                          [(d.friction or {}).get(key) for d in designs]))
     rows = [r for r in rows if any(v is not None for v in r.values)]

@@ -35,6 +35,7 @@ import numpy as np
 
 from ..base.version import __version__
 from ..base.files import RunLock, replacing
+from ..base.units import unit_text
 from ..kernels import config as kc
 from ..kernels.pareto import crowding_distance, knee_point, nondominated_rank
 from ..results.storage import (ResultsError, attr_text, candidate_ids, coordinate, hdf5_image, open_results, put,
@@ -122,7 +123,8 @@ def read_sweep(path) -> SweepData:
             path=Path(path), attrs={k: f.attrs[k] for k in f.attrs}, names=names,
             units=variable_units(d), params=d[()], status=f["candidates/status"][()],
             feasible=f["candidates/feasible"][()].astype(bool), objectives=objectives,
-            objective_units=[str(f[f"metrics/{o}"].attrs.get("units", "1")) for o in objectives],
+            objective_units=[unit_text(attr_text(f[f"metrics/{o}"].attrs.get("units", "1")))
+                             for o in objectives],
             F=F, reference=ref, ids=candidate_ids(f))
 
 
@@ -415,16 +417,23 @@ def summary(data: SweepData, res: dict, elapsed: float) -> dict:
     if not data.attrs.get("complete", True):
         out["warning"] = "the sweep is unfinished: only evaluated candidates are ranked"
 
-    def fmt(i):
-        return ", ".join(f"{o} {F[i, j]:.4g}" for j, o in enumerate(obj))
+    def fmt(i):       # with units (a pure number's 1 left out)
+        return ", ".join(f"{o} {F[i, j]:.4g}" + ("" if u in ("", "1") else f" {u}")
+                         for j, (o, u) in enumerate(zip(obj, data.objective_units)))
     if res["knee"] >= 0:
         out["knee"] = f"#{data.id(res['knee'])}: {fmt(res['knee'])}"
+    if not out["feasible"]:
+        out["note"] = ("no candidate is feasible, so there is no front: the constraints are " +
+                       _constraints_words(data))
     ref = res["reference"]
-    if ref["rank"] > 0:
+    if ref["rank"] > 0 and ref["feasible"]:
         out["reference design"] = (
-            f"front {ref['rank']} ({'feasible' if ref['feasible'] else ref['note']}); dominated "
-            f"by {len(ref['dominated_by'])} candidates, {len(ref['dominators_front1'])} of "
-            "them on front 1")
+            f"front {ref['rank']} (feasible); dominated by {len(ref['dominated_by'])} "
+            f"candidates, {len(ref['dominators_front1'])} of them on front 1")
+    elif not ref["feasible"]:    # an infeasible design is on no front
+        out["reference design"] = f"infeasible ({ref['note']}): on no front" + (
+            f"; {len(ref['dominated_by'])} feasible candidates dominate it, "
+            f"{len(ref['dominators_front1'])} of them on front 1" if ref["rank"] > 0 else "")
     else:
         out["reference design"] = "objectives not finite: not ranked"
     for o, m in res["models"].items():
@@ -440,6 +449,21 @@ def summary(data: SweepData, res: dict, elapsed: float) -> dict:
         "none"
     out["time"] = f"{elapsed:.1f} s"
     return out
+
+
+def _constraints_words(data: SweepData) -> str:
+    """The stored study's constraints in words (``constraints_text``)."""
+    from ..study.objectives import constraints_text
+    try:
+        spec = _study_spec(data)
+    except ValueError:
+        spec = None
+    if spec is None:
+        return "those of a study this version cannot read"
+    # a class III plan's margin (NaN elsewhere), where the file keeps it
+    has_margin = bool(np.isfinite(np.ravel(data.reference.get("singularity_margin",
+                                                             [np.nan]))[:1]).all())
+    return constraints_text(spec, has_margin)
 
 
 def analyze(path, n_representatives=5, *, max_samples=MAX_MODEL_SAMPLES, n_jobs=1) -> dict:

@@ -107,22 +107,22 @@ RATIO = Range("a gear ratio", -MAX_RATIO, MAX_RATIO, "", "turns of the geared cr
 MAX_OMEGA = 1e4
 OMEGA = Range("an angular speed", -MAX_OMEGA, MAX_OMEGA, "rad/s",
               "95,000 rpm: ten times the fastest sewing machine")
-# rad/s^2: 1,000 rpm from rest in a tenth of a second is 10^3 rad/s^2
+# rad/s²: 1,000 rpm from rest in a tenth of a second is 10^3 rad/s²
 MAX_EPS = 1e6
-EPS = Range("an angular acceleration", -MAX_EPS, MAX_EPS, "rad/s^2",
+EPS = Range("an angular acceleration", -MAX_EPS, MAX_EPS, "rad/s²",
             "a thousand times a main shaft reaching 1,000 rpm in 0.1 s")
 
 # kg: links weigh grams to a few kilograms; a ton is a slip of units (g for kg)
 MAX_MASS = 1e3
 MASS = Range("a mass", 0.0, MAX_MASS, "kg", "a ton: links weigh grams to kilograms",
              low_open=True)
-# kg*m^2: the largest mass at the largest length (MAX_MASS * (MAX_LENGTH / 1000)^2)
+# kg·m²: the largest mass at the largest length (MAX_MASS * (MAX_LENGTH / 1000)^2)
 MAX_INERTIA = MAX_MASS * (MAX_LENGTH / 1000.0) ** 2
-INERTIA = Range("a moment of inertia", 0.0, MAX_INERTIA, "kg*m^2",
+INERTIA = Range("a moment of inertia", 0.0, MAX_INERTIA, "kg·m²",
                 "the largest mass at the largest length")
 
-# m/s^2: zero (a study without gravity) to ten times the Earth's
-GRAVITY = Range("gravity", -100.0, 100.0, "m/s^2", "ten times the Earth's")
+# m/s²: zero (a study without gravity) to ten times the Earth's
+GRAVITY = Range("gravity", -100.0, 100.0, "m/s²", "ten times the Earth's")
 
 # MPa: the allowable bending stress of a pin; the strongest steels allow about 2,000
 STRESS = Range("an allowable stress", 0.0, 1e4, "MPa",
@@ -138,16 +138,16 @@ PRESSURE = Range("a bearing pressure", 0.0, 1e4, "MPa", "five times the stronges
                  low_open=True)
 # MPa*m/s: the allowed p*v of a plain bearing (bronze bushings about 1.5-3; PTFE composites
 # to about 3.5)
-PV = Range("a p*v limit", 0.0, 1e3, "MPa*m/s", "a hundred times the best plain bearings",
+PV = Range("a p*v limit", 0.0, 1e3, "MPa·m/s", "a hundred times the best plain bearings",
            low_open=True)
 # mm: a slider's length along its guide (0: no length given, the couple carried without
 # edge loads)
 BLOCK_LENGTH = Range("a block length", 0.0, MAX_LENGTH, "mm",
                      "10 m: ten times the largest linkage of these machines")
 
-# N*m*s: the crank's viscous damping (a motor's torque of tens of N*m over 100 rad/s is
-# about 0.1 N*m*s)
-DAMPING = Range("a damping coefficient", 0.0, 1e4, "N*m*s",
+# N·m·s: the crank's viscous damping (a motor's torque of tens of N·m over 100 rad/s is
+# about 0.1 N·m·s)
+DAMPING = Range("a damping coefficient", 0.0, 1e4, "N·m·s",
                 "10^5 times a motor's torque per speed")
 
 # s: a dynamics case's duration and steps: a run-up of the main shaft lasts seconds

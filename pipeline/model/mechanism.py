@@ -2,7 +2,7 @@
 the flat arrays the kernels read (``Plan``).
 
 Units follow DOMAIN.md: lengths in mm, angles in radians here (the study
-parser converts from degrees), masses kg, moments of inertia kg*m^2.
+parser converts from degrees), masses kg, moments of inertia kg·m².
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ class Crank:
     length: float
     phiM0: float = 0.0       # mounting phase, rad
     omega1: float = 1.0      # rad/s, sign = direction of rotation
-    eps1: float = 0.0        # rad/s^2
+    eps1: float = 0.0        # rad/s²
     rot: int = 1             # direction of the revolution: phi1 from phi0 to phi0 + rot*2pi
     phi0: float = 0.0        # start of the revolution, rad
     name: str = "crank"

@@ -34,14 +34,14 @@ def _curves(g, res, curves, study):
     xy = ("phi1", "point", "axis")
     put(g, "position", curves.pos[:, :nv], "mm", "point position", dims=xy)
     put(g, "position_analog", curves.d1[:, :nv], "mm/rad", "velocity analog dr/dphi1", dims=xy)
-    put(g, "acceleration_analog", curves.d2[:, :nv], "mm/rad^2",
+    put(g, "acceleration_analog", curves.d2[:, :nv], "mm/rad²",
         "acceleration analog d2r/dphi1^2", dims=xy)
     put(g, "velocity", v[:, :nv], "m/s", "point velocity", dims=xy)
-    put(g, "acceleration", a[:, :nv], "m/s^2", "point acceleration", dims=xy)
+    put(g, "acceleration", a[:, :nv], "m/s²", "point acceleration", dims=xy)
     put(g, "link_angle", np.rad2deg(curves.links[:, :, 0]), "deg", "link angle",
         dims=("phi1", "link"))
     put(g, "link_omega", om, "1/s", "link angular velocity", dims=("phi1", "link"))
-    put(g, "link_eps", ep, "1/s^2", "link angular acceleration", dims=("phi1", "link"))
+    put(g, "link_eps", ep, "1/s²", "link angular acceleration", dims=("phi1", "link"))
     put(g, "margin", curves.margin, "1", "distance from a toggle position per group",
         dims=("phi1", "group"))
     put(g, "newton_iterations", curves.iterations, "1", "Newton iterations (class III groups)",
@@ -52,10 +52,10 @@ def _curves(g, res, curves, study):
         put(g, "com_position", curves.pos[:, com], "mm", "centre-of-mass position", dims=sb)
         put(g, "com_position_analog", curves.d1[:, com], "mm/rad",
             "centre-of-mass velocity analog dS/dphi1", dims=sb)
-        put(g, "com_acceleration_analog", curves.d2[:, com], "mm/rad^2",
+        put(g, "com_acceleration_analog", curves.d2[:, com], "mm/rad²",
             "centre-of-mass acceleration analog d2S/dphi1^2", dims=sb)
         put(g, "com_velocity", v[:, com], "m/s", "centre-of-mass velocity", dims=sb)
-        put(g, "com_acceleration", a[:, com], "m/s^2", "centre-of-mass acceleration", dims=sb)
+        put(g, "com_acceleration", a[:, com], "m/s²", "centre-of-mass acceleration", dims=sb)
     if curves.forces is not None:
         _reactions(g, curves.forces)
 
@@ -65,10 +65,10 @@ def _reactions(g, r, along="phi1"):
     ``g``, along its coordinate ``along`` (the crank angle; the time along a motion)."""
     put(g, "reactions", r.R, "N", "joint reaction (force of the first body on the second)",
         dims=(along, "joint", "axis"), joints=list(r.joint_names))
-    put(g, "M_bal", r.M_bal, "N*m", "balancing moment the main shaft delivers (on the crank; "
+    put(g, "M_bal", r.M_bal, "N·m", "balancing moment the main shaft delivers (on the crank; "
         "with inputs besides the crank, plus their shares)", dims=(along,))
     if r.slide.shape[1]:
-        put(g, "slide_reactions", r.slide, ["N", "N*m"],
+        put(g, "slide_reactions", r.slide, ["N", "N·m"],
             "prismatic pair: normal force N of the guide on the slider (along the slide's "
             "direction turned +90 deg) and couple C, at the slider's centre of mass",
             dims=(along, "slide", "slide_component"), slides=list(r.slide_names))
@@ -81,10 +81,10 @@ def _reactions(g, r, along="phi1"):
             "drive of each input besides the crank: a moment on a rotary input, a force "
             "along the guide of a slider input", dims=(along, "input"),
             inputs=list(r.input_names))
-        put(g, "input_share", r.drive[:, :, 1], "N*m",
+        put(g, "input_share", r.drive[:, :, 1], "N·m",
             "each input's share of M_bal: its drive times dq/dphi1", dims=(along, "input"),
             inputs=list(r.input_names))
-    put(g, "body_loads", r.body_loads, ["N", "N", "N*m"],
+    put(g, "body_loads", r.body_loads, ["N", "N", "N·m"],
         "applied and inertia loads reduced to the centre of mass",
         dims=(along, "body", "load_component"), bodies=list(r.body_names))
     if r.residual is not None:
@@ -99,7 +99,7 @@ def _reactions(g, r, along="phi1"):
             "-d/dt sum(m v_S), gravity and external loads apart", dims=(along, "axis"))
         put(g, "shaking_force_magnitude", r.shaking_magnitude, "N", "|shaking force| on the frame",
             dims=(along,))
-        put(g, "shaking_moment", r.shaking[:, 2], "N*m",
+        put(g, "shaking_moment", r.shaking[:, 2], "N·m",
             f"shaking moment on the frame about the crank's pivot {r.shaking_about}: "
             "sum(-J_S eps + (S - O) x (-m a_S)) = -d/dt of the angular momentum about it, "
             "gravity and external loads apart", dims=(along,), about=r.shaking_about)
@@ -136,7 +136,7 @@ def _dynamics_case(group, res, motion_forces=None):
         put(grp, "t", t, "s", "time", dims=("t",))
         put(grp, "phi1", np.rad2deg(p), "deg", "crank angle phi1", dims=("t",))
         put(grp, "omega1", w, "rad/s", "crank angular velocity omega1", dims=("t",))
-        put(grp, "eps1", e, "rad/s^2", "crank angular acceleration eps1", dims=("t",))
+        put(grp, "eps1", e, "rad/s²", "crank angular acceleration eps1", dims=("t",))
     g["tail"].attrs["description"] = "every integration step of the last seconds"
     for rec in (motion_forces or {}).values():
         _motion_forces(g.create_group(MOTION_FORCE_GROUPS[rec.record]), rec)
@@ -158,7 +158,7 @@ def _motion_forces(g, rec):
     put(g, "t", rec.t, "s", "time", dims=("t",))
     put(g, "phi1", np.rad2deg(rec.phi1), "deg", "crank angle phi1", dims=("t",))
     put(g, "omega1", rec.omega1, "rad/s", "crank angular velocity omega1", dims=("t",))
-    put(g, "eps1", rec.eps1, "rad/s^2", "crank angular acceleration eps1", dims=("t",))
+    put(g, "eps1", rec.eps1, "rad/s²", "crank angular acceleration eps1", dims=("t",))
     put(g, "status", rec.status.astype(STATUS_ENUM), "1", "position status", dims=("t",),
         codes=status_table())
     _reactions(g, rec.forces, along="t")
@@ -171,9 +171,9 @@ def _reduced(group, red):
     group.attrs["equilibria_deg"] = [p for p, _ in red.equilibria] or [np.nan]
     group.attrs["equilibria_stable"] = [bool(st) for _, st in red.equilibria] or [False]
     put(group, "phi1", np.degrees(red.phi), "deg", "crank angle phi1", dims=("phi1",))
-    put(group, "J", red.J, "kg*m^2", "reduced moment of inertia J(phi)", dims=("phi1",))
-    put(group, "half_dJ", red.half_dJ, "kg*m^2", "(1/2) dJ/dphi", dims=("phi1",))
-    put(group, "Q", red.Q, "N*m", "generalised force without M1", dims=("phi1",))
+    put(group, "J", red.J, "kg·m²", "reduced moment of inertia J(phi)", dims=("phi1",))
+    put(group, "half_dJ", red.half_dJ, "kg·m²", "(1/2) dJ/dphi", dims=("phi1",))
+    put(group, "Q", red.Q, "N·m", "generalised force without M1", dims=("phi1",))
 
 
 def _counterweight(group, cw):
@@ -183,7 +183,7 @@ def _counterweight(group, cw):
                                 "force| over the dense positions: m_c r_c at the angle from the "
                                 f"crank line {pivot}->{tip}")
     put(group, "phi1", np.rad2deg(cw.phi), "deg", "crank angle phi1", dims=("phi1",))
-    put(group, "mass_radius", np.float64(cw.mass_radius), "kg*mm",
+    put(group, "mass_radius", np.float64(cw.mass_radius), "kg·mm",
         "counterweight: its mass times its radius, m_c r_c")
     put(group, "angle", np.float64(cw.angle), "deg",
         f"counterweight: its angle from the crank line {pivot}->{tip}, counter-clockwise")
@@ -207,7 +207,7 @@ def _flywheel(group, fw):
         group.attrs["not_sized"] = fw.refused
         return
     group.attrs["body"] = fw.J_body
-    put(group, "J_add", np.float64(fw.J_add), "kg*m^2",
+    put(group, "J_add", np.float64(fw.J_add), "kg·m²",
         "moment of inertia added on the crank shaft (to the crank body's J_S)")
     for key, what in (("target", "asked for"), ("delta", "with the flywheel"),
                       ("delta_without", "without the flywheel")):
@@ -235,7 +235,7 @@ def parameter_units(name) -> str:
         return "rad"
     if key in ("start", "stroke"):            # a slider input's law
         return "mm"
-    return {"mass": "kg", "J_S": "kg*m^2"}.get(key, "1")
+    return {"mass": "kg", "J_S": "kg·m²"}.get(key, "1")
 
 
 def _coordinates(f, plan, study):
@@ -377,9 +377,9 @@ def _friction_curves(g, r, along):
         "friction status (FRICTION_LOCK: a self-locking joint or slide, or the friction's "
         "Newton iteration does not converge; its forces NaN)", dims=(along,),
         codes=status_table())
-    put(g, "M_bal_frictionless", fr.M_bal_frictionless, "N*m",
+    put(g, "M_bal_frictionless", fr.M_bal_frictionless, "N·m",
         "balancing moment without friction (M_bal is with it)", dims=(along,))
-    put(g, "friction_moment", fr.moment, "N*m",
+    put(g, "friction_moment", fr.moment, "N·m",
         "friction moment on the joint's second body, f (d/2) |R| against its rotation "
         "relative to the first", dims=pj)
     put(g, "relative_omega_analog", fr.speed_analog[:, :nj], "1",
@@ -391,7 +391,7 @@ def _friction_curves(g, r, along):
         dims=pj)
     put(g, "sliding_speed", fr.sliding_speed, "m/s",
         "sliding speed at the pin's surface v = |omega_rel| d / 2", dims=pj)
-    put(g, "pv", fr.pv, "MPa*m/s", "bearing p*v", dims=pj)
+    put(g, "pv", fr.pv, "MPa·m/s", "bearing p*v", dims=pj)
     if r.slide.shape[1]:
         ps = (along, "slide")
         put(g, "slide_friction_force", fr.force, "N",
@@ -426,7 +426,7 @@ def _friction_summary(f, res):
     put(g, "slide_coefficient", np.float64(spec.slide), "1",
         "Coulomb coefficient at the prismatic pairs")
     for key, value, unit, what in (("p_max", spec.p_max, "MPa", "allowed bearing pressure"),
-                                   ("pv_max", spec.pv_max, "MPa*m/s", "allowed p*v")):
+                                   ("pv_max", spec.pv_max, "MPa·m/s", "allowed p*v")):
         if value is not None:
             put(g, key, np.float64(value), unit, what)
     put(g, "pin_diameter", np.asarray(spec.diameters(), float), "mm", "pin diameter d",
@@ -447,9 +447,9 @@ def _friction_summary(f, res):
             ("peak_pressure_phi1", "deg", "crank angle phi1 of the peak p"),
             ("peak_sliding_speed", "m/s", "peak sliding speed v (refined between positions)"),
             ("peak_sliding_speed_phi1", "deg", "crank angle phi1 of the peak v"),
-            ("peak_pv", "MPa*m/s", "peak p*v (refined between positions)"),
+            ("peak_pv", "MPa·m/s", "peak p*v (refined between positions)"),
             ("peak_pv_phi1", "deg", "crank angle phi1 of the peak p*v"),
-            ("mean_pv", "MPa*m/s", "mean p*v over the revolution"))):
+            ("mean_pv", "MPa·m/s", "mean p*v over the revolution"))):
         put(g, key, rows[:, c], unit, what, dims=("joint",))
 
 

@@ -12,7 +12,7 @@ import h5py
 import numpy as np
 
 from ..study.search_spec import HV_REFERENCE, NORMALISATION, SearchSpec
-from .storage import COMPRESSION, attach, attr_text, coordinate, hdf5_writing
+from .storage import COMPRESSION, attach, attr_text, coordinate, hdf5_writing, units_attr
 from .sweep_file import SweepFile, summarize
 from ..study.sweep_spec import SweepSpec
 
@@ -93,7 +93,7 @@ class SearchFile:
             for name, dtype, units, long in HISTORY:
                 h = g.create_dataset(name, (ngen,), dtype,
                                      fillvalue=np.nan if dtype == "f8" else -1)
-                h.attrs.update(units=units, long_name=long)
+                h.attrs.update(units=units_attr(units), long_name=long)
                 attach(h, ("generation",))
 
     def datasets(self, f):

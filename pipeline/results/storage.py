@@ -13,6 +13,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from ..base.units import unit_text
 from ..base.version import __version__
 from ..base.errors import ResultsError  # noqa: F401  (raised by every reader of results)
 from ..kernels import config as kc
@@ -86,11 +87,12 @@ STATUS_ENUM = h5py.enum_dtype({name: code for code, name in kc.STATUS_NAMES.item
 
 
 def units_attr(units):
-    """One form for units: a UDUNITS string, or one per column (a list)."""
+    """One form for units: a string, or one per column (a list), in the
+    package's one style (``base.units``: N·m, m/s²)."""
     if isinstance(units, (list, tuple)):
-        units = [str(u) for u in units]
+        units = [unit_text(u) for u in units]
         return units[0] if len(set(units)) == 1 else np.array(units, dtype=h5py.string_dtype())
-    return str(units)
+    return unit_text(units)
 
 
 def read_units(d, n=None) -> list:
@@ -112,7 +114,8 @@ def read_units(d, n=None) -> list:
     n = n if n is not None else (d.shape[1] if d.ndim > 1 else 1)
     if len(out) == 1 and n > 1:
         out = out * n
-    return [str(x) for x in out] if len(out) == n else ["?"] * n
+    # a file written before the one style reads in it (N*m -> N·m)
+    return [unit_text(x) for x in out] if len(out) == n else ["?"] * n
 
 
 def coordinate(group, name, values, units, long_name):
@@ -125,7 +128,7 @@ def coordinate(group, name, values, units, long_name):
     else:
         data = np.asarray(values)
     d = group.create_dataset(name, data=data)
-    d.attrs["units"] = units
+    d.attrs["units"] = units_attr(units)
     d.attrs["long_name"] = long_name
     d.make_scale(name)
     return d

@@ -9,10 +9,11 @@ import h5py
 import numpy as np
 
 from ..base.files import replacing
+from ..base.units import unit_text
 from ..kernels import config as kc
 from ..kernels import sweep as ks
 from ..study.objectives import (bounded_finite, constraint_names, constraint_units, constraints,
-                                metric_values)
+                                constraints_text, metric_values)
 from .storage import (COMPRESSION, STATUS_ENUM, ResultsError, attach, attr_text, coordinate,
                       hdf5_image, link_coordinates, put, room_for, status_table, units_attr,
                       write_root_attrs)
@@ -112,12 +113,16 @@ class SweepFile:
                     ("cv", "1", "summed constraint violation (0 = feasible, NaN = failed)")):
                 d = c.create_dataset(name, (n,), "f8", chunks=(ch,), **COMPRESSION,
                                      fillvalue=np.nan, **grow)
-                d.attrs.update(units=units, long_name=long)
+                d.attrs.update(units=units_attr(units), long_name=long)
                 attach(d, ("candidate",))
             d = c.create_dataset("fail_group", (n,), "i2", chunks=(ch,), **COMPRESSION,
                                  fillvalue=-1, **grow)
+            groups, why = list(plan.group_names), ""
+            if getattr(self.problem, "friction", None) is not None:
+                groups += list(self.problem.friction.names)
+                why = "; a FRICTION_LOCK's: the joint or slide, after the groups"
             d.attrs.update(units="1", long_name="index of the group that failed first (-1: none, "
-                           "or the revolution does not close)", groups=list(plan.group_names))
+                           f"or the revolution does not close{why})", groups=groups)
             attach(d, ("candidate",))
             d = c.create_dataset("feasible", (n,), "?", chunks=(ch,), **COMPRESSION, **grow)
             d.attrs.update(units="1", long_name="status OK, constraints met, objectives and "
@@ -141,7 +146,7 @@ class SweepFile:
                 units, long = METRICS[name][:2]
                 d = m.create_dataset(name, (n,), "f8", chunks=(ch,), **COMPRESSION,
                                      fillvalue=np.nan, **grow)
-                d.attrs.update(units=units, long_name=long)
+                d.attrs.update(units=units_attr(units), long_name=long)
                 attach(d, ("candidate",))
             joints = list(plan.joint_names)
             m.attrs["joint_names"] = joints
@@ -353,8 +358,11 @@ def summarize(out) -> dict:
             if name in counts:
                 s[f"status {name}"] = f"{counts[name]['count']} ({counts[name]['percent']:.1f}%)"
         s["feasible"] = f"{counts['feasible']['count']} ({counts['feasible']['percent']:.1f}%)"
+        said = _constraints_said(f, out)
+        if said:
+            s["constraints"] = said
         def unit(name):
-            u = attr_text(f[f"metrics/{name}"].attrs.get("units", ""))
+            u = unit_text(attr_text(f[f"metrics/{name}"].attrs.get("units", "")))
             return "" if u in ("", "1") else f" {u}"
         for o in f.attrs["objectives"]:
             v = f[f"metrics/{o}"][()][feas]
@@ -371,3 +379,17 @@ def summarize(out) -> dict:
         s["reference design"] = ", ".join(
             f"{o} {ref[o][()][0]:.4g}{unit(o)}" for o in f.attrs["objectives"] if o in ref)
     return s
+
+
+def _constraints_said(f, path) -> str:
+    """The constraints the stored study states, in words ("" where the file
+    keeps no study this version reads)."""
+    from ..study.reader import stored_study
+    try:
+        study = stored_study(f.attrs, path)
+    except ValueError:
+        return ""
+    if study is None or study.sweep is None:
+        return ""
+    names = [attr_text(n) for n in f["candidates/constraints"].attrs.get("names", [])]
+    return constraints_text(study.sweep, "singularity_margin_min" in names)

@@ -7,6 +7,8 @@ tolerance analysis of one design is ``pipeline.runs.tolerance``'s."""
 
 from __future__ import annotations
 
+import logging
+
 import math
 import threading
 import warnings
@@ -165,6 +167,7 @@ class RobustBuilds:
         self.names = tuple(names)
         self.spec = spec.nominal()     # a design's own constraints, robust bounds apart
         self.quantile = tol.robust.quantile
+        self.iso_class = tol.iso_class
         self.dims = drawn(tol.dimensions(study.mechanism))
         self.deltas = deviations(self.dims, tol.robust.builds, tol.seed)
         base = [ROBUST_OF[n] for n in self.names if ROBUST_OF[n]]
@@ -181,7 +184,9 @@ class RobustBuilds:
     def describe(self) -> str:
         return (f"{', '.join(self.names)}: {len(self.deltas)} builds per design that meets its "
                 f"constraints, quantile {self.quantile:g}, tolerances of "
-                f"{len(self.dims)} dimensions (the reference design's)")
+                f"{len(self.dims)} dimensions: ISO 2768-{self.iso_class} at the reference "
+                "design's sizes for every design (pipeline tolerance --candidate: at the "
+                "design's own sizes)")
 
     def fill(self, pars, status, rows, n_jobs=None, parallel=True, watch=None):
         """Write the robust columns of ``rows`` (n, N_ROW) of the designs
@@ -306,4 +311,7 @@ def robust_for(study, spec: SweepSpec):
     if not names:
         return None
     names = ["build_yield" if m == "build_loss" else m for m in names]
-    return RobustBuilds(study, spec, dict.fromkeys(names))
+    builds = RobustBuilds(study, spec, dict.fromkeys(names))
+    # which tolerance classes, said (pipeline tolerance --candidate says its own)
+    logging.getLogger(__name__).info("robust metrics %s", builds.describe())
+    return builds

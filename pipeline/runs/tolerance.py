@@ -212,10 +212,7 @@ def _meets(ev, status, values, rows, sweep_spec, spec):
         has_margin = bool(np.isin(ev.plan.codes, kc.CLASS3_GROUPS).any())
         _, cv = constraints(sweep_spec, rows, status, has_margin)
         meets = ok & (cv == 0) & bounded_finite(sweep_spec, rows)
-        bounds = [("stroke", *sweep_spec.stroke_bounds)]
-        if has_margin:
-            bounds.append(("singularity_margin", sweep_spec.margin_min, math.inf))
-        return meets, tuple(bounds) + tuple(sweep_spec.bounds)
+        return meets, sweep_spec.stated_constraints(has_margin)
     meets = ok.copy()
     for m, lo, hi in spec.bounds:
         v = metric_values(rows, m)

@@ -108,7 +108,7 @@ def _curve(plan, phi, t=0.0, mechanism=None, loads=True, tols=None):
 
 
 def reduced_terms(plan, phi, t=0.0, mechanism=None):
-    """(J [kg m^2], (1/2) dJ/dphi [kg m^2], Q without M1 [N m]) at crank
+    """(J [kg·m²], (1/2) dJ/dphi [kg·m²], Q without M1 [N·m]) at crank
     angle(s) ``phi`` (rad).  ``mechanism`` supplies the load expressions when
     the plan has loads (evaluated at ``t``).  Scalars in, scalars out."""
     (J, half, Q, _m1, _V), _ = _curve(plan, phi, t, mechanism)
@@ -148,7 +148,7 @@ class CaseResult:
     t: np.ndarray            # s
     phi1: np.ndarray         # rad
     omega1: np.ndarray       # rad/s
-    eps1: np.ndarray         # rad/s^2
+    eps1: np.ndarray         # rad/s²
     status: int
     method: str
     case: object             # study.DynamicsCase
@@ -517,9 +517,9 @@ class Reduced:
     J(phi), (1/2) dJ/dphi and the generalised force Q(phi) without M1, and
     the equilibria (Q = 0) with their stability."""
     phi: np.ndarray             # rad, absolute crank angle, increasing over [0, 2 pi)
-    J: np.ndarray               # kg m^2
-    half_dJ: np.ndarray         # kg m^2
-    Q: np.ndarray               # N m
+    J: np.ndarray               # kg·m²
+    half_dJ: np.ndarray         # kg·m²
+    Q: np.ndarray               # N·m
     equilibria: list            # (phi deg, stable) where Q = 0
 
     def summary(self) -> dict:

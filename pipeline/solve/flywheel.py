@@ -50,7 +50,7 @@ class NoSteadyRotation(ValueError):
 class Flywheel:
     case: str
     target: float               # delta asked for
-    J_add: float                # kg m^2 added on the crank shaft (0: none needed)
+    J_add: float                # kg·m² added on the crank shaft (0: none needed)
     delta: float                # of the sized system's steady rotation
     delta_without: float        # without the flywheel
     omega_min: float            # rad/s, with the flywheel (signed as the rotation)
@@ -72,7 +72,7 @@ class Flywheel:
                 f"none needed: delta {self.delta_without:.4g} is already at most "
                 f"{self.target:g}")}
         return {f"{self.case} flywheel": (
-            f"J = {self.J_add:.4g} kg m^2 added on the crank shaft brings delta from "
+            f"J = {self.J_add:.4g} kg·m² added on the crank shaft brings delta from "
             f"{self.delta_without:.4g} to {self.delta:.4g} (target {self.target:g}); omega1 "
             f"{self.omega_min:.4f} to {self.omega_max:.4f} rad/s, mean {self.omega_mean:.4f}")}
 
@@ -170,7 +170,7 @@ class _Orbit:
         else:
             raise NoSteadyRotation(
                 f"the crank stops within a revolution from every speed: M1 and the loads "
-                f"cannot carry it round against gravity and the damping b = {self.b:g} N*m*s")
+                f"cannot carry it round against gravity and the damping b = {self.b:g} N·m·s")
         fastest = 10.0 * lim.MAX_OMEGA
         while not gap(hi) < 0.0:
             hi *= 4.0
@@ -199,7 +199,7 @@ class _Orbit:
 
 
 def size_flywheel(plan, mech, case, target) -> Flywheel:
-    """The flywheel (kg m^2 on the crank shaft) that brings the steady rotation
+    """The flywheel (kg·m² on the crank shaft) that brings the steady rotation
     of dynamics case ``case`` to the non-uniformity ``target``."""
     from scipy.optimize import brentq
     body = plan.body_names[[plan.param(f"{n}.J_S") for n in plan.body_names]
@@ -218,7 +218,7 @@ def size_flywheel(plan, mech, case, target) -> Flywheel:
             break
         hi *= 4.0
     else:
-        raise NoSteadyRotation(f"no flywheel up to {hi:.3g} kg m^2 brings delta to {target:g}")
+        raise NoSteadyRotation(f"no flywheel up to {hi:.3g} kg·m² brings delta to {target:g}")
     J_add = brentq(lambda j: orbit.delta(j)[0] - target, 0.0, hi, xtol=XTOL * hi, rtol=1e-12)
     d = orbit.delta(J_add)
     return Flywheel(case.name, target, float(J_add), d[0], d0[0], *d[1:], body)

@@ -44,7 +44,7 @@ class MotionForces:
     t: np.ndarray            # s
     phi1: np.ndarray         # rad (absolute: many revolutions)
     omega1: np.ndarray       # rad/s
-    eps1: np.ndarray         # rad/s^2
+    eps1: np.ndarray         # rad/s²
     status: np.ndarray       # (n,) int8: the kinematics at each step
     forces: Reactions
 
@@ -57,7 +57,7 @@ class MotionForces:
                 for name, r, k, d in rows]
 
     def peak_M_bal(self):
-        """(M_bal [N*m] of the largest magnitude, t [s], phi1 [deg, mod 360])."""
+        """(M_bal [N·m] of the largest magnitude, t [s], phi1 [deg, mod 360])."""
         m = self.forces.M_bal
         if not np.isfinite(m).any():
             return math.nan, math.nan, math.nan
@@ -116,7 +116,7 @@ def case_forces(mechanism, plan, case, tols=None) -> dict:
 def comparison_rows(constant: Reactions, records: dict):
     """Per joint: (name, constant-speed R_max [N], its phi1 [deg], then for each
     record (samples, steady): R_max [N], t [s], phi1 [deg mod 360]), and the
-    same for |M_bal| as the last row (name "M_bal", N*m)."""
+    same for |M_bal| as the last row (name "M_bal", N·m)."""
     rows = []
     const = constant.peaks()
     per = {k: v.peaks() for k, v in records.items()}

@@ -55,10 +55,10 @@ def _magnitudes(study, plan, curves, forces=None):
     out = {}
     for i, name in enumerate(plan.point_names[:nv]):
         out[("velocity", name, "m/s")] = np.hypot(v[:, i, 0], v[:, i, 1])
-        out[("acceleration", name, "m/s^2")] = np.hypot(a[:, i, 0], a[:, i, 1])
+        out[("acceleration", name, "m/s²")] = np.hypot(a[:, i, 0], a[:, i, 1])
     for j, lab in enumerate(study.output.link_labels):
         out[("omega", lab, "1/s")] = np.abs(om[:, j])
-        out[("eps", lab, "1/s^2")] = np.abs(ep[:, j])
+        out[("eps", lab, "1/s²")] = np.abs(ep[:, j])
     for label, kind, names in transmission_items(study.mechanism):
         # transmission angle, as its deviation from 90 deg
         if kind == "lines":     # a group with a sliding pair: two lines (see below)
@@ -80,18 +80,18 @@ def _magnitudes(study, plan, curves, forces=None):
             out[("reaction", name, "N")] = mag[:, j]
         for k, name in enumerate(forces.slide_names):   # each prismatic pair's |N|, |C|
             out[("slide_normal", name, "N")] = np.abs(forces.slide[:, k, 0])
-            out[("slide_couple", name, "N*m")] = np.abs(forces.slide[:, k, 1])
-        out[("M_bal", "crank", "N*m")] = np.abs(forces.M_bal)
+            out[("slide_couple", name, "N·m")] = np.abs(forces.slide[:, k, 1])
+        out[("M_bal", "crank", "N·m")] = np.abs(forces.M_bal)
         if forces.shaking is not None:      # on the frame (kernels.forces.shaking)
             out[("shaking_force", "frame", "N")] = forces.shaking_magnitude
-            out[("shaking_moment", "frame", "N*m")] = np.abs(forces.shaking[:, 2])
+            out[("shaking_moment", "frame", "N·m")] = np.abs(forces.shaking[:, 2])
         fr = forces.friction
         if fr is not None:      # [mechanism.friction]: each plain bearing's p, v and p*v
             pv = fr.pv
             for j, (name, _, _) in enumerate(fr.spec.pins):
                 out[("bearing_pressure", name, "MPa")] = fr.pressure[:, j]
                 out[("sliding_speed", name, "m/s")] = fr.sliding_speed[:, j]
-                out[("bearing_pv", name, "MPa*m/s")] = pv[:, j]
+                out[("bearing_pv", name, "MPa·m/s")] = pv[:, j]
     return out
 
 

@@ -37,7 +37,7 @@ def slide_action(slide):
     its distance from the slider's centre of mass along the slide's direction
     (the guide's N n at S plus the couple C is the one force N n at S + e u,
     u the slide's direction, n = u turned +90 deg).  ``slide`` (..., 2) holds
-    (N [N], C [N*m]); NaN where N = 0 (a pure couple has no line of action).
+    (N [N], C [N·m]); NaN where N = 0 (a pure couple has no line of action).
 
     A slider that bears on its guide at two ends l [mm] apart, centred on S,
     takes N/2 - 1000 C/l and N/2 + 1000 C/l [N] there: both press on the same
@@ -62,7 +62,7 @@ def load_time(phi, crank):
 
 def sample_loads(mechanism, phi, t=None):
     """External loads at the crank angles ``phi`` (rad): array (n, n_loads, 3)
-    of (fx [N], fy [N], moment [N*m]); at the times ``t`` (s) where given (a
+    of (fx [N], fy [N], moment [N·m]); at the times ``t`` (s) where given (a
     crank motion), else at the times of a uniform run (``load_time``)."""
     phi = np.asarray(phi, float)
     t = load_time(phi, mechanism.crank) if t is None else np.asarray(t, float)
@@ -87,22 +87,22 @@ def joint_where(plan) -> list[str]:
 class Reactions:
     phi: np.ndarray          # rad
     R: np.ndarray            # (n, n_joints, 2) N: force of the first body on the second
-    slide: np.ndarray        # (n, n_slides, 2): normal force N, couple N*m
-    M_bal: np.ndarray        # (n,) N*m, delivered by the main shaft (the crank's moment
+    slide: np.ndarray        # (n, n_slides, 2): normal force N, couple N·m
+    M_bal: np.ndarray        # (n,) N·m, delivered by the main shaft (the crank's moment
                              # plus every input's share)
-    body_loads: np.ndarray   # (n, n_bodies, 3): applied + inertia loads at S (N, N*m)
+    body_loads: np.ndarray   # (n, n_bodies, 3): applied + inertia loads at S (N, N·m)
     joint_names: tuple
     slide_names: tuple
     body_names: tuple
-    # inputs besides the crank: (n, n_inputs, 2) = drive on the input (N*m for a
+    # inputs besides the crank: (n, n_inputs, 2) = drive on the input (N·m for a
     # rotary input, N along the guide for a slider input), its share of M_bal
     drive: np.ndarray = None
     input_names: tuple = ()
-    drive_units: tuple = ()  # per input: "N*m" (rotary) or "N" (slider)
+    drive_units: tuple = ()  # per input: "N·m" (rotary) or "N" (slider)
     # per position: the relative virtual-power residual (kernels.forces.equilibrium_residual)
     residual: np.ndarray = None
     # per position: the shaking force and moment on the frame, (n, 3) = (Fx [N], Fy [N],
-    # M [N*m] about the point ``shaking_about``, the crank's pivot): kernels.forces.shaking
+    # M [N·m] about the point ``shaking_about``, the crank's pivot): kernels.forces.shaking
     shaking: np.ndarray = None
     shaking_about: str = ""
     # with [mechanism.friction] at the constant crank speed: solve.friction.FrictionForces
@@ -129,14 +129,14 @@ class Reactions:
         if j is not None:
             out["peak_reaction"] = f"{peaks[j][1]:.1f} N at {peaks[j][0]}, phi1 = {peaks[j][2]:g} deg"
         k = int(np.nanargmax(np.abs(self.M_bal)))
-        out["peak_M_bal"] = f"{self.M_bal[k]:.3f} N*m at phi1 = {np.rad2deg(self.phi[k]):g} deg"
+        out["peak_M_bal"] = f"{self.M_bal[k]:.3f} N·m at phi1 = {np.rad2deg(self.phi[k]):g} deg"
         return out
 
 
 def scene_forces(mechanism, plan, curves, omega1=None, eps1=None, t=None) -> Reactions:
     """Reactions at every position of ``curves`` (which must carry second
     analogs), at the crank's constant omega1 and eps1, or along a crank
-    motion: ``omega1``, ``eps1`` (rad/s, rad/s^2) and ``t`` (s, for the
+    motion: ``omega1``, ``eps1`` (rad/s, rad/s²) and ``t`` (s, for the
     loads) one per position (``pipeline.solve.motion_forces``).  Without
     friction: ``pipeline.solve.friction.scene_forces_with_friction`` adds the
     mechanism's [mechanism.friction] at the constant crank speed."""
@@ -174,6 +174,6 @@ def scene_forces(mechanism, plan, curves, omega1=None, eps1=None, t=None) -> Rea
     return Reactions(curves.phi, R, S[:, :ns], M, body_loads, plan.joint_names,
                      plan.slide_names, plan.body_names, drive=S[:, ns:],
                      input_names=plan.input_names,
-                     drive_units=tuple("N*m" if k == ROTARY else "N" for k in plan.input_kind),
+                     drive_units=tuple("N·m" if k == ROTARY else "N" for k in plan.input_kind),
                      residual=residual, shaking=shake,
                      shaking_about=plan.point_names[plan.crank_pivot])

@@ -145,7 +145,7 @@ def run_scene(study, tols=None) -> SceneResult:
 
 
 def real_motion(curves: Curves, omega1, eps1):
-    """Point velocities (m/s) and accelerations (m/s^2), link omega (1/s) and
+    """Point velocities (m/s) and accelerations (m/s²), link omega (1/s) and
     eps (1/s^2) from the analogs: v = r' w, a = r'' w^2 + r' eps."""
     v = curves.d1 * omega1 / 1000.0
     a = (curves.d2 * omega1 ** 2 + curves.d1 * eps1) / 1000.0

@@ -113,7 +113,7 @@ def crank_counterweight(mechanism, plan, curves, force) -> Counterweight | None:
     ip, it = plan.point(crank.pivot), plan.point(crank.tip)
     w1, e1 = crank.omega1, crank.eps1
     a = ((curves.d2[:, it] - curves.d2[:, ip]) * w1 * w1
-         + (curves.d1[:, it] - curves.d1[:, ip]) * e1) / 1000.0     # m/s^2
+         + (curves.d1[:, it] - curves.d1[:, ip]) * e1) / 1000.0     # m/s²
     F = force[:, 0] + 1j * force[:, 1]
     A = a[:, 0] + 1j * a[:, 1]
     w = minimax_weight(F, A)

@@ -17,7 +17,7 @@ class DynamicsCase:
     phi_start: float        # rad
     omega_start: float      # rad/s
     M1: object              # Expression
-    damping: float          # b, N*m*s
+    damping: float          # b, N·m·s
     t_end: float
     dt: float
     sample_dt: float

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from ..base.units import unit_text
 from ..kernels import config as kc
 from ..kernels import sweep as ks
 from .sweep_spec import SweepSpec
@@ -60,6 +61,21 @@ def constraints(spec: SweepSpec, metrics, status: np.ndarray, has_margin: bool):
     G = np.stack(g, axis=1)
     cv = np.where(status == kc.OK, np.nansum(np.maximum(G, 0.0), axis=1), np.nan)
     return G, cv
+
+
+def constraints_text(spec: SweepSpec, has_margin: bool) -> str:
+    """The constraints the study states, in words with their units ("11 <= stroke
+    <= 15 mm, singularity_margin >= 0.3"), or that it states none."""
+    out = []
+    for m, lo, hi in spec.stated_constraints(has_margin):
+        u = unit_text(METRICS[m][0])
+        u = "" if u in ("", "1") else f" {u}"
+        if math.isfinite(lo) and math.isfinite(hi):
+            out.append(f"{lo:g} <= {m} <= {hi:g}{u}")
+        else:
+            out.append(f"{m} >= {lo:g}{u}" if math.isfinite(lo) else f"{m} <= {hi:g}{u}")
+    return ", ".join(out) if out else ("none given ([sweep.constraints]): every design that "
+                                       "assembles is feasible")
 
 
 def bounded_finite(spec: SweepSpec, metrics):

@@ -83,8 +83,8 @@ class SweepSpec:
     metrics: tuple
     objectives: tuple
     stroke_radius: float
-    stroke_bounds: tuple
-    margin_min: float
+    stroke_bounds: tuple      # mm (min, max); (-inf, inf) where the study states none
+    margin_min: float         # -inf where the study states none
     mass_model: tuple
     scheduler: str | None
     triangles: tuple = ()     # Triangle: known before solving; draws that break one are redrawn
@@ -98,6 +98,17 @@ class SweepSpec:
 
     def _wants(self, stage):
         return any(METRICS[m][2] == stage for m in self.metrics + self.objectives)
+
+    def stated_constraints(self, has_margin):
+        """(metric, min, max) of every constraint the study states in
+        [sweep.constraints] (a side it leaves open is -/+inf); the margin's only
+        where the plan has a class III group (``has_margin``).  Empty: none."""
+        out = []
+        if any(math.isfinite(b) for b in self.stroke_bounds):
+            out.append(("stroke", *self.stroke_bounds))
+        if has_margin and math.isfinite(self.margin_min):
+            out.append(("singularity_margin", self.margin_min, math.inf))
+        return tuple(out) + tuple(self.bounds)
 
     def wants(self, *names):
         """Whether the sweep stores one of the metrics ``names``."""
@@ -389,12 +400,17 @@ def _parse_constraints(cons, mech, output):
             margin_min = lo
         else:
             bounds.append((key, lo, hi))
-    if stroke is None:
-        stroke = cons.numbers("stroke", n=2, default=[11.0, 15.0])
+    # a constraint the study does not state is none (no window assumed: the OV-7
+    # studies state theirs, stroke = [11, 15] and singularity_margin_min = 0.3)
+    if stroke is None and cons.has("stroke"):
+        stroke = cons.numbers("stroke", n=2)
         if not stroke[0] < stroke[1]:
             raise cons.error("stroke", "expected [min, max] with min < max")
+    elif stroke is None:
+        stroke = (-math.inf, math.inf)
     if margin_min is None:
-        margin_min = cons.number("singularity_margin_min", 0.3)
+        margin_min = cons.number("singularity_margin_min") if \
+            cons.has("singularity_margin_min") else -math.inf
     elif cons.has("singularity_margin_min"):
         raise cons.error("singularity_margin_min", "given twice: singularity_margin = "
                                                    "{ min = ... } says the same")

@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from ..analysis.fronts import read_analysis, sweep_objectives, variable_units
+from ..base.units import unit_text
 from ..kernels import config as kc
 from ..results.storage import attr_text, candidate_ids, open_results, read_units, variables
 from ..study.reader import stored_study
@@ -99,7 +100,9 @@ def overview(path, top=10) -> dict:
                            "importances and representative designs")
         else:
             A = read_analysis(f)
-            ana["reference rank"] = int(A.reference["rank"])
+            ana["reference rank"] = int(A.reference["rank"]) if \
+                bool(A.reference.get("feasible", True)) else \
+                f"infeasible, on no front ({A.reference.get('note', '')})"
             ana["reference dominated by"] = int(A.reference["dominated_by_count"])
             for o, m in A.models.items():
                 ana[f"R2 {o}"] = float(m["r2_test"]) if m.get("fitted") else \
@@ -178,7 +181,7 @@ def candidate_details(path, cid) -> dict:
                          for n, v, u in zip(names, x, units)]
         rows = []
         for m, v, a in metrics:
-            row = {"name": m, "value": v, "units": str(attr_text(a.get("units", ""))),
+            row = {"name": m, "value": v, "units": unit_text(attr_text(a.get("units", ""))),
                    "long_name": str(attr_text(a.get("long_name", "")))}
             if m == "peak_joint" and math.isfinite(v) and 0 <= int(v) < len(joints):
                 row["joint"] = joints[int(v)]
@@ -321,12 +324,14 @@ def format_candidate(d: dict, fmt="table", wide=False) -> str:
             head.append("  constraints g <= 0: " + ", ".join(
                 f"{k} {_with_unit(v, cu.get(k, ''))}" for k, v in d["constraints"].items()))
     head += ["", "  design variables:"]
-    head += [f"    {p['name']:>8} = {_g(p['value'], 6):>10} {p['units']}" for p in d["params"]]
+    head += [f"    {p['name']:>8} = {_g(p['value'], 6):>10} "
+             f"{'' if p['units'] == '1' else p['units']}" for p in d["params"]]
     head += ["", "  metrics:"]
     for m in d["metrics"]:
-        extra = f" ({m['joint']})" if "joint" in m else ""
-        head.append(f"    {m['name']:>20} = {_g(m['value'], 6):>10} {m['units']:<4}{extra}  "
-                    f"{m['long_name']}")
+        # the joint by its name (R1, as the tables); a pure number's unit 1 left out
+        value = m["joint"] if "joint" in m else _g(m["value"], 6)
+        unit = "" if "joint" in m or m["units"] == "1" else m["units"]
+        head.append(f"    {m['name']:>20} = {value:>10} {unit:<4}  {m['long_name']}")
     return "\n".join(head if wide else _fit(head))
 
 

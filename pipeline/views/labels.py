@@ -10,18 +10,8 @@ from matplotlib.artist import Artist
 
 PEAK_GID = "peak"       # gid prefix of a curve's peak marker (tests/support/layout.py finds them)
 
-# the catalogue's and the files' units (ASCII) as the pictures write them
-_UNIT_WORDS = (("kg*m^2", "kg·m²"), ("kg m^2", "kg·m²"), ("N*m*s", "N·m·s"), ("N m s", "N·m·s"),
-               ("N*m", "N·m"), ("N m", "N·m"), ("kg*mm", "kg·mm"), ("s^2", "s²"),
-               ("s$^2$", "s²"), ("m^2", "m²"))
-
-
-def unit_text(unit: str) -> str:
-    """A unit as every picture writes it: 'm/s^2' -> 'm/s²', 'N*m' -> 'N·m',
-    'kg m^2' -> 'kg·m²'."""
-    for ascii_, shown in _UNIT_WORDS:
-        unit = unit.replace(ascii_, shown)
-    return unit
+# one style of units (pipeline.base.units): the pictures' as everything else's
+from ..base.units import unit_text  # noqa: E402,F401
 
 
 def link_name(study, label: str) -> str:

@@ -305,7 +305,11 @@ def build_html(path, top=20, drawings=None) -> str:
         summary.append(("knee", f"#{data.id(knee)}: " + ", ".join(
             f"{o} {_fmt(data.F[knee, j])} {data.objective_units[j]}"
             for j, o in enumerate(data.objectives))))
-    if int(ref["rank"]) > 0:
+    if int(ref["rank"]) > 0 and not bool(ref.get("feasible", True)):   # on no front
+        summary.append(("reference design", "infeasible, on no front: "
+                        f"{html.escape(str(ref.get('note', '')))}; dominated by "
+                        f"{int(ref['dominated_by_count'])} feasible candidates"))
+    elif int(ref["rank"]) > 0:
         summary.append(("reference design", f"front {int(ref['rank'])}, dominated by "
                         f"{int(ref['dominated_by_count'])} feasible candidates "
                         f"({len(ref['dominators_front1'])} of them on front 1); "

@@ -99,7 +99,9 @@ def pareto_figure(data, ana) -> str:
     ro = np.asarray(ana.reference.get("objectives", [np.nan, np.nan]), float)
     if ro.size >= 2 and np.isfinite(ro[:2]).all():
         ax.scatter([ro[0]], [ro[1]], s=260, marker="*", color="gold", ec="k", lw=1.0, zorder=6,
-                   label=f"reference design (front {int(ana.reference['rank'])})")
+                   label="reference design (" + (
+                       f"front {int(ana.reference['rank'])})"
+                       if bool(ana.reference.get("feasible", True)) else "infeasible)"))
     for on, axis, setter in ((logx, ax.xaxis, ax.set_xscale), (logy, ax.yaxis, ax.set_yscale)):
         if on:
             setter("log")

@@ -25,6 +25,7 @@ import pandas as pd
 from ..base.files import safe_name
 from ..kernels import config as kc
 from ..results.scene_file import peaks_table
+from ..base.units import unit_text
 from ..results.storage import (ResultsError, attr_text, candidate_ids, open_results, read_units,
                                variables)
 
@@ -33,7 +34,18 @@ def with_units(df: pd.DataFrame) -> pd.DataFrame:
     """A copy whose headers carry their units: ``name [unit]`` (none for text
     columns and counts)."""
     units = df.attrs.get("units", {})
-    return df.rename(columns={c: f"{c} [{units[c]}]" for c in df.columns if units.get(c)})
+    # one style of units (N·m, m/s²), a file written before it too
+    return df.rename(columns={c: f"{c} [{unit_text(units[c])}]" for c in df.columns
+                              if units.get(c)})
+
+
+def joint_labels(index, joints) -> np.ndarray:
+    """The joints' names (R1, ...) of the stored joint indices ``index`` (a
+    sweep's peak_joint); "" where there is none (NaN, out of range)."""
+    index = np.asarray(index, float)
+    names = np.array(list(joints) + [""], dtype=object)
+    ok = np.isfinite(index) & (index >= 0) & (index < len(joints))
+    return names[np.where(ok, np.nan_to_num(index, nan=-1.0), len(joints)).astype(np.int64)]
 
 
 def _frame(cols: dict, units: dict) -> pd.DataFrame:
@@ -76,9 +88,12 @@ def candidates(path, *, feasible=False, front=None) -> pd.DataFrame:
         for j, n in enumerate(names):
             cols[n] = X[:, j]
             units[n] = vunits[j]
+        joints = [str(attr_text(j)) for j in f["metrics"].attrs.get("joint_names", [])]
         for m in variables(f["metrics"]):
             cols[m] = f[f"metrics/{m}"][()]
             units[m] = str(attr_text(f[f"metrics/{m}"].attrs.get("units", "")))
+            if m == "peak_joint" and joints:      # the joint by name, as a scene's CSV: R1
+                cols[m], units[m] = joint_labels(cols[m], joints), ""
         g = f["candidates/constraints"]
         cn = [str(attr_text(n)) for n in g.attrs.get("names", [])]
         cu = read_units(g, len(cn))
@@ -127,7 +142,7 @@ def scene_tables(path, every=1) -> dict:
         pos, vel, acc = d["position"][rows], d["velocity"][rows], d["acceleration"][rows]
         for i, n in enumerate(names):
             for key, arr, unit in ((n, pos, "mm"), (_short(n, "V"), vel, "m/s"),
-                                   (_short(n, "A"), acc, "m/s^2")):
+                                   (_short(n, "A"), acc, "m/s²")):
                 for k, ax in enumerate("xy"):
                     cols[f"{key}_{ax}"] = arr[:, i, k]
                     units[f"{key}_{ax}"] = unit
@@ -136,7 +151,7 @@ def scene_tables(path, every=1) -> dict:
         ang, om, ep = d["link_angle"][rows], d["link_omega"][rows], d["link_eps"][rows]
         for j, lab in enumerate(links):
             for key, arr, unit in (("phi", ang, "deg"), ("omega", om, "1/s"),
-                                   ("eps", ep, "1/s^2")):
+                                   ("eps", ep, "1/s²")):
                 cols[f"{key}_{lab}"] = arr[:, j]
                 units[f"{key}_{lab}"] = unit
         out["links"] = _frame(cols, units)
@@ -148,12 +163,12 @@ def scene_tables(path, every=1) -> dict:
             L = d["body_loads"][rows] if "body_loads" in d else None
             for b, name in enumerate(bodies):
                 for key, arr, unit in ((f"S[{name}]", S, "mm"), (f"VS[{name}]", VS, "m/s"),
-                                       (f"AS[{name}]", AS, "m/s^2")):
+                                       (f"AS[{name}]", AS, "m/s²")):
                     for k, ax in enumerate("xy"):
                         cols[f"{key}_{ax}"] = arr[:, b, k]
                         units[f"{key}_{ax}"] = unit
                 if L is not None:   # applied and inertia loads reduced to S
-                    for k, (comp, unit) in enumerate((("Fx", "N"), ("Fy", "N"), ("M", "N*m"))):
+                    for k, (comp, unit) in enumerate((("Fx", "N"), ("Fy", "N"), ("M", "N·m"))):
                         cols[f"{comp}[{name}]"] = L[:, b, k]
                         units[f"{comp}[{name}]"] = unit
             out["bodies"] = _frame(cols, units)
@@ -272,7 +287,7 @@ def reaction_columns(d, rows, cols, units):
             lab = slide_label(str(attr_text(name)))
             cols[f"N[{lab}]"], cols[f"C[{lab}]"] = S[:, k, 0], S[:, k, 1]
             cols[f"e[{lab}]"] = E[:, k]
-            units.update({f"N[{lab}]": "N", f"C[{lab}]": "N*m", f"e[{lab}]": "mm"})
+            units.update({f"N[{lab}]": "N", f"C[{lab}]": "N·m", f"e[{lab}]": "mm"})
     if "input_drive" in d:        # inputs besides the crank: drive and share
         from ..results.storage import read_units
         D = d["input_drive"][rows]
@@ -281,19 +296,19 @@ def reaction_columns(d, rows, cols, units):
         du = read_units(d["input_drive"], len(names))
         for k, name in enumerate(names):
             cols[f"drive[{name}]"], cols[f"share[{name}]"] = D[:, k], H[:, k]
-            units.update({f"drive[{name}]": du[k], f"share[{name}]": "N*m"})
+            units.update({f"drive[{name}]": du[k], f"share[{name}]": "N·m"})
     if "shaking_force" in d:      # on the frame; the moment about the crank's pivot
         F = d["shaking_force"][rows]
         cols["shaking_Fx"], cols["shaking_Fy"] = F[:, 0], F[:, 1]
         cols["shaking_F"] = d["shaking_force_magnitude"][rows]
         cols["shaking_M"] = d["shaking_moment"][rows]
         units.update({"shaking_Fx": "N", "shaking_Fy": "N", "shaking_F": "N",
-                      "shaking_M": "N*m"})
+                      "shaking_M": "N·m"})
     if "equilibrium_residual" in d:
         cols["equilibrium_residual"] = d["equilibrium_residual"][rows]
         units["equilibrium_residual"] = "1"
     cols["M_bal"] = d["M_bal"][rows]
-    units["M_bal"] = "N*m"
+    units["M_bal"] = "N·m"
     return mag, joints
 
 

@@ -547,7 +547,7 @@ def test_law_study_file_columns_and_constraints(law_run, studies):
     study, out = law_run
     assert study.sweep.objectives == ("law_error", "peak_reaction")
     units = {"law_error": "1", "law_error_max": "1", "law_shift": "deg",
-             "min_transmission_angle": "deg", "peak_acceleration": "m/s^2"}
+             "min_transmission_angle": "deg", "peak_acceleration": "m/s²"}
     with h5py.File(out, "r") as f:
         for name, u in units.items():
             d = f[f"metrics/{name}"]
