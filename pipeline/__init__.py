@@ -1,6 +1,6 @@
 """pipeline: exact analysis and Monte-Carlo synthesis of planar hinged-lever mechanisms.
 
-The Python API (``pipeline.api``; see docs/api.md): ``load_study``, ``run``,
+The Python API (``pipeline.api``; see docs/guide/api.md): ``load_study``, ``run``,
 ``solve_scene`` (a scene solved in memory), ``open`` (a results file as pandas
 DataFrames), ``tolerance`` (how a design holds up when it is made), ``compare``
 (designs side by side), ``candidates``, ``scene_tables``, ``with_units``; pictures from

@@ -1,7 +1,7 @@
 """The import paths of the flat package, kept for one release.
 
 Issue 26 moved the modules of ``pipeline/`` into one package per layer
-(docs/architecture.md).  Code written against the old paths keeps working
+(docs/guide/architecture.md).  Code written against the old paths keeps working
 until the next release: ``import pipeline.sweep`` gives the module
 ``pipeline.runs.sweep`` itself (the very same object, so a monkeypatch through
 the old path acts on the real module), ``from pipeline.forces import

@@ -1,19 +1,20 @@
-"""The README's table "Accuracy figures" and tests/support/tolerances.py state the
-same numbers: every figure lives once in tolerances.py (where the tests assert
-it), and this test fails when the README says something else."""
+"""The table "Accuracy figures" of the guide's page docs/guide/accuracy.md (once
+the README's) and tests/support/tolerances.py state the same numbers: every figure
+lives once in tolerances.py (where the tests assert it), and this test fails when
+the page says something else."""
 
 import re
 from pathlib import Path
 
 from support import tolerances
 
-README = Path(__file__).resolve().parent.parent / "README.md"
+PAGE = Path(__file__).resolve().parent.parent / "docs" / "guide" / "accuracy.md"
 NUMBER = re.compile(r"(?<![\w.])\d+(?:\.\d+)?e[-+]?\d+(?![\w.])")    # 1e-7, 5.1e-5, 7.2e-12
 
 
-def readme_figures():
+def page_figures():
     """The table's rows: first cell -> the numbers written in its figure cell."""
-    text = README.read_text()
+    text = PAGE.read_text()
     head = text.index("**Accuracy figures**")
     rows = {}
     for line in text[head:].splitlines()[1:]:
@@ -26,20 +27,20 @@ def readme_figures():
     return rows
 
 
-def test_the_readme_has_one_table_of_figures():
-    text = README.read_text()
+def test_the_page_has_one_table_of_figures():
+    text = PAGE.read_text()
     assert text.count("**Accuracy figures**") == 1
-    assert len(readme_figures()) == len(tolerances.README_FIGURES)
+    assert len(page_figures()) == len(tolerances.README_FIGURES)
 
 
-def test_the_readme_figures_are_the_tolerances():
-    rows = readme_figures()
+def test_the_page_figures_are_the_tolerances():
+    rows = page_figures()
     for start, names in tolerances.README_FIGURES.items():
         found = [what for what in rows if what.startswith(start)]
-        assert len(found) == 1, f"README table: no single row starting {start!r}: {found}"
+        assert len(found) == 1, f"accuracy.md table: no single row starting {start!r}: {found}"
         written = rows[found[0]]
         held = [getattr(tolerances, n) for n in names]
-        assert written == held, (f"README row {found[0]!r} states {written}, "
+        assert written == held, (f"accuracy.md row {found[0]!r} states {written}, "
                                  f"tests/support/tolerances.py {dict(zip(names, held))}")
 
 

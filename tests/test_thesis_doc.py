@@ -1,4 +1,4 @@
-"""docs/thesis.md quotes our numbers beside the thesis's: recompute every one
+"""docs/guide/thesis.md quotes our numbers beside the thesis's: recompute every one
 from the shipped studies, so the page never drifts from the product."""
 
 import re
@@ -10,7 +10,7 @@ import pytest
 import pipeline
 from pipeline.solve.scene import real_motion
 
-DOC = Path(__file__).resolve().parent.parent / "docs" / "thesis.md"
+DOC = Path(__file__).resolve().parent.parent / "docs" / "guide" / "thesis.md"
 
 
 def _ours(label):

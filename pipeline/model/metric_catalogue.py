@@ -173,11 +173,13 @@ def metric_values(metrics, name):
 
 
 def markdown_table() -> str:
-    """The catalogue as the Markdown table of docs/metrics.md (a test keeps the
-    two equal: ``python -m pipeline.model.metric_catalogue > docs/metrics.md`` after a change)."""
+    """The catalogue as the Markdown table of the guide's page docs/guide/metrics.md (a
+    test keeps the two equal: ``python -m pipeline.model.metric_catalogue >
+    docs/guide/metrics.md`` after a change)."""
     rows = ["# Sweep metrics", "",
-            "Generated from `pipeline/model/metric_catalogue.py` (`python -m pipeline.model.metric_catalogue > "
-            "docs/metrics.md`); every objective is minimised.", "",
+            "Generated from `pipeline/model/metric_catalogue.py` (`python -m "
+            "pipeline.model.metric_catalogue > docs/guide/metrics.md`); every objective is "
+            "minimised.", "",
             "| metric | units | stage | objective | what |", "|---|---|---|---|---|"]
     for m in CATALOGUE:
         sense = f"no: minimise `{m.larger_is_better}`" if m.larger_is_better else "yes"

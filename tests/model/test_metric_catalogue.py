@@ -1,6 +1,6 @@
 """The catalogue of metrics (pipeline.model.metric_catalogue) is the one place a metric is
 described: the study format, the stored columns, the results file's attributes
-and docs/metrics.md all read it."""
+and docs/guide/metrics.md all read it."""
 
 from pathlib import Path
 
@@ -48,7 +48,7 @@ def test_the_study_format_and_the_stored_columns_read_the_catalogue():
 
 
 def test_the_docs_table_is_the_catalogue():
-    assert (ROOT / "docs" / "metrics.md").read_text() == mc.markdown_table()
+    assert (ROOT / "docs" / "guide" / "metrics.md").read_text() == mc.markdown_table()
 
 
 def test_a_journal_of_another_metric_row_is_not_mixed_in(studies, tmp_path):

@@ -1,15 +1,15 @@
 """Every tolerance of the tests in one place (explicit, never loosened to make a
-test pass), and every accuracy figure the README states.
+test pass), and every accuracy figure the guide states (docs/guide/accuracy.md).
 
-The README's figures (its table "Accuracy figures") are the first block:
-``README_FIGURES`` says which constants each row of that table states, in the
-order written, and tests/test_accuracy_figures.py fails when the README and
-this file disagree.  Each figure is asserted at its value by the test named
+The guide's figures (its table "Accuracy figures", once the README's) are the
+first block: ``README_FIGURES`` says which constants each row of that table
+states, in the order written, and tests/test_accuracy_figures.py fails when the
+page and this file disagree.  Each figure is asserted at its value by the test named
 beside it; the measurement it rests on (this checkout, the CI machine kind) is
 in the comment.
 """
 
-# ---------------------------------------------------------------- the README's figures
+# ------------------------------------- the guide's figures (docs/guide/accuracy.md)
 # reference position tables (both OV-7 designs): the tables' 6 decimals round to
 # 5e-7 mm; measured 4.97e-7 (A) and 4.98e-7 (B).  test_kinematics
 REFERENCE_MM = 5e-7
@@ -69,7 +69,7 @@ GPU_AGREEMENT_REL = 1e-12
 # each of these steps (rad) and held to the CPU's own counts under one-ulp input changes
 GPU_FAIL_PHI_STEPS = (1e-9, 1e-6, 1e-3)
 
-# the README's table: the start of each row's first cell -> the constants its
+# the guide's table: the start of each row's first cell -> the constants its
 # figure states, in the order written (numbers written as 1e-7, 5.1e-5, ...)
 README_FIGURES = {
     "reference position tables": ("REFERENCE_MM",),
