@@ -41,7 +41,7 @@ def test_scene_file_and_bodies_table_carry_the_centres_of_mass(studies, tmp_path
         b = names.index("lead 2-3")
         np.testing.assert_allclose(bodies["S[lead 2-3]_x [mm]"], d["com_position"][:, b, 0],
                                    rtol=1e-11)
-        np.testing.assert_allclose(bodies["AS[lead 2-3]_y [m/s^2]"],
+        np.testing.assert_allclose(bodies["AS[lead 2-3]_y [m/s²]"],
                                    d["com_acceleration"][:, b, 1], rtol=1e-11, atol=1e-9)
         np.testing.assert_allclose(bodies["Fx[lead 2-3] [N]"], d["body_loads"][:, b, 0],
                                    rtol=1e-11, atol=1e-9)

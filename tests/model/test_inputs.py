@@ -267,7 +267,7 @@ def test_reactions_and_drives_match_the_naive_dense_solve(studies, name, naive_f
 
 
 @pytest.mark.parametrize("name,naive_fn,input_name,units", [
-    ("cam_rocker_input", None, "rocker", "N*m"),
+    ("cam_rocker_input", None, "rocker", "N·m"),
     ("actuator_slider_input", naive.naive_forces_actuator, "actuator", "N")])
 def test_the_drives_are_in_the_scene_file(studies, tmp_path, name, naive_fn, input_name, units):
     """A scene file keeps each input's drive and share at the table and dense
@@ -284,7 +284,7 @@ def test_the_drives_are_in_the_scene_file(studies, tmp_path, name, naive_fn, inp
         for grid in ("table", "dense"):
             d = f[f"{grid}/input_drive"]
             assert d.attrs["units"] == units and list(d.attrs["inputs"]) == [input_name]
-            assert f[f"{grid}/input_share"].attrs["units"] == "N*m"
+            assert f[f"{grid}/input_share"].attrs["units"] == "N·m"
         phi = np.radians(f["table/phi1"][()])
         drive = f["table/input_drive"][:, 0]
         share = f["table/input_share"][:, 0]
@@ -457,14 +457,14 @@ def test_the_drives_are_in_reactions_csv(studies, tmp_path):
     assert n >= 360
     np.testing.assert_allclose(df["drive[actuator] [N]"], fr.drive[:n, 0, 0], rtol=1e-10,
                                atol=1e-12)
-    np.testing.assert_allclose(df["share[actuator] [N*m]"], fr.drive[:n, 0, 1], rtol=1e-10,
+    np.testing.assert_allclose(df["share[actuator] [N·m]"], fr.drive[:n, 0, 1], rtol=1e-10,
                                atol=1e-15)
-    np.testing.assert_allclose(df["M_bal [N*m]"], fr.M_bal[:n], rtol=1e-10, atol=1e-15)
+    np.testing.assert_allclose(df["M_bal [N·m]"], fr.M_bal[:n], rtol=1e-10, atol=1e-15)
 
 
 # ------------------------------------------------------------------ laws the positions resolve
 # a law steeper than the positions that sample it swung unseen between them: the cam with
-# a 1 deg rise reported a peak acceleration of 14 m/s^2, status OK, where it is 1.8e6
+# a 1 deg rise reported a peak acceleration of 14 m/s², status OK, where it is 1.8e6
 STEEP = [
     ("cam_rocker_input", (CYCLOIDAL, CYCLOIDAL.replace("rise = 150.0", "rise = 1")),
      "mechanism.groups[0].law.rise", "at least 8 positions within its rise"),
@@ -515,7 +515,7 @@ def test_laws_the_positions_resolve_load(studies):
 
 
 def _cycloid_peak_acceleration(rise, travel, phase, length, omega):
-    """max over the cycle of |a| (m/s^2) of the tip of a rotary input at
+    """max over the cycle of |a| (m/s²) of the tip of a rotary input at
     ``length`` mm moved by a cycloidal law, from the law's own formula on 2e6
     points (no kernel): a = length omega^2 (q'' n - q'^2 e)."""
     phi = np.linspace(0.0, 2.0 * np.pi, 2_000_001)

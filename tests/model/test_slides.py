@@ -50,17 +50,17 @@ def test_reactions_csv_has_every_slide_as_the_kernel_gives_it(yoke_run):
     assert list(r.columns) == ["phi1 [deg]", "R1 (ground / crank at P1) x [N]",
                                "R1 (ground / crank at P1) y [N]", "R1 (ground / crank at P1) [N]",
                                "R2 (crank / block at P2) x [N]", "R2 (crank / block at P2) y [N]",
-                               "R2 (crank / block at P2) [N]", "N[block] [N]", "C[block] [N*m]",
-                               "e[block] [mm]", "N[yoke] [N]", "C[yoke] [N*m]",
+                               "R2 (crank / block at P2) [N]", "N[block] [N]", "C[block] [N·m]",
+                               "e[block] [mm]", "N[yoke] [N]", "C[yoke] [N·m]",
                                "e[yoke] [mm]", "shaking_Fx [N]", "shaking_Fy [N]",
-                               "shaking_F [N]", "shaking_M [N*m]", "equilibrium_residual [1]",
-                               "M_bal [N*m]"]
+                               "shaking_F [N]", "shaking_M [N·m]", "equilibrium_residual [1]",
+                               "M_bal [N·m]"]
     res = run_scene(study)
     fr = res.dense.forces
     assert fr.slide_names == ("slide[block]", "slide[yoke]")
     with h5py.File(out, "r") as f:
         d = f["dense/slide_reactions"]
-        assert list(read_units(d)) == ["N", "N*m"]
+        assert list(read_units(d)) == ["N", "N·m"]
         np.testing.assert_array_equal(d[()], fr.slide)
         a = f["dense/slide_action"]
         assert set(read_units(a)) == {"mm"} and "C/N" in str(a.attrs["long_name"])
@@ -68,7 +68,7 @@ def test_reactions_csv_has_every_slide_as_the_kernel_gives_it(yoke_run):
         assert f["table/slide_action"].shape == (13, 2)
     for k, lab in enumerate(("block", "yoke")):
         for col, want in ((f"N[{lab}] [N]", fr.slide[:, k, 0]),
-                          (f"C[{lab}] [N*m]", fr.slide[:, k, 1])):
+                          (f"C[{lab}] [N·m]", fr.slide[:, k, 1])):
             np.testing.assert_allclose(r[col].values, want, rtol=CSV_REL,
                                        atol=CSV_REL * np.abs(want).max())
     e = r["e[yoke] [mm]"].values
@@ -92,10 +92,10 @@ def test_slide_forces_of_the_scotch_yoke_follow_from_statics(yoke_run):
     np.testing.assert_allclose(r["N[block] [N]"], n_block, atol=CLOSED_FORM_REL * scale)
     np.testing.assert_allclose(r["N[yoke] [N]"], m * g + 5.0, atol=CLOSED_FORM_REL * scale)
     c_yoke = 0.2 + L * np.sin(phi) * n_block / 1000.0
-    np.testing.assert_allclose(r["C[yoke] [N*m]"], c_yoke, atol=CLOSED_FORM_REL * scale * 1e-3)
+    np.testing.assert_allclose(r["C[yoke] [N·m]"], c_yoke, atol=CLOSED_FORM_REL * scale * 1e-3)
     np.testing.assert_allclose(r["e[yoke] [mm]"], 1000.0 * c_yoke / (m * g + 5.0),
                                rtol=1e-8)
-    assert np.abs(r["C[block] [N*m]"]).max() <= CLOSED_FORM_REL * scale * 1e-3
+    assert np.abs(r["C[block] [N·m]"]).max() <= CLOSED_FORM_REL * scale * 1e-3
 
 
 def test_slide_peaks(yoke_run):
@@ -107,12 +107,12 @@ def test_slide_peaks(yoke_run):
     normal = p[p.quantity == "slide_normal"].set_index("item")
     couple = p[p.quantity == "slide_couple"].set_index("item")
     assert list(normal.index) == ["slide[block]", "slide[yoke]"] == list(couple.index)
-    assert set(normal.unit) == {"N"} and set(couple.unit) == {"N*m"}
+    assert set(normal.unit) == {"N"} and set(couple.unit) == {"N·m"}
     assert normal.loc["slide[block]", "value"] == pytest.approx(67.0, rel=1e-9)
     assert normal.loc["slide[yoke]", "value"] == pytest.approx(0.35 * 9.81 + 5.0, rel=CSV_REL)
     assert (normal["value"] >= normal["grid_value"]).all()
     r = pd.read_csv(csv / "reactions.csv")
-    assert couple.loc["slide[yoke]", "value"] >= np.abs(r["C[yoke] [N*m]"]).max()
+    assert couple.loc["slide[yoke]", "value"] >= np.abs(r["C[yoke] [N·m]"]).max()
     with h5py.File(out, "r") as f:
         assert "long_name" in f["peaks/slide_normal"].attrs
         assert [x.decode() if isinstance(x, bytes) else x

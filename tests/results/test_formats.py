@@ -110,7 +110,7 @@ def test_units_are_one_form(files):
         assert units[names.index("crank.length")] == "mm"
         assert units[names.index("crank.phiM0")] == "rad"
         assert units[names.index("ternary 3-4-5.mass")] == "kg"       # ov7_class3's bodies
-        assert units[names.index("ternary 3-4-5.J_S")] == "kg*m^2"
+        assert units[names.index("ternary 3-4-5.J_S")] == "kg·m²"
 
 
 def test_format_1_0_files_are_still_read(files, tmp_path):

@@ -248,7 +248,7 @@ def test_cli_run_and_export_motion_tables(studies, tmp_path):
     with h5py.File(out, "r") as f:
         g = f["dynamics/runup"]
         for name, unit in (("t", "s"), ("phi1", "deg"), ("omega1", "rad/s"),
-                           ("eps1", "rad/s^2")):
+                           ("eps1", "rad/s²")):
             assert g[name].attrs["units"] == unit and g[name].attrs["long_name"]
         assert g.attrs["method"] == "rk4" and g.attrs["status"] == "OK"
         assert 0.0 < g.attrs["summary_delta"] < 0.1
@@ -257,8 +257,8 @@ def test_cli_run_and_export_motion_tables(studies, tmp_path):
                        ("free/forces", 1001)):
             h = f["dynamics/" + sub]
             assert h.attrs["long_name"]
-            for name, unit in (("t", "s"), ("omega1", "rad/s"), ("eps1", "rad/s^2"),
-                               ("reactions", "N"), ("M_bal", "N*m"),
+            for name, unit in (("t", "s"), ("omega1", "rad/s"), ("eps1", "rad/s²"),
+                               ("reactions", "N"), ("M_bal", "N·m"),
                                ("equilibrium_residual", "1")):
                 assert h[name].attrs["units"] == unit and h[name].attrs["long_name"], name
             assert n is None or h["t"].shape == (n,)
@@ -268,15 +268,15 @@ def test_cli_run_and_export_motion_tables(studies, tmp_path):
     csv = tmp_path / "csv"
     assert main(["export", str(out), "--csv", str(csv), "-q"]) == 0
     df = pd.read_csv(csv / "motion_runup_steady_forces.csv")
-    assert list(df.columns[:4]) == ["t [s]", "phi1 [deg]", "omega1 [rad/s]", "eps1 [rad/s^2]"]
+    assert list(df.columns[:4]) == ["t [s]", "phi1 [deg]", "omega1 [rad/s]", "eps1 [rad/s²]"]
     # the joint's column names its bodies and point: "R2 (crank ... at P..) [N]"
     r2 = [c for c in df.columns if c.startswith("R2 (") and c.endswith(") [N]")]
     assert len(r2) == 1 and " at " in r2[0], list(df.columns)
     np.testing.assert_allclose(df[r2[0]], np.hypot(R[:, 1, 0], R[:, 1, 1]), rtol=1e-9)
-    assert {"M_bal [N*m]", "N[needle bar] [N]", "equilibrium_residual [1]"} <= set(df.columns)
+    assert {"M_bal [N·m]", "N[needle bar] [N]", "equilibrium_residual [1]"} <= set(df.columns)
     for case, phi0 in (("runup", 269.18), ("free", 280.0)):
         df = pd.read_csv(csv / f"motion_{case}.csv")
-        assert list(df.columns) == ["t [s]", "phi1 [deg]", "omega1 [rad/s]", "eps1 [rad/s^2]"]
+        assert list(df.columns) == ["t [s]", "phi1 [deg]", "omega1 [rad/s]", "eps1 [rad/s²]"]
         assert len(df) == 1001
         np.testing.assert_allclose(df["t [s]"], np.arange(1001) * 0.01, atol=1e-9)
         assert df["phi1 [deg]"][0] == pytest.approx(phi0) and df["omega1 [rad/s]"][0] == 0.0

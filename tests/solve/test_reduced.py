@@ -62,6 +62,6 @@ def test_summary_file_table_and_picture(studies, tmp_path, capsys):
     assert main(["export", str(out), "--csv", str(tmp_path / "csv"), "-q"]) == 0
     df = pd.read_csv(tmp_path / "csv" / "reduced.csv")
     with h5py.File(out, "r") as f:
-        np.testing.assert_allclose(df["Q [N*m]"], f["reduced_dynamics/Q"][()], rtol=1e-11,
+        np.testing.assert_allclose(df["Q [N·m]"], f["reduced_dynamics/Q"][()], rtol=1e-11,
                                    atol=1e-15)
         assert f["reduced_dynamics"].attrs["equilibria_stable"].tolist() == [False, True]

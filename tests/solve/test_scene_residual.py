@@ -91,5 +91,5 @@ def test_stored_summarised_and_exported(studies, tmp_path):
     csv = tmp_path / "csv"
     assert main(["export", str(out.results), "--csv", str(csv), "-q"]) == 0
     df = pd.read_csv(csv / "reactions.csv")
-    assert df.columns[-1] == "M_bal [N*m]"
+    assert df.columns[-1] == "M_bal [N·m]"
     np.testing.assert_allclose(df["equilibrium_residual [1]"], r, rtol=1e-11, atol=0)

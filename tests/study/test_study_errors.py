@@ -227,7 +227,7 @@ RANGE_CASES = [
      "a length is 0.001 to 10,000 mm"),
     ("ov7_base", ("L_AB = 105.0", "L_AB = 2e4"), "groups[0].L_AB", "a length is"),
     ("ov7_base", ("P4 = [26.0, 98.7]", "P4 = [26.0, -1e9]"), "fixed.P4", "number 2: -1e+09 mm"),
-    ("warp_feed_fourbar", ("eps1 = 0.0", "eps1 = 1e9"), "crank.eps1", "rad/s^2"),
+    ("warp_feed_fourbar", ("eps1 = 0.0", "eps1 = 1e9"), "crank.eps1", "rad/s²"),
     ("takeup_dynamics", ("omega1 = 125.0", "omega1 = 1e6"), "crank.omega1",
      "an angular speed is -10,000 to 10,000 rad/s"),
     ("takeup_dynamics", ("mass = 0.200", "mass = 1e9"), "bodies[0].mass", "a mass is more than 0"),

@@ -87,7 +87,7 @@ def test_the_table_is_what_each_scene_file_stores(scenes, capsys, tmp_path):
     assert s["compared"] and s["unit"] == "mm"
     assert s["ov7_class3"]["change"] == pytest.approx(
         ref["ov7_class3"]["stroke"][0] - ref["ov7_base"]["stroke"][0], rel=1e-12)
-    assert rows["reaction_max"]["unit"] == "N" and rows["M_bal"]["unit"] == "N*m"
+    assert rows["reaction_max"]["unit"] == "N" and rows["M_bal"]["unit"] == "N·m"
     assert rows["pin_d_min_max"]["unit"] == "mm"
     assert rows["min_transmission_angle"]["unit"] == "deg"
     # the base design has no mass data: its forces are said to be left out, not zero

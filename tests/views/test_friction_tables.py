@@ -72,7 +72,7 @@ def test_friction_csv_columns_are_the_datasets(runs, key):
             unit = g[dataset].attrs["units"]
             np.testing.assert_allclose(df[f"{dataset} [{unit}]"], g[dataset][()], rtol=1e-11,
                                        atol=1e-11 * np.abs(g[dataset][()]).max())
-        assert "pv[R1] [MPa*m/s]" in df.columns and "loss[R1] [W]" in df.columns
+        assert "pv[R1] [MPa·m/s]" in df.columns and "loss[R1] [W]" in df.columns
 
 
 @pytest.mark.parametrize("key", ["b", "takeup"])
