@@ -108,7 +108,7 @@ def test_every_guide_command_runs(tmp_path, monkeypatch, capsys):
         (folder / "results").mkdir()
         shutil.copy(main_job, folder / "results")
         monkeypatch.chdir(folder)
-        run_commands(block, monkeypatch, capsys)
+        run_commands(block, monkeypatch, capsys, where=f"{page}, sh block {k}")
         results = folder / "results"
         if (results / "big_sweep.h5").exists():     # interrupted, then resumed
             assert_same_results(main_job, results / "big_sweep.h5")

@@ -6,8 +6,8 @@ tests/test_guide.py."""
 import re
 
 from pipeline.cli import main
-from support.shell_blocks import (MAIN_JOB, README, SMALL, ci_test_command, copy_studies,
-                                  run_commands, shell_blocks, unfenced_commands)
+from support.shell_blocks import (MAIN_JOB, README, SMALL, copy_studies, python_blocks,
+                                  run_commands, runs_in_ci, shell_blocks, unfenced_commands)
 
 MAX_LINES = 200                 # issue 55: what it is, set-up, the first hour, where to read on
 
@@ -24,14 +24,14 @@ def test_the_readme_is_a_first_hour():
     setup = shell_blocks(text.split("## Set-up", 1)[1].split("\n## ", 1)[0])
     assert setup == [[f"pip install -e . && {MAIN_JOB}"],
                      ['pip install -e ".[test]" && python -m pytest -q']]
-    assert ci_test_command().startswith(setup[1][0])
+    assert runs_in_ci(setup[1][0])
     assert not unfenced_commands(text)
 
 
 def test_readme_commands_run_in_order(tmp_path, monkeypatch, capsys):
-    """Every command succeeds, and what they write holds: the main job's file, the
-    scene's tables (the crank tip of DOMAIN.md section 5 and naive.py's eyelet), the
-    report, and the knee exported as a study of its own and run."""
+    """Every command succeeds, then the Python it shows, and what they write holds: the
+    main job's file, the scene's tables (the crank tip of DOMAIN.md section 5 and
+    naive.py's eyelet), the report, and the knee exported as a study of its own and run."""
     import h5py
     import numpy as np
     import pandas as pd
@@ -42,6 +42,8 @@ def test_readme_commands_run_in_order(tmp_path, monkeypatch, capsys):
     commands = readme_commands()
     assert commands[0] == f"pip install -e . && {MAIN_JOB}"
     run_commands(commands, monkeypatch, capsys)
+    for code in python_blocks(README.read_text()):      # from Python, on the same files
+        exec(compile(code, str(README), "exec"), {})
     results = tmp_path / "results"
     with h5py.File(results / "ov7_synthesis.h5", "r") as f:
         assert f.attrs["complete"] and f["candidates/status"].shape == (int(SMALL),)

@@ -45,6 +45,11 @@ def shell_blocks(text):
     return blocks
 
 
+def python_blocks(text):
+    """The source of each fenced ``python`` block of a Markdown text, in order."""
+    return [body for lang, body in FENCE.findall(text) if lang == "python"]
+
+
 def unfenced_commands(text):
     """Lines outside every fence that a reader would take for a command
     (indented ``pipeline ...``): each should be in an ``sh`` block."""
@@ -69,6 +74,12 @@ def ci_test_command():
     lines = [ln for ln in CI_RUN.read_text().splitlines() if "python -m pytest" in ln]
     assert len(lines) == 1, lines
     return lines[0]
+
+
+def runs_in_ci(command):
+    """.ci/run runs ``command``, word for word, with options after it at most."""
+    words, ci = shlex.split(command), shlex.split(ci_test_command())
+    return ci[:len(words)] == words
 
 
 def copy_studies(folder):
@@ -104,7 +115,7 @@ def pipeline_argvs(command):
         if command.startswith(prefix):
             rest = command[len(prefix):]
             if rest.startswith("python -m pytest"):
-                assert prefix == INSTALLED[1] and ci_test_command().startswith(command), (
+                assert prefix == INSTALLED[1] and runs_in_ci(command), (
                     f"{command!r} is not what .ci/run runs: {ci_test_command()!r}")
                 return []
             command = rest
@@ -120,9 +131,10 @@ def output_of(argv):
     return argv[argv.index("-o") + 1] if "-o" in argv else None
 
 
-def run_commands(commands, monkeypatch, capsys):
+def run_commands(commands, monkeypatch, capsys, where=""):
     """Run the commands in order in the current folder; each must exit 0 (a
-    sweep stopped to be resumed: 130, one chunk saved)."""
+    sweep stopped to be resumed: 130, one chunk saved).  ``where`` names them in a
+    failure."""
     import pipeline.runs.sweep as sw
     argvs = [a for c in commands for a in pipeline_argvs(c)]
     resumed = {output_of(a) for a in argvs if a[0] == "run" and "--resume" in a}
@@ -151,7 +163,7 @@ def run_commands(commands, monkeypatch, capsys):
             captured = capsys.readouterr()
             if interrupt:
                 assert rc == 130 and re.search(r"\b1 of \d+ chunks saved", captured.err), (
-                    argv, captured.err)
+                    where, argv, captured.err)
                 assert Path(output_of(argv) + ".parts").exists()
             else:
-                assert rc == 0, (argv, captured.err)
+                assert rc == 0, (where, argv, captured.err)
