@@ -25,6 +25,7 @@ SMOKE = {
     "bench_sweep.py": (["--smoke"], None),
     "bench_kernels.py": (["--smoke"], None),
     "bench_dynamics.py": (["--smoke"], None),
+    "bench_friction.py": (["--smoke"], None),
     "bench_watch.py": (["--smoke"], None),
     "bench_gpu.py": (["--smoke"], None),         # under numba's CUDA simulator
     "bench_search.py": (["--smoke", "-o", "{tmp}"], "search.md"),

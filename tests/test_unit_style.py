@@ -40,14 +40,8 @@ def _check(summary, csv_folder, what):
 
 
 STUDIES = Path(__file__).resolve().parent.parent / "studies"
-# the friction summary's p*v (pipeline/solve/friction.py, being worked on): MPa*m/s there
-# is to become MPa·m/s; strict, so that this mark goes when it does
-FRICTION = pytest.mark.xfail(strict=True, reason="solve/friction.py writes MPa*m/s")
-
-
 def _cases(kind):
-    return [pytest.param(n, marks=FRICTION) if "friction" in n else n
-            for n in _shipped(STUDIES, kind)]
+    return list(_shipped(STUDIES, kind))
 
 
 @pytest.mark.slow

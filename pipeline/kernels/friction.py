@@ -301,3 +301,65 @@ def friction_forces(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn
         slide_out[k, 0] = x[2 * nj + 2 * k]
         slide_out[k, 1] = x[2 * nj + 2 * k + 1]
     found[1] = x[col_m]
+
+
+@njit(**JIT)
+def friction_revolution(phis, pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn,
+                        body_mass_off, joint_point, joint_bodies, slide_bodies, slide_dir,
+                        slide_angle, crank_body, load_body, load_point, loads, f_rev, radius,
+                        f_slide, block, pin_area, rel_tol, max_iter, a0, b0, jac, res, x, sense,
+                        loads_out, r_out, slide_out, friction_out, speed_out, found, out):
+    """A sweep candidate's friction metrics over the revolution's positions
+    (``friction_forces`` at each, the definitions of ``solve.friction``):
+    out[0:9] = (status, mean loss [W], peak p*v over the revolute joints
+    [MPa*m/s], peak |R| [N], its joint, its crank angle [rad], peak |M_bal|
+    [N*m], the first locked position (-1: none), its locking element).  The
+    peaks are the largest of the positions (NaN and inf take them, as the
+    sweep's own); ``pin_area``: d l per joint [mm^2].  Stops at the first
+    position that locks (FRICTION_LOCK)."""
+    n = pos.shape[0]
+    nj = joint_point.shape[0]
+    ne = nj + slide_bodies.shape[0]
+    out[0] = OK
+    for i in range(1, 9):
+        out[i] = math.nan
+    out[7] = -1.0
+    out[8] = -1.0
+    total = 0.0
+    peak_pv = -1.0
+    peak_r = -1.0
+    peak_j = -1.0
+    peak_phi = math.nan
+    peak_m = -1.0
+    for k in range(n):
+        friction_forces(pos[k], d1[k], d2[k], omega1, eps1, gravity, par, body_com, body_turn,
+                        body_mass_off, joint_point, joint_bodies, slide_bodies, slide_dir,
+                        slide_angle, crank_body, load_body, load_point, loads[k], f_rev, radius,
+                        f_slide, block, rel_tol, max_iter, a0, b0, jac, res, x, sense,
+                        loads_out, r_out, slide_out, friction_out, speed_out, found)
+        if found[0] != OK:
+            out[0] = found[0]
+            out[7] = k
+            out[8] = found[2]
+            return
+        for e in range(ne):
+            unit = 1.0 if e < nj else 1e-3          # mm/rad -> m/rad on a slide
+            total += -friction_out[e] * speed_out[e] * unit * omega1
+        for j in range(nj):
+            r = math.hypot(r_out[j, 0], r_out[j, 1])
+            if r > peak_r or not math.isfinite(r):
+                peak_r = r
+                peak_j = j
+                peak_phi = phis[k]
+            pv = (r / pin_area[j]) * (abs(speed_out[j] * omega1) * radius[j])
+            if pv > peak_pv or not math.isfinite(pv):
+                peak_pv = pv
+        m = abs(found[1])
+        if m > peak_m or not math.isfinite(m):
+            peak_m = m
+    out[1] = total / n + 0.0
+    out[2] = peak_pv if nj > 0 else math.nan
+    out[3] = peak_r if nj > 0 else math.nan
+    out[4] = peak_j if nj > 0 else math.nan
+    out[5] = peak_phi
+    out[6] = peak_m

@@ -28,8 +28,10 @@ from ..kernels import sweep as ks
 # (stage 1, with [output.motion_law]), "kinematics", "transmission", "forces" (stage
 # 2, candidates that meet the stroke and margin constraints); "robust": a design's
 # builds within the study's [tolerance] (pipeline.runs.builds.RobustBuilds), for
-# the designs that meet their constraints, in columns after the kernels' own
-STAGES = ("positions", "law", "kinematics", "transmission", "forces", "robust")
+# the designs that meet their constraints, in columns after the kernels' own;
+# "friction": with [mechanism.friction], the candidates of the force stage on the
+# careful path (pipeline.runs.sweep_friction), in columns after the robust ones
+STAGES = ("positions", "law", "kinematics", "transmission", "forces", "robust", "friction")
 
 # the robust metrics' columns, after the kernels' N_METRICS: (name, the metric of the
 # builds it is a quantile of; "" for the yield)
@@ -37,7 +39,14 @@ ROBUST = (("robust_dwell_error", "dwell_error"), ("robust_peak_reaction", "peak_
           ("robust_law_error", "law_error"), ("build_yield", ""))
 ROBUST_COLUMN = {name: ks.N_METRICS + k for k, (name, _) in enumerate(ROBUST)}
 ROBUST_OF = dict(ROBUST)
-N_ROW = ks.N_METRICS + len(ROBUST)      # a metric row with the robust columns
+N_ROBUST_ROW = ks.N_METRICS + len(ROBUST)      # a metric row with the robust columns
+# the friction metrics' columns, after the robust ones (pipeline.runs.sweep_friction)
+FRICTION = ("friction_loss", "peak_pv")
+FRICTION_COLUMN = {name: N_ROBUST_ROW + k for k, name in enumerate(FRICTION)}
+N_ROW = N_ROBUST_ROW + len(FRICTION)    # a metric row with the robust and friction columns
+# with [mechanism.friction] these force peaks are those with friction (the friction
+# stage replaces the kernels' frictionless ones)
+WITH_FRICTION = ("peak_reaction", "peak_joint", "peak_phi", "peak_M_bal")
 _QUANTILE = ("the [tolerance.robust] quantile (default the 95th percentile) of {m} over the "
              "design's builds within the study's [tolerance] (default ISO 2768-f, the "
              "reference design's size classes; a build that cannot assemble counts as "
@@ -149,6 +158,17 @@ CATALOGUE = (
            "robust", ROBUST_COLUMN["build_yield"], larger_is_better="build_loss"),
     Metric("build_loss", "1", "1 - build_yield: the share of builds lost (an objective to "
            "minimise)", "robust", ROBUST_COLUMN["build_yield"], -1.0, 1.0),
+    Metric("friction_loss", "W",
+           "mean power lost to Coulomb friction in the joints and slides over the revolution "
+           "at the operating speed ([mechanism.friction]; the mean over the grid's positions, "
+           "as a scene's friction_loss); with friction peak_reaction, peak_joint, peak_phi "
+           "and peak_M_bal are those with friction too",
+           "friction", FRICTION_COLUMN["friction_loss"]),
+    Metric("peak_pv", "MPa*m/s",
+           "largest p*v of the plain bearings (p = |R| / (d l), v = |relative omega| d / 2 at "
+           "the pin's surface) over the revolute joints and the grid's positions, with "
+           "friction ([mechanism.friction]; not refined between the positions)",
+           "friction", FRICTION_COLUMN["peak_pv"]),
 )
 
 BY_NAME = {m.name: m for m in CATALOGUE}

@@ -361,6 +361,10 @@ def summarize(out) -> dict:
         said = _constraints_said(f, out)
         if said:
             s["constraints"] = said
+        if _has_friction(f, out):
+            s["friction"] = ("[mechanism.friction]: the force peaks with friction, on the "
+                             "careful path (Newton at every position of each candidate of "
+                             "the force stage, not in lanes: benchmarks/bench_friction.py)")
         def unit(name):
             u = unit_text(attr_text(f[f"metrics/{name}"].attrs.get("units", "")))
             return "" if u in ("", "1") else f" {u}"
@@ -379,6 +383,16 @@ def summarize(out) -> dict:
         s["reference design"] = ", ".join(
             f"{o} {ref[o][()][0]:.4g}{unit(o)}" for o in f.attrs["objectives"] if o in ref)
     return s
+
+
+def _has_friction(f, path) -> bool:
+    """Whether the stored study's mechanism has [mechanism.friction]."""
+    from ..study.reader import stored_study
+    try:
+        study = stored_study(f.attrs, path)
+    except ValueError:
+        return False
+    return study is not None and study.mechanism.friction is not None
 
 
 def _constraints_said(f, path) -> str:

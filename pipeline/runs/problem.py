@@ -39,6 +39,7 @@ class SweepProblem:
     law_best: bool = True    # the law shifted to fit best (align = "best")
     device: str = "cpu"      # cpu | gpu (resolved: never auto)
     robust: object = None    # pipeline.runs.builds.RobustBuilds: the robust metrics asked
+    friction: object = None  # pipeline.runs.sweep_friction.SweepFriction: [mechanism.friction]
 
     @property
     def kernels(self):
@@ -98,10 +99,16 @@ class SweepProblem:
             run_rows(self.kernels.evaluate, np.ascontiguousarray(pars), self.phis,
                      self.phi_close, self.tols, self.settings(), self.loads, status, metrics,
                      n_jobs=n_jobs if parallel else 1)
-        if self.robust is not None:     # the robust metrics' columns after the kernels'
-            from ..model.metric_catalogue import N_ROW
-            metrics = np.concatenate([metrics, np.full((len(status), N_ROW - ks.N_METRICS),
+        if self.robust is not None or self.friction is not None:
+            # the robust metrics' columns after the kernels', then the friction's
+            from ..model.metric_catalogue import N_ROBUST_ROW, N_ROW
+            width = N_ROW if self.friction is not None else N_ROBUST_ROW
+            metrics = np.concatenate([metrics, np.full((len(status), width - ks.N_METRICS),
                                                        np.nan)], axis=1)
+        if self.friction is not None:   # before the robust builds: their bounds read its peaks
+            self.friction.fill(self, pars, status, metrics, N_ROBUST_ROW, n_jobs, parallel,
+                               share if self.robust is None else None)
+        if self.robust is not None:
             self.robust.fill(np.ascontiguousarray(pars, float), status, metrics, n_jobs,
                              parallel, share)
         if share is not None:

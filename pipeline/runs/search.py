@@ -269,9 +269,6 @@ def run_search(study, out, *, seed_from=None, resume=False, overwrite=False, sch
     history row (generation, evaluations, hypervolume, ...)."""
     if study.search is None:
         raise ValueError(f"{study.path}: no [search] section; it runs as a Monte-Carlo sweep")
-    from ..study.friction_spec import refuse_friction
-    refuse_friction(study, "an adaptive search's metrics (peak_reaction, peak_M_bal, ...) "
-                           "would be")
     out = Path(out)
     if seed_from is not None and Path(seed_from).resolve() == out.resolve():
         raise ValueError(f"--from {seed_from}: that is the output file; seed from another one")

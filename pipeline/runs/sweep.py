@@ -67,6 +67,9 @@ def build_problem(study, spec: SweepSpec, tols=None, device="cpu") -> SweepProbl
     from .builds import robust_for
     problem = plain_problem(study, spec, tols, device)
     problem.robust = robust_for(study, spec)
+    if study.mechanism.friction is not None:
+        from .sweep_friction import SweepFriction
+        problem.friction = SweepFriction(study.mechanism, problem.plan)
     return problem
 
 
@@ -145,9 +148,7 @@ def run_sweep(study, out, *, candidates=None, resume=False, overwrite=False, sch
     file.  ``device`` (cpu | gpu | auto) and ``store`` (all | feasible)
     override the study's [sweep] device and store."""
     from dataclasses import replace
-    from ..study.friction_spec import refuse_friction
     from ..study.sweep_spec import DEVICES, STORES
-    refuse_friction(study, "a sweep's metrics (peak_reaction, peak_M_bal, ...) would be")
     spec: SweepSpec = study.sweep
     for name, value, allowed in (("device", device, DEVICES), ("store", store, STORES)):
         if value is not None and value not in allowed:

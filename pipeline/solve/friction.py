@@ -44,7 +44,7 @@ class FrictionForces:
     iterations: np.ndarray      # (n,) Newton's
     pressure: np.ndarray        # (n, nj) MPa
     sliding_speed: np.ndarray   # (n, nj) m/s
-    omega1: float
+    omega1: object              # rad/s: the crank's constant speed, or (n, 1) along a motion
     spec: object                # model.friction.Friction
     element_names: tuple        # joints, then slides
     fail_phi: float = math.nan  # rad: the first locking angle, located between positions
@@ -69,7 +69,7 @@ class FrictionForces:
         return float(np.mean(self.total_loss))
 
     def efficiency(self):
-        useful = float(np.mean(self.M_bal_frictionless * self.omega1))
+        useful = float(np.mean(self.M_bal_frictionless * np.ravel(self.omega1)))
         loss = self.mean_loss()
         return useful / (useful + loss) if useful > 0.0 and math.isfinite(loss) else math.nan
 
@@ -106,7 +106,7 @@ class FrictionForces:
         p_max, pv_max = self.spec.p_max, self.spec.pv_max
         for name, p, p_at, v, v_at, pv, pv_at, pv_mean in self.bearings(phi):
             line = (f"p {p:.3g} MPa at {p_at:g} deg{_against(p, p_max)}; v {v:.3g} m/s at "
-                    f"{v_at:g} deg; p*v {pv:.3g} MPa*m/s at {pv_at:g} deg"
+                    f"{v_at:g} deg; p*v {pv:.3g} MPa·m/s at {pv_at:g} deg"
                     f"{_against(pv, pv_max)}, mean {pv_mean:.3g}")
             out[f"bearing {name}"] = line
         if self.overall != kc.OK:
@@ -129,7 +129,8 @@ def _arrays(plan):
 
 def solve_positions(plan, spec, pos, d1, d2, omega1, eps1, loads):
     """The friction kernel at every position: (R, slide, M_bal, body_loads,
-    friction loads (n, ne), speed analogs (n, ne), found (n, 4))."""
+    friction loads (n, ne), speed analogs (n, ne), found (n, 4)); ``omega1``
+    and ``eps1``: the crank's, constant or one per position."""
     from ..kernels.friction import friction_forces
     n = pos.shape[0]
     nb, nj, ns = len(plan.body_names), len(plan.joint_names), len(plan.slide_names)
@@ -146,8 +147,11 @@ def solve_positions(plan, spec, pos, d1, d2, omega1, eps1, loads):
     speed = np.empty((n, nj + ns))
     found = np.empty((n, 4))
     (com, turn, mass_off, jp, jb, sb, sd, sa, crank_body, lb, lp) = _arrays(plan)
+    omega1 = np.broadcast_to(np.asarray(omega1, float), (n,))
+    eps1 = np.broadcast_to(np.asarray(eps1, float), (n,))
     for k in range(n):
-        friction_forces(pos[k], d1[k], d2[k], float(omega1), float(eps1), plan.gravity, plan.par,
+        friction_forces(pos[k], d1[k], d2[k], float(omega1[k]), float(eps1[k]), plan.gravity,
+                        plan.par,
                         com, turn, mass_off, jp, jb, sb, sd, sa, crank_body, lb, lp, loads[k],
                         float(spec.revolute), radius, float(spec.slide), block, REL_TOL,
                         MAX_ITER, a0, b0, jac, res, x, sense, body_loads[k], R[k], S[k],
@@ -168,20 +172,26 @@ def scene_forces_with_friction(mechanism, plan, curves, kinematics):
     return scene_friction(mechanism, plan, curves, out, kinematics)
 
 
-def scene_friction(mechanism, plan, curves, frictionless, kinematics):
+def scene_friction(mechanism, plan, curves, frictionless, kinematics, motion=None):
     """The scene's reactions with friction (``solve.reactions.Reactions`` with
-    ``friction``: a ``FrictionForces``) from the frictionless ones."""
+    ``friction``: a ``FrictionForces``) from the frictionless ones; at the
+    crank's constant speed, or along a crank motion (``motion`` = (omega1,
+    eps1, t), one each per position: ``solve.motion_forces``; no lock is
+    located between its steps, ``kinematics`` None)."""
     from .reactions import sample_loads
     spec = mechanism.friction
     crank = mechanism.crank
-    loads = sample_loads(mechanism, curves.phi)
+    omega1, eps1, t = (crank.omega1, crank.eps1, None) if motion is None else motion
+    loads = sample_loads(mechanism, curves.phi, t)
     R, S, M, body_loads, fric, speed, found = solve_positions(
-        plan, spec, curves.pos, curves.d1, curves.d2, crank.omega1, crank.eps1, loads)
+        plan, spec, curves.pos, curves.d1, curves.d2, omega1, eps1, loads)
+    # the crank's speed, constant or (n, 1) along a motion (broadcast with (n, ne))
+    w = float(omega1) if motion is None else np.asarray(omega1, float).reshape(-1, 1)
     nj = len(plan.joint_names)
     status = found[:, 0].astype(np.int8)
     element = found[:, 2].astype(np.int64)
     unit = np.r_[np.ones(nj), np.full(fric.shape[1] - nj, 1e-3)]   # mm/rad -> m/rad
-    loss = -fric * speed * unit * crank.omega1 + 0.0
+    loss = -fric * speed * unit * w + 0.0
     d = np.asarray(spec.diameters(), float)
     length = np.asarray(spec.lengths(), float)
     mag = np.hypot(R[..., 0], R[..., 1])
@@ -189,16 +199,16 @@ def scene_friction(mechanism, plan, curves, frictionless, kinematics):
         moment=fric[:, :nj], force=fric[:, nj:], speed_analog=speed, loss=loss,
         M_bal_frictionless=frictionless.M_bal, status=status, element=element,
         iterations=found[:, 3].astype(np.int64), pressure=mag / (d * length),
-        sliding_speed=np.abs(speed[:, :nj] * crank.omega1) * d * 0.5e-3,
-        omega1=crank.omega1, spec=spec,
+        sliding_speed=np.abs(speed[:, :nj] * w) * d * 0.5e-3,
+        omega1=w, spec=spec,
         element_names=tuple(plan.joint_names) + tuple(plan.slide_names))
     locked = np.flatnonzero(status != kc.OK)
-    if locked.size:
+    if locked.size and kinematics is not None:
         ff.fail_phi, ff.fail_element = locate_lock(mechanism, plan, curves, int(locked[0]),
                                                    int(element[locked[0]]), kinematics)
     from dataclasses import replace
     return replace(frictionless, R=R, slide=S, M_bal=M, body_loads=body_loads,
-                   residual=friction_residual(plan, curves, M, body_loads, loss, crank.omega1),
+                   residual=friction_residual(plan, curves, M, body_loads, loss, w),
                    friction=ff)
 
 
@@ -216,7 +226,10 @@ def friction_residual(plan, curves, M, body_loads, loss, omega1):
             v = curves.d1[:, b] - curves.d1[:, a]
             w[:, i] = (r[:, 0] * v[:, 1] - r[:, 1] * v[:, 0]) / (r[:, 0] ** 2 + r[:, 1] ** 2)
     pm = body_loads[..., 2] * w
-    fl = -loss / omega1 if omega1 != 0.0 else np.zeros_like(loss)
+    w = np.broadcast_to(np.asarray(omega1, float), (loss.shape[0], 1)) if np.ndim(omega1) \
+        else np.full((loss.shape[0], 1), float(omega1))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        fl = np.where(w != 0.0, -loss / np.where(w != 0.0, w, 1.0), 0.0)
     total = M + pf.sum(axis=1) + pm.sum(axis=1) + fl.sum(axis=1)
     scale = np.maximum.reduce([np.abs(M), np.abs(pf).max(axis=1), np.abs(pm).max(axis=1),
                                np.abs(fl).max(axis=1) if fl.shape[1] else np.zeros_like(M)])
@@ -233,22 +246,33 @@ def locate_lock(mechanism, plan, curves, k, element, kinematics):
     if k == 0:
         return float(curves.phi[0]), element
     crank = mechanism.crank
-    good, bad = float(curves.phi[k - 1]), float(curves.phi[k])
     prefix = np.asarray(curves.phi[:k], float)
+
+    def state(mid):
+        c = kinematics(np.append(prefix, mid))
+        if c.status[-1] != kc.OK:    # the kinematics fails first: not a lock here
+            return False, -1
+        found = solve_positions(plan, mechanism.friction, c.pos[-1:], c.d1[-1:], c.d2[-1:],
+                                crank.omega1, crank.eps1,
+                                sample_loads(mechanism, np.array([mid])))[-1]
+        return found[0, 0] == kc.OK, int(found[0, 2])
+    return bisect_lock(float(curves.phi[k - 1]), float(curves.phi[k]), element, state)
+
+
+def bisect_lock(good, bad, element, state):
+    """(crank angle [rad], element) of a lock between ``good`` (free) and
+    ``bad`` (locked), by bisection to LOCATE_TOL; ``state(phi)``: (free,
+    the locking element) there (a position whose kinematics fails counts
+    as not free, its element -1 keeping the last one found)."""
     for _ in range(200):
         if not abs(bad - good) > LOCATE_TOL:
             break
         mid = 0.5 * (good + bad)
-        c = kinematics(np.append(prefix, mid))
-        if c.status[-1] != kc.OK:    # the kinematics fails first: not a lock here
-            bad = mid
-            continue
-        found = solve_positions(plan, mechanism.friction, c.pos[-1:], c.d1[-1:], c.d2[-1:],
-                                crank.omega1, crank.eps1,
-                                sample_loads(mechanism, np.array([mid])))[-1]
-        if found[0, 0] == kc.OK:
+        free, e = state(mid)
+        if free:
             good = mid
         else:
             bad = mid
-            element = int(found[0, 2])
+            if e >= 0:
+                element = e
     return bad, element

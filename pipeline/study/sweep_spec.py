@@ -123,7 +123,8 @@ class SweepSpec:
 
     @property
     def wants_forces(self):
-        return self._wants("forces")
+        """The kinetostatics (stage 2); the friction metrics are computed from it."""
+        return self._wants("forces") or self._wants("friction")
 
     @property
     def wants_peaks(self):
@@ -257,6 +258,13 @@ def parse_sweep(root, mech, output) -> SweepSpec:
     stroke, margin_min, bounds = _parse_constraints(sec.table("constraints", default={}), mech,
                                                     output)
     metrics = tuple(dict.fromkeys(metrics + objectives + tuple(b[0] for b in bounds)))
+    forced = [b[0] for b in bounds if METRICS[b[0]][2] in ("forces", "friction")]
+    if (getattr(mech, "friction", None) is not None and forced
+            and {"build_yield", "build_loss"} & set(metrics)):
+        raise sec.error("constraints", f"build_yield would hold each build to {forced[0]} "
+                                       "without friction (a build's forces are frictionless), "
+                                       "and this mechanism has [mechanism.friction]; bound "
+                                       f"{forced[0]} without build_yield, or leave it out")
     mass_model = []
     if sec.has("mass_model"):
         bodies = {b.name for b in mech.bodies}
@@ -341,8 +349,24 @@ def _check_bounds_range(sec, v, name, param, low, high, units, factor, ref, spre
                                   f"give variables.{name}.min and max")
 
 
+# with [mechanism.friction], the metrics that would still be frictionless
+FRICTIONLESS_ONLY = {
+    "equilibrium_residual": "the frictionless kinetostatics' residual (a scene reports the "
+                            "residual with friction)",
+    "robust_peak_reaction": "a quantile over builds whose forces are frictionless",
+}
+
+
 def _check_available(sec, key, m, mech, output):
     """Refuse a metric the study cannot compute, naming the field."""
+    friction = getattr(mech, "friction", None)
+    if METRICS[m][2] == "friction" and friction is None:
+        raise sec.error(key, f"{m} needs friction in the joints: declare [mechanism.friction]")
+    if METRICS[m][2] == "friction" and not mech.bodies:
+        raise sec.error(key, f"{m} needs mass data: declare [[mechanism.bodies]]")
+    if friction is not None and m in FRICTIONLESS_ONLY:
+        raise sec.error(key, f"{m} is {FRICTIONLESS_ONLY[m]}, and this mechanism has "
+                             "[mechanism.friction]; leave it out")
     if METRICS[m][2] == "robust":        # a quantile of a metric over the builds: that metric's
         from ..model.metric_catalogue import ROBUST_OF
         base = ROBUST_OF.get(m, "")

@@ -52,7 +52,7 @@ def friction_figure(res):
             mark_peak(ax2, phi[k], pv[k, j], colour=line.get_color(), ms=3, what=f"p*v {name}")
     if fr.spec.pv_max is not None:
         ax2.axhline(fr.spec.pv_max, color="C3", ls="--", lw=1.0,
-                    label=f"pv_max {fr.spec.pv_max:g} MPa*m/s")
+                    label=f"pv_max {fr.spec.pv_max:g} MPa·m/s")
     ax2.set_ylabel("p*v [MPa·m/s]")
     ax2.set_xlabel("crank angle phi1 [deg]")
     ax2.grid(alpha=0.3)

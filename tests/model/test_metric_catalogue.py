@@ -15,10 +15,13 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def test_every_entry_reads_a_column_of_the_kernels_row():
     """... or, a robust metric, one of the columns after the kernels' own (filled
-    from a design's builds, pipeline.runs.builds.RobustBuilds)."""
+    from a design's builds, pipeline.runs.builds.RobustBuilds); a friction metric,
+    one after the robust ones (pipeline.runs.sweep_friction)."""
     for m in mc.CATALOGUE:
         if m.stage == "robust":
-            assert ks.N_METRICS <= m.column < mc.N_ROW, m.name
+            assert ks.N_METRICS <= m.column < mc.N_ROBUST_ROW, m.name
+        elif m.stage == "friction":
+            assert mc.N_ROBUST_ROW <= m.column < mc.N_ROW, m.name
         else:
             assert 0 <= m.column < ks.N_METRICS, m.name
         assert m.stage in mc.STAGES, m.name

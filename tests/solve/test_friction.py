@@ -413,7 +413,7 @@ def test_one_bearing_of_mechanism_b_by_hand_from_the_results_file(studies, tmp_p
             assert s[key][j] >= by_hand[k]
             assert abs(s[f"{key}_phi1"][j] - g["phi1"][k]) <= step
         assert s["mean_pv"][j] == pytest.approx(np.mean(p * v), rel=1e-12)
-        assert g["pv"].attrs["units"] == "MPa*m/s" and g["friction_loss"].attrs["units"] == "W"
+        assert g["pv"].attrs["units"] == "MPa·m/s" and g["friction_loss"].attrs["units"] == "W"
         assert f.attrs["status"] == "OK"
 
 

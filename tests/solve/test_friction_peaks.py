@@ -145,4 +145,4 @@ def test_the_refined_peaks_are_stored_and_printed_with_their_crank_angles(studie
     for j, name in enumerate(joints):
         line = summary[f"bearing {name}"]
         assert line.startswith(f"p {p[0][j]:.3g} MPa at {p[1][j]:g} deg (within the limit 25)")
-        assert f"p*v {pv[0][j]:.3g} MPa*m/s at {pv[1][j]:g} deg" in line
+        assert f"p*v {pv[0][j]:.3g} MPa·m/s at {pv[1][j]:g} deg" in line
