@@ -101,7 +101,7 @@ def test_a_first_run_says_it_is_compiling(tmp_path, studies, monkeypatch, caplog
     import time
     import types
 
-    import pipeline.runs.problem as pr
+    import pipeline.compiler.notice as pr
     import pipeline.runs.sweep as sw
     real = sw.SweepFile.create
     noticed = threading.Event()
@@ -123,7 +123,7 @@ def test_a_first_run_says_it_is_compiling(tmp_path, studies, monkeypatch, caplog
                                   monotonic=lambda: time.monotonic() + offset[0])
     monkeypatch.setattr(sw.SweepFile, "create", slow_create)
     monkeypatch.setattr(sw, "time", clock)
-    monkeypatch.setattr(pr, "time", clock)       # compile_notice's clock (runs/problem.py)
+    monkeypatch.setattr(pr, "time", clock)       # compile_notice's clock (compiler/notice.py)
     # the 1000 s it measures go to this test's record, not the session's compile cache
     monkeypatch.setattr(pr, "compile_record", lambda: tmp_path / "last_compile_s.txt")
     handler = Notice()

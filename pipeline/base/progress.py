@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import os
 import sys
 import threading
 import time
@@ -98,6 +99,25 @@ def bar(total=None, *, initial=0, desc="", unit="it", enabled=True, **tqdm_kw):
     return b
 
 
+def terminal_width() -> int:
+    """Columns of the terminal that progress goes to (80 where it does not say)."""
+    try:
+        return os.get_terminal_size(sys.stderr.fileno()).columns or 80
+    except (AttributeError, ValueError, OSError):
+        return 80
+
+
+def live_line(what: str, seconds: float, width: int) -> str:
+    """'WHAT: N s' in fewer than ``width`` columns (the last one left free: a
+    terminal wraps a full line): a long WHAT is cut, never the seconds, which
+    show that the stage is alive."""
+    tail = f": {seconds:.0f} s"
+    room = max(width - 1 - len(tail), 8)
+    if len(what) > room:
+        what = what[:room - 3].rstrip() + "..."
+    return what + tail
+
+
 class _Ticker:
     def __init__(self, what):
         self.what = self.name = what
@@ -113,7 +133,8 @@ def ticking(what: str, *, after: float = 0.0, say_done: bool = True):
     a terminal (redrawn every REDRAW_S), a plain line every QUIET_S elsewhere,
     and (``say_done``) a line with its time at the end.  ``after``: nothing at
     all unless the stage takes longer than that (a cache that may be warm).
-    Yields an object whose ``set(text)`` changes what the line says."""
+    Yields an object whose ``set(text)`` changes what the line says.  The live
+    line fits the terminal's width, its seconds always in it (``live_line``)."""
     t = _Ticker(what)
     if not shown():
         yield t
@@ -130,7 +151,7 @@ def ticking(what: str, *, after: float = 0.0, say_done: bool = True):
         if term:
             from tqdm import tqdm
             bar_ = tqdm(total=None, bar_format="{desc}", leave=False, dynamic_ncols=True)
-            bar_.set_description_str(f"{t.what}: {elapsed():.0f} s")
+            bar_.set_description_str(live_line(t.what, elapsed(), terminal_width()))
             line.append(bar_)
         else:
             log.info("%s ...", t.what)
@@ -143,7 +164,7 @@ def ticking(what: str, *, after: float = 0.0, say_done: bool = True):
             begin()
         while not stop.wait(REDRAW_S if term else QUIET_S):
             if term:
-                line[0].set_description_str(f"{t.what}: {elapsed():.0f} s")
+                line[0].set_description_str(live_line(t.what, elapsed(), terminal_width()))
             else:
                 log.info("%s: still at work, %.0f s", t.what, elapsed())
 

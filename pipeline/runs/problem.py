@@ -1,23 +1,21 @@
 """The problem a sweep's worker evaluates: plain arrays and the sweep's
-settings (picklable), the generated kernels on first use, and the notice
-around the first evaluation, which compiles a new mechanism's kernels."""
+settings (picklable), the generated kernels on first use; the notice around
+the first evaluation, which compiles a new mechanism's kernels, is
+``compiler.notice``'s (importable from here)."""
 
 from __future__ import annotations
 
-import contextlib
-import logging
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..compiler.notice import (COMPILE_RECORD, compile_notice,  # noqa: F401
+                               compile_record, last_compile_s)
 from ..kernels import config as kc
 from ..kernels import sweep as ks
 from ..study.sampling import draw_checked
 from ..study.sweep_spec import SweepSpec, parameter_rows
-
-log = logging.getLogger("pipeline")
 
 
 @dataclass
@@ -145,53 +143,3 @@ def plain_problem(study, spec: SweepSpec, tols=None, device="cpu") -> SweepProbl
         law=None if law is None else law.on_grid(crank, phis),
         law_best=True if law is None else law.best, device=device)
 
-COMPILE_RECORD = "last_compile_s.txt"     # in the compile cache folder: the last compile's seconds
-
-
-def compile_record():
-    """The file that keeps how long the last new mechanism's kernels took to
-    compile on this machine (beside the generated modules it compiled)."""
-    from ..compiler import cache_dir
-    return cache_dir() / COMPILE_RECORD
-
-
-def last_compile_s():
-    """Seconds the last compile took here (``compile_record``), or None."""
-    try:
-        s = float(compile_record().read_text().split()[0])
-    except (OSError, ValueError, IndexError):
-        return None
-    return s if math.isfinite(s) and s > 0 else None
-
-
-@contextlib.contextmanager
-def compile_notice():
-    """Around the first evaluation of a run (the reference design), which compiles
-    a new mechanism's kernels: a notice if it takes more than a second, and how
-    long it took (the list it yields holds the seconds afterwards).  The notice's
-    estimate is the last compile measured on this machine (a constant would be
-    wrong on every machine but one); the time it took is kept for the next, only
-    where numba did compile (its "numba:compile" event: a slow first load from
-    numba's cache, a second or more under load, is no compile to estimate from)."""
-    from numba.core import event
-
-    from ..base.progress import ticking
-    last = last_compile_s()
-    guess = (f"the last one here took {last:.0f} s" if last is not None else
-             "the first measured here")
-    t = time.perf_counter()
-    took = [0.0]
-    # after a second: what it does and for how long (live on a terminal)
-    with event.install_recorder("numba:compile") as compiled, \
-            ticking(f"compiling the kernels of this mechanism (its first run only; {guess})",
-                    after=1.0, say_done=False):
-        yield took
-    took[0] = time.perf_counter() - t
-    if took[0] > 1.0:
-        log.info("kernels ready after %.1f s", took[0])
-    if took[0] > 1.0 and compiled.buffer:
-        try:
-            from ..base.files import write_text
-            write_text(compile_record(), f"{took[0]:.1f}\n")
-        except OSError:     # a read-only cache: the next notice has no estimate
-            pass

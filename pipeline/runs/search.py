@@ -321,6 +321,26 @@ def _run_locked(study, out, seed_from, resume, overwrite, scheduler, client, n_j
             client.close()
 
 
+def _compile_the_search_steps(search, x0, problem, scale):
+    """The optimizer's compiled steps (its survival, mating and duplicate check)
+    and the front's sorting, compiled now, inside the compile notice, by two
+    generations of a throwaway optimizer told made-up objectives: else they
+    compile in the first generations, seconds with the bar at 0 %.  The run's
+    own optimizer, its random draws and its front are untouched."""
+    box = SweepBlackBox(problem)
+    algorithm = make_algorithm(search, x0, TriangleRepair(problem.spec), box)
+    tracker = FrontTracker(scale)
+    made_up = np.random.default_rng(0)
+    for _ in range(2):
+        X = algorithm.ask()
+        if len(X) == 0:
+            break
+        F = made_up.random((len(X), box.n_obj))
+        G = made_up.random((len(X), box.n_ieq_constr)) - 0.5    # some feasible, some not
+        algorithm.tell(X, F, G)
+        tracker.add(F, (G <= 0).all(axis=1))
+
+
 def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_generation,
                  stop_after, attrs):
     search = study.search
@@ -331,6 +351,7 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
     with compile_notice() as prep:
         scale = hv_scale(problem)
         sfile.create(scale)
+        _compile_the_search_steps(search, x0, problem, scale)
 
     done = set(journal.done())
     if done:

@@ -262,14 +262,17 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
     finished = set(journal.done())
     t0 = time.perf_counter()
     work = sf.path
-    with hdf5_writing(work, expendable=False) as f:
+    if finished:
+        log.info("resuming: %d of %d chunks already done", len(finished), spec.n_chunks)
+    # a resumed run's file is rebuilt from its journal: seconds for a large sweep
+    with hdf5_writing(work, expendable=False) as f, \
+            _reading_journal(journal, len(finished)) as line:
         d = sf.datasets(f)
-        for c in sorted(finished):
+        for i, c in enumerate(sorted(finished)):
+            line.set(f"{i:,}/{len(finished):,} chunks")
             sf.write_chunk(d, c, *journal.load(c))    # kept rows and counts, if any
         f.flush()
     todo = [c for c in range(spec.n_chunks) if c not in finished]
-    if finished:
-        log.info("resuming: %d of %d chunks already done", len(finished), spec.n_chunks)
     bar = _progress(spec, len(finished), progress)
     # locally the bar is told as a chunk's work goes (its robust builds slice by slice)
     watch = Watch(bar.update) if client is None else None
@@ -310,6 +313,20 @@ def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress
         sf.sort_rows(f)
     return finish_run(out, journal, client, time.perf_counter() - t0, prep[0], computed,
                       summarize, "candidates", device=problem.device_name)
+
+
+def _reading_journal(journal: Journal, n: int):
+    """Around a resumed run's read of its journal (``n`` chunks saved): a line
+    that says so and counts its seconds (nothing for a fresh run)."""
+    if not n:
+        return contextlib.nullcontext(_NoLine())
+    from ..base.progress import ticking
+    return ticking(f"reading the journal {journal.dir.name}")
+
+
+class _NoLine:
+    def set(self, detail):
+        pass
 
 
 def finish_run(out: Path, journal: Journal, client, wall: float, compile_s: float,
@@ -382,19 +399,46 @@ def _chunks(problem, todo, client, n_jobs, watch=None):
         ahead.shutdown(wait=True, cancel_futures=True)
 
 
-CONNECT_TIMEOUT = "20s"     # how long to wait for a Dask scheduler to answer
+CONNECT_TIMEOUT = "20s"     # how long to wait for a Dask scheduler to answer, unless
+CONNECT_TIMEOUT_ENV = "PIPELINE_CONNECT_TIMEOUT"    # this variable says (seconds, or "30s")
+
+
+def _connect_timeout() -> float:
+    """Seconds to wait for a Dask scheduler: $PIPELINE_CONNECT_TIMEOUT, else
+    CONNECT_TIMEOUT."""
+    from dask.utils import parse_timedelta
+    text = os.environ.get(CONNECT_TIMEOUT_ENV, "").strip() or CONNECT_TIMEOUT
+    try:
+        s = float(parse_timedelta(text, default="seconds"))
+    except (ValueError, KeyError, TypeError):
+        s = float("nan")
+    if not 0 < s < float("inf"):
+        raise ValueError(f"{CONNECT_TIMEOUT_ENV}: {text!r} is not a time to wait (seconds "
+                         "above 0, e.g. 30 or 30s)")
+    return s
 
 
 def _connect(scheduler):
-    """A client of the Dask scheduler at ``scheduler``; dask is imported only here."""
+    """A client of the Dask scheduler at ``scheduler``; dask is imported only here.
+    The wait says what it waits for and how long at most, and counts its seconds
+    (an unreachable scheduler is retried until the timeout)."""
+    from ..base.progress import ticking
+    needs = "--scheduler needs dask: pip install 'pipeline[dask]'"
     try:
-        from dask.distributed import Client
+        timeout = _connect_timeout()
     except ImportError:  # pragma: no cover - depends on the installation
-        raise ValueError("--scheduler needs dask: pip install 'pipeline[dask]'") from None
-    try:
-        return Client(scheduler, timeout=CONNECT_TIMEOUT)
-    except (OSError, TimeoutError) as e:
-        raise ValueError(f"cannot reach the Dask scheduler {scheduler}: {e}") from None
+        raise ValueError(needs) from None
+    with ticking(f"connecting (at most {timeout:g} s) to the Dask scheduler {scheduler}",
+                 say_done=False):
+        try:
+            from dask.distributed import Client
+        except ImportError:  # pragma: no cover - depends on the installation
+            raise ValueError(needs) from None
+        try:
+            return Client(scheduler, timeout=timeout)
+        except (OSError, TimeoutError) as e:
+            raise ValueError(f"cannot reach the Dask scheduler {scheduler} within {timeout:g} s "
+                             f"({CONNECT_TIMEOUT_ENV} sets how long to wait): {e}") from None
 
 
 def _dask_chunks(problem, todo, client):

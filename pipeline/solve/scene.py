@@ -12,6 +12,7 @@ import numpy as np
 
 from ..kernels import config as kc
 from ..compiler import kernels_for, scene_kernels_for
+from ..compiler.notice import compile_notice
 from ..kernels.geometry import link_angles
 from ..model.mechanism import Plan
 
@@ -129,17 +130,24 @@ def run_scene(study, tols=None) -> SceneResult:
     order = ORDER[out.analysis]
     tols = kc.default_tolerances() if tols is None else tols
     crank = study.mechanism.crank
-    scene_kernels_for(plan, forces=out.analysis == "forces")   # (forces compile beside)
-    table = solve_curves(plan, revolution_angles(crank, out.table_positions, True), order, tols)
-    dense_phis = revolution_angles(crank, out.dense_positions)
-    dense = solve_curves(plan, dense_phis, order, tols,
-                         close_at=crank.phi0 + crank.rot * 2.0 * math.pi)
-    if out.analysis == "forces":
+    forces = out.analysis == "forces"
+    if forces:
         from .friction import scene_forces_with_friction
 
         def kinematics(phis):
             return solve_curves(plan, phis, kc.ACCELERATIONS, tols)
-        table.forces = scene_forces_with_friction(study.mechanism, plan, table, kinematics)
+    # the first solve (the table's few positions) compiles a new mechanism's kernels:
+    # said as a compile, with its seconds, where it takes more than a second
+    with compile_notice():
+        scene_kernels_for(plan, forces=forces)   # (forces compile beside)
+        table = solve_curves(plan, revolution_angles(crank, out.table_positions, True), order,
+                             tols)
+        if forces:
+            table.forces = scene_forces_with_friction(study.mechanism, plan, table, kinematics)
+    dense_phis = revolution_angles(crank, out.dense_positions)
+    dense = solve_curves(plan, dense_phis, order, tols,
+                         close_at=crank.phi0 + crank.rot * 2.0 * math.pi)
+    if forces:
         dense.forces = scene_forces_with_friction(study.mechanism, plan, dense, kinematics)
     return SceneResult(study, plan, table, dense, tols)
 

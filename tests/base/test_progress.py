@@ -7,6 +7,8 @@ processor on a loaded machine), and a line that comes after a while is waited
 for (a hang guard, not a timing)."""
 
 import logging
+import re
+import socket
 import subprocess
 import sys
 import time
@@ -15,7 +17,7 @@ import pytest
 
 from pipeline.base import progress
 from pipeline.cli import main
-from pipeline.runs import problem
+from pipeline.compiler import notice
 from support.checkout import child_env
 from support.sweep_helpers import copy_of
 from support.terminal import longest_silence, run_on_terminal
@@ -69,22 +71,34 @@ def test_compile_estimate_is_the_last_compile_measured(caplog, monkeypatch, tmp_
     machine (none before the first), and keeps the time of this one where numba
     compiled (a slow load from its cache keeps the last compile's)."""
     record = tmp_path / "last_compile_s.txt"
-    monkeypatch.setattr(problem, "compile_record", lambda: record)
-    assert problem.last_compile_s() is None
+    monkeypatch.setattr(notice, "compile_record", lambda: record)
+    assert notice.last_compile_s() is None
     record.write_text("37.4\n")
-    assert problem.last_compile_s() == 37.4
+    assert notice.last_compile_s() == 37.4
     with caplog.at_level(logging.INFO, logger="pipeline"):
-        with problem.compile_notice() as slow_load:     # compiling nothing, until the notice
-            wait_for("compile notice", lambda: "its first run only" in caplog.text)
-    assert "its first run only; the last one here took 37 s" in caplog.text
-    assert slow_load[0] >= 1.0 and problem.last_compile_s() == 37.4     # kept: no compile
+        with notice.compile_notice() as slow_load:     # compiling nothing, until the notice
+            wait_for("compile notice", lambda: "first run only" in caplog.text)
+    assert "compiling the kernels of this mechanism (first run only; last time 37 s)" \
+        in caplog.text
+    assert slow_load[0] >= 1.0 and notice.last_compile_s() == 37.4     # kept: no compile
     from numba import njit
-    with problem.compile_notice() as took:
+    with notice.compile_notice() as took:
         assert njit(lambda x: x + 1)(1) == 2       # a compile (numba's own event)
         time.sleep(1.1)                            # past the notice's one second
-    assert took[0] >= 1.1 and problem.last_compile_s() == pytest.approx(took[0], abs=0.05)
+    assert took[0] >= 1.1 and notice.last_compile_s() == pytest.approx(took[0], abs=0.05)
     record.write_text("not a number")
-    assert problem.last_compile_s() is None
+    assert notice.last_compile_s() is None
+
+
+def test_a_live_line_fits_its_terminal_with_its_seconds():
+    """A text too long for the terminal is cut, never the seconds that show the
+    stage is alive (tqdm cuts the end of a line: on 80 columns the compile
+    notice lost its counter and looked hung); the last column stays free."""
+    long = "compiling the kernels of this mechanism (first run only; last time 137 s) " * 2
+    for width in (80, 40, 20):
+        line = progress.live_line(long, 1234.4, width)
+        assert len(line) < width and line.endswith("...: 1234 s"), (width, line)
+    assert progress.live_line("stage", 3.2, 80) == "stage: 3 s"
 
 
 # -- every command on a pseudo-terminal ------------------------------------------------
@@ -193,6 +207,7 @@ def test_command_on_a_terminal_never_falls_silent(case, help_time, synthesis_swe
     assert code == 0, text
     assert times and times[0] <= help_time + SILENCE_S, (argv, help_time, times[:3], text)
     assert longest_silence(times, end) <= SILENCE_S, (argv, times, end, text)
+    assert all(len(p) < 80 for p in live_lines(text)), text      # its seconds in view
     if case in ("analyze", "compile", "report"):
         assert f"{argv[0]}" in text and " s\r" in text, text      # the live line
 
@@ -208,3 +223,122 @@ def test_no_carriage_returns_off_a_terminal(case, synthesis_sweep, scenes, studi
     said = {"run-sweep": "sweep: 300/300 cand", "compare": "compare: "}[case]
     assert said in p.stderr, p.stderr
 
+
+
+# -- the waits of issue 55: each says what it waits for, counts its seconds, fits 80 columns
+
+_ESCAPE = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
+_LIVE = re.compile(r": (\d+) s$")
+
+
+def live_lines(text):
+    """The live lines the terminal showed ('WHAT: N s', each drawn between two
+    carriage returns or line ends), their padding dropped: a line cut before its
+    seconds is none."""
+    parts = (p.rstrip() for p in re.split(r"[\r\n]", _ESCAPE.sub("", text)))
+    return [p for p in parts if _LIVE.search(p)]
+
+
+def counted(lines, start):
+    """The seconds shown by the live lines that begin with ``start``."""
+    return sorted({int(_LIVE.search(p).group(1)) for p in lines if p.startswith(start)})
+
+
+def said_live(text, start):
+    """The live lines that begin with ``start`` fit 80 columns, and there are some."""
+    lines = [p for p in live_lines(text) if p.startswith(start)]
+    assert lines, (start, text)
+    assert all(len(p) < 80 for p in lines), lines
+    return lines
+
+
+WAIT_S = 3       # PIPELINE_CONNECT_TIMEOUT: the test's own timeout, not a measurement
+
+
+@on_linux
+def test_an_unreachable_scheduler_says_where_it_connects_and_counts(studies, tmp_path):
+    """A closed local port: the connection's live line names the scheduler and
+    how long it waits at most (PIPELINE_CONNECT_TIMEOUT), counts its seconds,
+    and the error ends it in one line (it was 20 s of silence)."""
+    with socket.socket() as s:          # a port nothing listens on, once closed
+        s.bind(("127.0.0.1", 0))
+        address = f"tcp://127.0.0.1:{s.getsockname()[1]}"
+    out = tmp_path / "s.h5"
+    code, times, end, text = run_on_terminal(
+        CLI + ["run", str(studies / "ov7_synthesis.toml"), "-o", str(out), "--candidates",
+               "300", "--scheduler", address],
+        env=child_env(PIPELINE_CONNECT_TIMEOUT=str(WAIT_S)))
+    assert code == 2, text
+    assert longest_silence(times, end) <= SILENCE_S, (times, end, text)
+    start = f"connecting (at most {WAIT_S} s) to the Dask scheduler {address}"
+    lines = said_live(text, start)
+    assert len(counted(lines, start)) >= 2, lines        # the seconds go on
+    assert f"error: cannot reach the Dask scheduler {address} within {WAIT_S} s" in text
+    assert not out.exists()
+
+
+@on_linux
+def test_a_resumed_sweep_says_it_reads_its_journal(studies, synthesis_sweep, tmp_path):
+    """--resume rebuilds the results file from the journal first: a live line says
+    so (and counts the chunks), no silence meanwhile (2.9-5.4 s for a large
+    sweep under load)."""
+    from pipeline.runs.sweep import run_sweep
+    from pipeline.study.reader import load_study
+    study = studies / "ov7_synthesis.toml"
+    out = tmp_path / "s.h5"
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(load_study(study), out, candidates=2000, chunk_size=250, progress=False,
+                  stop_after_chunks=5)
+    code, times, end, text = run_on_terminal(CLI + ["run", str(study), "-o", str(out),
+                                                    "--resume"], env=child_env())
+    assert code == 0, text
+    assert longest_silence(times, end) <= SILENCE_S, (times, end, text)
+    said_live(text, "reading the journal s.h5.parts")
+    assert "chunks already done" in text and "reading the journal s.h5.parts: " in text
+
+
+def cold_cache(tmp_path):
+    """An empty compile cache (generated modules and numba's): every kernel compiles."""
+    return child_env(PIPELINE_CACHE_DIR=str(tmp_path / "modules"),
+                     NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+
+
+_COUNT = re.compile(r"\|\s*([\d.]+)(k?)/")
+
+
+@on_linux
+@pytest.mark.slow
+def test_a_search_s_compile_is_said_before_its_bar(studies, tmp_path):
+    """With an empty compile cache, everything the first generations compile (the
+    kernels, the optimizer's steps, the front's sorting) is compiled under the
+    compile notice: once the bar shows, it moves past the first generation
+    within the silence limit (it stood at 0 % with an ETA for 8 s)."""
+    from pipeline.study.reader import load_study
+    study = studies / "ov7_search.toml"
+    population = load_study(study).search.population
+    pieces = []
+    code, times, end, text = run_on_terminal(CLI + ["run", str(study), "-o",
+                                                    str(tmp_path / "s.h5")],
+                                             env=cold_cache(tmp_path), pieces=pieces)
+    assert code == 0, text
+    assert longest_silence(times, end) <= SILENCE_S, (times, end, text)
+    said_live(text, "compiling the kernels of this mechanism (first run only")
+    bar = [(t, p) for t, p in pieces if "search nsga2" in p]
+    shown = bar[0][0]
+    past_first = [t for t, p in bar for m in _COUNT.finditer(p)
+                  if float(m.group(1)) * (1000 if m.group(2) else 1) > population]
+    assert past_first and past_first[0] - shown <= SILENCE_S, (shown, past_first[:3], text)
+
+
+@on_linux
+@pytest.mark.slow
+def test_a_new_scene_s_compile_is_called_a_compile(studies, tmp_path):
+    """A scene of a mechanism new to the compile cache: its first solve (and its
+    forces) is said as a compile, with its seconds, not only as the run's time."""
+    code, times, end, text = run_on_terminal(
+        CLI + ["run", str(studies / "warp_feed_fourbar.toml"), "-o", str(tmp_path / "w.h5"),
+               "--no-pictures"], env=cold_cache(tmp_path))
+    assert code == 0, text
+    assert longest_silence(times, end) <= SILENCE_S, (times, end, text)
+    said_live(text, "compiling the kernels of this mechanism (first run only")
+    assert "kernels ready after" in text

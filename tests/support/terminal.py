@@ -22,10 +22,10 @@ import time
 POLL_S = 0.05       # the reader's look at the command and at its waits
 
 
-def run_on_terminal(argv, env=None, cwd=None, timeout=300.0):
+def run_on_terminal(argv, env=None, cwd=None, timeout=300.0, pieces=None):
     """(exit code, [seconds of each output], seconds to exit, the text): the
     seconds on the command's own pace (the module's doc); ``timeout`` is a hang
-    guard in wall seconds."""
+    guard in wall seconds; ``pieces``, a list, gets each output's (seconds, text)."""
     master, slave = os.openpty()
     fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 80, 0, 0))
     t0 = time.perf_counter()
@@ -49,6 +49,8 @@ def run_on_terminal(argv, env=None, cwd=None, timeout=300.0):
                     break
                 times.append(pace.now(late, after=times[-1] if times else 0.0))
                 chunks.append(b)
+                if pieces is not None:
+                    pieces.append((times[-1], b.decode(errors="replace")))
             elif p.poll() is not None:
                 break
         end = pace.now(late, after=times[-1] if times else 0.0)
