@@ -103,7 +103,7 @@ def run(smoke=False, out=None, echo=print, source=None):
         def explorer():
             page["explorer"] = ex.explorer_html(path, data, ana)
         explorer_s = best_of(explorer, repeat)
-        payload, _ = ex.explorer_payload(path, data, ana)
+        payload, _, _ = ex.explorer_payload(path, data, ana)
         n_designs = len(payload["designs"])
         sample = list(ana.front1[:1 if smoke else 5])
         now_s, before_s = _per_design(path, sample) if sample else (float("nan"),) * 2
@@ -116,7 +116,7 @@ def run(smoke=False, out=None, echo=print, source=None):
         report_s = first_report if smoke else best_of(whole, 2)
     size = len(page["html"].encode())
     bundle = len(str(plotly_js()).encode())
-    n_points = len(payload["ids"])
+    n_points = payload["ids"]["length"]
     lines = ["# The HTML report's explorer and the whole report" + (" (smoke run)" if smoke else ""),
              "", f"hardware: {hardware()}", "",
              f"sweep: {data.n:,} candidates, {int(data.feasible.sum()):,} feasible, "
@@ -136,7 +136,8 @@ def run(smoke=False, out=None, echo=print, source=None):
              "| whole report, steady state (best of 2) | " + (
                  "not measured in a smoke run |" if smoke else
                  f"{report_s:.1f} s (target {TARGET_S:g} s for {CANDIDATES:,} candidates) |"),
-             f"| page | {size / 2 ** 20:.1f} MiB, of which plotly.js {bundle / 2 ** 20:.1f} MiB "
+             f"| page | {size / 2 ** 20:.1f} MiB, of which plotly.js (packed) "
+             f"{bundle / 2 ** 20:.1f} MiB "
              f"and the explorer's section {len(page['explorer'].encode()) / 2 ** 20:.1f} MiB |",
              ""]
     text = "\n".join(lines)

@@ -5,11 +5,18 @@ and lasso selection into a table and parallel coordinates, and the front-1
 designs, the knee and the reference design each with its cycle (drawing,
 output motion, joint reactions) re-run and embedded as data.
 
+It opens zoomed on fronts 1 to ZOOM_FRONTS (the rest of the cloud dimmed
+behind, double-click for all of it), where a click opens the nearest design of
+the best front within a few pixels: every front-1 design can be clicked at the
+first view, whatever crowds it.
+
 This module gathers the data and lays out the section (templates/
 explorer.html.j2); the page's script (templates/explorer.js) draws it with
 plotly.js (page.py says why Plotly).  Numbers go to the page with
-``page.DIGITS`` significant digits: the explorer shows designs, the file keeps
-their exact numbers (``pipeline browse``, ``pipeline show``).
+``page.DIGITS`` significant digits, the columns as one block of binary arrays
+(page.ArrayBlock) beside the JSON of the rest, both packed (gzip,
+page.packed): the explorer shows designs, the file keeps their exact numbers
+(``pipeline browse``, ``pipeline show``).
 """
 
 from __future__ import annotations
@@ -24,12 +31,15 @@ from pathlib import Path
 import numpy as np
 
 from ..results.storage import attr_text, open_results, variables
-from .page import json_number, json_numbers, render, script_json
+from .page import ArrayBlock, json_number, packed, render, script_json
 
 log = logging.getLogger("pipeline")
 
 MAX_POINTS = 100_000       # feasible designs embedded (a seeded sample above it; front 1 always)
-MAX_INFEASIBLE = 20_000    # infeasible designs with every objective, for "all" (seeded sample)
+# infeasible designs for "all" (a seeded sample): they show where the feasible region
+# ends; 5,000 draw that edge and keep the main job's page under 5 MB
+MAX_INFEASIBLE = 5_000
+ZOOM_FRONTS = 3            # the explorer opens zoomed on fronts 1 to this
 # The front-1 designs embedded with their cycle when --drawings does not say: all of
 # front 1 up to this many (spread along it above).  Each is a re-run with its
 # reactions, about 40 ms on one core, and 25-30 KB of page: 50 designs stay within about
@@ -49,10 +59,6 @@ class Column:
     kind: str               # objective, metric, front, constraint, variable
     values: np.ndarray
 
-    @property
-    def log(self) -> bool:
-        return log_axis(self.values)
-
 
 def log_axis(values) -> bool:
     """A log axis suits ``values`` when all the finite ones are positive and
@@ -62,6 +68,13 @@ def log_axis(values) -> bool:
     if v.size < 2 or not (v > 0).all():
         return False
     return bool(np.log10(v.max() / v.min()) > LOG_DECADES)
+
+
+def zoomed_rows(rank) -> np.ndarray:
+    """Which designs (Pareto ranks ``rank``, 0 = infeasible) the explorer opens
+    zoomed on: fronts 1 to ZOOM_FRONTS."""
+    rank = np.asarray(rank)
+    return (rank >= 1) & (rank <= ZOOM_FRONTS)
 
 
 def command_path(path) -> str:
@@ -164,27 +177,34 @@ def design_picks(ana, n) -> list[int]:
     return front
 
 
-def explorer_payload(path, data, ana, drawings=None) -> dict:
-    """Everything explorer.js draws, as JSON-ready data, and the numbers the
-    section's text states."""
+def explorer_payload(path, data, ana, drawings=None) -> tuple[dict, list, ArrayBlock]:
+    """Everything explorer.js draws, as JSON-ready data, the columns, and the
+    block of binary arrays (ids, feasible, each column's values) that the
+    data's ``{"dtype", "offset", "length"}`` entries point into."""
     from .explorer_designs import design_cycles
     t0 = time.perf_counter()
     n_drawings = EXPLORER_DRAWINGS if drawings is None else int(drawings)
     rows, n_feas, n_infeas = explorer_rows(data, ana)
     cols = read_columns(path, rows, data, ana)
+    near = zoomed_rows(ana.rank[rows])
     pos = {int(r): k for k, r in enumerate(rows)}
     ids = rows if data.ids is None else data.ids[rows]
     ref = reference_values(path, cols, ana)
     picks = design_picks(ana, n_drawings)
     designs = design_cycles(path, picks, data, reference=n_drawings > 0 and ref is not None)
     knee = pos.get(int(ana.knee), -1) if ana.knee >= 0 else -1
+    block = ArrayBlock()
     payload = {
-        "ids": [int(i) for i in ids],
-        "feasible": data.feasible[rows].astype(np.int8).tolist(),
+        "ids": block.add(ids),
+        "feasible": block.add(data.feasible[rows]),
         "front1": [pos[int(i)] for i in ana.front1 if int(i) in pos],
         "knee": knee,
+        "zoom_fronts": ZOOM_FRONTS,
+        # the axis a column gets: log where the designs it opens on (fronts 1 to
+        # ZOOM_FRONTS; all of them without a front) span decades
         "columns": [{"key": c.key, "label": c.label, "unit": c.unit, "kind": c.kind,
-                     "log": c.log, "values": json_numbers(c.values)} for c in cols],
+                     "log": log_axis(c.values[near] if near.any() else c.values),
+                     "values": block.add(c.values)} for c in cols],
         "objectives": list(data.objectives),
         "variables": [c.key for c in cols if c.kind == "variable"],
         "reference": ref,
@@ -197,7 +217,7 @@ def explorer_payload(path, data, ana, drawings=None) -> dict:
     }
     log.info("report: explorer data: %d designs, %d columns, %d re-run (%.1f s)", len(rows),
              len(cols), len(designs), time.perf_counter() - t0)
-    return payload, cols
+    return payload, cols, block
 
 
 def explorer_html(path, data, ana, drawings=None) -> str:
@@ -214,7 +234,7 @@ def explorer_section(path, data, ana, drawings=None) -> tuple[str, set]:
         return '<p class="note">The explorer plots two objectives; this study has one.</p>', set()
     if not (data.feasible & np.isfinite(data.F).all(axis=1)).any():
         return '<p class="note">No feasible design to explore.</p>', set()
-    payload, cols = explorer_payload(path, data, ana, drawings)
+    payload, cols, block = explorer_payload(path, data, ana, drawings)
     n = payload["counts"]
     objectives = []
     for c in cols:
@@ -226,7 +246,7 @@ def explorer_section(path, data, ana, drawings=None) -> tuple[str, set]:
     sampled = n["feasible_shown"] < n["feasible"]
     return render(
         "explorer.html.j2", columns=cols, objectives=objectives,
-        x=data.objectives[0], y=data.objectives[1], n_points=len(payload["ids"]),
+        x=data.objectives[0], y=data.objectives[1], n_points=payload["ids"]["length"],
         n_designs=len(payload["designs"]), has_knee=payload["knee"] >= 0,
         has_reference=payload["reference"] is not None,
         feasible_note=(f" ({n['feasible_shown']:,} of {n['feasible']:,}, a seeded sample with "
@@ -234,4 +254,5 @@ def explorer_section(path, data, ana, drawings=None) -> tuple[str, set]:
         all_note=(f" (with {n['infeasible_shown']:,} of the {n['infeasible']:,} infeasible "
                   "designs" + (", a seeded sample" if n["infeasible_shown"] < n["infeasible"]
                                else "") + ")" if n["infeasible"] else ""),
-        data=script_json(payload)), set(payload["designs"])
+        zoom_fronts=ZOOM_FRONTS, data=packed(script_json(payload)),
+        arrays=block.packed()), set(payload["designs"])

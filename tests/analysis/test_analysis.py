@@ -7,7 +7,6 @@ is copied once per module; tests that write into a file work on copies of it.
 import json
 import os
 import re
-import shutil
 import subprocess
 from io import StringIO
 
@@ -16,7 +15,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from support.html_page import markup_only
+from support.browser import (FRONT_TRACE, CLICK_PACE_S, ISOLATED, PLOT_AREA, POINT, WEBGL,
+                             Page, chromium, click_each_front_1_design, devtools, open_page)
+from support.html_page import explorer_data, markup_only
 from support.naive_pareto import brute_force_rank, dominates_ref
 from pipeline.analysis.fronts import analyze
 from pipeline.views.browse import rerun_candidate
@@ -342,19 +343,6 @@ def test_bad_candidate_ids_exit_2(sweep_file, capsys):
 
 
 # ---------------------------------------------------------------- the report
-# WebGL (the explorer's scattergl and parcoords) without a GPU: SwiftShader, which
-# headless Chromium takes only when asked (its automatic fallback is deprecated)
-WEBGL = ["--disable-gpu", "--enable-unsafe-swiftshader"]
-
-
-def chromium():
-    for name in ("/usr/bin/chromium", "chromium", "chromium-browser", "google-chrome"):
-        path = shutil.which(name)
-        if path:
-            return path
-    pytest.fail("headless Chromium is not installed (.ci/run installs it: apt-get install chromium)")
-
-
 def test_report_is_self_contained(cli_run):
     info = json.loads(cli_run["report"][1])
     assert "run now" in info["analysis"] and info["report"].endswith("report.html")
@@ -413,154 +401,19 @@ def test_report_renders_in_chromium(cli_run, tmp_path):
     assert r.returncode == 0 and shot.exists() and shot.stat().st_size > 50_000
 
 
-def _devtools(exe, url, tmp_path):
-    """A headless Chromium showing ``url``, driven over the DevTools protocol
-    (its own WebSocket: no extra driver).  Returns (process, page WebSocket URL)."""
-    import json as _json
-    import urllib.request
-
-    flags = ["--headless", "--no-sandbox", *WEBGL, "--no-first-run",
-             "--disable-background-networking", "--disable-component-update", "--disable-sync",
-             f"--user-data-dir={tmp_path / 'cdp-profile'}", "--remote-debugging-port=0",
-             "--window-size=1280,1800", url]
-    proc = subprocess.Popen([exe, *flags], stderr=subprocess.PIPE, text=True,
-                            env=dict(os.environ, HOME=str(tmp_path)))
-    port = None
-    for _ in range(200):
-        line = proc.stderr.readline()
-        m = re.search(r"DevTools listening on ws://[^:]+:(\d+)/", line)
-        if m:
-            port = int(m.group(1))
-            break
-    assert port, "Chromium did not open its DevTools port"
-    pages = _json.loads(urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list").read())
-    ws_url = [p for p in pages if p.get("type") == "page"][0]["webSocketDebuggerUrl"]
-    return proc, ws_url
-
-
-class _Page:
-    """One page over the DevTools protocol: ``call`` a method, evaluate ``js``,
-    send real mouse and keyboard input; every event is kept in ``events``."""
-
-    def __init__(self, ws):
-        self.ws, self.seq, self.events = ws, 0, []
-
-    async def call(self, method, **params):
-        import json as _json
-        self.seq += 1
-        self.ws.write_message(_json.dumps({"id": self.seq, "method": method, "params": params}))
-        while True:
-            msg = _json.loads(await self.ws.read_message())
-            if msg.get("id") == self.seq:
-                assert "error" not in msg, (method, msg["error"])
-                return msg.get("result", {})
-            self.events.append(msg)
-
-    async def js(self, expr):
-        r = await self.call("Runtime.evaluate", expression=expr, returnByValue=True,
-                            awaitPromise=True)
-        assert "exceptionDetails" not in r, r["exceptionDetails"]
-        return r["result"].get("value")
-
-    async def until(self, expr, what, seconds=60):
-        import asyncio
-        for _ in range(int(seconds * 10)):
-            if await self.js(expr):
-                return
-            await asyncio.sleep(0.1)
-        raise AssertionError(f"{what} within {seconds} s")
-
-    async def relayouts(self):
-        """How many relayouts the explorer's plot has finished (counted from the
-        first call): plotly.js applies a wheel's zoom a moment after the wheel,
-        and an input sent before that is undone by it."""
-        return await self.js("""(function () {
-            var gd = document.getElementById('ex-plot');
-            if (window.__relayouts === undefined) {
-                window.__relayouts = 0;
-                gd.on('plotly_relayout', function () { window.__relayouts += 1; });
-            }
-            return window.__relayouts; })()""")
-
-    async def moved(self, before, what, relayouts):
-        """The plot's area (_PLOT_AREA) once its axes' ranges differ from ``before``'s
-        and a relayout has finished since ``relayouts`` were counted."""
-        was = json.dumps(before["x"] + before["y"])
-        await self.until(f"window.__relayouts > {relayouts} && (function (a, b) {{ return "
-                         f"a.x.concat(a.y).some(function (v, i) {{ return v !== b[i]; }}); "
-                         f"}})({_PLOT_AREA}, {was})", what, 20)
-        return await self.js(_PLOT_AREA)
-
-    async def mouse(self, kind, x, y, **kw):
-        await self.call("Input.dispatchMouseEvent", type=kind, x=x, y=y, **kw)
-
-    async def click(self, x, y, count=1):
-        for k in range(1, count + 1):
-            await self.mouse("mousePressed", x, y, button="left", buttons=1, clickCount=k)
-            await self.mouse("mouseReleased", x, y, button="left", buttons=0, clickCount=k)
-
-    async def drag(self, x0, y0, x1, y1, steps=8):
-        await self.mouse("mouseMoved", x0, y0)
-        await self.mouse("mousePressed", x0, y0, button="left", buttons=1, clickCount=1)
-        for k in range(1, steps + 1):
-            await self.mouse("mouseMoved", x0 + (x1 - x0) * k / steps,
-                             y0 + (y1 - y0) * k / steps, button="left", buttons=1)
-        await self.mouse("mouseReleased", x1, y1, button="left", buttons=0, clickCount=1)
-
-    async def centre(self, selector):
-        """Scroll ``selector`` into view; its centre in the viewport."""
-        r = await self.js(f"""(function () {{
-            var e = document.querySelector({selector!r});
-            e.scrollIntoView({{block: 'center'}});
-            var r = e.getBoundingClientRect();
-            return [r.left + r.width / 2, r.top + r.height / 2];
-        }})()""")
-        return r[0], r[1]
-
-
-# where a design of the explorer's plot is, in viewport pixels: trace ``t``'s point ``k``
-_POINT = """(function (t, k) {
-    var gd = document.getElementById('ex-plot'), fl = gd._fullLayout, r = gd.getBoundingClientRect();
-    var tr = gd._fullData[t], xa = fl.xaxis, ya = fl.yaxis;
-    return {x: r.left + xa._offset + xa.l2p(xa.d2l(tr.x[k])),
-            y: r.top + ya._offset + ya.l2p(ya.d2l(tr.y[k])), id: tr.text[k]};
-})"""
-# the front-1 design (trace 2) farthest, in pixels, from every other design drawn:
-# the one a hover must name (front 1 can be crowded)
-_ISOLATED = """(function () {
-    var gd = document.getElementById('ex-plot'), fl = gd._fullLayout, xa = fl.xaxis, ya = fl.yaxis;
-    function px(t, k) { return [xa.l2p(xa.d2l(t.x[k])), ya.l2p(ya.d2l(t.y[k]))]; }
-    var front = gd._fullData[2], best = -1, far = -1;
-    for (var k = 0; k < front.x.length; k++) {
-        var p = px(front, k), near = Infinity;
-        [0, 1, 2].forEach(function (t) {
-            var tr = gd._fullData[t];
-            for (var j = 0; j < tr.x.length; j++) {
-                if (tr.x[j] === null || tr.y[j] === null || (t === 2 && j === k)) continue;
-                var q = px(tr, j);
-                near = Math.min(near, Math.hypot(q[0] - p[0], q[1] - p[1]));
-            }
-        });
-        if (near > far) { far = near; best = k; }
-    }
-    return best;
-})()"""
-_PLOT_AREA = """(function () {
-    var gd = document.getElementById('ex-plot'), fl = gd._fullLayout, r = gd.getBoundingClientRect();
-    return {l: r.left + fl._size.l, t: r.top + fl._size.t, w: fl._size.w, h: fl._size.h,
-            x: fl.xaxis.range.slice(), y: fl.yaxis.range.slice()};
-})()"""
-
-
 def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
     """In a real headless Chromium (WebGL through SwiftShader), with real mouse and
-    keyboard input: hovering a front-1 point shows Plotly's label with its number; a
-    click shows that design's drawing, motion and reactions (drawn by plotly.js from
-    the embedded data) and the command that draws it, and so does the reference
-    design's button; a drag zooms, the wheel zooms,
-    a double-click zooms back out; a box selection fills the table and the parallel
-    coordinates; an objective's upper bound hides designs; a header click sorts a
-    table.  No script error, no console error, nothing fetched but the page."""
+    keyboard input: the explorer opens zoomed on fronts 1 to 3, the rest of the
+    designs dimmed behind; hovering a front-1 point shows Plotly's label with its
+    number; a click shows that design's drawing, motion and reactions (drawn by
+    plotly.js from the embedded data) and the command that draws it, a click on
+    each front-1 point at that first view opens that design, and the reference
+    design's button opens it; a drag zooms, the wheel zooms, a double-click comes
+    back to the first view and another to all the designs, where a click on a
+    front-1 point still opens a front-1 design; a box selection fills
+    the table and the parallel coordinates, front 1 drawn on top; an objective's
+    upper bound hides designs; a header click sorts a table.  No script error, no
+    console error, nothing fetched but the page."""
     import asyncio
     import shlex
 
@@ -568,27 +421,41 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
 
     exe = chromium()
     url = (cli_run["dir"] / "report.html").resolve().as_uri()
-    proc, ws_url = _devtools(exe, "about:blank", tmp_path)
+    proc, ws_url = devtools(exe, "about:blank", tmp_path)
+    data = explorer_data((cli_run["dir"] / "report.html").read_text())
     seen = {}
 
     async def drive():
         ws = await websocket_connect(ws_url, max_message_size=64 << 20)
-        page = _Page(ws)
-        for domain in ("Runtime", "Network", "Page", "Log"):
-            await page.call(f"{domain}.enable")
-        await page.call("Page.navigate", url=url)
-        # the page (several MB: plotly.js, pictures and an animation inline) is loaded
-        # and its explorer drawn; on a loaded 2-core machine this takes seconds
-        await page.until("document.readyState === 'complete' && "
-                         "document.body.dataset.explorer === 'ready'", "the explorer drew")
+        page = Page(ws)
+        await open_page(page, url, ("Runtime", "Network", "Page", "Log"))
         await page.centre("#ex-plot")
         count0 = int(await page.js("document.getElementById('ex-count').dataset.shown"))
         seen["count0"] = count0
 
-        # hover: a front-1 design's label (trace 2 is front 1)
-        n_front = await page.js("document.getElementById('ex-plot')._fullData[2].x.length")
+        # the first view: the ranges hold every design of fronts 1 to 3 (traces 2 and
+        # 3), and the feasible cloud (trace 1, dimmed) reaches beyond them
+        seen["view"] = await page.js("""(function () {
+            var gd = document.getElementById('ex-plot'), fl = gd._fullLayout;
+            function inside(t) {
+                var tr = gd._fullData[t], n = 0, xa = fl.xaxis, ya = fl.yaxis;
+                for (var k = 0; k < tr.x.length; k++) {
+                    var x = xa.d2l(tr.x[k]), y = ya.d2l(tr.y[k]);
+                    if (x >= xa.range[0] && x <= xa.range[1] && y >= ya.range[0] &&
+                        y <= ya.range[1]) { n += 1; }
+                }
+                return [n, tr.x.length];
+            }
+            return {near: inside(2), front: inside(3), cloud: inside(1),
+                    names: gd._fullData.map(function (t) { return t.name; }),
+                    dim: [gd._fullData[1].marker.opacity, gd._fullData[3].marker.opacity]};
+        })()""")
+
+        # hover: a front-1 design's label
+        n_front = await page.js(
+            f"document.getElementById('ex-plot')._fullData[{FRONT_TRACE}].x.length")
         assert n_front >= 1
-        p = await page.js(f"{_POINT}(2, {await page.js(_ISOLATED)})")
+        p = await page.js(f"{POINT}({FRONT_TRACE}, {await page.js(ISOLATED)})")
         await page.mouse("mouseMoved", p["x"] - 3, p["y"] - 3)
         await page.mouse("mouseMoved", p["x"], p["y"])
         await page.until("(document.querySelector('#ex-plot .hoverlayer') || {}).textContent"
@@ -613,6 +480,9 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
                     svg: panel.querySelectorAll('.ex-drawings .main-svg').length};
         })()""")
 
+        # at the first view, a click on each front-1 point opens that design
+        seen["front_clicks"] = await click_each_front_1_design(page)
+
         # the reference design, opened by its button: drawn too, named 'reference'
         x, y = await page.centre("#ex-show-reference")
         await page.click(x, y)
@@ -627,7 +497,7 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
         # zoom: a drag in the plot narrows both axes; the wheel narrows x again;
         # a double-click gives the whole range back
         await page.centre("#ex-plot")
-        a = await page.js(_PLOT_AREA)
+        a = await page.js(PLOT_AREA)
         n = await page.relayouts()
         await page.drag(a["l"] + 0.05 * a["w"], a["t"] + 0.05 * a["h"],
                         a["l"] + 0.6 * a["w"], a["t"] + 0.7 * a["h"])
@@ -640,12 +510,20 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
         c = await page.moved(b, "the wheel's zoom", n)
         n = await page.relayouts()
         await page.click(a["l"] + 0.5 * a["w"], a["t"] + 0.5 * a["h"], count=2)
-        seen["ranges"] = (a, b, c, await page.moved(c, "the double-click's whole range", n))
+        d = await page.moved(c, "the double-click's first view", n)
+        await asyncio.sleep(CLICK_PACE_S)      # a double click of its own, not a third click
+        n = await page.relayouts()
+        await page.click(a["l"] + 0.5 * a["w"], a["t"] + 0.5 * a["h"], count=2)
+        seen["ranges"] = (a, b, c, d, await page.moved(d, "the double-click's whole range", n))
+        # there, with front 1 squeezed among the rest, a click on a front-1 point still
+        # opens a front-1 design (the nearest of the best front; plotly.js alone gives
+        # the design of any front drawn there: half of them on this sweep)
+        seen["whole_clicks"] = await click_each_front_1_design(page, still=False)
 
         # box selection: the tool bar's box tool, then a box over the whole plot
         await page.mouse("mouseMoved", a["l"] + 0.5 * a["w"], a["t"] + 0.5 * a["h"])
         bx, by = await page.centre('#ex-plot .modebar-btn[data-val="select"]')
-        a = await page.js(_PLOT_AREA)
+        a = await page.js(PLOT_AREA)
         await page.mouse("mouseMoved", a["l"] + 0.5 * a["w"], a["t"] + 0.5 * a["h"])
         await page.click(bx, by)
         await page.until("document.getElementById('ex-plot')._fullLayout.dragmode === 'select'",
@@ -664,13 +542,15 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
                     dims: document.getElementById('ex-parcoords').data[0].dimensions.length,
                     note: document.getElementById('ex-sel-count').textContent};
         })()""")
+        seen["lines"] = await page.js("""(function () {
+            var line = document.getElementById('ex-parcoords')._fullData[0].line;
+            return {color: Array.prototype.slice.call(line.color), cmax: line.cmax,
+                    cmin: line.cmin, ticks: line.colorbar.ticktext};
+        })()""")
 
         # a filter: typing an upper bound of the second objective hides designs
-        values = await page.js("""(function () {
-            var d = JSON.parse(document.getElementById('explorer-data').textContent);
-            var c = d.columns.filter(function (c) { return c.key === d.objectives[1]; })[0];
-            return c.values.filter(function (v, k) { return v !== null && d.feasible[k]; });
-        })()""")
+        second = [c for c in data["columns"] if c["key"] == data["objectives"][1]][0]
+        values = second["values"][(data["feasible"] == 1) & ~np.isnan(second["values"])]
         bound = float(np.median(values))
         x, y = await page.centre("#ex-max-1")
         await page.click(x, y)
@@ -691,8 +571,9 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
             var lg = document.getElementById('ex-xlog');
             lg.click();
             setTimeout(function () {
-                done([Array.isArray(gd._fullData[1].marker.color), gd._fullLayout.xaxis.type,
-                      !!gd.querySelector('.colorbar')]);
+                var colour = gd._fullData[1].marker.color;
+                done([colour.length > 0 && typeof colour[0] === 'number',
+                      gd._fullLayout.xaxis.type, !!gd.querySelector('.colorbar')]);
             }, 300);
         })""")
 
@@ -727,15 +608,38 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
     head, command, svg = seen["reference"].split("|")
     assert head.startswith("Reference design") and int(svg) >= 3, seen["reference"]
     assert command.endswith(" --candidate reference"), command
-    a, b, c, d = seen["ranges"]
+    # the first view: zoomed on fronts 1 to 3, the rest of the cloud dimmed behind
+    view = seen["view"]
+    rank = [c for c in data["columns"] if c["key"] == "front"][0]["values"]
+    n_front1 = int((rank == 1).sum())
+    assert view["front"] == [n_front1, n_front1], view
+    assert view["near"] == [int(((rank >= 2) & (rank <= 3)).sum())] * 2, view
+    assert 0 < view["cloud"][0] < view["cloud"][1], view           # some of it beyond
+    assert view["names"][1:4] == ["feasible", "fronts 2\u20133", "front 1"], view
+    assert view["dim"][0] < 0.5 <= view["dim"][1], view
+    # every front-1 design opens by a click where it is drawn at the first view
+    clicked, opened = seen["front_clicks"]
+    assert len(clicked) == n_front1 and opened == clicked, seen["front_clicks"]
+    a, b, c, d, e = seen["ranges"]
     width = lambda r: abs(r[1] - r[0])                              # noqa: E731
     assert width(b["x"]) < 0.8 * width(a["x"]) and width(b["y"]) < 0.8 * width(a["y"]), (a, b)
     assert width(c["x"]) < width(b["x"]), (b, c)                    # the wheel zoomed in
     assert d["x"] == pytest.approx(a["x"]) and d["y"] == pytest.approx(a["y"]), (a, d)
+    assert e["x"][0] < a["x"][0] and e["x"][1] > a["x"][1], (a, e)  # then all the designs
+    assert e["y"][0] < a["y"][0] and e["y"][1] > a["y"][1], (a, e)
+    front_ids = {str(i) for i in data["ids"][rank == 1]}
+    clicked, opened = seen["whole_clicks"]
+    assert set(clicked) == front_ids and set(opened) <= front_ids, seen["whole_clicks"]
     sel = seen["selection"]
     assert not sel["hidden"] and sel["rows"] >= seen["count0"] - 1, sel
     assert sel["table"] == min(sel["rows"], 200) and sel["first"].isdigit(), sel
     assert sel["parcoords"] == 1 and sel["dims"] == 9 and "selected" in sel["note"], sel
+    # the lines' colours: one per kind of design, front 1's the highest, which
+    # plotly.js draws on top (the line's depth is its colour value)
+    lines = seen["lines"]
+    colours = np.array(lines["color"])
+    assert (colours == 3).sum() == n_front1 and colours.max() == 3 < lines["cmax"], lines["cmax"]
+    assert (colours == 2).sum() == view["near"][1] and lines["ticks"][-1] == "front 1", lines
     shown, expected = seen["filtered"]
     assert 0 < shown == expected < seen["count0"], (seen["filtered"], seen["count0"])
     assert seen["count_text"].startswith(f"{shown:,} of "), seen["count_text"]

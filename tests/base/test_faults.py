@@ -361,6 +361,9 @@ def test_names_and_units_never_become_markup_in_the_report(studies, tmp_path):
     assert main(["run", str(study), "-o", str(out), "--candidates", "600", "-q"]) == 0
     assert main(["report", str(out), "-o", str(tmp_path / "r.html"), "-q", "--drawings", "1"]) == 0
     page = (tmp_path / "r.html").read_text()
-    data = page.split('id="explorer-data">', 1)[1].split("</script>", 1)[0]
-    assert "<" not in data and ">" not in data and "\\u003cimg" in data
+    from pipeline.views.page import unpacked
+    from support.html_page import packed_element
+    data = packed_element(page, "explorer-data")        # packed: base64 holds no markup
+    text = unpacked(data).decode("utf-8")               # and the JSON inside escapes it
+    assert "<" not in data + text and ">" not in data + text and "\\u003cimg" in text
     assert "<img src=x" not in page

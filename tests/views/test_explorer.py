@@ -1,7 +1,8 @@
 """The report's explorer (views/explorer.py, explorer_designs.py, page.py): the
-data it gives plotly.js, compact and script-safe, and the rules it draws by
-(log axes, which designs carry their cycle, the command's path).  The browser
-side is tested in tests/analysis/test_analysis.py (headless Chromium)."""
+data it gives plotly.js, compact (a block of binary arrays, packed) and
+script-safe, and the rules it draws by (the fronts it opens on, log axes, which
+designs carry their cycle, the command's path).  The browser side is tested in
+tests/analysis/test_analysis.py (headless Chromium)."""
 
 import json
 import re
@@ -14,8 +15,10 @@ import numpy as np
 import pytest
 
 from pipeline.views import explorer as ex
-from pipeline.views.page import json_numbers, render, rounded, script_json
+from pipeline.views.page import (ArrayBlock, block_array, json_numbers, packed, render,
+                                 rounded, script_json, unpacked)
 from pipeline.results.storage import variables
+from support.html_page import explorer_data
 
 
 # ---------------------------------------------------------------- numbers and text
@@ -43,11 +46,52 @@ def test_json_inside_a_script_never_closes_it():
     assert json.loads(text)["unit"].startswith("</script>")
 
 
+def test_packed_text_round_trips_and_holds_no_markup():
+    text = "var a = '</script><b>' && 1 < 2;\u2028" * 50
+    page = str(packed(text))
+    assert re.fullmatch(r"[A-Za-z0-9+/=]+", page)       # nothing to close a <script> early
+    assert unpacked(page).decode("utf-8") == text
+    assert str(packed(text)) == page                     # the same page for the same text
+    assert len(page) < len(text) / 3                      # gzip at work on repeated text
+    assert unpacked(packed(b"\x00\xff" * 10)) == b"\x00\xff" * 10
+
+
+def test_an_array_block_holds_each_array_in_the_smallest_type():
+    block = ArrayBlock()
+    cases = [([0, 1, 2, 127], "i1"), ([0, 200], "u1"), ([-5, 300], "i2"), ([0, 60000], "u2"),
+             ([-1, 70000], "i4"), (np.array([True, False, True]), "i1"),
+             ([0.5, 1.0], "f4"), ([1.0, np.nan], "f4"), ([2.0, np.inf], "f4"), ([], "f4")]
+    specs = [block.add(v) for v, _ in cases]
+    assert [sp["dtype"] for sp in specs] == [t for _, t in cases]
+    raw = unpacked(block.packed())
+    assert len(raw) == block.size
+    ends = 0
+    for (values, _), sp in zip(cases, specs):
+        assert sp["offset"] % 8 == 0 and sp["offset"] >= ends     # aligned, no overlap
+        got = block_array(raw, sp)
+        ends = sp["offset"] + got.nbytes
+        want = np.asarray(values, float)
+        want = np.where(np.isfinite(want), want, np.nan)           # missing: NaN
+        np.testing.assert_array_equal(got.astype(float), want)
+
+
+def test_an_array_block_keeps_five_significant_digits():
+    x = np.random.default_rng(3).lognormal(0, 4, 5000) * np.where(
+        np.random.default_rng(4).random(5000) < 0.5, -1, 1)
+    block = ArrayBlock()
+    spec = block.add(x)
+    got = block_array(unpacked(block.packed()), spec).astype(float)
+    assert spec["dtype"] == "f4"
+    np.testing.assert_allclose(got, x, rtol=5e-5)
+    np.testing.assert_array_equal(got, rounded(x).astype(np.float32))   # the page's digits
+
+
 def test_templates_escape_the_study_text():
     col = SimpleNamespace(key="x", label="<b>L12</b>", unit="mm")
     html = render("explorer.html.j2", columns=[col], objectives=[], x="x", y="x", n_points=1,
-                  n_designs=0, feasible_note="", all_note="", data=script_json({}),
-                  has_knee=False, has_reference=True)
+                  n_designs=0, feasible_note="", all_note="", data=packed(script_json({})),
+                  arrays=ArrayBlock().packed(), zoom_fronts=3, has_knee=False,
+                  has_reference=True)
     assert "<b>L12</b>" not in html and "&lt;b&gt;L12&lt;/b&gt;" in html
 
 
@@ -117,14 +161,13 @@ def page(synthesis_sweep, tmp_path_factory):
     with open_results(p, "sweep") as f:
         ana = read_analysis(f)
     html = ex.explorer_html(p, data, ana, drawings=2)
-    text = html.split('id="explorer-data">', 1)[1].split("</script>", 1)[0]
-    return p, data, ana, html, json.loads(text)
+    return p, data, ana, html, explorer_data(html)
 
 
 def test_every_feasible_design_and_column_is_there(page):
     p, data, ana, html, d = page
     n_feas = int((data.feasible & np.isfinite(data.F).all(axis=1)).sum())
-    assert sum(d["feasible"]) == d["counts"]["feasible_shown"] == n_feas
+    assert int(d["feasible"].sum()) == d["counts"]["feasible_shown"] == n_feas
     assert len(d["ids"]) == len(d["feasible"]) == n_feas + d["counts"]["infeasible_shown"]
     with h5py.File(p, "r") as f:
         metrics = set(variables(f["metrics"]))      # the metrics, not the coordinate
@@ -133,18 +176,33 @@ def test_every_feasible_design_and_column_is_there(page):
     assert metrics | {"front", "cv"} | set(data.names) == set(cols)
     assert [c["key"] for c in d["columns"][:2]] == list(data.objectives)
     assert d["variables"] == list(data.names)
-    ids = np.array(d["ids"])
-    np.testing.assert_allclose(np.array(cols["cv"]["values"], float), cv[ids], rtol=5e-5,
-                               atol=0)
-    dwell = np.array(cols["dwell_error"]["values"], float)
-    np.testing.assert_allclose(dwell[np.array(d["feasible"], bool)],
-                               data.F[ids[np.array(d["feasible"], bool)], 0], rtol=5e-5)
+    ids = d["ids"]
+    assert ids.dtype.kind == "i" and d["feasible"].dtype.kind in "iu"
+    np.testing.assert_allclose(cols["cv"]["values"], cv[ids], rtol=5e-5, atol=0)
+    dwell = cols["dwell_error"]["values"]
+    feasible = d["feasible"].astype(bool)
+    np.testing.assert_allclose(dwell[feasible], data.F[ids[feasible], 0], rtol=5e-5)
+    assert np.isnan(dwell[~feasible]).sum() == np.isnan(data.F[ids[~feasible], 0]).sum()
     assert sorted(ids[d["front1"]]) == sorted(data.id(i) for i in ana.front1)
     assert ids[d["knee"]] == data.id(ana.knee)
-    assert cols["front"]["values"] == [int(ana.rank[i]) for i in ids]
+    np.testing.assert_array_equal(cols["front"]["values"], ana.rank[ids])
     # the select inputs offer every column, the filters every objective
     assert html.count('<option value="dwell_error"') == 3
     assert 'id="ex-max-1"' in html and 'data-key="peak_reaction"' in html
+
+
+def test_the_explorer_opens_on_fronts_1_to_3_with_their_log_axes(page):
+    """The page opens zoomed on fronts 1 to ZOOM_FRONTS (explorer.js takes the
+    axis ranges from them), so a column's log axis is decided by them."""
+    p, data, ana, html, d = page
+    assert d["zoom_fronts"] == ex.ZOOM_FRONTS == 3
+    rank = {c["key"]: c for c in d["columns"]}["front"]["values"]
+    near = ex.zoomed_rows(rank)
+    np.testing.assert_array_equal(near, (rank >= 1) & (rank <= 3))
+    assert 0 < near.sum() < (rank >= 1).sum()
+    for c in d["columns"]:
+        assert c["log"] == ex.log_axis(c["values"][near]), c["key"]
+    assert "opened zoomed on fronts 1 to 3" in " ".join(html.split())
 
 
 def test_front_designs_carry_their_cycle_and_command(page):
@@ -174,7 +232,7 @@ def test_front_designs_carry_their_cycle_and_command(page):
 
 def test_no_drawings_embeds_no_cycle(page):
     p, data, ana, _, _ = page
-    d, _ = ex.explorer_payload(p, data, ana, drawings=0)
+    d, _, _ = ex.explorer_payload(p, data, ana, drawings=0)
     assert d["designs"] == {}
     text = str(script_json(d))
     assert not re.search(r"[\[,:]-0[,\]}]", text) and "NaN" not in text

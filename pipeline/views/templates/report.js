@@ -2,9 +2,11 @@
    (in data-* attributes of <body>) whether every picture decoded, so that a
    headless browser can check the page.  The explorer has its own (explorer.js). */
 (function () {
-  window.addEventListener('error', function () {
+  function counted() {
     document.body.dataset.jsErrors = String(Number(document.body.dataset.jsErrors || 0) + 1);
-  });
+  }
+  window.addEventListener('error', counted);
+  window.addEventListener('unhandledrejection', counted);    // the scripts that wait on a promise
   // sortable tables: a click on a header sorts by that column (again: reversed)
   function cellValue(td) {
     var t = td.textContent.trim(), v = parseFloat(t);
