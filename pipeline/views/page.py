@@ -105,7 +105,8 @@ def unpacked(text) -> bytes:
 
 # the typed arrays' short names (plotly.js's, in its {dtype, bdata} format), the
 # bytes little-endian as in every browser
-ARRAY_TYPES = {"i1": "i1", "u1": "u1", "i2": "<i2", "u2": "<u2", "i4": "<i4", "f4": "<f4"}
+ARRAY_TYPES = {"i1": "i1", "u1": "u1", "i2": "<i2", "u2": "<u2", "i4": "<i4", "f4": "<f4",
+               "f8": "<f8"}
 
 
 class ArrayBlock:
@@ -114,10 +115,11 @@ class ArrayBlock:
     them).  ``add`` appends an array and gives its place, ``{"dtype", "offset",
     "length"}``, where the script views the inflated block through a typed
     array of that type; ``packed`` is the block for the page.  Whole numbers go
-    as the smallest integer type that holds them; anything else to ``digits``
-    significant digits (``rounded``: gzip packs these much tighter than the
-    full float) as float32, NaN where a value is missing.  Each array starts at
-    a multiple of 8 bytes, as a typed array's view needs."""
+    as the smallest integer type that holds them (float64 beyond int32: exact to
+    2^53, as JavaScript's numbers); anything else to ``digits`` significant
+    digits (``rounded``: gzip packs these much tighter than the full float) as
+    float32, NaN where a value is missing.  Each array starts at a multiple of
+    8 bytes, as a typed array's view needs."""
 
     def __init__(self, digits=DIGITS):
         self.digits, self.parts, self.size = digits, [], 0
@@ -129,7 +131,7 @@ class ArrayBlock:
             lo, hi = x.min(), x.max()
             dtype = next((k for k in ("i1", "u1", "i2", "u2", "i4")
                           if np.iinfo(ARRAY_TYPES[k]).min <= lo
-                          and hi <= np.iinfo(ARRAY_TYPES[k]).max), "f4")
+                          and hi <= np.iinfo(ARRAY_TYPES[k]).max), "f8")
         y = x if dtype != "f4" else np.where(np.isfinite(x), rounded(x, self.digits), np.nan)
         data = y.astype(ARRAY_TYPES[dtype]).tobytes()
         spec = {"dtype": dtype, "offset": self.size, "length": int(x.size)}

@@ -59,7 +59,7 @@ def test_packed_text_round_trips_and_holds_no_markup():
 def test_an_array_block_holds_each_array_in_the_smallest_type():
     block = ArrayBlock()
     cases = [([0, 1, 2, 127], "i1"), ([0, 200], "u1"), ([-5, 300], "i2"), ([0, 60000], "u2"),
-             ([-1, 70000], "i4"), (np.array([True, False, True]), "i1"),
+             ([-1, 70000], "i4"), ([3, 2 ** 40 + 1], "f8"), (np.array([True, False]), "i1"),
              ([0.5, 1.0], "f4"), ([1.0, np.nan], "f4"), ([2.0, np.inf], "f4"), ([], "f4")]
     specs = [block.add(v) for v, _ in cases]
     assert [sp["dtype"] for sp in specs] == [t for _, t in cases]

@@ -23,8 +23,8 @@
     return explorer(D);
   });
 
-  var ARRAYS = {f4: Float32Array, i1: Int8Array, u1: Uint8Array, i2: Int16Array,
-                u2: Uint16Array, i4: Int32Array};
+  var ARRAYS = {f4: Float32Array, f8: Float64Array, i1: Int8Array, u1: Uint8Array,
+                i2: Int16Array, u2: Uint16Array, i4: Int32Array};
   function missing(v) { return v === null || v === undefined || v !== v; }   // NaN: no value
 
   function explorer(D) {
@@ -197,8 +197,9 @@
       return Plotly.react(plot, data, layout, CONFIG);
     }
     // the design a click opens: of the drawn designs within PICK_PX pixels of it, the
-    // nearest of the best front (plotly.js alone gives the nearest of any front, often
-    // a worse neighbour's); none that close: the one plotly.js gives
+    // nearest of the best front (plotly.js alone gives any design whose marker covers
+    // the click, often a worse neighbour's); none that close: the one plotly.js gives.
+    // Pixels by plotly.js's own axis conversions (d2l, l2p, _offset: no public call)
     function pick(ev) {
       var e = ev && ev.event, fl = plot._fullLayout, best, bestRank = Infinity, bestD = PICK_PX;
       if (e && fl && fl.xaxis && fl.yaxis) {
