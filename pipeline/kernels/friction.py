@@ -65,6 +65,48 @@ def relative_speeds(pos, d1, d2, body_com, body_turn, joint_bodies, slide_bodies
 
 
 @njit(**JIT)
+def relative_speed_slopes(pos, d1, d2, body_com, body_turn, joint_bodies, slide_bodies,
+                          slide_dir, slide_angle, out):
+    """The derivatives by the crank angle of ``relative_speeds``' analogs (from
+    the second analogs): out[j] (rad/rad^2) at revolute joint j, out[nj + k]
+    (mm/rad^2) of slide k (the guide's turn and the direction's included)."""
+    nj = joint_bodies.shape[0]
+    for j in range(nj):
+        w = 0.0
+        for side in range(2):
+            b = joint_bodies[j, side]
+            if b >= 0:
+                _, wb2 = body_motion(pos, d1, d2, body_turn[b, 0], body_turn[b, 1], 1.0, 0.0)
+                w += wb2 if side == 1 else -wb2
+        out[j] = w
+    for k in range(slide_bodies.shape[0]):
+        s = body_com[slide_bodies[k, 1]]
+        ax = d1[s, 0]                   # a = S' - G' - w_G perp(S - G): the relative velocity
+        ay = d1[s, 1]
+        bx = d2[s, 0]                   # a'
+        by = d2[s, 1]
+        g = slide_bodies[k, 0]
+        if g >= 0:
+            c = body_com[g]
+            wg, wg2 = body_motion(pos, d1, d2, body_turn[g, 0], body_turn[g, 1], 1.0, 0.0)
+            rx = pos[s, 0] - pos[c, 0]
+            ry = pos[s, 1] - pos[c, 1]
+            vx = d1[s, 0] - d1[c, 0]
+            vy = d1[s, 1] - d1[c, 1]
+            ax = vx + wg * ry
+            ay = vy - wg * rx
+            bx = d2[s, 0] - d2[c, 0] + wg2 * ry + wg * vy
+            by = d2[s, 1] - d2[c, 1] - wg2 * rx - wg * vx
+        th = slide_direction(pos, slide_dir, slide_angle, k)
+        turn = 0.0                      # the direction's own angle analog
+        if slide_dir[k, 0] >= 0:
+            turn, _ = body_motion(pos, d1, d2, slide_dir[k, 0], slide_dir[k, 1], 1.0, 0.0)
+        ux = math.cos(th)
+        uy = math.sin(th)
+        out[nj + k] = bx * ux + by * uy + turn * (ay * ux - ax * uy)
+
+
+@njit(**JIT)
 def _sense(analog, omega1):
     """The direction of a relative motion: +1, -1, or 0 at rest."""
     v = analog * omega1
@@ -192,7 +234,7 @@ def friction_forces(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn
                     joint_point, joint_bodies, slide_bodies, slide_dir, slide_angle, crank_body,
                     load_body, load_point, loads_k, f_rev, radius, f_slide, block, rel_tol,
                     max_iter, a0, b0, jac, res, x, sense, loads_out, r_out, slide_out,
-                    friction_out, speed_out, found):
+                    friction_out, speed_out, found, keep_sense):
     """Reactions with friction at one position (``kernels.forces.kinetostatics``'s
     r_out, slide_out and loads_out), per joint and slide the friction load
     (``add_friction``) and the relative speed analog (``relative_speeds``).
@@ -203,7 +245,10 @@ def friction_forces(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn
     within it too).  NaN with OK where the frictionless system has no
     solution (NaN kinematics or a singular system: as without friction);
     NaN with FRICTION_LOCK where the friction locks or does not converge.
-    Work arrays: a0, jac (n, n), b0, res, x (n), sense (joints + slides)."""
+    Work arrays: a0, jac (n, n), b0, res, x (n), sense (joints + slides):
+    the direction of each friction load, from the relative motion (the sign
+    of its speed analog times omega1), or as given (``keep_sense``: a crank
+    motion's regime, ``kernels.dynamics``)."""
     nj = joint_point.shape[0]
     ns = slide_bodies.shape[0]
     ne = nj + ns
@@ -220,7 +265,8 @@ def friction_forces(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn
                     slide_angle, speed_out)
     for e in range(ne):
         friction_out[e] = math.nan
-        sense[e] = _sense(speed_out[e], omega1)
+        if not keep_sense:
+            sense[e] = _sense(speed_out[e], omega1)
     col_m = assemble_forces(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn,
                             body_mass_off, joint_point, joint_bodies, slide_bodies, slide_dir,
                             slide_angle, crank_body, load_body, load_point, loads_k, a0, b0,
@@ -336,7 +382,7 @@ def friction_revolution(phis, pos, d1, d2, omega1, eps1, gravity, par, body_com,
                         body_mass_off, joint_point, joint_bodies, slide_bodies, slide_dir,
                         slide_angle, crank_body, load_body, load_point, loads[k], f_rev, radius,
                         f_slide, block, rel_tol, max_iter, a0, b0, jac, res, x, sense,
-                        loads_out, r_out, slide_out, friction_out, speed_out, found)
+                        loads_out, r_out, slide_out, friction_out, speed_out, found, False)
         if found[0] != OK:
             out[0] = found[0]
             out[7] = k

@@ -310,7 +310,11 @@ def _run_once(plan, mechanism, case, method, tols, file, dt, tol) -> CaseResult:
     n_steps = (n_samples - 1) * n_sub      # the times of every record, as rk4 writes them
     out[0][:] = np.arange(n_samples) * n_sub * dt
     tail[0][:] = np.arange(n_steps - n_tail + 1, n_steps + 1) * dt
-    if method == "rk4":
+    if method == "rk4" and mechanism.friction is not None:
+        status, crossing = _rk4_friction(plan, mechanism, tols, drive.args(), case, dt, n_sub,
+                                         out, tail)
+        t_cross = crossing * dt if crossing >= 0 else math.nan
+    elif method == "rk4":
         status, crossing = kernels_for(plan).rk4(
             *_plan_args(plan, tols), *drive.args(), float(case.damping), float(case.phi_start),
             float(case.omega_start), float(dt), n_sub, float(lim.MAX_OMEGA), *out, *tail)
@@ -320,6 +324,20 @@ def _run_once(plan, mechanism, case, method, tols, file, dt, tol) -> CaseResult:
     res = CaseResult(case.name, *out, int(status), method, case, *tail, dt=dt)
     res.t_cross = t_cross
     return res
+
+
+def _rk4_friction(plan, mechanism, tols, drive_args, case, dt, n_sub, out, tail):
+    """RK4 with the mechanism's friction (``kernels.dynamics_friction``): on the
+    generated module's continuation, as its ``rk4``."""
+    from ..kernels import dynamics_friction as df
+    mod = kernels_for(plan)
+    par, K, tols = _plan_args(plan, tols)
+    df.compile_friction_integrator()
+    return df.rk4_friction(mod.advance_first_class, mod.start_first_class, K, mod.SIZES,
+                           mod.MASSES, par, tols, *drive_args, float(case.damping),
+                           float(case.phi_start), float(case.omega_start), float(dt), n_sub,
+                           float(lim.MAX_OMEGA), *out, *tail,
+                           df.friction_args(plan, mechanism.friction))
 
 
 @dataclass

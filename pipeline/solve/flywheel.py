@@ -16,7 +16,10 @@ by Brent's method on K(0).  omega_mean is the time mean (2 pi over the period,
 as ``CaseResult.steady`` measures it).  J_f is then found by Brent's method on
 delta(J_f) = target: delta falls as J_f grows.  Needs M1 and the loads to be
 constants or functions of phi (a steady rotation has no clock), and a net
-positive work per revolution in the direction of rotation.
+positive work per revolution in the direction of rotation.  With
+[mechanism.friction] the drive is less the work the joints' friction takes per
+radian at the study's constant crank speed (``friction_work``: the total loss
+over |omega1|).
 
 No flywheel is sized (``flywheel_of``: a ``Flywheel`` whose ``refused`` says
 why, in one line naming the study file and its field) on a case whose motion
@@ -126,6 +129,10 @@ class _Orbit:
         self.J = J[order]
         self.drive = self.s * drive[order]
         self.b = case.damping
+        self.friction = None
+        if mech.friction is not None:   # less what the joints lose at constant speed
+            self.friction = friction_work(plan, mech, self.phi, self.s)
+            self.drive = self.drive - self.friction
 
     def run(self, K0, J_add):
         """K at the nodes over one revolution from K0."""
@@ -196,6 +203,29 @@ class _Orbit:
         mean = 2.0 * math.pi / period
         return (float((w.max() - w.min()) / mean), self.s * float(w.min()),
                 self.s * float(w.max()), self.s * float(mean))
+
+
+def friction_work(plan, mech, phi, s):
+    """The work the joints' friction takes per radian of the crank [N·m] at the
+    crank angles ``phi``, at the constant speed s |omega1| (the study's crank
+    speed in the direction of rotation s; eps1 = 0): the total loss [W] over
+    |omega1| (``solve.friction``'s kinetostatics)."""
+    from .friction import solve_positions
+    from .reactions import sample_loads
+    from .scene import solve_curves
+    omega = s * abs(mech.crank.omega1)
+    c = solve_curves(plan, phi, kc.ACCELERATIONS)
+    if c.overall != kc.OK:
+        raise NoSteadyRotation("the mechanism cannot be assembled over the whole revolution")
+    _, _, _, _, fric, speed, found = solve_positions(plan, mech.friction, c.pos, c.d1, c.d2,
+                                                     omega, 0.0, sample_loads(mech, phi))
+    if (found[:, 0] != kc.OK).any():
+        k = int(np.flatnonzero(found[:, 0] != kc.OK)[0])
+        raise NoSteadyRotation(f"the friction locks at phi1 = {math.degrees(phi[k]):.6g} deg "
+                               "at constant speed")
+    nj = len(plan.joint_names)
+    unit = np.r_[np.ones(nj), np.full(fric.shape[1] - nj, 1e-3)]     # mm/rad -> m/rad
+    return (-fric * speed * unit).sum(axis=1) * math.copysign(1.0, omega)
 
 
 def size_flywheel(plan, mech, case, target) -> Flywheel:

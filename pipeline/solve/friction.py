@@ -155,7 +155,7 @@ def solve_positions(plan, spec, pos, d1, d2, omega1, eps1, loads):
                         com, turn, mass_off, jp, jb, sb, sd, sa, crank_body, lb, lp, loads[k],
                         float(spec.revolute), radius, float(spec.slide), block, REL_TOL,
                         MAX_ITER, a0, b0, jac, res, x, sense, body_loads[k], R[k], S[k],
-                        fric[k], speed[k], found[k])
+                        fric[k], speed[k], found[k], False)
     return R, S, found[:, 1].copy(), body_loads, fric, speed, found
 
 

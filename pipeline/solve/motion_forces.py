@@ -95,6 +95,9 @@ def along(mechanism, plan, case, record, t, phi1, omega1, eps1, tols=None) -> Mo
     t, phi1, omega1, eps1 = (np.ascontiguousarray(a, float) for a in (t, phi1, omega1, eps1))
     curves = solve_curves(plan, phi1, kc.ACCELERATIONS, tols)
     forces = scene_forces(mechanism, plan, curves, omega1, eps1, t)
+    if mechanism.friction is not None:      # with the friction at each step's omega1, eps1
+        from .friction import scene_friction
+        forces = scene_friction(mechanism, plan, curves, forces, None, (omega1, eps1, t))
     return MotionForces(case, record, t, phi1, omega1, eps1, curves.status, forces)
 
 

@@ -89,8 +89,9 @@ def _per_joint(sec: Section, key, default, joints, points):
 
 
 # what computes friction today: the paths that do not refuse a study with [mechanism.friction]
-WITH_FRICTION = ("friction is computed for scene studies (study.kind = \"scene\": `pipeline "
-                 "run` gives the losses, M_bal with friction and the bearings' p and p*v)")
+WITH_FRICTION = ("friction is computed for scenes (the losses, M_bal with friction, the "
+                 "bearings' p and p*v, the crank dynamics and flywheel), sweeps and searches "
+                 "(friction_loss, peak_pv)")
 
 
 def refuse_friction(study, what, source=None, hint="remove the section for a frictionless run"):

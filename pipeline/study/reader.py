@@ -121,10 +121,6 @@ def parse_study(text: str, path="<study>", cad_reports=None) -> Study:
     mech = replace(mech, links=output.links)
     dynamics = None
     if root.has("dynamics"):
-        if mech.friction is not None:
-            raise root.error("dynamics", "the crank's motion with [mechanism.friction] is not "
-                                         "computed yet (its friction moment is implicit in "
-                                         "each step's omega1 and eps1): remove one of them")
         dynamics = parse_dynamics(root.table("dynamics"), mech)
     sweep = None
     if kind == "sweep":

@@ -86,14 +86,14 @@ def test_the_scene_reports_and_stores_the_flywheel(tmp_path, capsys):
                  "--no-pictures"]) == 0
     text = capsys.readouterr().out
     line = [ln for ln in text.splitlines() if "runup flywheel" in ln]
-    assert len(line) == 1 and "kg m^2 added on the crank shaft" in line[0]
+    assert len(line) == 1 and "kg·m² added on the crank shaft" in line[0]
     # every motion's summary prints its error estimate (issue 58)
     for case in ("runup", "free"):
         line = [ln for ln in text.splitlines() if f"{case} error_phi1:" in ln]
         assert len(line) == 1 and "rad estimated (accepted: 8e-08 rad" in line[0], text
     with h5py.File(out, "r") as f:
         g = f["flywheel"]
-        assert g["J_add"].attrs["units"] == "kg*m^2" and g["J_add"][()] > 0
+        assert g["J_add"].attrs["units"] == "kg·m²" and g["J_add"][()] > 0
         assert g["delta"][()] == pytest.approx(0.02, rel=1e-9)
         assert g["omega_mean"].attrs["units"] == "rad/s" and g.attrs["body"] == "crank"
 
