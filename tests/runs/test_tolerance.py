@@ -67,7 +67,7 @@ def test_large_tolerances_show_where_the_linear_picture_fails():
 CASES = [
     (fourbar_study, mpt.fourbar_angles, mpt.fourbar_dims, "Attach[2].length",
      ["RRR[1].L_AB", "P4.x", "crank.phiM0", "Attach[2].length"]),
-    (mech_b_study, mpt.mech_b_angles, mpt.mech_b_dims, "Attach[2].length",
+    (mech_b_study, mpt.mech_b_angles, mpt.mech_b_dims, "output arm.length",
      ["triad.L23", "P6.x", "crank.phiM0"]),
 ]
 
@@ -180,7 +180,7 @@ def test_study_tolerances_and_iso_defaults():
     assert dims["triad.L57"].tolerance == 0.5             # 120-400 mm
     assert dims["P1.x"].tolerance == 0.0                  # the datum
     assert dims["crank.phiM0"].tolerance == 0.0           # timed at assembly
-    assert dims["Attach[2].angle"].tolerance == pytest.approx(10 / 60)   # leg 136.8 mm
+    assert dims["output arm.angle"].tolerance == pytest.approx(10 / 60)  # leg 136.8 mm
     # a candidate's own sizes choose its classes
     from pipeline.study.sweep_spec import apply_design
     x = np.array([v.high for v in study.sweep.variables])

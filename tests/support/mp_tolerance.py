@@ -33,7 +33,7 @@ def mech_b_dims():
     return {"P1.x": 0, "P1.y": 0, "P6.x": 195, "P6.y": 226, "P7.x": 46, "P7.y": 533,
             "crank.length": 50, "crank.phiM0": 173, "triad.L23": 272.5, "triad.L34": 81,
             "triad.L45": 104.5, "triad.L35": 174, "triad.L46": 104.5, "triad.L57": 261,
-            "Attach[2].angle": -25, "Attach[2].length": 136.8}
+            "output arm.angle": -25, "output arm.length": 136.8}
 
 
 def _rad(deg):

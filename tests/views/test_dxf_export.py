@@ -24,11 +24,11 @@ LENGTHS = {
     "ov7_class3": {("P1", "P2"): "crank.length", ("P2", "P3"): "triad.L23",
                    ("P3", "P4"): "triad.L34", ("P4", "P5"): "triad.L45",
                    ("P5", "P3"): "triad.L35", ("P6", "P4"): "triad.L46",
-                   ("P7", "P5"): "triad.L57", ("P7", "P8"): "Attach[2].length"},
+                   ("P7", "P5"): "triad.L57", ("P7", "P8"): "output arm.length"},
     "ov7_base": {("P1", "P2"): "crank.length", ("P2", "P3"): "RRR[1].L_AB",
                  ("P4", "P3"): "RRR[1].L_CB", ("P3", "P5"): "RRR[2].L_AB",
                  ("P6", "P5"): "RRR[2].L_CB", ("P5", "P7"): "RRR[3].L_AB",
-                 ("P8", "P7"): "RRR[3].L_CB", ("P8", "P9"): "Attach[4].length"},
+                 ("P8", "P7"): "RRR[3].L_CB", ("P8", "P9"): "output arm.length"},
 }
 LENGTHS["ov7_synthesis"] = LENGTHS["ov7_class3"]     # the sweep of mechanism B's dimensions
 
