@@ -259,7 +259,7 @@ def sweep_case(name, pb, pars, context=None):
     from interpreter import sweep as isw
     from pipeline.kernels import config as kc
     from pipeline.kernels import sweep as ks
-    from pipeline.runs.sweep import COLUMN
+    from pipeline.study.objectives import COLUMN
 
     plan, s = pb.plan, pb.spec
     n = pars.shape[0]
@@ -357,7 +357,7 @@ def careful_note(case, pb, pars, sr, mr, diffs):
 
     from pipeline.kernels import config as kc
     from pipeline.kernels import sweep as ks
-    from pipeline.runs.sweep import COLUMN
+    from pipeline.study.objectives import COLUMN
     if not hasattr(ks, "SET_MARGIN_SAFE"):
         return
     over = np.unique(np.concatenate(
@@ -460,7 +460,8 @@ def stress_case(synthesis, n=STRESS_N):
 
 def montecarlo_case(synthesis, n):
     from pipeline.runs.sweep import build_problem
-    from pipeline.study.sweep_spec import draw_candidates, parameter_rows
+    from pipeline.study.sweep_spec import parameter_rows
+    from pipeline.study.sampling import draw_candidates
     spec = synthesis.sweep.with_candidates(n)
     pb = build_problem(synthesis, spec)
     x = np.concatenate([draw_candidates(spec, c) for c in range(spec.n_chunks)])[:n]

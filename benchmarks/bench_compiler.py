@@ -154,7 +154,8 @@ def measure(quick=False, n=None, interpreter=True, with_stage_a=True):
 
     from pipeline.compiler.parallel import default_jobs
     from pipeline.runs.sweep import build_problem
-    from pipeline.study.sweep_spec import draw_candidates, draw_unit, parameter_rows
+    from pipeline.study.sweep_spec import parameter_rows
+    from pipeline.study.sampling import draw_candidates, draw_unit
     cores = default_jobs()
     numba.set_num_threads(cores)
     n = n or (4096 if quick else 32768)
@@ -487,7 +488,8 @@ def other_sweeps(names, n, reference_rate, cores, rep):
     from pipeline.kernels import sweep as ks
     from pipeline.runs.sweep import build_problem
     from pipeline.study.reader import load_study
-    from pipeline.study.sweep_spec import draw_candidates, parameter_rows
+    from pipeline.study.sweep_spec import parameter_rows
+    from pipeline.study.sampling import draw_candidates
     ref = load_study(STUDIES / "ov7_synthesis.toml").sweep.positions
     lines = ["| sweep | candidates/s, all cores | positions | per candidate-position / "
              "ov7_synthesis | lanes | force stage for |", "|---|---|---|---|---|---|"]

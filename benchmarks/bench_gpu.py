@@ -33,7 +33,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks.common import STUDIES, hardware  # noqa: E402
 from pipeline.study.reader import load_study  # noqa: E402
-from pipeline.runs.sweep import build_problem, draw_checked, parameter_rows, run_sweep  # noqa: E402
+from pipeline.runs.sweep import build_problem, run_sweep  # noqa: E402
+from pipeline.study.sampling import draw_checked  # noqa: E402
+from pipeline.study.sweep_spec import parameter_rows  # noqa: E402
 
 
 def main(argv=None):
@@ -49,12 +51,13 @@ def main(argv=None):
                     help="that it runs, at the simulator's tiny sizes (the test suite runs it "
                          "under NUMBA_ENABLE_CUDASIM=1)")
     a = ap.parse_args(argv)
+    from pipeline.compiler.cuda_device import SIMULATOR
     from pipeline.runs import gpu
     p = gpu.probe()
     if p["missing"]:
         print(f"no usable GPU: missing {p['missing']}")
         return 0
-    if gpu.SIMULATOR or a.smoke:
+    if SIMULATOR or a.smoke:
         a.sizes, a.cpu_max, a.kernel_rows, a.repeat, a.chunk_size = [200], 200, 64, 1, 100
     print(hardware())
     print(f"device: {gpu.describe(p)}")

@@ -70,7 +70,7 @@ def study_with(path: Path, folder: Path, name: str, **changes):
 
 def front_numbers(path, n, scale):
     """(hypervolume, least feasible peak reaction) of the first n candidates."""
-    from pipeline.runs.search import hypervolume
+    from pipeline.runs.search_problem import hypervolume
     with h5py.File(path, "r") as f:
         F = np.stack([f[f"metrics/{o}"][:n] for o in f.attrs["objectives"]], axis=1)
         feas = f["candidates/feasible"][:n]
@@ -152,7 +152,8 @@ def main(argv=None):
     import matplotlib.pyplot as plt
 
     from pipeline.base.files import save_figure, write_text
-    from pipeline.runs.search import NORMALISATION, hv_scale
+    from pipeline.study.search_spec import NORMALISATION
+    from pipeline.runs.search_problem import hv_scale
     from pipeline.runs.sweep import build_problem
 
     out = Path(a.out)

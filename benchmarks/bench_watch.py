@@ -35,7 +35,8 @@ from pipeline.kernels import config as kc  # noqa: E402
 from pipeline.kernels import sweep as ks  # noqa: E402
 from pipeline.study.reader import load_study  # noqa: E402
 from pipeline.runs.sweep import build_problem  # noqa: E402
-from pipeline.study.sweep_spec import draw_checked, parameter_rows  # noqa: E402
+from pipeline.study.sweep_spec import parameter_rows  # noqa: E402
+from pipeline.study.sampling import draw_checked  # noqa: E402
 
 
 def candidates(pb, n):

@@ -43,7 +43,7 @@ def solve_scene(study):
     its dynamics cases with the reduced dynamics.  Draw it with
     ``pipeline.views.plots.scene_figure(result)``, ``forces_figure``, and
     ``pipeline.views.dynamics_plots.dynamics_figure(case)``."""
-    from .runner import solve_scene as solve
+    from .solve.scene_study import solve_scene as solve
     if not isinstance(study, Study):
         study = _load_study(study)
     if study.kind != "scene":
@@ -86,7 +86,8 @@ def compare(*results, candidate=None):
 def open(path):  # noqa: A001 - pipeline.open, as the users asked for it
     """A results file as tables: a sweep's candidates as one DataFrame
     (``candidates``), a scene's tables as {name: DataFrame} (``scene_tables``)."""
-    from .results.storage import ResultsError, attr_text, open_results
+    from .results.storage import attr_text, open_results
+    from .base.errors import ResultsError
     with open_results(path) as f:
         kind = attr_text(f.attrs["kind"])
     try:

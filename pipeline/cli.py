@@ -14,8 +14,7 @@ EXIT_USER_ERROR = 2
 
 def _user_errors():
     from .base.expressions import ExpressionError
-    from .results.storage import ResultsError
-    from .study.reader import StudyError
+    from .base.errors import ResultsError, StudyError
     return (StudyError, ResultsError, ExpressionError, FileNotFoundError, ValueError)
 
 
@@ -142,7 +141,7 @@ def cmd_show(a):
     if a.animate:
         info = animate(a.results, a.candidate, a.output, frames=a.frames)
     elif results_kind(a.results) == "scene":
-        from .results.storage import ResultsError
+        from .base.errors import ResultsError
         raise ResultsError(a.results, "is a scene result, this command needs a sweep result "
                                       "(`pipeline run` wrote the scene's pictures; `pipeline "
                                       f"show {a.results} --animate` animates it)")

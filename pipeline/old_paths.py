@@ -7,6 +7,10 @@ until the next release: ``import pipeline.sweep`` gives the module
 the old path acts on the real module), ``from pipeline.forces import
 scene_forces`` the function of ``pipeline.solve.reactions``, and
 ``python -m pipeline.metrics`` runs ``pipeline.model.metric_catalogue``.
+Each old path, the first time a process imports it, warns (``DeprecationWarning``,
+naming the new path, attributed to the importing line); so does a name taken
+from the re-exports of ``pipeline.model``, ``pipeline.study`` and
+``pipeline.analysis`` (their ``__init__``).
 
 ``MOVED`` below is the whole list.  Nothing inside ``pipeline/`` imports an old
 path (tests/test_architecture.py checks it); the next release deletes this
@@ -21,6 +25,7 @@ import importlib
 import importlib.abc
 import importlib.util
 import sys
+import warnings
 
 # packages that took an old module's name: their __init__ re-exports its names
 REEXPORTED = ("model", "study", "analysis")
@@ -86,12 +91,21 @@ def new_name(name: str) -> str | None:
     return None
 
 
+def deprecated(old: str, new: str) -> str:
+    """The warning's text for the old path ``old``, now ``new``."""
+    return (f"{old} is an old import path, kept for one release: import {new} "
+            "(the next release removes the old path; docs/guide/architecture.md)")
+
+
 class OldPaths(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     """Finds an old path and loads it as the module at its new path."""
 
     def find_spec(self, name, path=None, target=None):
-        if new_name(name) is None:
+        new = new_name(name)
+        if new is None:
             return None
+        # the import system's own frames are skipped: the warning names the importing line
+        warnings.warn(deprecated(name, new), DeprecationWarning, stacklevel=2)
         return importlib.util.spec_from_loader(name, self, is_package=False)
 
     def create_module(self, spec):

@@ -170,14 +170,16 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
     if pictures:
         import matplotlib.pyplot as plt
 
+        from .solve.cyclogram import output_motion
         from .views import plots
-        from .views.dynamics_plots import dynamics_figure
+        from .views.cyclogram_plots import cyclogram_figure
+        from .views.dynamics_plots import dynamics_figure, eps1_figure
         # made and saved one at a time: a figure is closed before the next is drawn
         figures = [(lambda: plots.scene_figure(res), out.with_suffix(".png")),
                    (lambda: plots.kinematics_figure(res), out.with_name(
                        f"{out.stem}_kinematics.png"))]
-        if plots.output_motion(res) is not None:
-            figures.append((lambda: plots.cyclogram_figure(res), out.with_name(
+        if output_motion(res) is not None:
+            figures.append((lambda: cyclogram_figure(res), out.with_name(
                 f"{out.stem}_cyclogram.png")))
         if res.dense.forces is not None:
             figures.append((lambda: plots.forces_figure(res),
@@ -194,7 +196,7 @@ def _write_scene_study(study, out, pictures) -> RunOutcome:
             name = safe_name(case.name, "case")
             figures.append((lambda case=case: dynamics_figure(case),
                             out.with_name(f"{out.stem}_{name}.png")))
-            figures.append((lambda case=case: plots.eps1_figure(case),
+            figures.append((lambda case=case: eps1_figure(case),
                             out.with_name(f"{out.stem}_{name}_eps1.png")))
             if (res.motion_forces or {}).get(case.name):
                 from .views.dynamics_plots import motion_forces_figure

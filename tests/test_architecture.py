@@ -229,3 +229,133 @@ def test_tests_mirror_the_packages():
                 assert not node.module.split(".")[-1].startswith("test_"), (f, node.module)
             elif isinstance(node, ast.Import):
                 assert not any(a.name.split(".")[-1].startswith("test_") for a in node.names), f
+
+
+def test_importing_an_old_path_warns_naming_the_new_one(tmp_path):
+    """Each old path, and each name of the flat package's pipeline.model, .study
+    and .analysis, warns (DeprecationWarning) with the path to import instead,
+    attributed to the importing line, and gives the very object; importing every
+    module of the package at its new path warns of no old path.  (In a fresh
+    interpreter: a module already imported does not warn again.)"""
+    import subprocess
+    import sys
+    code = '''
+import importlib, sys, warnings
+from pipeline.old_paths import MOVED
+def caught(f):
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        value = f()
+    return value, [x for x in w if "old import path" in str(x.message)]
+mods = %r
+for m in mods:
+    _, w = caught(lambda: importlib.import_module(m))
+    assert not w, (m, [str(x.message) for x in w])
+for old, new in MOVED.items():
+    _, w = caught(lambda: __import__(f"pipeline.{old}"))      # as an import statement does
+    assert sys.modules[f"pipeline.{old}"] is importlib.import_module(f"pipeline.{new}"), old
+    assert [x.category for x in w] == [DeprecationWarning], (old, w)
+    assert f"import pipeline.{new} " in str(w[0].message), (old, str(w[0].message))
+    assert w[0].filename == __file__, (old, w[0].filename)
+for pkg in ("model", "study", "analysis"):
+    p = importlib.import_module(f"pipeline.{pkg}")
+    for name, home in p._OLD_NAMES.items():
+        value, w = caught(lambda: getattr(p, name))
+        assert value is getattr(importlib.import_module(home), name), (pkg, name)
+        assert name in vars(importlib.import_module(home)), (pkg, name, home)
+        assert [x.category for x in w] == [DeprecationWarning], (pkg, name, w)
+        assert f"import {name} from {home} " in str(w[0].message), str(w[0].message)
+        assert w[0].filename == __file__, (pkg, name, w[0].filename)
+print("ok")
+''' % sorted(m for m in _modules() if m != "pipeline.old_paths"
+               and not m.startswith("pipeline.compiler.skeleton"))
+    user = tmp_path / "user.py"        # a user's script: the warnings name its lines
+    user.write_text(code)
+    out = subprocess.run([sys.executable, str(user)], capture_output=True, text=True)
+    assert out.returncode == 0 and out.stdout.split()[-1] == "ok", out.stderr[-3000:]
+    # as the user sees it: an old path is an error under -W error::DeprecationWarning
+    old = subprocess.run([sys.executable, "-W", "error::DeprecationWarning", "-c",
+                          "import pipeline.sweep"], capture_output=True, text=True)
+    assert old.returncode != 0 and "import pipeline.runs.sweep " in old.stderr, old.stderr
+
+
+# ---------------------------------------------------------------- re-exports
+# the modules whose names are imported from elsewhere on purpose: the package and
+# its API (docs/guide/api.md); the skeleton's header, whose imports declare the
+# generated module's names for the other skeleton files (compiler/skeleton/header.py)
+PUBLIC = ("pipeline", "pipeline.api", "pipeline.compiler.skeleton.header")
+
+
+def _defined(tree):
+    """The names a module binds at its top level itself (def, class, assignment,
+    a loop's or a with's target), not by an import."""
+    out = set()
+    todo = list(tree.body)
+    while todo:
+        node = todo.pop()
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            out.add(node.name)
+            continue
+        targets = []
+        if isinstance(node, ast.Assign):
+            targets = node.targets
+        elif isinstance(node, (ast.AnnAssign, ast.AugAssign, ast.For)):
+            targets = [node.target]
+        elif isinstance(node, ast.With):
+            targets = [i.optional_vars for i in node.items if i.optional_vars]
+        for t in targets:
+            out.update(n.id for n in ast.walk(t) if isinstance(n, ast.Name))
+        for field in ("body", "orelse", "finalbody", "handlers"):
+            todo.extend(getattr(node, field, ()))
+    return out
+
+
+def _reexport_uses(mods):
+    """(module, line, source, name) for every ``from X import name`` inside
+    pipeline/ (in functions too) where X, a module of the package, does not
+    define ``name`` but imports it: the name is to be imported where it is defined."""
+    trees = {m: ast.parse(f.read_text()) for m, f in mods.items()}
+    defined = {m: _defined(t) for m, t in trees.items()}
+    out = set()
+    for m, tree in trees.items():
+        pkg = m if mods[m].name == "__init__.py" else m.rsplit(".", 1)[0]
+        for node in ast.walk(tree):
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            if node.level:
+                base = pkg
+                for _ in range(node.level - 1):
+                    base = base.rsplit(".", 1)[0]
+                base = base + ("." + node.module if node.module else "")
+            else:
+                base = node.module or ""
+            if base not in mods or base in PUBLIC:
+                continue
+            for a in node.names:
+                if a.name != "*" and f"{base}.{a.name}" not in mods \
+                        and a.name not in defined[base]:
+                    out.add((m, node.lineno, base, a.name))
+    return out
+
+
+def test_no_module_imports_a_name_from_a_module_that_does_not_define_it():
+    """Inside the package a name is imported from the module that defines it,
+    never through another module's import of it (one place for each thing: a
+    module's imports are its own, free to change)."""
+    uses = sorted(_reexport_uses(_modules()))
+    assert not uses, f"names imported through a module that only imports them: {uses}"
+
+
+def test_the_reexport_check_finds_one(tmp_path, monkeypatch):
+    """The check can fail: a planted import of ResultsError (base.errors') through
+    results.storage, and of a function's name through a module that imports it."""
+    import shutil
+    pkg = tmp_path / "pipeline"
+    shutil.copytree(PKG, pkg, ignore=shutil.ignore_patterns("__pycache__"))
+    f = pkg / "views" / "tables.py"
+    f.write_text(f.read_text() + "\n\ndef _planted():\n"
+                 "    from ..results.storage import ResultsError, open_results\n")
+    monkeypatch.setattr(__import__(__name__), "PKG", pkg)
+    found = {(m, base, name) for m, _, base, name in _reexport_uses(_modules())}
+    assert ("pipeline.views.tables", "pipeline.results.storage", "ResultsError") in found
+    assert ("pipeline.views.tables", "pipeline.results.storage", "open_results") not in found

@@ -6,7 +6,8 @@ import pandas as pd
 import pytest
 
 from pipeline.cli import main
-from pipeline.results.storage import FORMAT, ResultsError, open_results, read_units
+from pipeline.results.storage import FORMAT, open_results, read_units
+from pipeline.base.errors import ResultsError
 
 
 @pytest.fixture(scope="module")

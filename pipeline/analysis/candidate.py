@@ -14,7 +14,8 @@ import numpy as np
 from .fronts import variable_units
 from ..kernels import config as kc
 from .ranking import ranking
-from ..results.storage import ResultsError, attr_text, candidate_ids, open_results, row_of
+from ..results.storage import attr_text, candidate_ids, open_results, row_of
+from ..base.errors import ResultsError
 from ..study.reader import stored_study
 
 STATUS_HELP = {
@@ -148,7 +149,8 @@ def tolerance_design(source, candidate=None):
     design: a scene's results file or study file, or a sweep's candidate
     (``candidate``: a number, 'knee' or 'reference'; a sweep study file: its
     reference design)."""
-    from ..results.storage import ResultsError, attr_text, open_results
+    from ..results.storage import attr_text, open_results
+    from ..base.errors import ResultsError
     from pathlib import Path
     source = Path(source)
     if source.suffix.lower() == ".toml":
@@ -196,7 +198,14 @@ def candidate_scene(source, candidate):
     if sweep is None:
         raise ValueError(f"{source} is not a sweep: --candidate picks a design of a sweep's "
                          "results file")
-    output = replace(study.output, dense_positions=int(sweep.positions),
+    return design_scene(study, mech), label, origin.get("candidate", "reference")
+
+
+def design_scene(study, mech):
+    """The sweep study ``study`` with the design's mechanism ``mech`` as a scene
+    study, at the sweep's positions per revolution and operating speed (with
+    the force analysis where the mechanism has mass data): what
+    ``candidate_scene`` gives and ``analysis.refined`` refines the peaks of."""
+    output = replace(study.output, dense_positions=int(study.sweep.positions),
                      analysis="forces" if mech.bodies else "accelerations")
-    return (replace(study, kind="scene", mechanism=mech, output=output, sweep=None, search=None),
-            label, origin.get("candidate", "reference"))
+    return replace(study, kind="scene", mechanism=mech, output=output, sweep=None, search=None)

@@ -46,7 +46,8 @@ import numpy as np
 
 from ..base.files import fault_point
 from ..results.scene_file import peaks_table
-from ..results.storage import ResultsError, attr_text, open_results
+from ..results.storage import attr_text, open_results
+from ..base.errors import ResultsError
 
 
 @dataclass

@@ -38,14 +38,16 @@ from ..base.files import RunLock, replacing
 from ..base.units import unit_text
 from ..kernels import config as kc
 from ..kernels.pareto import crowding_distance, knee_point, nondominated_rank
-from ..results.storage import (ResultsError, attr_text, candidate_ids, coordinate, hdf5_image, open_results, put,
+from ..results.storage import (attr_text, candidate_ids, coordinate, hdf5_image, open_results, put,
                                read_units, remove_group, results_output, variables)
+from ..base.errors import ResultsError
 from ..study.reader import stored_study
 
 log = logging.getLogger("pipeline")
 
 GROUP = "analysis"
 DEFAULT_OBJECTIVES = ("dwell_error", "peak_reaction")
+REFINED_FRONTS = 3            # fronts whose peaks are refined between positions
 MIN_MODEL_SAMPLES = 20        # fewer feasible candidates than this: no model
 MAX_MODEL_SAMPLES = 20_000    # feasible candidates used for a model (train + test)
 TEST_FRACTION = 0.25
@@ -71,6 +73,7 @@ class SweepData:
     F: np.ndarray             # (N, m) objective values
     reference: dict = field(default_factory=dict)
     ids: np.ndarray | None = None   # (N,) the candidate index of each row (store = feasible)
+    metric_units: dict = field(default_factory=dict)   # every stored metric's units
 
     def id(self, i) -> int:
         """The sweep's candidate index of row ``i``."""
@@ -125,7 +128,9 @@ def read_sweep(path) -> SweepData:
             feasible=f["candidates/feasible"][()].astype(bool), objectives=objectives,
             objective_units=[unit_text(attr_text(f[f"metrics/{o}"].attrs.get("units", "1")))
                              for o in objectives],
-            F=F, reference=ref, ids=candidate_ids(f))
+            F=F, reference=ref, ids=candidate_ids(f),
+            metric_units={m: unit_text(attr_text(f[f"metrics/{m}"].attrs.get("units", "1")))
+                          for m in variables(f["metrics"])})
 
 
 def has_analysis(f) -> bool:
@@ -267,33 +272,102 @@ def _study_spec(data: SweepData):
     return study.sweep if study is not None else None
 
 
+def refine_fronts(data: SweepData, study, stage=None) -> tuple[np.ndarray, dict]:
+    """The objectives the fronts are ranked on, and the refined peaks
+    (``analysis.refined``) of the candidates of fronts 1-3.
+
+    Every peak metric the file stores is refined between positions for the
+    members of fronts 1-3, and a peak objective takes its refined value there
+    (the grid's elsewhere).  Refining raises a peak objective (a refined peak
+    is never below the grid's), which may let a candidate not yet refined into
+    front 3: the fronts are ranked again and its peaks refined, until every
+    member of fronts 1-3 carries refined values.  Fronts 1-3 are then those a
+    refinement of every candidate would give (a candidate outside them, once
+    refined, would only rise further).  ``stage.set(text)``: progress."""
+    from .refined import LOCATIONS, peak_metrics_of, refine_designs
+    metrics = peak_metrics_of(data.metric_units)
+    F = data.F.copy()
+    cols = [(j, metrics.index(o)) for j, o in enumerate(data.objectives) if o in metrics]
+    out = {"metrics": metrics, "columns": metrics + LOCATIONS, "ranked_on": [
+        data.objectives[j] for j, _ in cols], "rows": np.zeros(0, np.int64),
+           "values": np.zeros((0, len(metrics) + len(LOCATIONS))), "status": np.zeros(0, np.int8)}
+    if not metrics or study is None:
+        out["ranked_on"] = []
+        return F, out
+    rows, values, status = [], [], []
+    done = np.zeros(data.n, bool)
+    while True:
+        rank = nondominated_rank(F, data.feasible)
+        todo = np.flatnonzero((rank >= 1) & (rank <= REFINED_FRONTS) & ~done)
+        if not todo.size:
+            break
+        total = done.sum() + todo.size
+
+        def progress(k, base=int(done.sum()), total=int(total)):
+            if stage is not None:
+                stage.set(f"refining the peaks of fronts 1-{REFINED_FRONTS}: "
+                          f"{base + k}/{total} designs")
+        v, st = refine_designs(study, data.params[todo], metrics, progress)
+        done[todo] = True
+        for j, k in cols:     # a design whose scene fails keeps the grid's value (its status)
+            F[todo, j] = np.where(np.isfinite(v[:, k]), v[:, k], F[todo, j])
+        rows.append(todo), values.append(v), status.append(st)
+    if rows:
+        rows = np.concatenate(rows)
+        order = np.argsort(rows)
+        out.update(rows=rows[order], values=np.concatenate(values)[order],
+                   status=np.concatenate(status)[order])
+    return F, out
+
+
+def _refined_reference(data: SweepData, study, refined, ref_obj):
+    """The reference design's objectives with its peak objectives refined as
+    the fronts' are (the grid's where its scene fails or nothing is refined)."""
+    params = data.reference.get("params")
+    if not refined["ranked_on"] or params is None or not np.isfinite(params).all() or \
+            int(np.ravel(data.reference.get("status", [kc.NOT_EVALUATED]))[0]) != kc.OK:
+        return ref_obj
+    from .refined import refine_designs
+    v, _ = refine_designs(study, np.atleast_2d(params), refined["metrics"])
+    refined["reference"] = v[0]
+    out = ref_obj.copy()
+    for j, o in enumerate(data.objectives):
+        if o in refined["metrics"] and np.isfinite(v[0, refined["metrics"].index(o)]):
+            out[j] = v[0, refined["metrics"].index(o)]
+    return out
+
+
 def compute(data: SweepData, n_representatives=5, *, max_samples=MAX_MODEL_SAMPLES,
-            n_jobs=1) -> dict:
-    """Every number of the analysis (no file I/O)."""
-    F, feas = data.F, data.feasible
+            n_jobs=1, stage=None) -> dict:
+    """Every number of the analysis (no file I/O but the refinement's scenes)."""
+    feas = data.feasible
+    try:
+        study = stored_study(data.attrs, data.path)
+    except ValueError:           # a study this version cannot read: no refinement
+        study = None
+    F, refined = refine_fronts(data, study, stage)
     rank = nondominated_rank(F, feas)
     crowd = crowding_distance(F, rank)
     knee = knee_point(F, rank)
     front = np.flatnonzero(rank == 1)
     front = front[np.lexsort(F[front].T[::-1])] if front.size else front.astype(np.int64)
-    res = {"rank": rank, "crowding": crowd, "knee": int(knee), "front1": front.astype(np.int64)}
+    res = {"rank": rank, "crowding": crowd, "knee": int(knee), "front1": front.astype(np.int64),
+           "F": F, "refined": refined}
 
     # the study's reference design
     ref_obj = np.array([float(np.ravel(data.reference.get(o, [np.nan]))[0])
                         for o in data.objectives])
-    try:
-        spec = _study_spec(data)
-    except ValueError:           # a study this version cannot read: judge without constraints
-        spec = None
+    ref_obj = _refined_reference(data, study, refined, ref_obj)
+    spec = study.sweep if study is not None else None   # None: judged without constraints
     ref_feasible, ref_note = _reference_feasible(data, spec)
     ref_rank, dominators = reference_standing(F, feas, rank, ref_obj)
     res["reference"] = {"objectives": ref_obj, "feasible": ref_feasible, "note": ref_note,
                         "rank": ref_rank, "dominated_by": dominators,
                         "dominators_front1": dominators[rank[dominators] == 1]}
 
-    # models: one per objective, on the feasible candidates
+    # models: one per objective, on the feasible candidates (the grid's values: all alike)
     X = data.params[feas]
-    res["models"] = {o: fit_importance(X, F[feas, j], data.names, data.seed,
+    res["models"] = {o: fit_importance(X, data.F[feas, j], data.names, data.seed,
                                        max_samples=max_samples, n_jobs=n_jobs)
                      for j, o in enumerate(data.objectives)}
     reps, sizes = representatives(F, front, n_representatives, data.seed)
@@ -340,8 +414,11 @@ def _write_group(f, data: SweepData, res: dict, elapsed: float):
     idx = res["front1"]
     coordinate(fr, "member", np.arange(len(idx)), "1", "member of front 1")
     put(fr, "index", idx, "1", "candidate index", dims=("member",))
-    put(fr, "objectives", data.F[idx].reshape(len(idx), len(obj)), list(ou),
-        "objectives (minimised)", dims=("member", "objective"), names=obj)
+    ranked = res["refined"]["ranked_on"]
+    put(fr, "objectives", res["F"][idx].reshape(len(idx), len(obj)), list(ou),
+        "objectives (minimised) the fronts are ranked on" + (
+            f" ({', '.join(ranked)} refined between positions: /{GROUP}/refined)"
+            if ranked else ""), dims=("member", "objective"), names=obj)
     put(fr, "params", data.params[idx].reshape(len(idx), len(names)), list(units),
         "design variables", dims=("member", "variable"), names=names)
     put(fr, "crowding", res["crowding"][idx], "1", "crowding distance within front 1",
@@ -394,6 +471,8 @@ def _write_group(f, data: SweepData, res: dict, elapsed: float):
         put(og, "r2_train", np.float64(m["r2_train"]), "1",
             f"training R^2 of the model ({m['target']} target)")
 
+    _write_refined(f, g, data, res["refined"])
+
     rp = g.create_group("representatives")
     rp.attrs["long_name"] = ("front-1 designs nearest the k-means centroids of the "
                              "normalised front-1 objectives")
@@ -406,9 +485,54 @@ def _write_group(f, data: SweepData, res: dict, elapsed: float):
     g.attrs["complete"] = True
 
 
+def _write_refined(f, g, data: SweepData, r: dict):
+    """``/analysis/refined``: the peak metrics of fronts 1-3 refined between
+    positions, beside the grid's in /metrics (whose attribute ``refined``
+    says where the refined ones are)."""
+    from .refined import LOCATIONS
+    rg = g.create_group("refined")
+    rg.attrs["long_name"] = (
+        f"peak metrics of the candidates of fronts 1-{REFINED_FRONTS} refined between the "
+        "grid's positions as the design's scene refines them (pipeline show --candidate); "
+        "/metrics keeps the grid's values (the largest of the sweep's positions)")
+    rg.attrs["fronts"] = REFINED_FRONTS
+    rg.attrs["ranked_on"] = list(r["ranked_on"])
+    rows = r["rows"]
+    coordinate(rg, "design", np.arange(len(rows)), "1", "refined design")
+    put(rg, "index", rows.astype(np.int64), "1", "candidate index (row of /candidates)",
+        dims=("design",))
+    put(rg, "candidate", np.array([data.id(i) for i in rows], np.int64), "1",
+        "candidate number of the sweep", dims=("design",))
+    put(rg, "status", r["status"].astype(np.int8), "1",
+        "status of the design's scene (0 = OK; elsewhere no refined value: the grid's ranks)",
+        dims=("design",))
+    for j, m in enumerate(r["columns"]):
+        of = "peak_reaction" if m in LOCATIONS else m
+        units = _refined_units(data, m)
+        what = {"peak_joint": "joint (index) of the refined peak reaction",
+                "peak_phi": "crank angle phi1 of the refined peak reaction"}.get(
+                    m, f"{m} refined between the grid's positions")
+        put(rg, m, r["values"][:, j], units,
+            f"{what}, as the design's scene refines it (the grid's: /metrics/{of})",
+            dims=("design",))
+        if m in r["metrics"] and f"metrics/{m}" in f:
+            f[f"metrics/{m}"].attrs["refined"] = (
+                f"the largest of the grid's positions; fronts 1-{REFINED_FRONTS} refined "
+                f"between them in /{GROUP}/refined/{m}")
+    if "reference" in r:
+        coordinate(rg, "column", list(r["columns"]), "1", "refined metric")
+        put(rg, "reference", r["reference"], [_refined_units(data, m) for m in r["columns"]],
+            "the reference design's peak metrics refined between positions",
+            dims=("column",), names=list(r["columns"]))
+
+
+def _refined_units(data: SweepData, m) -> str:
+    return {"peak_phi": "deg", "peak_joint": "1"}.get(m) or data.metric_units.get(m, "1")
+
+
 def summary(data: SweepData, res: dict, elapsed: float) -> dict:
     """What `pipeline analyze` prints."""
-    F, obj = data.F, data.objectives
+    F, obj = res["F"], data.objectives
     drawn = int(data.attrs.get("n_candidates", data.n))
     out = {"results": str(data.path),
            "candidates": drawn if drawn == data.n else f"{drawn} ({data.n} feasible stored)",
@@ -445,6 +569,16 @@ def summary(data: SweepData, res: dict, elapsed: float) -> dict:
                                      for j in top))
         else:
             out[f"model {o}"] = f"skipped: {m['reason']}"
+    r = res["refined"]
+    if len(r["rows"]):
+        failed = int((r["status"] != kc.OK).sum())
+        out["refined peaks"] = (
+            f"{len(r['rows'])} designs of fronts 1-{REFINED_FRONTS}: " +
+            ", ".join(r["metrics"]) + " refined between positions as their scenes refine "
+            f"them (/{GROUP}/refined)" +
+            (f"; fronts ranked on the refined {', '.join(r['ranked_on'])}"
+             if r["ranked_on"] else "") +
+            (f"; {failed} scenes failed (their grid values ranked)" if failed else ""))
     out["representatives"] = " ".join(f"#{data.id(i)}" for i in res["representatives"]) or \
         "none"
     out["time"] = f"{elapsed:.1f} s"
@@ -487,7 +621,9 @@ def analyze(path, n_representatives=5, *, max_samples=MAX_MODEL_SAMPLES, n_jobs=
         stage.set("reading the candidates")
         data = read_sweep(path)
         stage.set("fronts, parameter importances, representatives")
-        res = compute(data, n_representatives, max_samples=max_samples, n_jobs=n_jobs)
+        res = compute(data, n_representatives, max_samples=max_samples, n_jobs=n_jobs,
+                      stage=stage)
+        stage.set("fronts, parameter importances, representatives")
         elapsed = time.perf_counter() - t0
         stage.set("writing /analysis")
         write(path, data, res, elapsed)

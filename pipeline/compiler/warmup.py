@@ -23,8 +23,18 @@ def mechanism():
     its own; no bodies (the force kernels compile in a scene's process beside)."""
     import math
 
-    from ..model.groups import (PPR, PRP, RPP, RPR, RRP, RRR, Attach, ClassIII, ClassIIISlider,
-                                Law, RotaryInput, SliderInput)
+    from ..model.groups.ppr import PPR
+    from ..model.groups.prp import PRP
+    from ..model.groups.rpp import RPP
+    from ..model.groups.rpr import RPR
+    from ..model.groups.rrp import RRP
+    from ..model.groups.rrr import RRR
+    from ..model.groups.attach import Attach
+    from ..model.groups.class3 import ClassIII
+    from ..model.groups.class3_slider import ClassIIISlider
+    from ..model.groups.law import Law
+    from ..model.groups.rotary_input import RotaryInput
+    from ..model.groups.slider_input import SliderInput
     from ..model.mechanism import Crank, Mechanism
     deg = math.radians
     fixed = {"P1": (0.0, 0.0), "P4": (38.0, 0.0), "P6": (38.0, 50.0), "P9": (0.0, 60.0),

@@ -32,8 +32,9 @@ from numba import njit, types
 
 from .config import FRICTION_LOCK, JIT, JIT_ALLOC, OK, SINGULAR
 from .continuation import work
-from .dynamics import (_DRIVE, _F1, _I1, _I2, ADVANCE, MASSES, OMEGA_STOP, SIZES, START,
-                       TOO_FAST, acceleration, begin, channel, lagrange_terms)
+from .dynamics import (_DRIVE, _F1, _I1, _I2, MASSES, OMEGA_STOP, SIZES, TOO_FAST, acceleration,
+                       begin, channel, lagrange_terms)
+from .walk import ADVANCE, START
 from .friction import friction_forces, relative_speed_slopes
 
 FRICTION_REL = 1e-12     # the friction's Newton (kernels.friction), relative

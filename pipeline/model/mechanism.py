@@ -12,8 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .groups import (PPR, PRP, RPP, RPR, RRP, RRR, Attach, ClassIII,  # noqa: F401 (the model's)
-                     ClassIIISlider, GroupType, Law, RotaryInput, SliderInput)
+from .groups.base import GroupType
 from ..kernels import config as kc
 
 

@@ -518,7 +518,7 @@ def _scene_into(f, res):
         put(g, "stroke", np.float64(res.motion["stroke"]), "mm",
             "stroke of the working point: radius x rocker swing")
         if "law_error" in res.motion:      # [output.motion_law]
-            from ..study.sweep_spec import METRICS
+            from ..model.metric_catalogue import METRICS
             g.attrs["law_align"] = res.motion["law_align"]
             for key in ("law_error", "law_error_max", "law_shift"):
                 put(g, key, np.float64(res.motion[key]), METRICS[key][0], METRICS[key][1])

@@ -13,11 +13,11 @@ from ..base.units import unit_text
 from ..kernels import config as kc
 from ..kernels import sweep as ks
 from ..study.objectives import (bounded_finite, constraint_names, constraint_units, constraints,
-                                constraints_text, metric_values)
-from .storage import (COMPRESSION, STATUS_ENUM, ResultsError, attach, attr_text, coordinate,
-                      hdf5_image, link_coordinates, put, room_for, status_table, units_attr,
-                      write_root_attrs)
-from ..study.sweep_spec import METRICS
+                                constraints_text)
+from ..model.metric_catalogue import METRICS, metric_values
+from .storage import (COMPRESSION, STATUS_ENUM, attach, attr_text, coordinate, hdf5_image,
+                      link_coordinates, put, room_for, status_table, units_attr, write_root_attrs)
+from ..base.errors import ResultsError
 
 
 # the columns of progress/status_counts: every status, then the feasible candidates

@@ -1,7 +1,7 @@
 """The problem a sweep's worker evaluates: plain arrays and the sweep's
 settings (picklable), the generated kernels on first use; the notice around
 the first evaluation, which compiles a new mechanism's kernels, is
-``compiler.notice``'s (importable from here)."""
+``compiler.notice``'s."""
 
 from __future__ import annotations
 
@@ -10,8 +10,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..compiler.notice import (COMPILE_RECORD, compile_notice,  # noqa: F401
-                               compile_record, last_compile_s)
 from ..kernels import config as kc
 from ..kernels import sweep as ks
 from ..study.sampling import draw_checked

@@ -51,20 +51,15 @@ from ..results.search_file import SearchFile, search_summary
 from .builds import Watch
 from .search_problem import FrontTracker, SweepBlackBox, TriangleRepair, _broken, hv_scale
 from ..study.search_spec import METHODS, SearchSpec
-from ..results.storage import (ResultsError, attr_text, hdf5_writing, open_results, same_study,
-                                study_digest)
+from ..results.storage import attr_text, hdf5_writing, open_results, same_study, study_digest
+from ..base.errors import ResultsError
 from ..results.journal import MANIFEST_DEFAULTS, Journal
-from .sweep import (SweepInterrupted, SweepOutcome, SweepProblem, _connect, aside_or_done,
-                    build_problem, check_existing, compile_notice, finish_run,
-                    nothing_left_before_first)
-from ..study.sweep_spec import SweepSpec, draw_checked, parameter_rows
-# the problem pymoo sees and the results file have modules of their own
-# (search_problem, search_file); their names stay importable from here for one release
-from .search_problem import (FAILED_OBJECTIVE, FAILED_VIOLATION, HV_REFERENCE,  # noqa: F401
-                             NORMALISATION, REPAIR_STEP, buildable_centre, hypervolume,
-                             pymoo_view, repair_triangles)
-from ..results.search_file import (HISTORY, GenerationLayout, SearchHistory,  # noqa: F401
-                                   generation_layout, read_history)
+from .sweep import (SweepInterrupted, SweepOutcome, _connect, aside_or_done, build_problem,
+                    check_existing, finish_run, nothing_left_before_first)
+from .problem import SweepProblem
+from ..compiler.notice import compile_notice
+from ..study.sweep_spec import SweepSpec, parameter_rows
+from ..study.sampling import draw_checked
 
 log = logging.getLogger("pipeline")
 

@@ -33,10 +33,11 @@ from pymoo.core.problem import Problem
 from pymoo.core.repair import Repair
 
 from ..kernels import config as kc
-from ..study.objectives import bounded_finite, constraint_names, constraints, metric_values
+from ..study.objectives import bounded_finite, constraint_names, constraints
+from ..model.metric_catalogue import metric_values
 from ..kernels.pareto import nondominated_rank
-from ..study.search_spec import HV_REFERENCE, NORMALISATION  # noqa: F401 (NORMALISATION: the search's)
-from .sweep import SweepProblem
+from ..study.search_spec import HV_REFERENCE
+from .problem import SweepProblem
 from ..study.sweep_spec import SweepSpec, parameter_rows
 
 FAILED_VIOLATION = 1e12   # the `evaluable` constraint of a failed candidate: above any real one

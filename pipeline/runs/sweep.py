@@ -24,19 +24,16 @@ import h5py
 
 from ..base.files import RunLock, fault_point, replacing
 from ..base.limits import CHUNK_WHY, MAX_CHUNK
-from ..results.storage import FORMAT, ResultsError, hdf5_writing, room_for, same_study
-from ..study.sampling import draw_checked  # noqa: F401 (importable from here)
-from ..study.sweep_spec import SweepSpec, parameter_rows  # noqa: F401
-# the problem a worker evaluates has a module of its own (problem.py); its names stay
-# importable from here
-from .problem import SweepProblem, compile_notice, plain_problem  # noqa: E402,F401
-from .builds import Watch  # noqa: E402
-# the journal, the objectives and the results file have modules of their own; their
-# names stay importable from here (search, browse, report and the tests use them)
-from ..results.journal import JOURNAL_VERSION, MANIFEST_DEFAULTS, Journal, manifest_for  # noqa: F401
-from ..study.objectives import (COLUMN, DERIVED, bounded_finite, constraint_names,  # noqa: F401
-                                constraint_units, constraints, metric_values)
-from ..results.sweep_file import COUNTED, SweepFile, status_counts, summarize  # noqa: F401
+from ..results.storage import FORMAT, hdf5_writing, room_for, same_study
+from ..base.errors import ResultsError
+from ..study.sweep_spec import SweepSpec
+# the problem a worker evaluates has a module of its own (problem.py)
+from .problem import SweepProblem, plain_problem
+from ..compiler.notice import compile_notice
+from .builds import Watch
+# the journal and the results file have modules of their own
+from ..results.journal import MANIFEST_DEFAULTS, Journal, manifest_for
+from ..results.sweep_file import SweepFile, summarize
 
 log = logging.getLogger("pipeline")
 

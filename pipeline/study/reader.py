@@ -22,9 +22,9 @@ from ..base.limits import (MAX_NAME_LENGTH, MAX_POSITIONS, MAX_STUDY_BYTES, MAX_
                            POSITIONS_WHY, STUDY_BYTES_WHY, TITLE_WHY)
 from ..model.mechanism import Body, CentreOfMass, Crank, Load, Mechanism, Slide, group_label
 from .slide_check import check_slide as _check_slide
-# the study file's tables (the reader of every section; name_problem: a name's check)
-from .section import _MISSING, Section, _key, _quote, name_problem  # noqa: F401
-from .dynamics_spec import DynamicsCase, DynamicsSpec, parse_dynamics  # noqa: F401  (the API)
+# the study file's tables (the reader of every section)
+from .section import _MISSING, Section, _key, _quote
+from .dynamics_spec import DynamicsSpec, parse_dynamics
 
 
 # ----------------------------------------------------------------- study objects

@@ -202,7 +202,8 @@ def _angle_leg(plan, owner, key):
 def parse_tolerance(root, mech, output, sweep=None) -> ToleranceSpec:
     """Read [tolerance] of a study (``root``: the study's top Section); a study
     without one gets ``ToleranceSpec()``: the ISO 2768-f defaults."""
-    from .sweep_spec import METRICS, _check_available
+    from .sweep_spec import _check_available
+    from ..model.metric_catalogue import METRICS
     sec = root.table("tolerance")
     plan = mech.compile()
     iso_class = sec.string("class", "f", choices=CLASSES)

@@ -79,7 +79,8 @@ def motion_from_scene_file(path) -> Motion:
     with the links of the study stored in the file."""
     from ..analysis.candidate import load_study_from_results
     from .plots import _links_to_draw, joint_labels, point_label
-    from ..results.storage import ResultsError, attr_text, open_results
+    from ..results.storage import attr_text, open_results
+    from ..base.errors import ResultsError
     with open_results(path, "scene") as f:
         study = load_study_from_results(f)
         names = [str(attr_text(x)) for x in f["mechanism"].attrs["point_names"]]

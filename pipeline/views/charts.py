@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from ..kernels import config as kc
-from .labels import unit_text
+from ..base.units import unit_text
 from .page import json_number, json_numbers, script_json
 
 COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b")

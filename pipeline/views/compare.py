@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from ..analysis.compare import Comparison
-from .labels import unit_text
+from ..base.units import unit_text
 
 
 def _num(v, digits=5):

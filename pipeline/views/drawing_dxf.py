@@ -43,7 +43,8 @@ import numpy as np
 from ..base.files import (check_output, check_output_folder, replacing, safe_name,
                           write_text)
 from ..kernels import config as kc
-from ..results.storage import ResultsError, attr_text, open_results
+from ..results.storage import attr_text, open_results
+from ..base.errors import ResultsError
 from ..study.reader import stored_study
 
 APPID = "PIPELINE"            # the extended data's application name

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..kernels import config as kc
 from ..solve.crank_motion import STATUS_NAMES, TAIL_SECONDS
-from .labels import unit_text
+from ..base.units import unit_text
 
 BAND_WINDOW_S = 0.1     # s: the time window of a drawn band (a long series' min and max in it)
 

@@ -10,9 +10,6 @@ from matplotlib.artist import Artist
 
 PEAK_GID = "peak"       # gid prefix of a curve's peak marker (tests/support/layout.py finds them)
 
-# one style of units (pipeline.base.units): the pictures' as everything else's
-from ..base.units import unit_text  # noqa: E402,F401
-
 
 def link_name(study, label: str) -> str:
     """The name of the link ``label`` ('2_3', the vector P2 -> P3 of ``[output]

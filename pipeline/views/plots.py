@@ -19,10 +19,6 @@ from .cyclogram_plots import cyclogram_figure  # noqa: F401 (a picture of plots,
 from .dynamics_plots import eps1_figure  # noqa: F401 (a picture of plots, drawn there)
 from .labels import POINT_OFFSETS, around, is_constant, link_name, mark_peak, placer
 from ..solve.scene import real_motion
-# what the cyclogram draws is computed one layer down; output_motion, design_phases,
-# stated_cycle and DWELL_RESIDUAL are this module's names too (the report and the tests use them)
-from ..solve.cyclogram import (DWELL_RESIDUAL, design_phases,  # noqa: F401
-                               output_motion, stated_cycle)
 
 POSITION_CMAP = "viridis"
 MAX_KEY_TICKS = 12          # labelled crank angles on the colour key

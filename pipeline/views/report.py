@@ -36,10 +36,6 @@ from .charts import chart_html, comparison_chart, importance_chart, tolerance_ch
 from .report_figures import _letters, _png, pareto_figure, search_figure
 from ..results.storage import attr_text, open_results
 from ..results.sweep_file import status_counts
-# the page's assets and pictures have modules of their own (report_assets,
-# report_figures); their names stay importable from here for one release
-from .report_figures import MAX_FRONT_POINTS, MAX_GREY  # noqa: F401
-
 log = logging.getLogger("pipeline")
 
 
@@ -84,7 +80,8 @@ def motion_html(path, ana, data, drawn=()) -> str:
     explorer embeds) has it, else an animated GIF embedded like the pictures."""
     from .animate import gif_bytes, motion_of
     from .show import OV7_PHASES
-    from .plots import cyclogram_figure, stated_cycle
+    from .cyclogram_plots import cyclogram_figure
+    from ..solve.cyclogram import stated_cycle
     if ana.knee >= 0:
         cid, why = int(ana.knee), "the knee of front 1"
     elif len(ana.representatives):

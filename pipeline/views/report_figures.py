@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ..base.files import literal_text
-from .labels import unit_text
+from ..base.units import unit_text
 
 MAX_GREY = 60_000       # infeasible points drawn in the Pareto plot (seeded subsample)
 MAX_FRONT_POINTS = 200_000

@@ -9,7 +9,8 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
-from .labels import is_constant, mark_peak, unit_text
+from .labels import is_constant, mark_peak
+from ..base.units import unit_text
 from .plots import _travel_arrows, outside_legend, polar_marks
 
 

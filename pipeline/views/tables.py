@@ -26,8 +26,8 @@ from ..base.files import safe_name
 from ..kernels import config as kc
 from ..results.scene_file import peaks_table
 from ..base.units import unit_text
-from ..results.storage import (ResultsError, attr_text, candidate_ids, open_results, read_units,
-                               variables)
+from ..results.storage import attr_text, candidate_ids, open_results, read_units, variables
+from ..base.errors import ResultsError
 
 
 def with_units(df: pd.DataFrame) -> pd.DataFrame:

@@ -10,7 +10,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..kernels import config as kc
-from .labels import unit_text
+from ..base.units import unit_text
 
 TORNADO_ROWS = 8        # dimensions per metric in the tornado chart
 BINS = 50

@@ -27,7 +27,8 @@ from support.faults import digest, one_line_error
 from pipeline.base.errors import ResultsError
 from pipeline.base.files import RunLock
 from pipeline.study.reader import load_study
-from pipeline.runs.sweep import SweepFile, build_problem, run_sweep
+from pipeline.runs.sweep import build_problem, run_sweep
+from pipeline.results.sweep_file import SweepFile
 
 ROOT = Path(__file__).resolve().parents[2]
 N = 600

@@ -28,7 +28,8 @@ from pipeline.kernels.metrics import dwell_error, dwell_lanes
 from pipeline.solve.scene import revolution_angles, solve_curves
 from pipeline.study.reader import load_study
 from pipeline.runs.sweep import build_problem
-from pipeline.study.sweep_spec import draw_candidates, parameter_rows
+from pipeline.study.sweep_spec import parameter_rows
+from pipeline.study.sampling import draw_candidates
 from support.checkout import child_env
 from support.lanes import (assert_lanes_agree, evaluate_with, packed_force_lane_ops,
                            scalar_forces)
@@ -197,7 +198,8 @@ def test_the_library_warm_up_has_every_group_type_and_input_law():
     kernels once per installation, has every group type (either class III
     kind) and every input law, and compiles to a plan."""
     from pipeline.compiler.warmup import mechanism
-    from pipeline.model.groups import GROUP_CLASSES, LAW_TYPES
+    from pipeline.model.groups import GROUP_CLASSES
+    from pipeline.model.groups.law import LAW_TYPES
     mech = mechanism()
     assert {type(g) for g in mech.groups} | {type(mech.crank)} >= set(GROUP_CLASSES)
     assert {g.law.kind for g in mech.groups if hasattr(g, "law")} == set(LAW_TYPES)

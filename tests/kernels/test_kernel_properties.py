@@ -31,7 +31,9 @@ from pipeline.kernels import config as kc
 from pipeline.kernels.groups import attach, crank, rpr, rrp, rrr
 from pipeline.kernels import triad as triad_kernels
 from pipeline.kernels.triad import class3, ternary_angle
-from pipeline.model.mechanism import ClassIII, Crank, Mechanism, RRR
+from pipeline.model.mechanism import Crank, Mechanism
+from pipeline.model.groups.class3 import ClassIII
+from pipeline.model.groups.rrr import RRR
 from pipeline.solve.scene import solve_curves
 from support.tolerances import CLOSURE_MM, KERNEL_EXACT_REL, LENGTH_REL, SELF_FD_REL, WELL_INSIDE_REL
 

@@ -19,9 +19,10 @@ from pipeline.compiler.emit import EMITTERS
 from pipeline.solve.reactions import scene_forces
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
-from pipeline.model.mechanism import ClassIIISlider
+from pipeline.model.groups.class3_slider import ClassIIISlider
 from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
-from pipeline.study.reader import StudyError, load_study, parse_study
+from pipeline.study.reader import load_study, parse_study
+from pipeline.base.errors import StudyError
 from support.lanes import assert_lanes_agree, evaluate_with, scalar_forces, widened_draws
 from support.power import virtual_power
 from support.references import against_mp_reference

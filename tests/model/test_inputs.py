@@ -17,11 +17,15 @@ from support import naive
 from support.references import against_mp_reference
 from pipeline.kernels import config as kc
 from pipeline.kernels.inputs import linear_law, rise_return, table_law
-from pipeline.model.mechanism import Law, RotaryInput, SliderInput
+from pipeline.model.groups.law import Law
+from pipeline.model.groups.rotary_input import RotaryInput
+from pipeline.model.groups.slider_input import SliderInput
 from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
 from pipeline.runs.sweep import build_problem
-from pipeline.study.reader import StudyError, load_study, parse_study
-from pipeline.study.sweep_spec import draw_candidates, parameter_rows
+from pipeline.study.reader import load_study, parse_study
+from pipeline.base.errors import StudyError
+from pipeline.study.sweep_spec import parameter_rows
+from pipeline.study.sampling import draw_candidates
 from support.lanes import assert_force_lanes_round, assert_lanes_agree, widened_draws
 from support.power import virtual_power
 from support.tolerances import FAIL_ANGLE_RAD, REACTION_MP_REL, VIRTUAL_POWER_REL

@@ -7,7 +7,6 @@ from pathlib import Path
 import numpy as np
 
 import pipeline.model.metric_catalogue as mc
-from pipeline.study import objectives, sweep_spec
 from pipeline.kernels import sweep as ks
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -35,18 +34,18 @@ def test_every_entry_reads_a_column_of_the_kernels_row():
 
 
 def test_the_study_format_and_the_stored_columns_read_the_catalogue():
-    assert sweep_spec.METRICS == {m.name: (m.units, m.long_name, m.stage) for m in mc.CATALOGUE}
-    assert set(sweep_spec.DEFAULT_METRICS) <= set(mc.BY_NAME)
-    assert sweep_spec.NOT_OBJECTIVES == {"min_transmission_angle": "transmission_deviation",
-                                         "build_yield": "build_loss"}
+    assert mc.METRICS == {m.name: (m.units, m.long_name, m.stage) for m in mc.CATALOGUE}
+    assert set(mc.DEFAULT_METRICS) <= set(mc.BY_NAME)
+    assert mc.NOT_OBJECTIVES == {"min_transmission_angle": "transmission_deviation",
+                                 "build_yield": "build_loss"}
     rows = np.arange(3 * mc.N_ROW, dtype=float).reshape(3, mc.N_ROW) - 7.5
     for m in mc.CATALOGUE:
         want = rows[:, m.column] * m.factor + m.offset
-        np.testing.assert_array_equal(objectives.metric_values(rows, m.name), want)
+        np.testing.assert_array_equal(mc.metric_values(rows, m.name), want)
     # a conversion to degrees, and the derived deviation of the transmission angle
-    np.testing.assert_array_equal(objectives.metric_values(rows, "dwell_start"),
+    np.testing.assert_array_equal(mc.metric_values(rows, "dwell_start"),
                                   np.degrees(rows[:, ks.M_DWELL_START]))
-    np.testing.assert_allclose(objectives.metric_values(rows, "transmission_deviation"),
+    np.testing.assert_allclose(mc.metric_values(rows, "transmission_deviation"),
                                90.0 - np.degrees(rows[:, ks.M_MIN_TRANS]), rtol=0, atol=1e-12)
 
 

@@ -20,9 +20,12 @@ from pipeline.kernels.metrics import law_error, relative_angle
 from pipeline.results.storage import variables
 from pipeline.solve.peaks import _magnitudes, scene_peaks
 from pipeline.solve.scene import real_motion, revolution_angles, run_scene, solve_curves
-from pipeline.study.reader import StudyError, load_study, parse_study
-from pipeline.runs.sweep import build_problem, metric_values, run_sweep
-from pipeline.study.sweep_spec import apply_design, draw_checked, parameter_rows
+from pipeline.study.reader import load_study, parse_study
+from pipeline.base.errors import StudyError
+from pipeline.runs.sweep import build_problem, run_sweep
+from pipeline.model.metric_catalogue import metric_values
+from pipeline.study.sweep_spec import apply_design, parameter_rows
+from pipeline.study.sampling import draw_checked
 from support import naive
 from support.tolerances import LAW_VS_NAIVE_REL, SWEEP_VS_SCENE_REL
 

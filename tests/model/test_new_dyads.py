@@ -16,12 +16,15 @@ from pipeline.compiler import kernels_for
 from pipeline.compiler.emit import EMITTERS
 from pipeline.solve.reactions import scene_forces
 from pipeline.kernels import config as kc
-from pipeline.model.mechanism import PRP, RPP
+from pipeline.model.groups.prp import PRP
+from pipeline.model.groups.rpp import RPP
 from pipeline.solve.scene import revolution_angles, solve_curves
-from pipeline.study.reader import StudyError, load_study, parse_study
+from pipeline.study.reader import load_study, parse_study
+from pipeline.base.errors import StudyError
 from pipeline.kernels import sweep as ks
 from pipeline.runs.sweep import build_problem
-from pipeline.study.sweep_spec import draw_candidates, parameter_rows
+from pipeline.study.sweep_spec import parameter_rows
+from pipeline.study.sampling import draw_candidates
 from support.lanes import (assert_force_lanes_round, assert_lanes_agree, packed_force_lane_ops,
                            widened_draws)
 from support.power import virtual_power

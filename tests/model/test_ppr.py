@@ -13,12 +13,16 @@ import pytest
 
 from pipeline import compile as pc
 from pipeline.compiler.emit import EMITTERS
-from pipeline.model.groups import GROUP_TYPES, PPR, RPP
-from pipeline.runner import solve_scene
+from pipeline.model.groups import GROUP_TYPES
+from pipeline.model.groups.ppr import PPR
+from pipeline.model.groups.rpp import RPP
+from pipeline.solve.scene_study import solve_scene
 from pipeline.kernels import sweep as ks
 from pipeline.runs.sweep import build_problem
-from pipeline.study.reader import StudyError, load_study, parse_study
-from pipeline.study.sweep_spec import draw_candidates, parameter_rows
+from pipeline.study.reader import load_study, parse_study
+from pipeline.base.errors import StudyError
+from pipeline.study.sweep_spec import parameter_rows
+from pipeline.study.sampling import draw_candidates
 from support.lanes import assert_force_lanes_round, assert_lanes_agree, widened_draws
 
 SCENE = "ppr_cross_slide"

@@ -16,14 +16,17 @@ from pipeline.cli import main
 from pipeline.solve.reactions import slide_action
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
-from pipeline.model.mechanism import RPP
+from pipeline.model.groups.rpp import RPP
 from pipeline.solve.peaks import _magnitudes, scene_peaks, transmission_items
-from pipeline.runner import peak_summary, solve_scene
+from pipeline.runner import peak_summary
+from pipeline.solve.scene_study import solve_scene
 from pipeline.solve.scene import run_scene, solve_curves
 from pipeline.results.storage import read_units
 from pipeline.study.reader import load_study, parse_study
-from pipeline.runs.sweep import build_problem, metric_values
-from pipeline.study.sweep_spec import apply_design, draw_checked, parameter_rows
+from pipeline.runs.sweep import build_problem
+from pipeline.model.metric_catalogue import metric_values
+from pipeline.study.sweep_spec import apply_design, parameter_rows
+from pipeline.study.sampling import draw_checked
 from support.tolerances import SWEEP_VS_SCENE_REL
 
 CSV_REL = 1e-11          # CSV keeps 12 significant digits

@@ -12,7 +12,8 @@ import pytest
 
 from pipeline.cli import main
 from pipeline.kernels import config as kc
-from pipeline.results.storage import ResultsError, open_results, unknown_status
+from pipeline.results.storage import open_results, unknown_status
+from pipeline.base.errors import ResultsError
 from support.sweep_helpers import copy_of
 
 

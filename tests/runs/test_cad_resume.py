@@ -8,7 +8,8 @@ import re
 
 import pytest
 
-from pipeline.results.storage import ResultsError, study_digest
+from pipeline.results.storage import study_digest
+from pipeline.base.errors import ResultsError
 from pipeline.runs.sweep import SweepInterrupted, run_sweep
 from pipeline.study.reader import load_study
 

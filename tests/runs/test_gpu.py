@@ -202,7 +202,7 @@ def test_store_feasible_keeps_the_feasible_rows_and_every_count(tmp_path):
         counts = a["progress/status_counts"][()].sum(axis=0)
         assert counts[:-1].sum() == 900 and counts[-1] == feas.sum()
     from pipeline.views.browse import browse
-    from pipeline.runs.sweep import summarize
+    from pipeline.results.sweep_file import summarize
     sa, sb = summarize(full), summarize(kept)
     assert sa["candidates"] == sb["candidates"] == 900
     assert sa["feasible"] == sb["feasible"] and sa["status OK"] == sb["status OK"]

@@ -11,11 +11,14 @@ import pytest
 
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
-from pipeline.runs.search import (FAILED_VIOLATION, SweepBlackBox, hv_scale,
-                                  pymoo_view, repair_triangles, buildable_centre, run_search)
-from pipeline.results.storage import ResultsError
-from pipeline.study.reader import StudyError, load_study
-from pipeline.runs.sweep import COLUMN, SweepInterrupted, build_problem, run_sweep
+from pipeline.runs.search import run_search
+from pipeline.runs.search_problem import (FAILED_VIOLATION, SweepBlackBox, hv_scale, pymoo_view,
+                                          repair_triangles, buildable_centre)
+from pipeline.base.errors import ResultsError
+from pipeline.study.reader import load_study
+from pipeline.base.errors import StudyError
+from pipeline.runs.sweep import SweepInterrupted, build_problem, run_sweep
+from pipeline.study.objectives import COLUMN
 from pipeline.study.sweep_spec import parameter_rows
 from support.naive_pareto import hypervolume_2d_ref
 from support.sweep_helpers import assert_same_results, copy_of, kill_9_after_chunks

@@ -14,10 +14,12 @@ from pipeline.solve.reactions import scene_forces
 from pipeline.kernels import config as kc
 from pipeline.kernels.metrics import dwell_error
 from pipeline.solve.scene import revolution_angles, solve_curves
-from pipeline.results.storage import ResultsError
-from pipeline.study.reader import StudyError, load_study
+from pipeline.base.errors import ResultsError
+from pipeline.study.reader import load_study
+from pipeline.base.errors import StudyError
 from pipeline.runs.sweep import SweepInterrupted, build_problem, run_sweep
-from pipeline.study.sweep_spec import apply_design, draw_candidates, parameter_rows
+from pipeline.study.sweep_spec import apply_design, parameter_rows
+from pipeline.study.sampling import draw_candidates
 from support.sweep_helpers import (SYNTHESIS_CHUNK, SYNTHESIS_N, assert_same_results, copy_of,
                                    kill_9_after_chunks)
 from support.tolerances import DWELL_VS_NAIVE_REL, SWEEP_VS_SCENE_REL
@@ -299,7 +301,7 @@ def test_redrawn_designs_follow_rejection_sampling(synthesis):
     (two-sample Kolmogorov-Smirnov per variable, fixed seeds)."""
     from scipy.stats import ks_2samp
 
-    from pipeline.study.sweep_spec import draw_checked
+    from pipeline.study.sampling import draw_checked
     spec = dataclasses.replace(synthesis.sweep, sampler="uniform", candidates=40000,
                                chunk_size=40000)
     x, rejected = draw_checked(spec, 0)

@@ -14,7 +14,11 @@ from support.naive import naive_c_lagrange_terms
 from pipeline.solve import crank_motion as dy
 from pipeline.cli import main
 from pipeline.kernels import config as kc
-from pipeline.study.reader import DynamicsCase, StudyError, load_study, parse_study
+from pipeline.kernels.dynamics import TOO_FAST
+from pipeline.solve.crank_drive import build_drive
+from pipeline.study.reader import load_study, parse_study
+from pipeline.study.dynamics_spec import DynamicsCase
+from pipeline.base.errors import StudyError
 from pipeline.base.expressions import parse_expression
 from support.tolerances import (ANALOG_REL, ENERGY_DRIFT_REL, RK4_DT_S,
                                 RK4_VS_DOP853_RAD)
@@ -171,7 +175,7 @@ def test_tabulated_constant_drive_is_exact(study, plan, cases, text):
 def test_drive_tables_follow_the_expression(study, text, var):
     from pipeline.kernels.dynamics import channel
     m1 = parse_expression(text, "M1")
-    drive = dy.build_drive(study.mechanism, m1, t_end=10.0, dt=1e-4)
+    drive = build_drive(study.mechanism, m1, t_end=10.0, dt=1e-4)
     tab, other = (drive.tab_phi, drive.tab_t) if var == "phi" else (drive.tab_t, drive.tab_phi)
     assert tab.shape[1] > 0 and other.shape[1] == 0
     xs = np.linspace(-20.0, 20.0, 41) if var == "phi" else np.linspace(0.0, 10.0, 37) + 1e-4
@@ -289,7 +293,7 @@ def test_cli_run_and_export_motion_tables(studies, tmp_path):
 # is re-run with halved steps or refused, and a speed past the study's limit is a status.
 from pipeline.base import limits as lim
 
-REFUSED = (dy.INACCURATE, dy.TOO_FAST)
+REFUSED = (dy.INACCURATE, TOO_FAST)
 
 
 @pytest.fixture(scope="module")
@@ -372,7 +376,7 @@ def test_a_speed_past_the_limit_is_a_status(study, plan, cases):
     case = dy.with_changes(cases["runup"], M1=50.0, t_end=0.1)
     res = dy.integrate(plan, study.mechanism, case)
     ref = dy.integrate(plan, study.mechanism, case, "dop853")
-    assert res.status == ref.status == dy.TOO_FAST, (res.note, ref.note)
+    assert res.status == ref.status == TOO_FAST, (res.note, ref.note)
     assert res.t_cross == pytest.approx(ref.t_cross, abs=2 * res.dt)
     assert res.error_phi1 <= dy.ACCEPTED_ERROR_RAD and res.dt < case.dt
     before = res.t < res.t_cross

@@ -20,7 +20,8 @@ from pipeline.kernels import config as kc
 from pipeline.solve.peaks import _magnitudes, scene_peaks
 from pipeline.solve.reactions import scene_forces
 from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
-from pipeline.study.reader import StudyError, parse_study
+from pipeline.study.reader import parse_study
+from pipeline.base.errors import StudyError
 
 FINE = 100_000          # the reference's revolution: 0.0036 deg steps
 ZOOMS = 2               # then twice SUB samples across the best sample's neighbours

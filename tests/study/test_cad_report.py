@@ -16,7 +16,8 @@ import pytest
 from pipeline.cli import main
 from pipeline.solve.scene import run_scene
 from pipeline.study.cad_report import read_part, read_parts
-from pipeline.study.reader import StudyError, load_study, stored_study
+from pipeline.study.reader import load_study, stored_study
+from pipeline.base.errors import StudyError
 
 # DOMAIN.md section 5, mechanism B: name, joints, base point and link vector (the part's
 # origin and x axis), lS mm, US deg, m kg, J_S kg*m^2

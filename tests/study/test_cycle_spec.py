@@ -8,7 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from pipeline.study.reader import StudyError, load_study
+from pipeline.study.reader import load_study
+from pipeline.base.errors import StudyError
 
 STUDIES = Path(__file__).resolve().parents[2] / "studies"
 BASE = (STUDIES / "ov7_base.toml").read_text()

@@ -34,7 +34,8 @@ import pytest
 from pipeline.cli import main
 from pipeline.compile import source
 from pipeline.base.limits import MAX_NAME_LENGTH
-from pipeline.study.reader import StudyError, parse_study
+from pipeline.study.reader import parse_study
+from pipeline.base.errors import StudyError
 
 STUDIES = Path(__file__).resolve().parents[2] / "studies"
 CAM = (STUDIES / "cam_rocker_input.toml").read_text()

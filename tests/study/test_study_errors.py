@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from pipeline.study.reader import StudyError, load_study, parse_study
+from pipeline.study.reader import load_study, parse_study
+from pipeline.base.errors import StudyError
 
 BASE = (__import__("pathlib").Path(__file__).resolve().parents[2] / "studies"
         / "ov7_base.toml").read_text()

@@ -31,11 +31,14 @@ sys.path.insert(0, str(HERE.parent))     # tests/: the support package
 from support.stress_cases import near_singular_triads  # noqa: E402
 from support.tolerances import GPU_FAIL_PHI_STEPS as FAIL_PHI_STEPS  # noqa: E402
 
-from pipeline.runs.gpu import SIMULATOR, GpuSweep  # noqa: E402
+from pipeline.runs.gpu import GpuSweep  # noqa: E402
+from pipeline.compiler.cuda_device import SIMULATOR  # noqa: E402
 from pipeline.kernels import sweep as ks  # noqa: E402
 from pipeline.model.metric_catalogue import CATALOGUE  # noqa: E402
 from pipeline.study.reader import load_study  # noqa: E402
-from pipeline.runs.sweep import build_problem, draw_checked, parameter_rows  # noqa: E402
+from pipeline.runs.sweep import build_problem  # noqa: E402
+from pipeline.study.sampling import draw_checked  # noqa: E402
+from pipeline.study.sweep_spec import parameter_rows  # noqa: E402
 
 STUDIES = ("ov7_synthesis.toml", "ov7_synthesis_law.toml", "ov7_search.toml",
            "slotted_rocker_prp_sweep.toml", "cam_rocker_input_sweep.toml",

@@ -23,7 +23,8 @@ def widened_draws(studies, stem, widen, candidates):
 
     from pipeline.runs.sweep import build_problem
     from pipeline.study.reader import parse_study
-    from pipeline.study.sweep_spec import draw_candidates, parameter_rows
+    from pipeline.study.sweep_spec import parameter_rows
+    from pipeline.study.sampling import draw_candidates
     text = (studies / f"{stem}.toml").read_text()
     for old, new in widen:
         assert text.count(old) == 1, old

@@ -21,7 +21,9 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 from conftest import STUDIES  # noqa: E402
-from pipeline.runner import constant_forces, solve_scene  # noqa: E402
+from pipeline.runner import constant_forces  # noqa: E402
+from pipeline.solve.scene_study import solve_scene  # noqa: E402
+from pipeline.solve.cyclogram import output_motion  # noqa: E402
 from pipeline.study.reader import load_study  # noqa: E402
 from pipeline.views import plots  # noqa: E402
 from support.layout import layout_problems  # noqa: E402
@@ -45,7 +47,7 @@ def scene_pictures(res):
     from pipeline.views.shaking_plots import shaking_figure
     out = [("scene", lambda: plots.scene_figure(res)),
            ("kinematics", lambda: plots.kinematics_figure(res))]
-    if plots.output_motion(res) is not None:
+    if output_motion(res) is not None:
         out.append(("cyclogram", lambda: plots.cyclogram_figure(res)))
     if res.dense.forces is not None:
         out.append(("forces", lambda: plots.forces_figure(res)))

@@ -24,9 +24,10 @@ from PIL import Image  # noqa: E402
 
 from pipeline.views import plots  # noqa: E402
 from pipeline.views.animate import MAX_FRAMES, frame_indices, motion_of, write_animation  # noqa: E402
-from pipeline.views.browse import OV7_PHASES  # noqa: E402
+from pipeline.views.show import OV7_PHASES  # noqa: E402
 from pipeline.cli import main  # noqa: E402
-from pipeline.runner import solve_scene  # noqa: E402
+from pipeline.solve.scene_study import solve_scene  # noqa: E402
+from pipeline.solve.cyclogram import DWELL_RESIDUAL, output_motion  # noqa: E402
 from pipeline.study.reader import load_study  # noqa: E402
 from support import naive  # noqa: E402
 
@@ -116,7 +117,7 @@ def test_cyclogram_dwell_is_the_scenes_dwell_window(scenes):
     """Where the design dwells is peaks.scene_motion's window; with the OV-7 cycle
     its dwell is turned to start there too, and its phases fill the revolution."""
     res = scenes["ov7_base"]
-    m = plots.output_motion(res)
+    m = output_motion(res)
     assert m["error"] == pytest.approx(res.motion["dwell_error"], rel=1e-12)
     assert math.degrees(res.dense.phi[m["start"]]) == pytest.approx(res.motion["dwell_start"])
     fig = plots.cyclogram_figure(res, OV7_PHASES, "OV-7 cycle")
@@ -162,8 +163,8 @@ def test_cyclogram_shows_the_cycle_the_study_states(scenes):
 
 def test_a_design_without_a_dwell_is_not_said_to_dwell(scenes):
     res = scenes["warp_feed_fourbar"]        # a crank-rocker: no rocker declared, no dwell
-    m = plots.output_motion(res)
-    assert "P5" in m["what"] and m["error"] > plots.DWELL_RESIDUAL
+    m = output_motion(res)
+    assert "P5" in m["what"] and m["error"] > DWELL_RESIDUAL
     fig = plots.cyclogram_figure(res)
     assert "no dwell" in _wedges(fig, "design")["dwell"].get_label()
     assert "no dwell" in fig.axes[0].get_title()
@@ -383,7 +384,7 @@ def test_a_failing_mechanism_is_animated_up_to_where_it_fails(studies, tmp_path)
     info = write_animation(motion, tmp_path / "f.gif", frames=20)
     assert info["frames"] == _gif(tmp_path / "f.gif").n_frames == 9     # 0, 18, ..., 144 deg
     assert "up to where it fails" in info["duration"]
-    assert plots.output_motion(res) is None
+    assert output_motion(res) is None
     assert "does not assemble" in plots.cyclogram_figure(res).axes[0].texts[0].get_text()
 
 
