@@ -40,7 +40,7 @@ from ..kernels import config as kc
 from ..model.metric_catalogue import BY_NAME, metric_values
 from ..study.tolerance_spec import ToleranceSpec, drawn
 from .builds import BuildEvaluator, build_rows, deviations
-from .problem import compile_notice
+from ..compiler.notice import compile_notice
 
 log = logging.getLogger("pipeline")
 
