@@ -90,7 +90,7 @@ def class3_rows(plan, pars):
         ("L23", "triad.L23"), ("L34", "triad.L34"), ("L45", "triad.L45"), ("L35", "triad.L35"),
         ("L46", "triad.L46"), ("L57", "triad.L57"), ("orientation", "triad.orientation"),
         ("a0", "triad.a0"), ("b0", "triad.b0"), ("phi_start", "triad.phi_start"),
-        ("U578", "Attach[2].angle"), ("L78", "Attach[2].length"))}
+        ("U578", "output arm.angle"), ("L78", "output arm.length"))}
     if plan.body_names:
         for i, body in enumerate(BODIES_B):
             out[f"m{i}"] = col(f"{body}.mass")
