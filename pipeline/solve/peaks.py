@@ -181,8 +181,10 @@ def _meet(a, b, c, d):
     return q[:, :2]
 
 
-def scene_peaks(res) -> list[Peak]:
-    """Every peak of the scene ``res`` (pipeline.solve.scene.SceneResult), refined."""
+def scene_peaks(res, keep=None) -> list[Peak]:
+    """Every peak of the scene ``res`` (pipeline.solve.scene.SceneResult), refined;
+    with ``keep(quantity, item)`` only those it keeps (each peak is refined on
+    its own: the same numbers to the bit as among all of them)."""
     from scipy.optimize import minimize_scalar
 
     from .friction import scene_forces_with_friction
@@ -198,12 +200,15 @@ def scene_peaks(res) -> list[Peak]:
     order = 2
     with_forces = dense.forces is not None
     grid = _magnitudes(study, plan, dense, dense.forces)
+    if keep is not None:
+        grid = {k: v for k, v in grid.items() if keep(k[0], k[1])}
     nodes, walked, breaks = bracket_positions(study.mechanism, phis)
     if len(nodes) == len(phis):
         samples = grid            # no input law steeper than the dense revolution resolves
     else:
         c = solve_curves(plan, nodes, order, res.tolerances)
-        samples = _magnitudes(study, plan, c, forces_of(c) if with_forces else None)
+        samples = {k: v for k, v in _magnitudes(study, plan, c, forces_of(c) if with_forces
+                                                 else None).items() if k in grid}
         bad = c.status != 0       # (a position the walk between dense ones failed: unsampled)
         samples = {k: np.where(bad, np.nan, v) for k, v in samples.items()}
     n = len(nodes)

@@ -227,5 +227,28 @@ def _show(path, cid, out):
         info["dwell error"] = f"{run.dwell_error:.4g}" + (
             f" (stored {stored:.4g})" if stored is not None and np.isfinite(stored) else "")
     if run.dense.forces is not None:
-        info["peak reaction"] = f"{np.nanmax(run.dense.forces.magnitude):.1f} N"
+        info["peak reaction"] = f"{np.nanmax(run.dense.forces.magnitude):.1f} N (the grid's)"
+        info.update(refined_peak_reaction(path, run))
     return info
+
+
+def refined_peak_reaction(path, run) -> dict:
+    """The design's peak reaction refined between positions as its scene refines
+    it (``analysis.refined``), beside the value `pipeline analyze` stored for it
+    (fronts 1-3)."""
+    from ..analysis.candidate import candidate_scene
+    from ..analysis.refined import design_peaks
+    scene, _, _ = candidate_scene(path, run.index)
+    r = design_peaks(scene, ("peak_reaction",))
+    if "peak_reaction" not in r.values:
+        return {}
+    joint = run.dense.forces.joint_names[int(r.values["peak_joint"])]
+    text = (f"{r.values['peak_reaction']:.12g} N at {joint}, phi1 = {r.values['peak_phi']:.4f} "
+            "deg (refined between positions, as the design's scene)")
+    with open_results(path, "sweep") as f:
+        g = f.get("analysis/refined")
+        if run.index != "reference" and g is not None and "peak_reaction" in g:
+            at = np.flatnonzero(g["index"][()] == run.index)
+            if at.size:
+                text += f"; stored by analyze {float(g['peak_reaction'][at[0]]):.12g} N"
+    return {"refined peak reaction": text}
