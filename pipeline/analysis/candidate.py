@@ -14,7 +14,8 @@ import numpy as np
 from .fronts import variable_units
 from ..kernels import config as kc
 from .ranking import ranking
-from ..results.storage import ResultsError, attr_text, candidate_ids, open_results, row_of
+from ..results.storage import attr_text, candidate_ids, open_results, row_of
+from ..base.errors import ResultsError
 from ..study.reader import stored_study
 
 STATUS_HELP = {
@@ -148,7 +149,8 @@ def tolerance_design(source, candidate=None):
     design: a scene's results file or study file, or a sweep's candidate
     (``candidate``: a number, 'knee' or 'reference'; a sweep study file: its
     reference design)."""
-    from ..results.storage import ResultsError, attr_text, open_results
+    from ..results.storage import attr_text, open_results
+    from ..base.errors import ResultsError
     from pathlib import Path
     source = Path(source)
     if source.suffix.lower() == ".toml":

@@ -38,8 +38,9 @@ from ..base.files import RunLock, replacing
 from ..base.units import unit_text
 from ..kernels import config as kc
 from ..kernels.pareto import crowding_distance, knee_point, nondominated_rank
-from ..results.storage import (ResultsError, attr_text, candidate_ids, coordinate, hdf5_image, open_results, put,
+from ..results.storage import (attr_text, candidate_ids, coordinate, hdf5_image, open_results, put,
                                read_units, remove_group, results_output, variables)
+from ..base.errors import ResultsError
 from ..study.reader import stored_study
 
 log = logging.getLogger("pipeline")
