@@ -179,7 +179,7 @@ METRICS = {m.name: (m.units, m.long_name, m.stage) for m in CATALOGUE}
 # peaks and residuals are not quantities to tolerance)
 TOLERANCED_METRICS = ("stroke", "dwell_error", "law_error", "singularity_margin",
                       "min_transmission_angle", "peak_acceleration", "peak_reaction",
-                      "peak_M_bal")
+                      "peak_M_bal", "friction_loss", "peak_pv")
 # stored when a study names no metrics (in this order: the results file's)
 DEFAULT_METRICS = ("dwell_error", "peak_reaction", "stroke", "singularity_margin",
                    "dwell_start", "peak_joint", "peak_phi", "peak_M_bal", "newton_iterations")

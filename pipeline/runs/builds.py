@@ -26,8 +26,8 @@ from .problem import plain_problem
 
 
 def available_metrics(study, plan):
-    """The toleranced metrics this mechanism has (forces need bodies, the law
-    error a motion law, the transmission angle a dyad or a class III group,
+    """The toleranced metrics this mechanism has (forces need bodies, friction
+    [mechanism.friction], the law error a motion law, the transmission angle a dyad or a class III group,
     the singularity margin a class III group)."""
     from ..solve.peaks import transmission_items
     mech, out = study.mechanism, study.output
@@ -35,7 +35,9 @@ def available_metrics(study, plan):
     keep = []
     for m in TOLERANCED_METRICS:
         stage = BY_NAME[m].stage
-        if ((stage == "forces" and not mech.bodies) or (stage == "law" and out.motion_law is None)
+        if ((stage in ("forces", "friction") and not mech.bodies)
+                or (stage == "friction" and mech.friction is None)
+                or (stage == "law" and out.motion_law is None)
                 or (stage == "transmission" and not transmission_items(mech))
                 or (m == "singularity_margin" and not has_margin)):
             continue
@@ -87,6 +89,9 @@ class BuildEvaluator:
             self.metrics = ("stroke",) + self.metrics
         self.spec = evaluation_spec(study, self.plan, self.metrics)
         self.problem = plain_problem(study, self.spec)
+        if mech.friction is not None:   # the force metrics with friction, and its own
+            from .sweep_friction import SweepFriction
+            self.problem.friction = SweepFriction(mech, self.plan)
         self.arm = working_arm(study, self.plan)
 
     def raw(self, pars, n_jobs=None):

@@ -138,7 +138,7 @@ def analyse(study, mech, spec: ToleranceSpec, *, label="design", sweep_spec=None
     assemble is refused (its builds deviate from nothing): ``source``, the
     file it came from, names it."""
     t0 = time.perf_counter()
-    _refuse_friction(study, mech, spec, sweep_spec, source)
+    _check_friction(study, mech, spec, sweep_spec, source)
     if sweep_spec is not None:      # a build has no builds of its own: robust bounds apart
         sweep_spec = sweep_spec.nominal()
     with compile_notice():
@@ -171,23 +171,16 @@ def failure_text(label, plan, status, row):
             "revolution (its builds deviate from it)")
 
 
-def _refuse_friction(study, mech, spec, sweep_spec, source):
-    """A design with [mechanism.friction] whose builds' force metrics would be
-    frictionless is refused; its kinematic metrics (stroke, dwell, law, margin,
-    transmission, acceleration) do not depend on friction and are analysed."""
-    if mech.friction is None:
+def _check_friction(study, mech, spec, sweep_spec, source):
+    """A friction metric asked of a design without [mechanism.friction] is
+    refused in one line (with it, every build's force metrics are those with
+    friction: ``runs.sweep_friction`` in the builds' evaluator)."""
+    if mech.friction is not None:
         return
-    from dataclasses import replace
-
-    from ..model.metric_catalogue import TOLERANCED_METRICS
-    from ..study.friction_spec import refuse_friction
-    forces = [m for m in _wanted(spec, sweep_spec, mech) or TOLERANCED_METRICS
-              if BY_NAME[m].stage == "forces"]
-    if forces:
-        refuse_friction(replace(study, mechanism=mech),
-                        f"a tolerance analysis's {', '.join(forces)} would be", source=source,
-                        hint="--metrics without them analyses the kinematic metrics, which "
-                             "friction does not change")
+    asked = [m for m in _wanted(spec, sweep_spec, mech) or () if BY_NAME[m].stage == "friction"]
+    if asked:
+        raise ValueError(f"{source or study.path}: tolerance metrics: {asked[0]} needs friction "
+                         "in the joints: declare [mechanism.friction]")
 
 
 def _wanted(spec, sweep_spec, mech):

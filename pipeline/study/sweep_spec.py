@@ -258,13 +258,6 @@ def parse_sweep(root, mech, output) -> SweepSpec:
     stroke, margin_min, bounds = _parse_constraints(sec.table("constraints", default={}), mech,
                                                     output)
     metrics = tuple(dict.fromkeys(metrics + objectives + tuple(b[0] for b in bounds)))
-    forced = [b[0] for b in bounds if METRICS[b[0]][2] in ("forces", "friction")]
-    if (getattr(mech, "friction", None) is not None and forced
-            and {"build_yield", "build_loss"} & set(metrics)):
-        raise sec.error("constraints", f"build_yield would hold each build to {forced[0]} "
-                                       "without friction (a build's forces are frictionless), "
-                                       "and this mechanism has [mechanism.friction]; bound "
-                                       f"{forced[0]} without build_yield, or leave it out")
     mass_model = []
     if sec.has("mass_model"):
         bodies = {b.name for b in mech.bodies}
@@ -353,7 +346,6 @@ def _check_bounds_range(sec, v, name, param, low, high, units, factor, ref, spre
 FRICTIONLESS_ONLY = {
     "equilibrium_residual": "the frictionless kinetostatics' residual (a scene reports the "
                             "residual with friction)",
-    "robust_peak_reaction": "a quantile over builds whose forces are frictionless",
 }
 
 

@@ -1,7 +1,7 @@
 """Friction on the paths beyond a scene's run (issue 52): an adaptive search
 minimises the friction loss (a sweep's: tests/runs/test_sweep_friction.py); a
-tolerance analysis's force metrics would be frictionless, so a study with
-[mechanism.friction] is refused there in one line naming the file and the field; `pipeline compare` of scene files shows their friction (the mean
+tolerance analysis of a design with friction has its force metrics with friction
+and the friction's own; `pipeline compare` of scene files shows their friction (the mean
 loss, the largest peak p*v) and says where the designs differ in it; a sweep's
 design re-run as a scene (show --candidate, the report) keeps its friction."""
 
@@ -74,26 +74,54 @@ def scenes(studies, tmp_path_factory):
     return out
 
 
-def test_tolerance_of_a_friction_scene_refuses_its_force_metrics(scenes, studies, tmp_path,
-                                                                 capsys):
-    """Its builds' peak_reaction and peak_M_bal would be frictionless: refused (the
-    scene's results file, the study file with one force metric named); the
-    kinematic metrics alone, which friction does not change, are analysed."""
+def test_tolerance_of_a_friction_design_is_with_friction(studies, tmp_path, capsys):
+    """A tolerance analysis of mechanism B with friction: the design's own
+    peak_reaction, peak_M_bal, friction_loss and peak_pv are those of the
+    kinetostatics with friction on the scene's grid (``solve.friction``, reduced
+    in numpy here), every build carries them; a friction metric asked of a
+    frictionless design is refused in one line."""
+    from dataclasses import replace
+
+    from pipeline.kernels import config as kc
+    from pipeline.runs.tolerance import analyse
+    from pipeline.solve.friction import solve_positions
+    from pipeline.solve.reactions import sample_loads
+    from pipeline.solve.scene import revolution_angles, solve_curves
+    from pipeline.study.reader import load_study
+    from pipeline.study.tolerance_spec import ToleranceSpec
+    study = load_study(studies / "ov7_friction.toml")
+    mech = study.mechanism
+    names = ("peak_reaction", "peak_M_bal", "friction_loss", "peak_pv")
+    spec = replace(ToleranceSpec(), metrics=names, samples=16)
+    res = analyse(study, mech, spec)
+    plan = mech.compile()
+    phi = revolution_angles(mech.crank, study.output.dense_positions)
+    c = solve_curves(plan, phi, kc.ACCELERATIONS)
+    R, _, M, _, fric, speed, found = solve_positions(plan, mech.friction, c.pos, c.d1, c.d2,
+                                                     mech.crank.omega1, mech.crank.eps1,
+                                                     sample_loads(mech, phi))
+    assert (found[:, 0] == kc.OK).all()
+    nj = len(plan.joint_names)
+    r = np.hypot(R[..., 0], R[..., 1])
+    d = np.asarray(mech.friction.diameters(), float)
+    pv = r / (d * np.asarray(mech.friction.lengths(), float)) \
+        * np.abs(speed[:, :nj] * mech.crank.omega1) * d * 0.5e-3
+    loss = (-fric * speed * mech.crank.omega1).sum(axis=1)     # (no slides)
+    want = {"peak_reaction": r.max(), "peak_M_bal": np.abs(M).max(),
+            "friction_loss": loss.mean(), "peak_pv": pv.max()}
+    for k, name in enumerate(res.metrics):
+        if name in want:
+            assert res.nominal[k] == pytest.approx(want[name], rel=1e-11), name
+            ok = res.status == kc.OK
+            assert np.isfinite(res.values[ok, k]).all() and ok.any()
     out = tmp_path / "t.h5"
     capsys.readouterr()
-    for source, extra, named in ((scenes["full"], [], "peak_reaction, peak_M_bal"),
-                                 (studies / "ov7_friction.toml",
-                                  ["--metrics", "stroke,peak_M_bal"], "peak_M_bal")):
-        assert main(["tolerance", str(source), "-o", str(out), "--samples", "16",
-                     "--no-pictures", "-q", *extra]) == 2
-        line = error_line(capsys)
-        assert line.startswith(f"pipeline tolerance: error: {source}: mechanism.friction: ")
-        assert f"tolerance analysis's {named} would be frictionless" in line
-        assert "friction is computed for scenes" in line and "--metrics" in line \
-            and not out.exists()
-    assert main(["tolerance", str(studies / "ov7_friction.toml"), "-o", str(out), "--samples",
-                 "16", "--no-pictures", "-q", "--metrics", "stroke,dwell_error"]) == 0
-    assert out.exists()
+    source = studies / "ov7_class3.toml"
+    assert main(["tolerance", str(source), "-o", str(out), "--samples", "16", "--no-pictures",
+                 "-q", "--metrics", "stroke,friction_loss"]) == 2
+    line = error_line(capsys)
+    assert line.startswith(f"pipeline tolerance: error: {source}: ") and "friction_loss needs "\
+        "friction in the joints" in line and not out.exists()
 
 
 # ------------------------------------------------------------------ compared
