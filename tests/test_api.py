@@ -43,7 +43,14 @@ def test_open_a_sweep_gives_the_datasets_row_for_row(sweep):
         codes = f["candidates/status"][()]
         assert list(df["status"]) == [kc.STATUS_NAMES[c] for c in codes]
         np.testing.assert_array_equal(df["feasible"], f["candidates/feasible"][()])
+        joints = [j.decode() if isinstance(j, bytes) else j
+                  for j in f["metrics"].attrs["joint_names"]]
         for m in variables(f["metrics"]):
+            if m == "peak_joint":       # the joint by name, as a scene's CSV names it (R1 ...)
+                stored = f[f"metrics/{m}"][()]
+                want = [joints[int(i)] if np.isfinite(i) else "" for i in stored]
+                assert list(df[m]) == want and set(want) - {""} <= set(joints)
+                continue
             np.testing.assert_array_equal(df[m], f[f"metrics/{m}"][()])
         np.testing.assert_array_equal(df["g_stroke_min"], f["candidates/constraints"][:, 0])
         # the failing group by name (the mechanism's groups), empty where none failed

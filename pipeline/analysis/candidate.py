@@ -14,6 +14,7 @@ import numpy as np
 from .fronts import variable_units
 from ..kernels import config as kc
 from .ranking import ranking
+from .refined import design_scene
 from ..results.storage import attr_text, candidate_ids, open_results, row_of
 from ..base.errors import ResultsError
 from ..study.reader import stored_study
@@ -199,13 +200,3 @@ def candidate_scene(source, candidate):
         raise ValueError(f"{source} is not a sweep: --candidate picks a design of a sweep's "
                          "results file")
     return design_scene(study, mech), label, origin.get("candidate", "reference")
-
-
-def design_scene(study, mech):
-    """The sweep study ``study`` with the design's mechanism ``mech`` as a scene
-    study, at the sweep's positions per revolution and operating speed (with
-    the force analysis where the mechanism has mass data): what
-    ``candidate_scene`` gives and ``analysis.refined`` refines the peaks of."""
-    output = replace(study.output, dense_positions=int(study.sweep.positions),
-                     analysis="forces" if mech.bodies else "accelerations")
-    return replace(study, kind="scene", mechanism=mech, output=output, sweep=None, search=None)

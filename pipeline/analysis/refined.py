@@ -18,7 +18,7 @@ value is the grid's or larger.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -106,7 +106,6 @@ def refine_designs(study, params, metrics, progress=None) -> tuple[np.ndarray, n
     the last two columns LOCATIONS; NaN where a design's scene fails), status
     (n,) int8 of each design's scene.  ``progress(k)`` after each design."""
     from ..study.sweep_spec import apply_design
-    from .candidate import design_scene
     cols = tuple(metrics) + LOCATIONS
     values = np.full((len(params), len(cols)), math.nan)
     status = np.zeros(len(params), np.int8)
@@ -119,3 +118,13 @@ def refine_designs(study, params, metrics, progress=None) -> tuple[np.ndarray, n
         if progress is not None:
             progress(k + 1)
     return values, status
+
+
+def design_scene(study, mech):
+    """The sweep study ``study`` with the design's mechanism ``mech`` as a scene
+    study, at the sweep's positions per revolution and operating speed (with
+    the force analysis where the mechanism has mass data): what
+    ``candidate_scene`` gives and ``analysis.refined`` refines the peaks of."""
+    output = replace(study.output, dense_positions=int(study.sweep.positions),
+                     analysis="forces" if mech.bodies else "accelerations")
+    return replace(study, kind="scene", mechanism=mech, output=output, sweep=None, search=None)

@@ -43,7 +43,7 @@ class Counterweight:
     def summary(self) -> dict:
         pivot, tip = self.crank
         return {"counterweight": (
-            f"{self.mass_radius:.6g} kg*mm at {self.angle:.4f} deg from the crank line "
+            f"{self.mass_radius:.6g} kg·mm at {self.angle:.4f} deg from the crank line "
             f"{pivot}->{tip} (m_c r_c; counter-clockwise): peak shaking force over the "
             f"{len(self.phi)} positions {self.before:.6g} N (phi1 = {self.before_phi1:g} deg) "
             f"-> {self.after:.6g} N (phi1 = {self.after_phi1:g} deg)")}

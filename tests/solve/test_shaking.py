@@ -150,21 +150,21 @@ def test_the_results_file_the_summary_and_the_tables_carry_it(studies, tmp_path)
     lines = peak_summary(res)
     assert lines["peak_shaking_force"].endswith(" deg") and " N at phi1 = " in \
         lines["peak_shaking_force"]
-    assert " N*m about P1 at phi1 = " in lines["peak_shaking_moment"]
+    assert " N·m about P1 at phi1 = " in lines["peak_shaking_moment"]
     assert f"{cw.before:.6g} N" in lines["counterweight"] and f"{cw.after:.6g} N" in \
-        lines["counterweight"] and lines["counterweight"].startswith(f"{cw.mass_radius:.6g} kg*mm")
+        lines["counterweight"] and lines["counterweight"].startswith(f"{cw.mass_radius:.6g} kg·mm")
     assert out.summary["counterweight"] == lines["counterweight"]
     with h5py.File(out.results, "r") as f:
         d = f["dense"]
         for key, units in (("shaking_force", "N"), ("shaking_force_magnitude", "N"),
-                           ("shaking_moment", "N*m")):
+                           ("shaking_moment", "N·m")):
             assert d[key].attrs["units"] == units and d[key].attrs["long_name"], key
             assert d[key].dims[0][0].name == "/dense/phi1", key
         np.testing.assert_array_equal(d["shaking_force"][()], res.dense.forces.shaking[:, :2])
         assert d["shaking_moment"].attrs["about"] == "P1"
         assert "shaking_force" in f["table"]
         g = f["counterweight"]
-        for key, units in (("mass_radius", "kg*mm"), ("angle", "deg"), ("peak_before", "N"),
+        for key, units in (("mass_radius", "kg·mm"), ("angle", "deg"), ("peak_before", "N"),
                            ("peak_after", "N"), ("peak_after_phi1", "deg"),
                            ("shaking_force", "N")):
             assert g[key].attrs["units"] == units and g[key].attrs["long_name"], key
@@ -174,12 +174,12 @@ def test_the_results_file_the_summary_and_the_tables_carry_it(studies, tmp_path)
         assert p["shaking_force"].attrs["item"] == "frame"
         assert p["shaking_force_grid"][()] == cw.before
         assert p["shaking_force"][()] >= cw.before
-        assert p["shaking_moment"].attrs["units"] == "N*m"
+        assert p["shaking_moment"].attrs["units"] == "N·m"
     tables = pipeline.open(out.results)
     r = tables["reactions"]
     np.testing.assert_array_equal(r["shaking_F"], res.dense.forces.shaking_magnitude)
     np.testing.assert_array_equal(r["shaking_M"], res.dense.forces.shaking[:, 2])
-    assert r.attrs["units"]["shaking_Fx"] == "N" and r.attrs["units"]["shaking_M"] == "N*m"
+    assert r.attrs["units"]["shaking_Fx"] == "N" and r.attrs["units"]["shaking_M"] == "N·m"
     peaks = tables["peaks"].set_index("quantity")
     assert peaks.loc["shaking_force", "item"] == "frame"
     assert peaks.loc["M_bal", "item"] == "crank"
@@ -187,5 +187,5 @@ def test_the_results_file_the_summary_and_the_tables_carry_it(studies, tmp_path)
     csv = tmp_path / "csv"
     assert main(["export", str(out.results), "--csv", str(csv), "-q"]) == 0
     head = pd.read_csv(csv / "reactions.csv").columns
-    assert {"shaking_Fx [N]", "shaking_Fy [N]", "shaking_F [N]", "shaking_M [N*m]"} <= set(head)
+    assert {"shaking_Fx [N]", "shaking_Fy [N]", "shaking_F [N]", "shaking_M [N·m]"} <= set(head)
     assert (csv / "counterweight.csv").exists()
