@@ -188,6 +188,28 @@ def eps_at(gravity, body_com, body_turn, body_mass_off, load_body, load_point, p
     return OK, eps
 
 
+@njit(inline='always', **JIT)
+def record(n, n_sub, tail0, h, p, w, e, out_t, out_phi, out_omega, out_eps, tail_t, tail_phi,
+           tail_omega, tail_eps):
+    """The state (phi1, omega1, eps1) after step n (t = n h) into the samples
+    (every n_sub steps) and the fine tail (from step tail0 on); whether it was
+    a sample."""
+    sample = n % n_sub == 0
+    if sample:
+        k = n // n_sub
+        out_t[k] = n * h
+        out_phi[k] = p
+        out_omega[k] = w
+        out_eps[k] = e
+    if n >= tail0:
+        j = n - tail0
+        tail_t[j] = n * h
+        tail_phi[j] = p
+        tail_omega[j] = w
+        tail_eps[j] = e
+    return sample
+
+
 @njit(**JIT_ALLOC)
 def rk4(advance, start, K, sizes, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t, damping,
         phi0, omega0, dt, n_sub, omega_limit, out_t, out_phi, out_omega, out_eps, tail_t,
@@ -262,20 +284,9 @@ def rk4(advance, start, K, sizes, masses, par, tols, const, tab_phi, h_phi, tab_
             s += 1
             continue
         e = es
-        if n % n_sub == 0:
-            k = n // n_sub
-            out_t[k] = n * h
-            out_phi[k] = p
-            out_omega[k] = w
-            out_eps[k] = e
-            if crossing >= 0:
-                st = TOO_FAST
-        if n >= tail0:
-            j = n - tail0
-            tail_t[j] = n * h
-            tail_phi[j] = p
-            tail_omega[j] = w
-            tail_eps[j] = e
+        if record(n, n_sub, tail0, h, p, w, e, out_t, out_phi, out_omega, out_eps, tail_t,
+                  tail_phi, tail_omega, tail_eps) and crossing >= 0:
+            st = TOO_FAST
         if n == n_steps or st == TOO_FAST:
             break
         kp = w

@@ -33,7 +33,7 @@ from numba import njit, types
 from .config import FRICTION_LOCK, JIT, JIT_ALLOC, OK, SINGULAR
 from .continuation import work
 from .dynamics import (_DRIVE, _F1, _I1, _I2, MASSES, OMEGA_STOP, SIZES, TOO_FAST, acceleration,
-                       begin, channel, lagrange_terms)
+                       begin, channel, lagrange_terms, record)
 from .walk import ADVANCE, START
 from .friction import friction_forces, relative_speed_slopes
 
@@ -270,20 +270,9 @@ def rk4_friction(advance, start, K, sizes, masses, par, tols, const, tab_phi, h_
                   False, speed0)
     n = 0
     while st == OK:
-        if n % n_sub == 0:
-            k = n // n_sub
-            out_t[k] = n * dt
-            out_phi[k] = p
-            out_omega[k] = w
-            out_eps[k] = e
-            if crossing >= 0:
-                st = TOO_FAST
-        if n >= tail0:
-            j = n - tail0
-            tail_t[j] = n * dt
-            tail_phi[j] = p
-            tail_omega[j] = w
-            tail_eps[j] = e
+        if record(n, n_sub, tail0, dt, p, w, e, out_t, out_phi, out_omega, out_eps, tail_t,
+                  tail_phi, tail_omega, tail_eps) and crossing >= 0:
+            st = TOO_FAST
         if n == n_steps or st != OK:
             break
         # the step to t = (n + 1) dt, in pieces that each keep their start's regime

@@ -9,11 +9,11 @@ for one release, with a warning (``from pipeline.model import Mechanism``); insi
 import each from the module that defines it.
 """
 
-import importlib as _importlib
-import warnings as _warnings
+from ..base.old_names import by_name as _by_name
+from ..base.old_names import old_names as _old_names
 
 # the flat package's names, kept for one release: the module that defines them -> names
-_OLD_NAMES = {name: module for module, names in {
+_OLD_NAMES = _by_name({
     "pipeline.model.mechanism": "GIDX_WIDTH Body CentreOfMass Crank Group Load Mechanism Plan"
                                 " Slide compile_mechanism group_label natural_key",
     "pipeline.model.groups.ppr": "PPR",
@@ -29,15 +29,7 @@ _OLD_NAMES = {name: module for module, names in {
     "pipeline.model.groups.law": "Law",
     "pipeline.model.groups.rotary_input": "RotaryInput",
     "pipeline.model.groups.slider_input": "SliderInput",
-}.items() for name in names.split()}
+})
+__getattr__ = _old_names(__name__, _OLD_NAMES)
 
 
-def __getattr__(name):
-    """A name of the flat package's ``pipeline.model``: it warns (``DeprecationWarning``,
-    naming the module that defines it) and gives the very object."""
-    if name not in _OLD_NAMES:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    _warnings.warn(f"{__name__}.{name} is an old import path, kept for one release: import "
-                   f"{name} from {_OLD_NAMES[name]} (the next release removes the old "
-                   "path; docs/guide/architecture.md)", DeprecationWarning, stacklevel=2)
-    return getattr(_importlib.import_module(_OLD_NAMES[name]), name)

@@ -1,0 +1,30 @@
+"""The names of the flat package's subpackages (``pipeline.model``,
+``pipeline.study``, ``pipeline.analysis``), kept importable from them for one
+release with a warning: one module-level ``__getattr__`` for each
+(``old_names``).  Old module paths are ``pipeline.old_paths``'."""
+
+import importlib
+import warnings
+
+
+def by_name(table: dict) -> dict:
+    """{name: the module that defines it} from {module: its names, space-separated}."""
+    return {name: module for module, names in table.items() for name in names.split()}
+
+
+def old_names(package: str, where: dict):
+    """A module ``__getattr__`` for ``package``: a name of ``where`` (``by_name``)
+    warns (``DeprecationWarning``, naming the module that defines it) and gives
+    the very object."""
+
+    def __getattr__(name):
+        if name not in where:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        warnings.warn(f"{package}.{name} is an old import path, kept for one release: import "
+                      f"{name} from {where[name]} (the next release removes the old "
+                      "path; docs/guide/architecture.md)", DeprecationWarning, stacklevel=2)
+        return getattr(importlib.import_module(where[name]), name)
+    __getattr__.__doc__ = (f"A name of the flat package's ``{package}``: it warns "
+                           "(``DeprecationWarning``, naming the module that defines it) and "
+                           "gives the very object.")
+    return __getattr__
