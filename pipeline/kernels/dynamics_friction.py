@@ -9,9 +9,12 @@ equation at every evaluation, by the secant method from the frictionless eps1
 (``friction_eps``): implicit, not lagged.
 
 The friction loads turn with the relative motions: the "regime" (per joint
-and slide, the sign of its relative speed analog times omega1) changes where
-a relative speed passes zero (a rocker's reversal, a slider's dead centre) or
-where omega1 does, and the right-hand side jumps there.  RK4 keeps its order
+and slide, the sign of its relative speed analog times omega1; per slide, the
+branch of its normal force's magnitude, ``kernels.friction.slide_branch``)
+changes where a relative speed passes zero (a rocker's reversal, a slider's
+dead centre) or omega1 does, and the right-hand side jumps there; where a
+slide's normal force changes its sign, or its block starts or stops bearing
+on its edges, the right-hand side has a kink.  RK4 keeps its order
 only between such switches, so every step is integrated in the regime of its
 start (``rk4_in_regime``: the stages forced to it) and checked at its end: a
 step whose end is in another regime is cut where the regime changes, located
@@ -127,6 +130,7 @@ def _eval(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t, damp
     if not keep:
         for k in range(sense.shape[0]):
             regime[k] = sense[k]
+        for k in range(fw[10].shape[0]):
             speed[0, k] = fw[10][k]
         relative_speed_slopes(pos, d1, d2, body_com, body_turn, friction[6], friction[7],
                               friction[8], friction[9], speed[1])
@@ -247,12 +251,14 @@ def rk4_friction(advance, start, K, sizes, masses, par, tols, const, tab_phi, h_
     nj = friction[5].shape[0]
     ns = friction[7].shape[0]
     m = 3 * nb
+    # the regime: per joint and slide the direction of its friction, then per slide
+    # the branch of its normal force's magnitude (kernels.friction.slide_branch)
     fw = (np.empty((m, m)), np.empty((m, m)), np.empty(m), np.empty(m), np.empty(m),
-          np.empty(nj + ns), np.empty((nb, 3)), np.empty((nj, 2)), np.empty((ns, 2)),
+          np.empty(nj + 2 * ns), np.empty((nb, 3)), np.empty((nj, 2)), np.empty((ns, 2)),
           np.empty(nj + ns), np.empty(nj + ns), np.empty(4))
-    regime = np.empty(nj + ns)
-    after = np.empty(nj + ns)
-    switched = np.empty(nj + ns)
+    regime = np.empty(nj + 2 * ns)
+    after = np.empty(nj + 2 * ns)
+    switched = np.empty(nj + 2 * ns)
     speed0 = np.empty((2, nj + ns))     # the relative speeds and slopes at a piece's start
     speed1 = np.empty((2, nj + ns))     # ... at a trial's end
     speed_sw = np.empty((2, nj + ns))   # ... at the end of the piece past a switch

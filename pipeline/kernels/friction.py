@@ -114,6 +114,18 @@ def _sense(analog, omega1):
 
 
 @njit(**JIT)
+def slide_branch(n, c, block):
+    """A slide's branch of |N_f| (``model.friction``) at its normal force N and
+    couple C: sign(N) (1 where N = 0) on |N|, 2 sign(C) on the edge loads
+    2000 |C| / l.  ``add_friction`` holds a crank motion's regime to it where
+    ``sense`` carries it after the joints and slides (a slide's friction has a
+    kink where N changes its sign or the branch changes: a switch of its own)."""
+    if block > 0.0 and 2000.0 * abs(c) / block > abs(n):
+        return 2.0 if c > 0.0 else -2.0
+    return -1.0 if n < 0.0 else 1.0
+
+
+@njit(**JIT)
 def add_friction(x, only, pos, body_com, joint_bodies, slide_bodies, slide_dir, slide_angle,
                  f_rev, radius, f_slide, block, sense, jac, res, friction_out):
     """Add the friction loads at the unknowns ``x`` to the residual ``res`` and
@@ -147,13 +159,25 @@ def add_friction(x, only, pos, body_com, joint_bodies, slide_bodies, slide_dir, 
         cn = 2 * nj + 2 * k
         n = x[cn]
         cc = x[cn + 1]
-        mag = abs(n)
-        dn = 1.0 if n > 0.0 else (-1.0 if n < 0.0 else 0.0)
-        dc = 0.0
-        if block[k] > 0.0 and 2000.0 * abs(cc) / block[k] > mag:   # wedged: edge loads
-            mag = 2000.0 * abs(cc) / block[k]
+        # a slide's branch (``slide_branch``): given where sense holds it, else its own
+        code = sense[nj + slide_bodies.shape[0] + k] if sense.shape[0] > e + slide_bodies.shape[0] \
+            else 0.0
+        if code == 0.0:
+            mag = abs(n)
+            dn = 1.0 if n > 0.0 else (-1.0 if n < 0.0 else 0.0)
+            dc = 0.0
+            if block[k] > 0.0 and 2000.0 * abs(cc) / block[k] > mag:   # wedged: edge loads
+                mag = 2000.0 * abs(cc) / block[k]
+                dn = 0.0
+                dc = (2000.0 / block[k]) * (1.0 if cc > 0.0 else -1.0)
+        elif abs(code) == 1.0:      # |N| = code N, continued past N = 0
+            mag = code * n
+            dn = code
+            dc = 0.0
+        else:                       # the edge loads: |N_f| = 2000 (code / 2) C / l
+            mag = 0.5 * code * 2000.0 * cc / block[k]
             dn = 0.0
-            dc = (2000.0 / block[k]) * (1.0 if cc > 0.0 else -1.0)
+            dc = 0.5 * code * 2000.0 / block[k]
         c = -sense[e] * f_slide                    # the force on the slider: c |N_f| u
         friction_out[e] = c * mag
         th = slide_direction(pos, slide_dir, slide_angle, k)
@@ -267,6 +291,9 @@ def friction_forces(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn
         friction_out[e] = math.nan
         if not keep_sense:
             sense[e] = _sense(speed_out[e], omega1)
+    if not keep_sense:
+        for k in range(ne, sense.shape[0]):     # the slides' branches: their own, found below
+            sense[k] = 0.0
     col_m = assemble_forces(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn,
                             body_mass_off, joint_point, joint_bodies, slide_bodies, slide_dir,
                             slide_angle, crank_body, load_body, load_point, loads_k, a0, b0,
@@ -346,6 +373,8 @@ def friction_forces(pos, d1, d2, omega1, eps1, gravity, par, body_com, body_turn
     for k in range(ns):
         slide_out[k, 0] = x[2 * nj + 2 * k]
         slide_out[k, 1] = x[2 * nj + 2 * k + 1]
+        if not keep_sense and sense.shape[0] > ne + k:
+            sense[ne + k] = slide_branch(slide_out[k, 0], slide_out[k, 1], block[k])
     found[1] = x[col_m]
 
 

@@ -18,8 +18,8 @@ delta(J_f) = target: delta falls as J_f grows.  Needs M1 and the loads to be
 constants or functions of phi (a steady rotation has no clock), and a net
 positive work per revolution in the direction of rotation.  With
 [mechanism.friction] the drive is less the work the joints' friction takes per
-radian at the study's constant crank speed (``friction_work``: the total loss
-over |omega1|).
+radian at constant speed (``friction_work``: the total loss over the speed),
+that speed the steady rotation's own mean over the revolution (``_Orbit._friction``).
 
 No flywheel is sized (``flywheel_of``: a ``Flywheel`` whose ``refused`` says
 why, in one line naming the study file and its field) on a case whose motion
@@ -130,9 +130,44 @@ class _Orbit:
         self.drive = self.s * drive[order]
         self.b = case.damping
         self.friction = None
+        self.friction_speed = math.nan
         if mech.friction is not None:   # less what the joints lose at constant speed
-            self.friction = friction_work(plan, mech, self.phi, self.s)
+            self.friction_speed, self.friction = self._friction(plan, mech)
             self.drive = self.drive - self.friction
+
+    def _simpson(self, y):
+        """The integral over the revolution of ``y`` at the nodes and half steps."""
+        h = 0.5 * self.h
+        return h / 3.0 * (y[0] + y[-1] + 4.0 * y[1:-1:2].sum() + 2.0 * y[2:-1:2].sum())
+
+    def _friction(self, plan, mech):
+        """(|omega| [rad/s], the friction's work per radian at it) where |omega| is
+        the steady rotation's mean speed over the revolution: b 2 pi |omega| =
+        the drive's work per revolution less the friction's at |omega| (exact for
+        the periodic rotation: the damping takes b |omega| per radian), by Brent's
+        method between rest and the frictionless mean speed."""
+        from scipy.optimize import brentq
+        work = self._simpson(self.drive)
+        top = work / (2.0 * math.pi * self.b)
+        if not (work > 0.0 and math.isfinite(top)):
+            raise NoSteadyRotation("M1 and the loads do no net work over a revolution in its "
+                                   "direction; there is no steady rotation")
+        cache = {}
+
+        def lost(w):
+            if w not in cache:
+                cache[w] = friction_work(plan, mech, self.phi, self.s, w)
+            return cache[w]
+
+        def gap(w):
+            return (work - self._simpson(lost(w))) / (2.0 * math.pi * self.b) - w
+
+        lo = top * 1e-6
+        if not gap(lo) > 0.0:
+            raise NoSteadyRotation("the joints' friction takes more than M1 and the loads give "
+                                   "at every speed: the crank stops")
+        w = brentq(gap, lo, top, xtol=1e-12 * top, rtol=1e-13)
+        return w, lost(w)
 
     def run(self, K0, J_add):
         """K at the nodes over one revolution from K0."""
@@ -205,15 +240,15 @@ class _Orbit:
                 self.s * float(w.max()), self.s * float(mean))
 
 
-def friction_work(plan, mech, phi, s):
+def friction_work(plan, mech, phi, s, speed):
     """The work the joints' friction takes per radian of the crank [N·m] at the
-    crank angles ``phi``, at the constant speed s |omega1| (the study's crank
-    speed in the direction of rotation s; eps1 = 0): the total loss [W] over
-    |omega1| (``solve.friction``'s kinetostatics)."""
+    crank angles ``phi``, at the constant speed s ``speed`` (in the direction
+    of rotation s; eps1 = 0): the total loss [W] over the speed
+    (``solve.friction``'s kinetostatics)."""
     from .friction import solve_positions
     from .reactions import sample_loads
     from .scene import solve_curves
-    omega = s * abs(mech.crank.omega1)
+    omega = s * abs(speed)
     c = solve_curves(plan, phi, kc.ACCELERATIONS)
     if c.overall != kc.OK:
         raise NoSteadyRotation("the mechanism cannot be assembled over the whole revolution")

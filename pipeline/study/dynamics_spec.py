@@ -35,11 +35,6 @@ def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
     if not mech.bodies:
         raise sec.error("", "crank dynamics needs mass data: declare [[mechanism.bodies]]")
     method = sec.string("method", "rk4", choices=("rk4", "dop853"))
-    if mech.friction is not None and mech.friction.slide != 0.0 and mech.slides:
-        raise sec.error("", "the crank's motion with friction at the slides is not integrated "
-                            "yet (a slide's normal force changes sign within the revolution, "
-                            "and its friction with it: a switch RK4 must locate); friction at "
-                            "the revolute joints is: give mechanism.friction.slide = 0")
     if method == "dop853" and mech.friction is not None:
         raise sec.error("method", "the reference integrator (dop853) is frictionless; with "
                                   "[mechanism.friction] the crank's motion is integrated by "
