@@ -23,6 +23,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..kernels import config as kc
+from ..kernels.pareto import nondominated_rank
+from ..results.storage import coordinate, put
+
+REFINED_FRONTS = 3            # fronts whose peaks are refined between positions
 
 # a sweep's peak metric -> (the scene's peak quantity it is the extreme of, its items:
 # None every item, "working point" the study's working point only); the refined value is
@@ -128,3 +132,110 @@ def design_scene(study, mech):
     output = replace(study.output, dense_positions=int(study.sweep.positions),
                      analysis="forces" if mech.bodies else "accelerations")
     return replace(study, kind="scene", mechanism=mech, output=output, sweep=None, search=None)
+
+
+def refine_fronts(data, study, stage=None) -> tuple[np.ndarray, dict]:
+    """The objectives the fronts are ranked on, and the refined peaks
+    (``analysis.refined``) of the candidates of fronts 1-3.
+
+    Every peak metric the file stores is refined between positions for the
+    members of fronts 1-3, and a peak objective takes its refined value there
+    (the grid's elsewhere).  Refining raises a peak objective (a refined peak
+    is never below the grid's), which may let a candidate not yet refined into
+    front 3: the fronts are ranked again and its peaks refined, until every
+    member of fronts 1-3 carries refined values.  Fronts 1-3 are then those a
+    refinement of every candidate would give (a candidate outside them, once
+    refined, would only rise further).  ``stage.set(text)``: progress."""
+    metrics = peak_metrics_of(data.metric_units)
+    F = data.F.copy()
+    cols = [(j, metrics.index(o)) for j, o in enumerate(data.objectives) if o in metrics]
+    out = {"metrics": metrics, "columns": metrics + LOCATIONS, "ranked_on": [
+        data.objectives[j] for j, _ in cols], "rows": np.zeros(0, np.int64),
+           "values": np.zeros((0, len(metrics) + len(LOCATIONS))), "status": np.zeros(0, np.int8)}
+    if not metrics or study is None:
+        out["ranked_on"] = []
+        return F, out
+    rows, values, status = [], [], []
+    done = np.zeros(data.n, bool)
+    while True:
+        rank = nondominated_rank(F, data.feasible)
+        todo = np.flatnonzero((rank >= 1) & (rank <= REFINED_FRONTS) & ~done)
+        if not todo.size:
+            break
+        total = done.sum() + todo.size
+
+        def progress(k, base=int(done.sum()), total=int(total)):
+            if stage is not None:
+                stage.set(f"refining the peaks of fronts 1-{REFINED_FRONTS}: "
+                          f"{base + k}/{total} designs")
+        v, st = refine_designs(study, data.params[todo], metrics, progress)
+        done[todo] = True
+        for j, k in cols:     # a design whose scene fails keeps the grid's value (its status)
+            F[todo, j] = np.where(np.isfinite(v[:, k]), v[:, k], F[todo, j])
+        rows.append(todo), values.append(v), status.append(st)
+    if rows:
+        rows = np.concatenate(rows)
+        order = np.argsort(rows)
+        out.update(rows=rows[order], values=np.concatenate(values)[order],
+                   status=np.concatenate(status)[order])
+    return F, out
+
+
+def refined_reference(data, study, refined, ref_obj):
+    """The reference design's objectives with its peak objectives refined as
+    the fronts' are (the grid's where its scene fails or nothing is refined)."""
+    params = data.reference.get("params")
+    if not refined["ranked_on"] or params is None or not np.isfinite(params).all() or \
+            int(np.ravel(data.reference.get("status", [kc.NOT_EVALUATED]))[0]) != kc.OK:
+        return ref_obj
+    v, _ = refine_designs(study, np.atleast_2d(params), refined["metrics"])
+    refined["reference"] = v[0]
+    out = ref_obj.copy()
+    for j, o in enumerate(data.objectives):
+        if o in refined["metrics"] and np.isfinite(v[0, refined["metrics"].index(o)]):
+            out[j] = v[0, refined["metrics"].index(o)]
+    return out
+
+
+def write_refined(f, g, data, r: dict):
+    """``/analysis/refined``: the peak metrics of fronts 1-3 refined between
+    positions, beside the grid's in /metrics (whose attribute ``refined``
+    says where the refined ones are)."""
+    rg = g.create_group("refined")
+    rg.attrs["long_name"] = (
+        f"peak metrics of the candidates of fronts 1-{REFINED_FRONTS} refined between the "
+        "grid's positions as the design's scene refines them (pipeline show --candidate); "
+        "/metrics keeps the grid's values (the largest of the sweep's positions)")
+    rg.attrs["fronts"] = REFINED_FRONTS
+    rg.attrs["ranked_on"] = list(r["ranked_on"])
+    rows = r["rows"]
+    coordinate(rg, "design", np.arange(len(rows)), "1", "refined design")
+    put(rg, "index", rows.astype(np.int64), "1", "candidate index (row of /candidates)",
+        dims=("design",))
+    put(rg, "candidate", np.array([data.id(i) for i in rows], np.int64), "1",
+        "candidate number of the sweep", dims=("design",))
+    put(rg, "status", r["status"].astype(np.int8), "1",
+        "status of the design's scene (0 = OK; elsewhere no refined value: the grid's ranks)",
+        dims=("design",))
+    for j, m in enumerate(r["columns"]):
+        of = "peak_reaction" if m in LOCATIONS else m
+        units = _refined_units(data, m)
+        what = {"peak_joint": "joint (index) of the refined peak reaction",
+                "peak_phi": "crank angle phi1 of the refined peak reaction"}.get(
+                    m, f"{m} refined between the grid's positions")
+        put(rg, m, r["values"][:, j], units,
+            f"{what}, as the design's scene refines it (the grid's: /metrics/{of})",
+            dims=("design",))
+        if m in r["metrics"] and f"metrics/{m}" in f:
+            f[f"metrics/{m}"].attrs["refined"] = (
+                f"the largest of the grid's positions; fronts 1-{REFINED_FRONTS} refined "
+                f"between them in {g.name}/refined/{m}")
+    if "reference" in r:
+        coordinate(rg, "column", list(r["columns"]), "1", "refined metric")
+        put(rg, "reference", r["reference"], [_refined_units(data, m) for m in r["columns"]],
+            "the reference design's peak metrics refined between positions",
+            dims=("column",), names=list(r["columns"]))
+
+
+def _refined_units(data, m) -> str:
+    return {"peak_phi": "deg", "peak_joint": "1"}.get(m) or data.metric_units.get(m, "1")
