@@ -13,7 +13,10 @@ direction of rotation s (theta = s (phi - phi0)),
 integrated by RK4 over one revolution from the exact J(phi) and Q(phi) of the
 mechanism (``crank_motion.reduced_terms``), and made periodic, K(2 pi) = K(0),
 by Brent's method on K(0).  omega_mean is the time mean (2 pi over the period,
-as ``CaseResult.steady`` measures it).  J_f is then found by Brent's method on
+as ``CaseResult.steady`` measures it); omega_min and omega_max are refined
+between the nodes (``_Orbit.extreme``: the largest of |omega| along an RK4
+step of the same equation, over its length), so that delta and J_f do not
+carry the nodes' O(h^2) error (2e-5 relative at 0.25 deg).  J_f is then found by Brent's method on
 delta(J_f) = target: delta falls as J_f grows.  Needs M1 and the loads to be
 constants or functions of phi (a steady rotation has no clock), and a net
 positive work per revolution in the direction of rotation.  With
@@ -129,6 +132,7 @@ class _Orbit:
         self.J = J[order]
         self.drive = self.s * drive[order]
         self.b = case.damping
+        self.plan, self.mech, self.case = plan, mech, case
         self.friction = None
         self.friction_speed = math.nan
         if mech.friction is not None:   # less what the joints lose at constant speed
@@ -228,16 +232,66 @@ class _Orbit:
         K = self.run(K0, J_add)
         return np.sqrt(2.0 * K / (self.J[::2] + J_add))
 
-    def delta(self, J_add):
-        """(delta, omega_min, omega_max, omega_mean) of the periodic rotation."""
+    def delta(self, J_add, refined=True):
+        """(delta, omega_min, omega_max, omega_mean) of the periodic rotation; its
+        extremes refined between the nodes (``extreme``), or the nodes' own."""
         w = self.periodic(J_add)
         inv = 1.0 / w                          # time = integral of dtheta / |omega|: Simpson
         period = self.h / 3.0 * (inv[0] + inv[-1] + 4.0 * inv[1:-1:2].sum()
                                  + 2.0 * inv[2:-1:2].sum()) if self.n % 2 == 0 else \
             self.h * (inv.sum() - 0.5 * (inv[0] + inv[-1]))
         mean = 2.0 * math.pi / period
-        return (float((w.max() - w.min()) / mean), self.s * float(w.min()),
-                self.s * float(w.max()), self.s * float(mean))
+        lo, hi = float(w.min()), float(w.max())
+        if refined:
+            K = 0.5 * w * w * (self.J[::2] + J_add)
+            lo = self.extreme(K, J_add, int(np.argmin(w)), -1.0)
+            hi = self.extreme(K, J_add, int(np.argmax(w)), 1.0)
+        return (float((hi - lo) / mean), self.s * lo, self.s * hi, self.s * float(mean))
+
+    def extreme(self, K, J_add, i, sign):
+        """|omega|'s largest (sign 1) or smallest (-1) value between the nodes i - 1
+        and i + 1 of the periodic rotation (K at the nodes): the largest of |omega|
+        along one RK4 step of the same equation from node i - 1 (its drive and J
+        at the step's own angles, ``_terms``), over the step's length, by Brent's
+        bounded method.  The nodes' value where that is larger."""
+        from scipy.optimize import minimize_scalar
+        j = max(i - 1, 0)
+        span = self.h * (min(i + 1, self.n) - j)
+        J0, d0 = self.J[2 * j] + J_add, self.drive[2 * j]
+        theta = self.h * j
+        b = self.b
+
+        def speed(tau):
+            if tau <= 0.0:
+                return math.sqrt(2.0 * K[j] / J0)
+            J, d = self._terms(theta + np.array([0.5 * tau, tau]))
+            J = J + J_add
+
+            def f(dk, Jk, k):
+                return dk - b * math.sqrt(max(2.0 * k / Jk, 0.0))
+            k1 = f(d0, J0, K[j])
+            k2 = f(d[0], J[0], K[j] + 0.5 * tau * k1)
+            k3 = f(d[0], J[0], K[j] + 0.5 * tau * k2)
+            k4 = f(d[1], J[1], K[j] + tau * k3)
+            k = K[j] + tau / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+            return math.sqrt(max(2.0 * k / J[1], 0.0))
+
+        r = minimize_scalar(lambda tau: -sign * speed(tau), bounds=(0.0, span),
+                            method="bounded", options={"xatol": 1e-10 * span})
+        best = speed(float(r.x))
+        nodes = math.sqrt(2.0 * K[i] / (self.J[2 * i] + J_add))
+        return max(best, nodes) if sign > 0 else min(best, nodes)
+
+    def _terms(self, theta):
+        """(J [kg·m²], the drive in the direction of rotation less the friction's
+        work [N·m]) at the angles ``theta`` along the rotation from phi_start."""
+        phi = self.case.phi_start + self.s * np.asarray(theta, float)
+        J, _, Q = reduced_terms(self.plan, phi, 0.0, self.mech)
+        M1 = np.broadcast_to(self.case.M1.evaluate(phi, 0.0), phi.shape)
+        d = self.s * (np.asarray(M1, float) + np.asarray(Q, float))
+        if self.friction is not None:
+            d = d - friction_work(self.plan, self.mech, phi, self.s, self.friction_speed)
+        return np.asarray(J, float), d
 
 
 def friction_work(plan, mech, phi, s, speed):
@@ -263,13 +317,14 @@ def friction_work(plan, mech, phi, s, speed):
     return (-fric * speed * unit).sum(axis=1) * math.copysign(1.0, omega)
 
 
-def size_flywheel(plan, mech, case, target) -> Flywheel:
+def size_flywheel(plan, mech, case, target, steps=ORBIT_STEPS) -> Flywheel:
     """The flywheel (kg·m² on the crank shaft) that brings the steady rotation
-    of dynamics case ``case`` to the non-uniformity ``target``."""
+    of dynamics case ``case`` to the non-uniformity ``target`` (its extremes
+    refined between the ``steps`` RK4 nodes of the revolution)."""
     from scipy.optimize import brentq
     body = plan.body_names[[plan.param(f"{n}.J_S") for n in plan.body_names]
                            .index(crank_inertia(plan, mech))]
-    orbit = _Orbit(plan, mech, case)
+    orbit = _Orbit(plan, mech, case, steps)
     d0 = orbit.delta(0.0)
     fastest = max(abs(d0[1]), abs(d0[2]))
     if not fastest <= lim.MAX_OMEGA:

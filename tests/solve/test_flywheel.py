@@ -170,3 +170,28 @@ def test_a_refused_case_gets_no_flywheel(tmp_path, capsys, line_new):
         assert "J_add" not in f["flywheel"] and "not sized" not in f["flywheel"].attrs["case"]
         assert f["flywheel"].attrs["not_sized"].startswith(f"{study}: dynamics.flywheel: ")
         assert f["dynamics/runup"].attrs["status"] in ("INACCURATE", "TOO_FAST")
+
+
+def test_the_extremes_are_refined_between_the_nodes():
+    """The take-up's flywheel with the speed extremes refined between the orbit's
+    RK4 nodes: J_add at 1440 steps within 1e-7 of the refined reference at 4x the
+    steps, where the nodes' own extremes miss it by more (issue 53)."""
+    from scipy.optimize import brentq
+
+    from pipeline.solve.flywheel import ORBIT_STEPS, _Orbit, size_flywheel
+    from pipeline.study.reader import load_study
+    study = load_study(STUDIES / "takeup_dynamics.toml")
+    plan = study.mechanism.compile()
+    case = next(c for c in study.dynamics.cases if c.name == "runup")
+    target = 0.02
+    ref = size_flywheel(plan, study.mechanism, case, target, steps=4 * ORBIT_STEPS)
+    got = size_flywheel(plan, study.mechanism, case, target)
+    assert got.J_add == pytest.approx(ref.J_add, rel=1e-7)
+    assert got.omega_max == pytest.approx(ref.omega_max, rel=1e-9)
+    orbit = _Orbit(plan, study.mechanism, case)
+    grid = brentq(lambda j: orbit.delta(j, refined=False)[0] - target, 0.0, 4 * ref.J_add,
+                  xtol=1e-15, rtol=1e-12)
+    assert abs(grid - ref.J_add) > 1e-7 * ref.J_add       # the nodes alone: not within it
+    d, lo, hi, _ = orbit.delta(got.J_add)
+    g, glo, ghi, _ = orbit.delta(got.J_add, refined=False)
+    assert hi >= ghi and lo <= glo and d >= g                 # refined: never inside the nodes'
