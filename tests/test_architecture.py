@@ -18,19 +18,22 @@ def _modules():
     return mods
 
 
+def _from_module(mods, name, node):
+    """The module a ``from X import ...`` of module ``name`` imports from."""
+    if not node.level:
+        return node.module or ""
+    base = name if mods[name].name == "__init__.py" else name.rsplit(".", 1)[0]
+    for _ in range(node.level - 1):
+        base = base.rsplit(".", 1)[0]
+    return base + ("." + node.module if node.module else "")
+
+
 def _imports(mods, name):
     f = mods[name]
-    pkg = name if f.name == "__init__.py" else name.rsplit(".", 1)[0]
     out = set()
     for node in ast.walk(ast.parse(f.read_text())):
         if isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = pkg
-                for _ in range(node.level - 1):
-                    base = base.rsplit(".", 1)[0]
-                base = base + ("." + node.module if node.module else "")
-            else:
-                base = node.module or ""
+            base = _from_module(mods, name, node)
             for a in node.names:
                 full = f"{base}.{a.name}"
                 out.add(full if full in mods else base)
@@ -318,17 +321,10 @@ def _reexport_uses(mods):
     defined = {m: _defined(t) for m, t in trees.items()}
     out = set()
     for m, tree in trees.items():
-        pkg = m if mods[m].name == "__init__.py" else m.rsplit(".", 1)[0]
         for node in ast.walk(tree):
             if not isinstance(node, ast.ImportFrom):
                 continue
-            if node.level:
-                base = pkg
-                for _ in range(node.level - 1):
-                    base = base.rsplit(".", 1)[0]
-                base = base + ("." + node.module if node.module else "")
-            else:
-                base = node.module or ""
+            base = _from_module(mods, m, node)
             if base not in mods or base in PUBLIC:
                 continue
             for a in node.names:

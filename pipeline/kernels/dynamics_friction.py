@@ -139,25 +139,27 @@ def _eval(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t, damp
 
 @njit(**JIT)
 def rk4_in_regime(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t, damping,
-                  t, p, w, h, state, last, pos, d1, d2, margins, loads_k, friction, fw, regime,
-                  out):
-    """One RK4 step of length h from (t, p, w), every stage in ``regime``:
-    out[0:2] = (phi1, omega1) at its end.  Returns its status."""
-    sp = 0.0
-    sw = 0.0
+                  t, p, w, e, h, state, last, pos, d1, d2, margins, loads_k, friction, fw,
+                  regime, out):
+    """One RK4 step of length h from (t, p, w), every stage in ``regime``, the
+    first one eps1 = e (the start's, in that regime: the evaluation that ended
+    the piece before): out[0:2] = (phi1, omega1) at its end.  Returns its
+    status."""
+    sp = w
+    sw = e
     kp = w
-    kw = 0.0
-    for s in range(4):
-        c = 0.0 if s == 0 else (0.5 if s < 3 else 1.0)
+    kw = e
+    for s in range(1, 4):
+        c = 0.5 if s < 3 else 1.0
         ts, ps, ws = t + c * h, p + c * h * kp, w + c * h * kw
-        if s > 0 and not math.isfinite(ws):
+        if not math.isfinite(ws):
             return SINGULAR
         st, es = _eval(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t,
                        damping, ts, ps, ws, state, last, pos, d1, d2, margins, loads_k,
                        friction, fw, regime, True, fw[0])
         if st != OK:
             return st
-        weight = 2.0 if 0 < s < 3 else 1.0
+        weight = 2.0 if s < 3 else 1.0
         sp += weight * ws
         sw += weight * es
         kp = ws
@@ -169,16 +171,16 @@ def rk4_in_regime(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h
 
 @njit(**JIT)
 def _trial(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t, damping, t, p, w,
-           h, omega_limit, state, last, pos, d1, d2, margins, loads_k, friction, fw, regime,
+           e, h, omega_limit, state, last, pos, d1, d2, margins, loads_k, friction, fw, regime,
            after, end, speed0, speed1):
-    """A piece of length h from (t, p, w) in ``regime`` (``rk4_in_regime``),
+    """A piece of length h from (t, p, w) (eps1 there e) in ``regime`` (``rk4_in_regime``),
     then the motion's own regime at its end (``after``, its speeds and slopes
     ``speed1``; ``speed0``: at its start): (status, eps1 at its end, whether
     it stays in its regime: the same at its end, and no relative speed that
     changes sign twice within it, ``_dips``)."""
     st = rk4_in_regime(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t,
-                       damping, t, p, w, h, state, last, pos, d1, d2, margins, loads_k, friction,
-                       fw, regime, end)
+                       damping, t, p, w, e, h, state, last, pos, d1, d2, margins, loads_k,
+                       friction, fw, regime, end)
     if st != OK:
         return st, math.nan, False
     if not abs(end[1]) <= OMEGA_STOP * omega_limit:
@@ -226,6 +228,16 @@ def _roots(a, b, c):
         return math.nan, math.nan
     q = -0.5 * (b + math.copysign(math.sqrt(d), b))
     return q / a, (c / q if q != 0.0 else math.nan)
+
+
+@njit(**JIT)
+def _copy(regime_from, speed_from, regime_to, speed_to):
+    """A regime and its relative speeds and slopes, copied."""
+    for k in range(regime_from.shape[0]):
+        regime_to[k] = regime_from[k]
+    for k in range(speed_from.shape[1]):
+        speed_to[0, k] = speed_from[0, k]
+        speed_to[1, k] = speed_from[1, k]
 
 
 @njit(**JIT)
@@ -292,54 +304,45 @@ def rk4_friction(advance, start, K, sizes, masses, par, tols, const, tab_phi, h_
                 crossing = n
                 break
             r = t_end - t
+            e_start = e     # eps1 at the piece's start, in its regime: every trial's first stage
             st, e, same = _trial(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t,
-                                 h_t, damping, t, p, w, r, omega_limit, state, last, pos, d1,
-                                 d2, margins, loads_k, friction, fw, regime, after, end, speed0,
-                                 speed1)
+                                 h_t, damping, t, p, w, e_start, r, omega_limit, state, last,
+                                 pos, d1, d2, margins, loads_k, friction, fw, regime, after, end,
+                                 speed0, speed1)
             h = r
             if st == OK and not same:
                 # the switch by bisection on the piece's length: [lo, hi] brackets it
                 lo = 0.0
                 hi = r
-                hi_p, hi_w = end[0], end[1]
-                for k in range(after.shape[0]):
-                    switched[k] = after[k]
-                    speed_sw[0, k] = speed1[0, k]
-                    speed_sw[1, k] = speed1[1, k]
+                hi_p, hi_w, hi_e = end[0], end[1], e
+                _copy(after, speed1, switched, speed_sw)
                 for _ in range(SWITCH_STEPS):
                     mid = 0.5 * (lo + hi)
                     st, e, same = _trial(advance, K, masses, par, tols, const, tab_phi, h_phi,
-                                         tab_t, h_t, damping, t, p, w, mid, omega_limit, state,
-                                         last, pos, d1, d2, margins, loads_k, friction, fw,
-                                         regime, after, end, speed0, speed1)
+                                         tab_t, h_t, damping, t, p, w, e_start, mid,
+                                         omega_limit, state, last, pos, d1, d2, margins,
+                                         loads_k, friction, fw, regime, after, end, speed0,
+                                         speed1)
                     if st != OK:
                         break
                     if same:
                         lo = mid
                     else:
                         hi = mid
-                        hi_p, hi_w = end[0], end[1]
-                        for k in range(after.shape[0]):
-                            switched[k] = after[k]
-                            speed_sw[0, k] = speed1[0, k]
-                            speed_sw[1, k] = speed1[1, k]
+                        hi_p, hi_w, hi_e = end[0], end[1], e
+                        _copy(after, speed1, switched, speed_sw)
                 # taken: the piece just past the switch, in the regime of its start
                 h = hi
                 end[0] = hi_p
                 end[1] = hi_w
-                for k in range(after.shape[0]):
-                    after[k] = switched[k]
-                    speed1[0, k] = speed_sw[0, k]
-                    speed1[1, k] = speed_sw[1, k]
+                e = hi_e
+                _copy(switched, speed_sw, after, speed1)
             if st != OK:
                 break
             t = t_end if h == r else t + h
             p = end[0]
             w = end[1]
-            for k in range(regime.shape[0]):
-                regime[k] = after[k]
-                speed0[0, k] = speed1[0, k]
-                speed0[1, k] = speed1[1, k]
+            _copy(after, speed1, regime, speed0)
         if st != OK:
             break
         n += 1

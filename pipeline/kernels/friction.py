@@ -34,6 +34,21 @@ from .config import FRICTION_LOCK, JIT, OK
 from .forces import MM, assemble_forces, body_motion, gauss_solve, slide_direction
 
 
+@njit(inline='always', **JIT)
+def _relative_turn(pos, d1, d2, body_turn, joint_bodies, j):
+    """(first, second) analog of the turn of revolute joint j's second body
+    against its first (a body that does not turn, or the ground: 0)."""
+    w1 = 0.0
+    w2 = 0.0
+    for side in range(2):
+        b = joint_bodies[j, side]
+        if b >= 0:
+            wb1, wb2 = body_motion(pos, d1, d2, body_turn[b, 0], body_turn[b, 1], 1.0, 0.0)
+            w1 += wb1 if side == 1 else -wb1
+            w2 += wb2 if side == 1 else -wb2
+    return w1, w2
+
+
 @njit(**JIT)
 def relative_speeds(pos, d1, d2, body_com, body_turn, joint_bodies, slide_bodies, slide_dir,
                     slide_angle, out):
@@ -43,13 +58,7 @@ def relative_speeds(pos, d1, d2, body_com, body_turn, joint_bodies, slide_bodies
     at S (v_G + omega_G x (S - G), G the guide's centre of mass)."""
     nj = joint_bodies.shape[0]
     for j in range(nj):
-        w = 0.0
-        for side in range(2):
-            b = joint_bodies[j, side]
-            if b >= 0:
-                wb, _ = body_motion(pos, d1, d2, body_turn[b, 0], body_turn[b, 1], 1.0, 0.0)
-                w += wb if side == 1 else -wb
-        out[j] = w
+        out[j] = _relative_turn(pos, d1, d2, body_turn, joint_bodies, j)[0]
     for k in range(slide_bodies.shape[0]):
         s = body_com[slide_bodies[k, 1]]
         vx = d1[s, 0]
@@ -72,13 +81,7 @@ def relative_speed_slopes(pos, d1, d2, body_com, body_turn, joint_bodies, slide_
     (mm/rad^2) of slide k (the guide's turn and the direction's included)."""
     nj = joint_bodies.shape[0]
     for j in range(nj):
-        w = 0.0
-        for side in range(2):
-            b = joint_bodies[j, side]
-            if b >= 0:
-                _, wb2 = body_motion(pos, d1, d2, body_turn[b, 0], body_turn[b, 1], 1.0, 0.0)
-                w += wb2 if side == 1 else -wb2
-        out[j] = w
+        out[j] = _relative_turn(pos, d1, d2, body_turn, joint_bodies, j)[1]
     for k in range(slide_bodies.shape[0]):
         s = body_com[slide_bodies[k, 1]]
         ax = d1[s, 0]                   # a = S' - G' - w_G perp(S - G): the relative velocity
@@ -159,22 +162,18 @@ def add_friction(x, only, pos, body_com, joint_bodies, slide_bodies, slide_dir, 
         cn = 2 * nj + 2 * k
         n = x[cn]
         cc = x[cn + 1]
-        # a slide's branch (``slide_branch``): given where sense holds it, else its own
-        code = sense[nj + slide_bodies.shape[0] + k] if sense.shape[0] > e + slide_bodies.shape[0] \
-            else 0.0
-        if code == 0.0:
-            mag = abs(n)
-            dn = 1.0 if n > 0.0 else (-1.0 if n < 0.0 else 0.0)
-            dc = 0.0
-            if block[k] > 0.0 and 2000.0 * abs(cc) / block[k] > mag:   # wedged: edge loads
-                mag = 2000.0 * abs(cc) / block[k]
-                dn = 0.0
-                dc = (2000.0 / block[k]) * (1.0 if cc > 0.0 else -1.0)
-        elif abs(code) == 1.0:      # |N| = code N, continued past N = 0
+        # a slide's branch (``slide_branch``): as given where sense holds one (a crank
+        # motion's regime), else its own at x
+        ns = slide_bodies.shape[0]
+        code = sense[e + ns] if sense.shape[0] > e + ns else 0.0
+        own = code == 0.0
+        if own:
+            code = slide_branch(n, cc, block[k])
+        if abs(code) == 1.0:        # |N| = code N (continued past N = 0 where given)
             mag = code * n
-            dn = code
+            dn = 0.0 if own and n == 0.0 else code
             dc = 0.0
-        else:                       # the edge loads: |N_f| = 2000 (code / 2) C / l
+        else:                       # wedged, the edge loads: |N_f| = 2000 (code / 2) C / l
             mag = 0.5 * code * 2000.0 * cc / block[k]
             dn = 0.0
             dc = 0.5 * code * 2000.0 / block[k]
