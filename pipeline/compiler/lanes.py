@@ -57,90 +57,118 @@ def _rot_lines(c, s, delta):
     ]
 
 
-def _triad_lines(e, names):
-    """Lane lines of one class III group (or its sliding variant: P5 on a line
-    instead of a lead): predictor, NEWTON_STEPS Newton steps, the confirming
-    evaluation and the checks."""
-    P2, P6, P7, P3, P4, P5 = (e.xy(j) for j in range(6))
+def _triad_terms(e):
+    """The names a class III group's lane lines use: its points, its lengths (and
+    the slider's guide offset), the cos/sin of its fixed angle U435, and its rows
+    of the lane array."""
     k = e.k
     t = f"t{e.triad_row}"
-    slider = isinstance(e, ClassIIISliderEmitter)
-    L23, L34, L35, L46 = (lane(k(x)) for x in ("L23", "L34", "L35", "L46"))
-    cu, su = lane(f"{k('U435')}_cos"), lane(f"{k('U435')}_sin")
-    r = {x: f"S[R_{t}_{x}, l]" for x in ("ca", "sa", "cb", "sb", "dca", "dsa", "dcb", "dsb",
-                                          "sign")}
-    if slider:
-        off = lane(k("guide_offset"))
-        out = [f"# {e.title()}: Newton on |P4 - P6| = L46 and n.(P5 - {P7}) = offset, n the",
+    P2, P6, P7, P3, P4, P5 = (e.xy(j) for j in range(6))
+    T = dict(P2=P2, P6=P6, P7=P7, P3=P3, P4=P4, P5=P5,
+             slider=isinstance(e, ClassIIISliderEmitter),
+             cu=lane(f"{k('U435')}_cos"), su=lane(f"{k('U435')}_sin"),
+             r={x: f"S[R_{t}_{x}, l]" for x in ("ca", "sa", "cb", "sb", "dca", "dsa", "dcb",
+                                                 "dsb", "sign")})
+    T.update((x, lane(k(x))) for x in ("L23", "L34", "L35", "L46"))
+    T["off" if T["slider"] else "L57"] = lane(k("guide_offset" if T["slider"] else "L57"))
+    return T
+
+
+def _triad_predictor_lines(e, T):
+    """The closure solved, then e(a), e(b) turned by the last increment."""
+    r = T["r"]
+    if T["slider"]:
+        out = [f"# {e.title()}: Newton on |P4 - P6| = L46 and n.(P5 - {T['P7']}) = offset, "
+               "n the",
                "# guide's unit normal (kernels.triad.slider_closure)"]
         out += lane_direction(e, "gu", "guide_angle", 6) + ["gnx = -guy", "gny = gux"]
     else:
-        L57 = lane(k("L57"))
         out = [f"# {e.title()}: Newton on the closure |P4 - P6| = L46, |P5 - P7| = L57"]
-    out += ["# predictor: e(a), e(b) turned by the last increment (secant)",
-           f"ca0 = {r['ca']}", f"sa0 = {r['sa']}", f"cb0 = {r['cb']}", f"sb0 = {r['sb']}",
-           f"ca = ca0 * {r['dca']} - sa0 * {r['dsa']}",
-           f"sa = sa0 * {r['dca']} + ca0 * {r['dsa']}",
-           f"cb = cb0 * {r['dcb']} - sb0 * {r['dsb']}",
-           f"sb = sb0 * {r['dcb']} + cb0 * {r['dsb']}",
-           "corr_a = 0.0", "corr_b = 0.0"]
+    return out + [
+        "# predictor: e(a), e(b) turned by the last increment (secant)",
+        f"ca0 = {r['ca']}", f"sa0 = {r['sa']}", f"cb0 = {r['cb']}", f"sb0 = {r['sb']}",
+        f"ca = ca0 * {r['dca']} - sa0 * {r['dsa']}",
+        f"sa = sa0 * {r['dca']} + ca0 * {r['dsa']}",
+        f"cb = cb0 * {r['dcb']} - sb0 * {r['dsb']}",
+        f"sb = sb0 * {r['dcb']} + cb0 * {r['dsb']}",
+        "corr_a = 0.0", "corr_b = 0.0"]
 
-    def evaluate():
-        if slider:      # (slider_closure_unit: F1 halved, F2 a distance)
-            return [
-                f"cc = cb * {cu} - sb * {su}", f"sc = sb * {cu} + cb * {su}",
-                f"{P3}x = {P2}x + {L23} * ca", f"{P3}y = {P2}y + {L23} * sa",
-                f"r4x = {P3}x + {L34} * cb - {P6}x", f"r4y = {P3}y + {L34} * sb - {P6}y",
-                f"f1 = 0.5 * (r4x * r4x + r4y * r4y - {L46} * {L46})",
-                f"f2 = gnx * ({P3}x + {L35} * cc - {P7}x) + gny * ({P3}y + {L35} * sc - {P7}y)"
-                f" - {off}",
-                f"j11 = {L23} * (r4y * ca - r4x * sa)",
-                f"j12 = {L34} * (r4y * cb - r4x * sb)",
-                f"j21 = {L23} * (gny * ca - gnx * sa)",
-                f"j22 = {L35} * (gny * cc - gnx * sc)",
-                "det = j11 * j22 - j12 * j21",
-            ]
-        return [
-            f"cc = cb * {cu} - sb * {su}", f"sc = sb * {cu} + cb * {su}",
-            f"{P3}x = {P2}x + {L23} * ca", f"{P3}y = {P2}y + {L23} * sa",
-            f"r4x = {P3}x + {L34} * cb - {P6}x", f"r4y = {P3}y + {L34} * sb - {P6}y",
-            f"r5x = {P3}x + {L35} * cc - {P7}x", f"r5y = {P3}y + {L35} * sc - {P7}y",
-            f"f1 = r4x * r4x + r4y * r4y - {L46} * {L46}",
-            f"f2 = r5x * r5x + r5y * r5y - {L57} * {L57}",
-            f"j11 = 2.0 * {L23} * (r4y * ca - r4x * sa)",
-            f"j12 = 2.0 * {L34} * (r4y * cb - r4x * sb)",
-            f"j21 = 2.0 * {L23} * (r5y * ca - r5x * sa)",
-            f"j22 = 2.0 * {L35} * (r5y * cc - r5x * sc)",
+
+def _triad_residual_lines(T):
+    """The closure's residual F = (f1, f2) and its Jacobian J at e(a), e(b)."""
+    P2, P3, P6, P7 = T["P2"], T["P3"], T["P6"], T["P7"]
+    L23, L34, L35, L46, cu, su = (T[x] for x in ("L23", "L34", "L35", "L46", "cu", "su"))
+    out = [f"cc = cb * {cu} - sb * {su}", f"sc = sb * {cu} + cb * {su}",
+           f"{P3}x = {P2}x + {L23} * ca", f"{P3}y = {P2}y + {L23} * sa",
+           f"r4x = {P3}x + {L34} * cb - {P6}x", f"r4y = {P3}y + {L34} * sb - {P6}y"]
+    if T["slider"]:      # (slider_closure_unit: F1 halved, F2 a distance)
+        return out + [
+            f"f1 = 0.5 * (r4x * r4x + r4y * r4y - {L46} * {L46})",
+            f"f2 = gnx * ({P3}x + {L35} * cc - {P7}x) + gny * ({P3}y + {L35} * sc - {P7}y)"
+            f" - {T['off']}",
+            f"j11 = {L23} * (r4y * ca - r4x * sa)",
+            f"j12 = {L34} * (r4y * cb - r4x * sb)",
+            f"j21 = {L23} * (gny * ca - gnx * sa)",
+            f"j22 = {L35} * (gny * cc - gnx * sc)",
             "det = j11 * j22 - j12 * j21",
         ]
+    return out + [
+        f"r5x = {P3}x + {L35} * cc - {P7}x", f"r5y = {P3}y + {L35} * sc - {P7}y",
+        f"f1 = r4x * r4x + r4y * r4y - {L46} * {L46}",
+        f"f2 = r5x * r5x + r5y * r5y - {T['L57']} * {T['L57']}",
+        f"j11 = 2.0 * {L23} * (r4y * ca - r4x * sa)",
+        f"j12 = 2.0 * {L34} * (r4y * cb - r4x * sb)",
+        f"j21 = 2.0 * {L23} * (r5y * ca - r5x * sa)",
+        f"j22 = 2.0 * {L35} * (r5y * cc - r5x * sc)",
+        "det = j11 * j22 - j12 * j21",
+    ]
 
+
+def _triad_newton_lines(T):
+    """NEWTON_STEPS Newton steps, each a rotation of e(a), e(b) by small angles."""
+    out = []
     for step in range(NEWTON_STEPS):
         out += [f"# Newton step {step + 1}: J (da, db) = F, then e(a), e(b) turned by -da, -db"]
-        out += evaluate()
+        out += _triad_residual_lines(T)
         out += ["da = (f1 * j22 - j12 * f2) / det", "db = (j11 * f2 - f1 * j21) / det",
                 "corr_a += da", "corr_b += db",
                 f"big = big | (abs(da) > {SMALL_ANGLE}) | (abs(db) > {SMALL_ANGLE})",
                 "na = -da", "nb = -db"]
         out += _rot_lines("ca", "sa", "na") + _rot_lines("cb", "sb", "nb")
-    out += ["# renormalise the unit vectors (one Newton step for 1/|e|, no division)",
-            "g = 1.5 - 0.5 * (ca * ca + sa * sa)", "ca *= g", "sa *= g",
-            "g = 1.5 - 0.5 * (cb * cb + sb * sb)", "cb *= g", "sb *= g",
-            "# confirming evaluation: the residual, and det J for the margin and the branch"]
-    out += evaluate()
-    if slider:
+    return out
+
+
+def _triad_check_lines(T):
+    """The confirming evaluation: residual, margin and branch checked."""
+    L23, L34, L35, L46 = (T[x] for x in ("L23", "L34", "L35", "L46"))
+    out = ["# renormalise the unit vectors (one Newton step for 1/|e|, no division)",
+           "g = 1.5 - 0.5 * (ca * ca + sa * sa)", "ca *= g", "sa *= g",
+           "g = 1.5 - 0.5 * (cb * cb + sb * sb)", "cb *= g", "sb *= g",
+           "# confirming evaluation: the residual, and det J for the margin and the branch"]
+    out += _triad_residual_lines(T)
+    if T["slider"]:
         out += [f"res = max(abs(f1) / {L46}, abs(f2))",
                 f"conv = res <= tol * max({L23}, {L46})",
                 f"m = abs(det) / ({L23} * {L46} * max({L34}, {L35}))"]
     else:
+        L57 = T["L57"]
         out += [f"res = max(abs(f1) / (2.0 * {L46}), abs(f2) / (2.0 * {L57}))",
                 f"conv = res <= tol * max({L46}, {L57})",
                 f"m = abs(det) / (4.0 * {L23} * {L46} * {L57} * max({L34}, {L35}))"]
-    out += [
+    return out + [
         "sgn = 1.0 if det > 0.0 else -1.0",
-        f"big = big | (not conv) | (sgn != {r['sign']}) | (abs(corr_a) > jump) | "
+        f"big = big | (not conv) | (sgn != {T['r']['sign']}) | (abs(corr_a) > jump) | "
         "(abs(corr_b) > jump)",
         "low = low | (not (m >= margin_safe))",
-        "margin = min(margin, m)",
+        "margin = min(margin, m)"]
+
+
+def _triad_handover_lines(e, T):
+    """The step's increment kept (the next predictor), the solution handed to
+    the force stage, and P4, P5."""
+    r, P3, P4, P5 = T["r"], T["P3"], T["P4"], T["P5"]
+    L34, L35 = T["L34"], T["L35"]
+    return [
         "# the increment of this step: the next predictor, and the careful walk's step bound",
         "ia_c = ca0 * ca + sa0 * sa", "ia_s = ca0 * sa - sa0 * ca",
         "ib_c = cb0 * cb + sb0 * sb", "ib_s = cb0 * sb - sb0 * cb",
@@ -156,7 +184,49 @@ def _triad_lines(e, names):
         f"{P4}x = {P3}x + {L34} * cb", f"{P4}y = {P3}y + {L34} * sb",
         f"{P5}x = {P3}x + {L35} * cc", f"{P5}y = {P3}y + {L35} * sc",
     ]
-    return out
+
+
+def _triad_lines(e):
+    """Lane lines of one class III group (or its sliding variant: P5 on a line
+    instead of a lead): predictor, NEWTON_STEPS Newton steps, the confirming
+    evaluation and the checks."""
+    T = _triad_terms(e)
+    return (_triad_predictor_lines(e, T) + _triad_newton_lines(T) + _triad_check_lines(T)
+            + _triad_handover_lines(e, T))
+
+
+TRIAD_ROWS = ("ca", "sa", "cb", "sb", "dca", "dsa", "dcb", "dsb", "sign", "a0c", "a0s", "b0c",
+              "b0s")
+
+
+def _lane_rows(consts, triads, watched):
+    """The rows of the lane array S[row, lane]: every per-candidate constant,
+    each class III group's state, the output rocker's, and each watched group's
+    margin^2 at k-3, k-2, k-1."""
+    rows = list(consts)
+    for e in triads:
+        rows += [f"t{e.triad_row}_{x}" for x in TRIAD_ROWS]
+    rows += ["rock_x", "rock_y", "theta", "margin", "flag", "first_flag", "last_flag"]
+    for i, e in enumerate(watched):
+        rows += [f"w{i}_{x}" for x in ("k3", "k2", "k1")]
+    return rows
+
+
+def _lane_constants(plan, names, rocker, width, fast, rows, n_triads, n_inputs):
+    """The module's constants of the lane path: the output rocker's points, the
+    lane count, the lane table's columns and the rows of S."""
+    ipiv, ipt = plan.point(rocker[0]), plan.point(rocker[1])
+    src = [f"ROCKER_PIVOT = {names.I(ipiv)}   # {text(rocker[0])}",
+           f"ROCKER_POINT = {names.I(ipt)}   # {text(rocker[1])}",
+           f"LANES = {width}",
+           f"HAS_LANES = {fast}   # every kinematic group has a lane form",
+           f"NEWTON_STEPS = {NEWTON_STEPS}   # Newton steps per position in the lanes",
+           f"THETA_COLS = {1 + 4 * n_triads + 4 * n_inputs}   # rocker angle, e(a), e(b) of "
+           "each class III group, e(q) (or q), q', q'' of each input",
+           f"THETA_IN = {1 + 4 * n_triads}   # the first column of the inputs' laws",
+           f"N_LANE_ROWS = {len(rows)}",
+           "# rows of the lane array S[row, lane]"]
+    return src + [f"R_{r} = {i}" for i, r in enumerate(rows)] + [""]
 
 
 def lane_kernel(plan, names, ems, rocker, width, watch=True):
@@ -169,116 +239,131 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
     inputs = [e for e in kin if isinstance(e, InputEmitter)]
     for j, e in enumerate(inputs):      # their columns of the table, after the triads'
         e.theta_col = 1 + 4 * len(triads) + 4 * j
-    rows = []
-    # per-candidate constants: every entry of constants(par)
     consts = constant_names(plan, names, ems)
-    rows += consts
-    for e in triads:
-        t = f"t{e.triad_row}"
-        rows += [f"{t}_{x}" for x in ("ca", "sa", "cb", "sb", "dca", "dsa", "dcb", "dsb",
-                                      "sign", "a0c", "a0s", "b0c", "b0s")]
-    rows += ["rock_x", "rock_y", "theta", "margin", "flag", "first_flag", "last_flag"]
     watched = [e for e in kin if e.watched and watch]
-    for i, e in enumerate(watched):
-        rows += [f"w{i}_{x}" for x in ("k3", "k2", "k1")]    # margin^2 at k-3, k-2, k-1
-    ipiv, ipt = plan.point(rocker[0]), plan.point(rocker[1])
-    piv, pt = names.xy(ipiv), names.xy(ipt)
-    src = [f"ROCKER_PIVOT = {names.I(ipiv)}   # {text(rocker[0])}",
-           f"ROCKER_POINT = {names.I(ipt)}   # {text(rocker[1])}",
-           f"LANES = {width}",
-           f"HAS_LANES = {fast}   # every kinematic group has a lane form",
-           f"NEWTON_STEPS = {NEWTON_STEPS}   # Newton steps per position in the lanes",
-           f"THETA_COLS = {1 + 4 * len(triads) + 4 * len(inputs)}   # rocker angle, e(a), e(b) of "
-           "each class III group, e(q) (or q), q', q'' of each input",
-           f"THETA_IN = {1 + 4 * len(triads)}   # the first column of the inputs' laws",
-           f"N_LANE_ROWS = {len(rows)}",
-           "# rows of the lane array S[row, lane]"]
-    src += [f"R_{r} = {i}" for i, r in enumerate(rows)]
-    src.append("")
+    rows = _lane_rows(consts, triads, watched)
+    src = _lane_constants(plan, names, rocker, width, fast, rows, len(triads), len(inputs))
     if not fast:
         src += ["\n" + no_lane_path("A group without a lane form")]
         return "\n".join(src) + "\n"
+    rocker_xy = (names.xy(plan.point(rocker[0])), names.xy(plan.point(rocker[1])))
+    src += [""] + _walk(plan, names, kin, triads, watched, rocker_xy) + ["", ""]
+    src += _setup_lane(consts, inputs, triads, watched)
+    src += _block_walk() + _lanes_apply()
+    return "\n".join(src) + "\n\n"
 
-    # setup_lane: one candidate into one lane (its constants, the careful solve at
-    # phis[0], the first increment of each class III group from its analogs)
+
+def _setup_lane(consts, inputs, triads, watched):
+    """Source of ``setup_lane``: one candidate into one lane (its constants, its
+    inputs' laws, the careful solve at phis[0], the first increment of each
+    class III group from its analogs)."""
     unpack = "(" + ", ".join(consts) + ("," if len(consts) == 1 else "") + ") = K"
-    setup = []
-    a = setup.append
-    a("K = constants(pars[i])")
-    for line in _split(unpack):
-        a(line)
-    for c in consts:
-        a(f"S[R_{c}, l] = {c}")
+    body = ["K = constants(pars[i])"] + _split(unpack) + [f"S[R_{c}, l] = {c}" for c in consts]
     for e in inputs:
-        for line in e.law_steps():
-            a(line)
-    a("st = advance(K, walk_start(K, phis[0], state), phis[0], np.int64(1), tols, state, pos,")
-    a("             d1, d2, margins, np.bool_(False))")
-    a("ok = st == OK")
+        body += e.law_steps()
+    body += ["st = advance(K, walk_start(K, phis[0], state), phis[0], np.int64(1), tols, "
+             "state, pos,",
+             "             d1, d2, margins, np.bool_(False))",
+             "ok = st == OK"]
     for e in triads:
-        t = f"t{e.triad_row}"
-        j = e.triad_row
-        P2, P3, P4 = (e.p(x) for x in (0, 3, 4))
-        a(f"# {e.title()}: e(a), e(b) at phis[0] and the first increment from the analogs")
-        a(f"av = state[{j}, S_A]")
-        a(f"bv = state[{j}, S_B]")
-        a(f"S[R_{t}_ca, l] = math.cos(av)")
-        a(f"S[R_{t}_sa, l] = math.sin(av)")
-        a(f"S[R_{t}_cb, l] = math.cos(bv)")
-        a(f"S[R_{t}_sb, l] = math.sin(bv)")
-        a(f"S[R_{t}_a0c, l] = S[R_{t}_ca, l]")
-        a(f"S[R_{t}_a0s, l] = S[R_{t}_sa, l]")
-        a(f"S[R_{t}_b0c, l] = S[R_{t}_cb, l]")
-        a(f"S[R_{t}_b0s, l] = S[R_{t}_sb, l]")
-        a(f"S[R_{t}_sign, l] = state[{j}, S_DET_SIGN]")
-        for q, v in enumerate(("ca", "sa", "cb", "sb")):
-            a(f"theta[0, {1 + 4 * j + q} * LANES + l] = S[R_{t}_{v}, l]")
-        a("# a' = (P3' - P2') . n(a) / L23, b' = (P4' - P3') . n(b) / L34")
-        a(f"ad = ((d1[{P3}, 1] - d1[{P2}, 1]) * math.cos(av) - (d1[{P3}, 0] - d1[{P2}, 0])"
-          f" * math.sin(av)) / {e.k('L23')}")
-        a(f"bd = ((d1[{P4}, 1] - d1[{P3}, 1]) * math.cos(bv) - (d1[{P4}, 0] - d1[{P3}, 0])"
-          f" * math.sin(bv)) / {e.k('L34')}")
-        a("h = phis[1] - phis[0]")
-        a("ok = ok and math.isfinite(ad) and math.isfinite(bd)")
-        a("if not ok:")
-        a("    ad = 0.0")
-        a("    bd = 0.0")
-        a(f"S[R_{t}_dca, l] = math.cos(ad * h)")
-        a(f"S[R_{t}_dsa, l] = math.sin(ad * h)")
-        a(f"S[R_{t}_dcb, l] = math.cos(bd * h)")
-        a(f"S[R_{t}_dsb, l] = math.sin(bd * h)")
-        a("if not ok:")
-        a(f"    S[R_{t}_ca, l] = 1.0")
-        a(f"    S[R_{t}_sa, l] = 0.0")
-        a(f"    S[R_{t}_cb, l] = 1.0")
-        a(f"    S[R_{t}_sb, l] = 0.0")
-    a("S[R_rock_x, l] = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]")
-    a("S[R_rock_y, l] = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]")
-    a("S[R_theta, l] = 0.0")
-    a("theta[0, l] = 0.0")
-    if triads:
-        a("S[R_margin, l] = min(" + ", ".join(f"state[{e.triad_row}, S_MARGIN]" for e in triads)
-          + ("" if len(triads) > 1 else ", math.inf") + ")")
-    else:
-        a("S[R_margin, l] = math.inf")
-    a("if not ok or not math.isfinite(S[R_rock_x, l]):")
-    a("    ok = False")
-    a("    S[R_rock_x, l] = 1.0")
-    a("    S[R_rock_y, l] = 0.0")
-    a("S[R_flag, l] = 0.0")
-    a("S[R_first_flag, l] = -1.0   # the first position the lane flagged (-1: none)")
-    a("S[R_last_flag, l] = -1.0    # and the last")
+        body += _setup_triad_lines(e)
+    body += _setup_rocker_lines(triads)
     for i, e in enumerate(watched):
-        a(f"# {e.title()}: the watch's history starts with margin^2 at phis[0]")
-        for x in ("k3", "k2", "k1"):
-            a(f"S[R_w{i}_{x}, l] = margins[{e.g}] * margins[{e.g}]")
-    # block_walk: the walk of a full block (its closing checks inside)
-    closing = []
-    a = closing.append
-    a("# the lock-step walk: positions 1 .. n - 1, the closing position and two past it")
-    a("# (the watch's windows wrap round the close)")
-    a("walk(S.reshape(N_LANE_ROWS * LANES), S.shape[1], theta, cph_tab, sph_tab, npos + 3, npos,")
-    a("     tol, jump, step_change, margin_safe, close, tols[T_WATCH])")
+        body.append(f"# {e.title()}: the watch's history starts with margin^2 at phis[0]")
+        body += [f"S[R_w{i}_{x}, l] = margins[{e.g}] * margins[{e.g}]"
+                 for x in ("k3", "k2", "k1")]
+    return [
+        "# its own function, compiled from the start in the process beside the run",
+        "# (pipeline.compiler.beside), which then loads it from numba's cache;",
+        "# with a Python wrapper: the lane tests and the benchmark call it",
+        "@njit(**JIT)",
+        "def setup_lane(pars, i, l, phis, close, tols, S, theta, pos, d1, d2, margins, state):",
+        '    """Candidate ``i`` into lane ``l``: its constants, its inputs\' laws at every',
+        "    step of the walk (``close``: phi_close, or phis[0] where the revolution",
+        "    need not close), and the careful solve at phis[0] (order 1: the first",
+        "    increment of the class III angles comes from their analogs).  Returns",
+        '    OK, the status of a failure there, or -1."""'] + ["    " + x for x in body] + [
+        "    # OK (0): in the lane; a failure at phis[0] is the careful path's own first",
+        "    # step, reported as it is; -1: assembled, but the lane cannot start (careful)",
+        "    return (0 if ok else -1) if st == OK else st", "", ""]
+
+
+def _setup_triad_lines(e):
+    """setup_lane's lines of one class III group: e(a), e(b) at phis[0] from the
+    careful solve, and the first increment from the analogs (a', b')."""
+    t = f"t{e.triad_row}"
+    j = e.triad_row
+    P2, P3, P4 = (e.p(x) for x in (0, 3, 4))
+    out = [f"# {e.title()}: e(a), e(b) at phis[0] and the first increment from the analogs",
+           f"av = state[{j}, S_A]",
+           f"bv = state[{j}, S_B]",
+           f"S[R_{t}_ca, l] = math.cos(av)",
+           f"S[R_{t}_sa, l] = math.sin(av)",
+           f"S[R_{t}_cb, l] = math.cos(bv)",
+           f"S[R_{t}_sb, l] = math.sin(bv)",
+           f"S[R_{t}_a0c, l] = S[R_{t}_ca, l]",
+           f"S[R_{t}_a0s, l] = S[R_{t}_sa, l]",
+           f"S[R_{t}_b0c, l] = S[R_{t}_cb, l]",
+           f"S[R_{t}_b0s, l] = S[R_{t}_sb, l]",
+           f"S[R_{t}_sign, l] = state[{j}, S_DET_SIGN]"]
+    out += [f"theta[0, {1 + 4 * j + q} * LANES + l] = S[R_{t}_{v}, l]"
+            for q, v in enumerate(("ca", "sa", "cb", "sb"))]
+    return out + [
+        "# a' = (P3' - P2') . n(a) / L23, b' = (P4' - P3') . n(b) / L34",
+        f"ad = ((d1[{P3}, 1] - d1[{P2}, 1]) * math.cos(av) - (d1[{P3}, 0] - d1[{P2}, 0])"
+        f" * math.sin(av)) / {e.k('L23')}",
+        f"bd = ((d1[{P4}, 1] - d1[{P3}, 1]) * math.cos(bv) - (d1[{P4}, 0] - d1[{P3}, 0])"
+        f" * math.sin(bv)) / {e.k('L34')}",
+        "h = phis[1] - phis[0]",
+        "ok = ok and math.isfinite(ad) and math.isfinite(bd)",
+        "if not ok:",
+        "    ad = 0.0",
+        "    bd = 0.0",
+        f"S[R_{t}_dca, l] = math.cos(ad * h)",
+        f"S[R_{t}_dsa, l] = math.sin(ad * h)",
+        f"S[R_{t}_dcb, l] = math.cos(bd * h)",
+        f"S[R_{t}_dsb, l] = math.sin(bd * h)",
+        "if not ok:",
+        f"    S[R_{t}_ca, l] = 1.0",
+        f"    S[R_{t}_sa, l] = 0.0",
+        f"    S[R_{t}_cb, l] = 1.0",
+        f"    S[R_{t}_sb, l] = 0.0"]
+
+
+def _setup_rocker_lines(triads):
+    """setup_lane's lines of the output rocker's start, the lane's margin (the
+    smallest of its class III groups') and its flags."""
+    out = ["S[R_rock_x, l] = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]",
+           "S[R_rock_y, l] = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]",
+           "S[R_theta, l] = 0.0",
+           "theta[0, l] = 0.0"]
+    if triads:
+        out.append("S[R_margin, l] = min(" + ", ".join(f"state[{e.triad_row}, S_MARGIN]"
+                                                      for e in triads)
+                   + ("" if len(triads) > 1 else ", math.inf") + ")")
+    else:
+        out.append("S[R_margin, l] = math.inf")
+    return out + [
+        "if not ok or not math.isfinite(S[R_rock_x, l]):",
+        "    ok = False",
+        "    S[R_rock_x, l] = 1.0",
+        "    S[R_rock_y, l] = 0.0",
+        "S[R_flag, l] = 0.0",
+        "S[R_first_flag, l] = -1.0   # the first position the lane flagged (-1: none)",
+        "S[R_last_flag, l] = -1.0    # and the last"]
+
+
+def _flat(line):
+    """A line of the walk, which sees S flat, rows LANES apart (a constant stride:
+    rows provably apart, so no run-time overlap checks), while the lane count
+    stays a run-time value (a constant trip count is unrolled, and stays scalar)."""
+    return re.sub(r"S\[(R_\w+), l\]", r"S[\1 * LANES + l]", line)
+
+
+def _walk(plan, names, kin, triads, watched, rocker_xy):
+    """Source of ``walk``: every lane of a block advanced one crank position at a
+    time, each group's lane lines, the output rocker's angle and the flags; at
+    the closing position, the class III groups' return to their start."""
     walk = ["@njit(**JIT_LANES)   # FMA contraction: the one kernel with it",
             "def walk(S, n_lanes, theta, cph_tab, sph_tab, k_end, k_close, tol, jump, step_change,",
             "         margin_safe, close, watch_floor):",
@@ -302,10 +387,21 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
         inner += [f"{pn}x = S[R_{names.par(off)}, l]",
                   f"{pn}y = S[R_{names.par(int(off) + 1)}, l]"]
     for e in kin:
-        inner += (_triad_lines(e, names) if e.continued else e.lanes())
+        inner += (_triad_lines(e) if e.continued else e.lanes())
         if e in watched:
             inner += _watch_lines(watched.index(e), e)
-    inner += [
+    inner += _rocker_step_lines(*rocker_xy)
+    walk += ["            " + _flat(line) for line in inner]
+    if triads:
+        walk += ["        if k == k_close:"] + ["            " + _flat(x)
+                                                  for x in _closing_lines(triads)]
+    return walk
+
+
+def _rocker_step_lines(piv, pt):
+    """The walk's lines of the output rocker (its angle from the increments, atan
+    series of a small tan) and of the lane's margin and flags at this position."""
+    return [
         "# the output rocker: its angle from the increments (atan series of a small tan)",
         f"ux = {pt}x - {piv}x", f"uy = {pt}y - {piv}y",
         "vx = S[R_rock_x, l]", "vy = S[R_rock_y, l]",
@@ -325,58 +421,55 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
         "S[R_first_flag, l]",
         "S[R_last_flag, l] = k if flagged else S[R_last_flag, l]",
     ]
-    # the walk sees S flat, rows LANES apart (a constant stride: rows provably
-    # apart, so no run-time overlap checks), while the lane count stays a
-    # run-time value (a constant trip count is unrolled, and stays scalar)
-    flat = lambda line: re.sub(r"S\[(R_\w+), l\]", r"S[\1 * LANES + l]", line)  # noqa: E731
-    walk += ["            " + flat(line) for line in inner]
-    if triads:
-        shut = ["# the revolution closes on its start (row k_close is phi_close)",
-                "for l in range(n_lanes):"]
-        for e in triads:
-            t = f"t{e.triad_row}"
-            shut += [f"    ea = S[R_{t}_a0c, l] * S[R_{t}_sa, l] - S[R_{t}_a0s, l] * S[R_{t}_ca, l]",
-                     f"    eb = S[R_{t}_b0c, l] * S[R_{t}_sb, l] - S[R_{t}_b0s, l] * S[R_{t}_cb, l]",
-                     f"    dot = S[R_{t}_a0c, l] * S[R_{t}_ca, l] + S[R_{t}_a0s, l] * S[R_{t}_sa, l]",
-                     "    if not (abs(ea) <= close and abs(eb) <= close and dot > 0.0):",
-                     "        S[R_flag, l] = 1.0",
-                     "        if S[R_first_flag, l] < 0.0:",
-                     "            S[R_first_flag, l] = k",
-                     "        S[R_last_flag, l] = max(S[R_last_flag, l], k)"]
-        walk += ["        if k == k_close:"] + ["            " + flat(x) for x in shut]
-    src += [""] + walk + ["", ""]
-    src += ["# its own function, compiled from the start in the process beside the run",
-            "# (pipeline.compiler.beside), which then loads it from numba's cache;",
-            "# with a Python wrapper: the lane tests and the benchmark call it",
-            "@njit(**JIT)",
-            "def setup_lane(pars, i, l, phis, close, tols, S, theta, pos, d1, d2, margins, state):",
-            '    """Candidate ``i`` into lane ``l``: its constants, its inputs\' laws at every',
-            "    step of the walk (``close``: phi_close, or phis[0] where the revolution",
-            "    need not close), and the careful solve at phis[0] (order 1: the first",
-            "    increment of the class III angles comes from their analogs).  Returns",
-            '    OK, the status of a failure there, or -1."""']
-    src += ["    " + x for x in setup]
-    src += ["    # OK (0): in the lane; a failure at phis[0] is the careful path's own first",
-            "    # step, reported as it is; -1: assembled, but the lane cannot start (careful)",
-            "    return (0 if ok else -1) if st == OK else st", "", ""]
-    src += ["# its own function: compiled beside the run, as setup_lane",
-            "@njit(**JIT)",
-            "def block_walk(S, theta, cph_tab, sph_tab, phis, tols, settings):",
-            '    """The lock-step walk of a full block (every lane set up), then the closing',
-            '    checks; S[R_flag, l] != 0 marks a lane the careful path must redo."""',
-            "    npos = phis.shape[0]",
-            "    margin_safe = settings[SET_MARGIN_SAFE]",
-            "    tol = tols[T_NEWTON_TOL]",
-            "    jump = tols[T_JUMP]",
-            "    step_change = tols[T_STEP_CHANGE]",
-            "    close = tols[T_CLOSE]"]
-    src += ["    " + x for x in closing] + ["", ""]
-    src += ["@njit(**JIT_INNER)",
-            "def lanes_apply(phis, tols):",
-            '    """Whether the lane path applies to this crank grid (at least 3 positions, steps',
-            '    no longer than the careful walk\'s largest)."""',
-            "    return phis.shape[0] >= 3 and abs(phis[1] - phis[0]) <= tols[T_SUBSTEP]", ""]
-    return "\n".join(src) + "\n\n"
+
+
+def _closing_lines(triads):
+    """The walk's lines at the closing position: each class III group back on its
+    start, else the lane flagged."""
+    shut = ["# the revolution closes on its start (row k_close is phi_close)",
+            "for l in range(n_lanes):"]
+    for e in triads:
+        t = f"t{e.triad_row}"
+        shut += [f"    ea = S[R_{t}_a0c, l] * S[R_{t}_sa, l] - S[R_{t}_a0s, l] * S[R_{t}_ca, l]",
+                 f"    eb = S[R_{t}_b0c, l] * S[R_{t}_sb, l] - S[R_{t}_b0s, l] * S[R_{t}_cb, l]",
+                 f"    dot = S[R_{t}_a0c, l] * S[R_{t}_ca, l] + S[R_{t}_a0s, l] * S[R_{t}_sa, l]",
+                 "    if not (abs(ea) <= close and abs(eb) <= close and dot > 0.0):",
+                 "        S[R_flag, l] = 1.0",
+                 "        if S[R_first_flag, l] < 0.0:",
+                 "            S[R_first_flag, l] = k",
+                 "        S[R_last_flag, l] = max(S[R_last_flag, l], k)"]
+    return shut
+
+
+def _block_walk():
+    """Source of ``block_walk``: the walk of a full block (its closing checks inside)."""
+    return [
+        "# its own function: compiled beside the run, as setup_lane",
+        "@njit(**JIT)",
+        "def block_walk(S, theta, cph_tab, sph_tab, phis, tols, settings):",
+        '    """The lock-step walk of a full block (every lane set up), then the closing',
+        '    checks; S[R_flag, l] != 0 marks a lane the careful path must redo."""',
+        "    npos = phis.shape[0]",
+        "    margin_safe = settings[SET_MARGIN_SAFE]",
+        "    tol = tols[T_NEWTON_TOL]",
+        "    jump = tols[T_JUMP]",
+        "    step_change = tols[T_STEP_CHANGE]",
+        "    close = tols[T_CLOSE]",
+        "    # the lock-step walk: positions 1 .. n - 1, the closing position and two past it",
+        "    # (the watch's windows wrap round the close)",
+        "    walk(S.reshape(N_LANE_ROWS * LANES), S.shape[1], theta, cph_tab, sph_tab, "
+        "npos + 3, npos,",
+        "         tol, jump, step_change, margin_safe, close, tols[T_WATCH])", "", ""]
+
+
+def _lanes_apply():
+    """Source of ``lanes_apply``: whether the crank grid suits the lane path."""
+    return [
+        "@njit(**JIT_INNER)",
+        "def lanes_apply(phis, tols):",
+        '    """Whether the lane path applies to this crank grid (at least 3 positions, steps',
+        '    no longer than the careful walk\'s largest)."""',
+        "    return phis.shape[0] >= 3 and abs(phis[1] - phis[0]) <= tols[T_SUBSTEP]", ""]
 
 
 def _watch_lines(i, e):
