@@ -92,6 +92,16 @@ def _on_a_fixed_guide(e) -> bool:
     return col is not None and e.ix[col] < 0
 
 
+def _c(name):
+    """A lane's entry of the force lanes' row ``name`` (FS)."""
+    return f"FS[F_{name} * LANES + l]"
+
+
+def _t(q):
+    """A lane's entry of column ``q`` of the table handed over at position k (FT)."""
+    return f"FT[k, {q} * LANES + l]"
+
+
 def lane_force_kernel(plan, names, ems, rocker) -> str:
     """Source of the force lanes of ``plan`` (``force_lanes``, ``force_lane_in``,
     their constants and the driver ``force_flush``), or of the skeleton without
@@ -106,72 +116,120 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
     if why:
         return part("no_lane_forces").format(why=why)
     consts = constant_names(plan, names, ems)
-    nb, nj = len(plan.body_names), len(plan.joint_names)
     triads = [e for e in ems if e.continued]
     crank = [e for e in ems if isinstance(e, CrankEmitter)]
     inputs = [e for e in ems if isinstance(e, InputEmitter)]
     handed = 4 * len(triads) + 4 * len(inputs)      # the lane walk's columns handed over
-    ns = len(plan.slide_names)
-    rows = consts + [f"mass{b}" for b in range(nb)] + [f"jS{b}" for b in range(nb)]
-    rows += [f"slide{k}_{x}" for k in range(ns) for x in ("cos", "sin")]
-    rows += ["pm", "pe", "bad"] + [f"sign{e.triad_row}" for e in triads]
     # the transmission items (transmission()'s), their angles' cos/sin hoisted
     items = [it for e in ems[:plan.n_kinematic] for it in e.transmission_items()[1]]
     angles = [(q, j, x) for q, (kind, args) in enumerate(items) if kind == "lines"
               for j, x in ((0, args[2]), (1, args[5]))]
-    rows += [f"tr{q}_{j}_{f}" for q, j, _ in angles for f in ("cos", "sin")]
+    rows = _force_rows(plan, consts, triads, angles)
+    src = _force_constants(plan, ems, rows, items, handed + 2 * len(crank))
+    L = _position_lines(plan, names, ems, handed, len(triads))
+    L += _load_lines(plan)
+    L += _force_lines(body, len(plan.joint_names), _c)
+    L += _metric_lines(plan, rocker, items)
+    src += _force_lanes(triads, L)
+    src += _force_lane_in(plan, names, consts, angles, crank, handed)
+    src += [part("lane_forces")]
+    return "\n".join(src) + "\n"
+
+
+def _force_rows(plan, consts, triads, angles):
+    """The rows of FS: the candidate's constants, masses and moments of inertia,
+    each slide's cos/sin, the running maxima and verdict, each class III
+    group's branch, the transmission angles' cos/sin."""
+    nb, ns = len(plan.body_names), len(plan.slide_names)
+    rows = consts + [f"mass{b}" for b in range(nb)] + [f"jS{b}" for b in range(nb)]
+    rows += [f"slide{k}_{x}" for k in range(ns) for x in ("cos", "sin")]
+    rows += ["pm", "pe", "bad"] + [f"sign{e.triad_row}" for e in triads]
+    return rows + [f"tr{q}_{j}_{f}" for q, j, _ in angles for f in ("cos", "sin")]
+
+
+def _force_constants(plan, ems, rows, items, ft):
+    """The module's constants of the force lanes: the rows of FS, the columns of
+    FT (``ft``: per position, e(a), e(b) of each class III group, e(q) (or q),
+    q', q'' of each input, the crank's cos/sin) and of RB."""
+    nj = len(plan.joint_names)
     tr_col = 2 * nj + 2
-    ft = handed + 2 * len(crank)     # per position: e(a), e(b) of each class III group,
-    #                                  e(q) (or q), q', q'' of each input, the crank's cos/sin
+    return ["# ---- the force stage in lanes (pipeline.compiler.lane_forces) ----",
+            "HAS_LANE_FORCES = True", f"N_FROWS = {len(rows)}   # rows of FS[row * LANES + lane]",
+            f"FT_COLS = {ft}   # FT[k, col * LANES + lane]: e(a), e(b) of each class III group, "
+            "e(q) (or q), q', q'' of each input, the crank's cos/sin",
+            f"N_RCOLS = {tr_col + 2 * len(items)}   # RB[k, col * LANES + lane]: "
+            "the reactions (x, y) of each joint, the working point's acceleration (x, y), "
+            "|u x w|, |u . w| of each transmission item",
+            f"ACC_COL = {2 * nj}   # RB's columns of the working point's acceleration",
+            f"N_TRANS = {len(items)}   # the transmission items (transmission()'s)",
+            f"TR_COL = {tr_col}   # RB's column of the first",
+            f"SAME_BITS = {same_bits(plan, ems)}   # the force lanes give the scalar force "
+            "stage's bits (else its numbers to rounding)"] + [
+        f"F_{r} = {i}" for i, r in enumerate(rows)]
 
-    def c(name):
-        return f"FS[F_{name} * LANES + l]"
 
-    def t(q):
-        return f"FT[k, {q} * LANES + l]"
-
+def _position_lines(plan, names, ems, handed, n_triads):
+    """A lane's lines of the positions, velocity and acceleration analogs of
+    every point: the fixed points', then each group's."""
     L = ["bad = False", "z = 0.0"]
     for fi, off in zip(plan.fixed_idx, plan.fixed_off):
         i = int(fi)
-        L += [f"P{i}_0 = {c(names.par(off))}", f"P{i}_1 = {c(names.par(int(off) + 1))}",
+        L += [f"P{i}_0 = {_c(names.par(off))}", f"P{i}_1 = {_c(names.par(int(off) + 1))}",
               f"V{i}_0 = 0.0", f"V{i}_1 = 0.0", f"A{i}_0 = 0.0", f"A{i}_1 = 0.0"]
+    crank = [e for e in ems if isinstance(e, CrankEmitter)]
+    inputs = [e for e in ems if isinstance(e, InputEmitter)]
     for e in ems:
         L += [f"# {e.title()}"]
         if isinstance(e, CrankEmitter):
-            o, tip = e.ix[0], e.ix[1]
-            q = handed + 2 * crank.index(e)
-            ln = c(e.k("length"))
-            L += [f"cc = {t(q)}", f"sc = {t(q + 1)}",
-                  f"P{tip}_0 = P{o}_0 + {ln} * cc", f"P{tip}_1 = P{o}_1 + {ln} * sc",
-                  f"V{tip}_0 = V{o}_0 - {ln} * sc", f"V{tip}_1 = V{o}_1 + {ln} * cc",
-                  f"A{tip}_0 = A{o}_0 - {ln} * cc", f"A{tip}_1 = A{o}_1 - {ln} * sc"]
-        elif isinstance(e, ClassIIIEmitter):
-            L += class3_lines(e, c, t)
-        elif isinstance(e, ClassIIISliderEmitter):
-            L += class3_slider_lines(e, c, t)
+            L += _crank_lines(e, handed + 2 * crank.index(e))
         elif isinstance(e, InputEmitter):
-            L += input_lines(e, c, t, 4 * len(triads) + 4 * inputs.index(e))
-        elif isinstance(e, RRPEmitter):
-            L += rrp_lines(e)
-        elif isinstance(e, RRREmitter):
-            L += rrr_lines(e)
-        elif isinstance(e, PRPEmitter):
-            L += (direction_lines(e, "u1", "t1", "guide1_angle", 1)
-                  + direction_lines(e, "u2", "t2", "guide2_angle", 4)
-                  + meet_lines(e.ix[0], lane(e.k("guide1_offset")), e.ix[3],
-                                lane(e.k("guide2_offset")), e.ix[6]))
-        elif isinstance(e, RPPEmitter):
-            cs, ss = lane(f"{e.k('slot_angle')}_cos"), lane(f"{e.k('slot_angle')}_sin")
-            L += (direction_lines(e, "u1", "t1", "guide_angle", 2)
-                  + from_position_lanes([f"u2x = {cs} * u1x - {ss} * u1y",
-                                          f"u2y = {ss} * u1x + {cs} * u1y"])
-                  + ["t21 = t11", "t22 = t12"]
-                  + meet_lines(e.ix[1], lane(e.k("guide_offset")), e.ix[0],
-                                f"-{lane(e.k('slot_offset'))}", e.ix[4]))
+            L += input_lines(e, _c, _t, 4 * n_triads + 4 * inputs.index(e))
         else:
-            L += attach_lines(e, c)
-    L += ["# applied and inertia loads at each centre of mass (kernels.forces.applied_loads)"]
-    for b in range(nb):
+            L += _group_lines(e)
+    return L
+
+
+def _crank_lines(e, q):
+    """A crank's tip from its cos/sin in FT's columns q, q + 1 (kernels.groups.crank)."""
+    o, tip = e.ix[0], e.ix[1]
+    ln = _c(e.k("length"))
+    return [f"cc = {_t(q)}", f"sc = {_t(q + 1)}",
+            f"P{tip}_0 = P{o}_0 + {ln} * cc", f"P{tip}_1 = P{o}_1 + {ln} * sc",
+            f"V{tip}_0 = V{o}_0 - {ln} * sc", f"V{tip}_1 = V{o}_1 + {ln} * cc",
+            f"A{tip}_0 = A{o}_0 - {ln} * cc", f"A{tip}_1 = A{o}_1 - {ln} * sc"]
+
+
+def _group_lines(e):
+    """A lane's lines of a group other than a crank or an input."""
+    if isinstance(e, ClassIIIEmitter):
+        return class3_lines(e, _c, _t)
+    if isinstance(e, ClassIIISliderEmitter):
+        return class3_slider_lines(e, _c, _t)
+    if isinstance(e, RRPEmitter):
+        return rrp_lines(e)
+    if isinstance(e, RRREmitter):
+        return rrr_lines(e)
+    if isinstance(e, PRPEmitter):
+        return (direction_lines(e, "u1", "t1", "guide1_angle", 1)
+                + direction_lines(e, "u2", "t2", "guide2_angle", 4)
+                + meet_lines(e.ix[0], lane(e.k("guide1_offset")), e.ix[3],
+                             lane(e.k("guide2_offset")), e.ix[6]))
+    if isinstance(e, RPPEmitter):
+        cs, ss = lane(f"{e.k('slot_angle')}_cos"), lane(f"{e.k('slot_angle')}_sin")
+        return (direction_lines(e, "u1", "t1", "guide_angle", 2)
+                + from_position_lanes([f"u2x = {cs} * u1x - {ss} * u1y",
+                                       f"u2y = {ss} * u1x + {cs} * u1y"])
+                + ["t21 = t11", "t22 = t12"]
+                + meet_lines(e.ix[1], lane(e.k("guide_offset")), e.ix[0],
+                             f"-{lane(e.k('slot_offset'))}", e.ix[4]))
+    return attach_lines(e, _c)
+
+
+def _load_lines(plan):
+    """A lane's lines of the applied and inertia loads LD at each centre of mass
+    (kernels.forces.applied_loads), the external loads added."""
+    L = ["# applied and inertia loads at each centre of mass (kernels.forces.applied_loads)"]
+    for b in range(len(plan.body_names)):
         s = int(plan.body_com[b])
         ta, tb = (int(v) for v in plan.body_turn.reshape(-1, 2)[b])
         L += [f"ax = (A{s}_0 * omega1 * omega1 + V{s}_0 * eps1) * {MM!r}",
@@ -186,9 +244,9 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
                   "c2 = dx * d2y - dy * d2x", "th1 = c1 / r2",
                   "th2 = c2 / r2 - 2.0 * (dx * d1x + dy * d1y) * c1 / (r2 * r2)",
                   "eb = th2 * omega1 * omega1 + th1 * eps1"]
-        L += [f"LD{b}_0 = -{c(f'mass{b}')} * ax",
-              f"LD{b}_1 = -{c(f'mass{b}')} * GRAVITY - {c(f'mass{b}')} * ay",
-              f"LD{b}_2 = -{c(f'jS{b}')} * eb"]
+        L += [f"LD{b}_0 = -{_c(f'mass{b}')} * ax",
+              f"LD{b}_1 = -{_c(f'mass{b}')} * GRAVITY - {_c(f'mass{b}')} * ay",
+              f"LD{b}_2 = -{_c(f'jS{b}')} * eb"]
     for q in range(len(plan.load_body)):
         b, p = int(plan.load_body[q]), int(plan.load_point[q])
         s = int(plan.body_com[b])
@@ -196,54 +254,57 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
               f"LD{b}_0 += fx", f"LD{b}_1 += fy", f"LD{b}_2 += loads[k, {q}, 2]"]
         if p >= 0:
             L += [f"LD{b}_2 += ((P{p}_0 - P{s}_0) * fy - (P{p}_1 - P{s}_1) * fx) * {MM!r}"]
-    L += _force_lines(body, nj, c)
-    L += ["# the running maximum of |M_bal| (force_stage's test, NaN and inf included)",
-          f"pm = {c('pm')}",
-          f"{c('pm')} = mb if ((abs(mb) > abs(pm)) | (not (mb - mb == 0.0))) else pm"]
-    L += peak_lines(plan, rocker, c)
+    return L
+
+
+def _metric_lines(plan, rocker, items):
+    """A lane's lines of the sweep's metrics at this position: the running maximum
+    of |M_bal|, the peaks, |u x w| and |u . w| of each transmission item, the
+    lane's verdict."""
+    tr_col = 2 * len(plan.joint_names) + 2
+    L = ["# the running maximum of |M_bal| (force_stage's test, NaN and inf included)",
+         f"pm = {_c('pm')}",
+         f"{_c('pm')} = mb if ((abs(mb) > abs(pm)) | (not (mb - mb == 0.0))) else pm"]
+    L += peak_lines(plan, rocker, _c)
     for q, (kind, args) in enumerate(items):
-        L += transmission_lines(q, kind, args, c)
+        L += transmission_lines(q, kind, args, _c)
         L += [f"RB[k, {tr_col + 2 * q} * LANES + l] = abs(ux * wy - uy * wx)",
               f"RB[k, {tr_col + 2 * q + 1} * LANES + l] = abs(ux * wx + uy * wy)"]
-    L += [f"{c('bad')} = 1.0 if bad else {c('bad')}"]
-    flat = [f"F_{r} = {i}" for i, r in enumerate(rows)]
-    src = ["# ---- the force stage in lanes (pipeline.compiler.lane_forces) ----",
-           "HAS_LANE_FORCES = True", f"N_FROWS = {len(rows)}   # rows of FS[row * LANES + lane]",
-           f"FT_COLS = {ft}   # FT[k, col * LANES + lane]: e(a), e(b) of each class III group, "
-           "e(q) (or q), q', q'' of each input, the crank's cos/sin", f"N_RCOLS = {tr_col + 2 * len(items)}   # RB[k, col * LANES + lane]: "
-           "the reactions (x, y) of each joint, the working point's acceleration (x, y), "
-           "|u x w|, |u . w| of each transmission item",
-           f"ACC_COL = {2 * nj}   # RB's columns of the working point's acceleration",
-           f"N_TRANS = {len(items)}   # the transmission items (transmission()'s)",
-           f"TR_COL = {tr_col}   # RB's column of the first",
-           f"SAME_BITS = {same_bits(plan, ems)}   # the force lanes give the scalar force "
-           "stage's bits (else its numbers to rounding)"]
-    src += flat
-    src += ["", "", "@njit(**JIT)   # strict, like the scalar force stage: its bits",
-            "def force_lanes(FS, FT, RB, n_lanes, npos, tol, tsing, omega1, eps1, loads, iw):",
-            '    """Positions 0 .. npos - 1 of every lane: the reactions and the working',
-            "    point's (iw) acceleration into RB, the running maxima of |M_bal| and of",
-            '    the rocker\'s |angular acceleration| and the lane\'s verdict into FS."""',
-            "    for l in range(n_lanes):",
-            f"        {c('pm')} = 0.0",
-            f"        {c('pe')} = 0.0",
-            f"        {c('bad')} = 0.0"]
-    src += [f"        {c(f'sign{e.triad_row}')} = 0.0" for e in triads]
+    return L + [f"{_c('bad')} = 1.0 if bad else {_c('bad')}"]
+
+
+def _force_lanes(triads, L):
+    """Source of ``force_lanes``: the lines ``L`` of one lane at one position, in
+    the loops over positions and lanes."""
+    src = ["", "", "@njit(**JIT)   # strict, like the scalar force stage: its bits",
+           "def force_lanes(FS, FT, RB, n_lanes, npos, tol, tsing, omega1, eps1, loads, iw):",
+           '    """Positions 0 .. npos - 1 of every lane: the reactions and the working',
+           "    point's (iw) acceleration into RB, the running maxima of |M_bal| and of",
+           '    the rocker\'s |angular acceleration| and the lane\'s verdict into FS."""',
+           "    for l in range(n_lanes):",
+           f"        {_c('pm')} = 0.0",
+           f"        {_c('pe')} = 0.0",
+           f"        {_c('bad')} = 0.0"]
+    src += [f"        {_c(f'sign{e.triad_row}')} = 0.0" for e in triads]
     src += ["    for k in range(npos):",
             "        # a trip count known only at run time: LLVM vectorizes this loop (FT and RB",
             "        # indexed [k, col * LANES + l]: flat indices kept it scalar)",
             "        for l in range(n_lanes):"]
-    src += ["            " + x for x in L]
-    src += ["", ""]
-    # force_lane_in: one candidate into lane l
-    src += ["# its own function: compiled beside the run (pipeline.compiler.beside)",
-            "@njit(**JIT_INNER)",
-            "def force_lane_in(par, l, trail, FS, FT, phis, crank_tab):",
-            '    """Candidate ``par`` into force lane ``l``: its constants, masses and the',
-            '    class III solutions of the lane walk (``trail``), and the crank\'s cos/sin',
-            "    of phis[k] + phiM0 (crank_tab: the last phiM0 in row 0, the table after",
-            '    it; computed again only for another phiM0)."""',
-            "    K = constants(par)"]
+    return src + ["            " + x for x in L] + ["", ""]
+
+
+def _force_lane_in(plan, names, consts, angles, crank, handed):
+    """Source of ``force_lane_in``: one candidate into force lane l (its constants,
+    masses, slides' and transmission angles' cos/sin, the lane walk's columns
+    handed over, the crank's cos/sin)."""
+    src = ["# its own function: compiled beside the run (pipeline.compiler.beside)",
+           "@njit(**JIT_INNER)",
+           "def force_lane_in(par, l, trail, FS, FT, phis, crank_tab):",
+           '    """Candidate ``par`` into force lane ``l``: its constants, masses and the',
+           '    class III solutions of the lane walk (``trail``), and the crank\'s cos/sin',
+           "    of phis[k] + phiM0 (crank_tab: the last phiM0 in row 0, the table after",
+           '    it; computed again only for another phiM0)."""',
+           "    K = constants(par)"]
     if angles:
         src += ["    " + x for x in wrap_line("(" + ", ".join(consts) + ",) = K", 90).split("\n")]
         for q, j, x in angles:
@@ -251,11 +312,11 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
                     f"    FS[F_tr{q}_{j}_sin * LANES + l] = math.sin({x})"]
     for i, r in enumerate(consts):
         src.append(f"    FS[F_{r} * LANES + l] = K[{i}]")
-    for b in range(nb):
+    for b in range(len(plan.body_names)):
         off = int(plan.body_mass_off[b])
         src += [f"    FS[F_mass{b} * LANES + l] = par[{off}]",
                 f"    FS[F_jS{b} * LANES + l] = par[{off + 1}]"]
-    for k in range(ns):
+    for k in range(len(plan.slide_names)):
         src += [f"    a = {slide_angle(plan, names, k)}   # slide {k}'s angle (forces_at's)",
                 f"    FS[F_slide{k}_cos * LANES + l] = math.cos(a)",
                 f"    FS[F_slide{k}_sin * LANES + l] = math.sin(a)"]
@@ -265,20 +326,22 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
                 f"        for q in range({handed}):",
                 "            FT[k, q * LANES + l] = trail[k, q]"]
     for j, e in enumerate(crank):
-        q = handed + 2 * j
-        m0 = f"K[{consts.index(e.k('phiM0'))}]"
-        src += [f"    m0 = {m0}",
-                "    if not (crank_tab[0, 0] == m0):   # (kernels.groups.crank's cos, sin)",
-                "        crank_tab[0, 0] = m0",
-                "        for k in range(npos):",
-                "            crank_tab[1 + k, 0] = math.cos(phis[k] + m0)",
-                "            crank_tab[1 + k, 1] = math.sin(phis[k] + m0)",
-                "    for k in range(npos):",
-                f"        FT[k, {q} * LANES + l] = crank_tab[1 + k, 0]",
-                f"        FT[k, {q + 1} * LANES + l] = crank_tab[1 + k, 1]"]
-    src += ["", ""]
-    src += [part("lane_forces")]
-    return "\n".join(src) + "\n"
+        src += _crank_table_lines(f"K[{consts.index(e.k('phiM0'))}]", handed + 2 * j)
+    return src + ["", ""]
+
+
+def _crank_table_lines(m0, q):
+    """force_lane_in's lines of a crank's cos/sin of phis[k] + phiM0 (``m0``) into
+    FT's columns q, q + 1, the table made again only for another phiM0."""
+    return [f"    m0 = {m0}",
+            "    if not (crank_tab[0, 0] == m0):   # (kernels.groups.crank's cos, sin)",
+            "        crank_tab[0, 0] = m0",
+            "        for k in range(npos):",
+            "            crank_tab[1 + k, 0] = math.cos(phis[k] + m0)",
+            "            crank_tab[1 + k, 1] = math.sin(phis[k] + m0)",
+            "    for k in range(npos):",
+            f"        FT[k, {q} * LANES + l] = crank_tab[1 + k, 0]",
+            f"        FT[k, {q + 1} * LANES + l] = crank_tab[1 + k, 1]"]
 
 
 def _force_lines(body, nj, c):
