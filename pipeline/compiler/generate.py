@@ -62,83 +62,107 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
     # the study's names are data: in comments only, as ascii() writes them
     # (pipeline.compiler.names); every identifier comes from an index
     out = [part("header").format(n_groups=plan.n_kinematic, digest=digest)]
-    w = out.append
-    w("# the groups, in solve order")
-    for e in ems[:plan.n_kinematic]:
-        w(f"#   {e.title()}")
-    w("")
+    out += _group_list(plan, ems)
+    out += _plan_constants(plan, n, n_triads)
+    out += _force_constants(plan, ems, watch)
+    for e in ems:
+        out += e.module_constants()
+    if shared is not None:
+        out += _shared_kernels(plan, n, ems, rocker, lanes_width, watch, shared)
+        return _checked("\n".join(out))
+    consts = constants_of(plan, n, ems)
+    names_k = [c[0] for c in consts]
+    unpack = _unpack(names_k)
+    out.append(_fn("constants(par)",
+                   "Every per-candidate constant of the mechanism, computed once per "
+                   "candidate\n(before the position loop): the row's dimensions and what "
+                   "follows from them.",
+                   [f"{k} = {v}" for k, v in consts] + ["return " + _tuple(names_k)]))
+    out.append(_position_fn(plan, n, ems, unpack))
+    out.append(_start_fn(ems, unpack))
+    out.append(_spaced(part("advance_newton" if n_triads else "advance_closed")))
+    out.append(force_kernel(plan, n))
+    out.append(_transmission_fn(plan, ems, unpack))
+    out.append(_spaced(module_walk() + part("careful") + part("crank_dynamics")
+                       + part("batch")))
+    out.append(_sweep_parts(plan, n, ems, rocker, lanes_width, watch))
+    return _checked("\n".join(out))     # ends with the blank line after the last part
 
-    # ---------------------------------------------------------------- constants of the plan
-    w("# ---- the mechanism's plan, as constants ----")
-    # the sizes the kernels allocate work arrays by (work, force_work, watch_work) as
-    # np.int64, not literals: one compiled version of each serves every mechanism
-    w(f"N_POINTS = np.int64({plan.n_points})")
-    w(f"N_GROUPS = np.int64({plan.n_groups})")
-    w(f"N_KINEMATIC = {plan.n_kinematic}   # groups before the hidden centres of mass")
-    w(f"N_TRIADS = np.int64({n_triads})   # class III groups, either kind (rows of the "
-      "continuation state)")
-    w(f"N_PARAMS = {len(plan.par_names)}")
-    w(f"GRAVITY = {literal(plan.gravity)}")
-    w("")
+
+def _group_list(plan, ems):
+    """The comment listing the groups in solve order."""
+    return (["# the groups, in solve order"]
+            + [f"#   {e.title()}" for e in ems[:plan.n_kinematic]] + [""])
+
+
+def _plan_constants(plan, n, n_triads):
+    """The plan's sizes, gravity, and the indices of its points and of the
+    columns of a candidate's parameter row, as the module's constants."""
+    out = ["# ---- the mechanism's plan, as constants ----",
+           # the sizes the kernels allocate work arrays by (work, force_work, watch_work)
+           # as np.int64, not literals: one compiled version of each serves every mechanism
+           f"N_POINTS = np.int64({plan.n_points})",
+           f"N_GROUPS = np.int64({plan.n_groups})",
+           f"N_KINEMATIC = {plan.n_kinematic}   # groups before the hidden centres of mass",
+           f"N_TRIADS = np.int64({n_triads})   # class III groups, either kind (rows of the "
+           "continuation state)",
+           f"N_PARAMS = {len(plan.par_names)}",
+           f"GRAVITY = {literal(plan.gravity)}",
+           ""]
     # np.int64: numba types a plain int global as a literal, and every call of a
     # library kernel (rrr, class3, ...) with other literal indices compiled a
     # version of that kernel of its own, for each group and each mechanism; as
     # int64 values one compiled version serves them all (from numba's cache)
-    w("# point indices in pos/d1/d2")
-    for i, p in enumerate(plan.point_names):
-        w(f"{n.I(i)} = np.int64({i})   # {text(p)}")
-    w(f"{NO_POINT} = np.int64(-1)   # none: a guide, line or link of fixed direction")
-    w("")
-    w("# columns of a candidate's parameter row")
-    for i, p in enumerate(plan.par_names):
-        w(f"PAR_{n.par(i)} = {i}   # {text(p)}")
-    w("")
-    w("# force analysis: bodies, joints, slides, loads")
-    w(_array("BODY_COM", plan.body_com, "int64"))
-    w(_array("BODY_TURN", plan.body_turn.reshape(-1, 2), "int64"))
-    w(_array("BODY_MASS_OFF", plan.body_mass_off, "int64"))
-    w(_array("JOINT_POINT", plan.joint_point, "int64"))
-    w(_array("JOINT_BODIES", plan.joint_bodies.reshape(-1, 2), "int64"))
-    w(_array("SLIDE_BODIES", plan.slide_bodies.reshape(-1, 2), "int64"))
-    w(_array("SLIDE_DIR", plan.slide_dir.reshape(-1, 2), "int64"))
-    w(_array("SLIDE_ANGLE", plan.slide_angle, "float64"))
-    w(_array("LOAD_BODY", plan.load_body, "int64"))
-    w(_array("LOAD_POINT", plan.load_point, "int64"))
+    out.append("# point indices in pos/d1/d2")
+    out += [f"{n.I(i)} = np.int64({i})   # {text(p)}" for i, p in enumerate(plan.point_names)]
+    out += [f"{NO_POINT} = np.int64(-1)   # none: a guide, line or link of fixed direction",
+            "", "# columns of a candidate's parameter row"]
+    out += [f"PAR_{n.par(i)} = {i}   # {text(p)}" for i, p in enumerate(plan.par_names)]
+    return out + [""]
+
+
+def _force_constants(plan, ems, watch):
+    """The force analysis' tables (bodies, joints, slides, loads), the watched
+    groups and the crank's body, as the module's constants."""
     watched = [e.g for e in ems[:plan.n_kinematic] if e.watched and watch]
-    w("# groups whose margin the walks watch between positions (pipeline.kernels.watch)")
-    w(_array("WATCH_G", watched, "int64"))
-    w(f"N_WATCH = np.int64({len(watched)})")
-    w(f"CRANK_BODY = {plan.crank_body}")
-    w(f"CRANK_PIVOT = {plan.crank_pivot}   # the shaking moment's reference point")
-    w(f"N_BODIES = np.int64({len(plan.body_names)})")
-    w(f"N_JOINTS = np.int64({len(plan.joint_names)})")
-    w(f"N_SLIDES = np.int64({len(plan.slide_names)})")
-    w(f"N_INPUTS = np.int64({plan.n_inputs})   # inputs besides the crank: their drives follow "
-      "the slides' rows of slide_out")
-    w("")
-    for e in ems:
-        for line in e.module_constants():
-            w(line)
+    return [
+        "# force analysis: bodies, joints, slides, loads",
+        _array("BODY_COM", plan.body_com, "int64"),
+        _array("BODY_TURN", plan.body_turn.reshape(-1, 2), "int64"),
+        _array("BODY_MASS_OFF", plan.body_mass_off, "int64"),
+        _array("JOINT_POINT", plan.joint_point, "int64"),
+        _array("JOINT_BODIES", plan.joint_bodies.reshape(-1, 2), "int64"),
+        _array("SLIDE_BODIES", plan.slide_bodies.reshape(-1, 2), "int64"),
+        _array("SLIDE_DIR", plan.slide_dir.reshape(-1, 2), "int64"),
+        _array("SLIDE_ANGLE", plan.slide_angle, "float64"),
+        _array("LOAD_BODY", plan.load_body, "int64"),
+        _array("LOAD_POINT", plan.load_point, "int64"),
+        "# groups whose margin the walks watch between positions (pipeline.kernels.watch)",
+        _array("WATCH_G", watched, "int64"),
+        f"N_WATCH = np.int64({len(watched)})",
+        f"CRANK_BODY = {plan.crank_body}",
+        f"CRANK_PIVOT = {plan.crank_pivot}   # the shaking moment's reference point",
+        f"N_BODIES = np.int64({len(plan.body_names)})",
+        f"N_JOINTS = np.int64({len(plan.joint_names)})",
+        f"N_SLIDES = np.int64({len(plan.slide_names)})",
+        f"N_INPUTS = np.int64({plan.n_inputs})   # inputs besides the crank: their drives "
+        "follow the slides' rows of slide_out",
+        ""]
 
-    if shared is not None:
-        sweep = _sweep_parts(plan, n, ems, rocker, lanes_width, watch)
-        own = set(defined_functions(sweep))
-        names = [f for f in shared[1] if f not in own]
-        w("# ---- the kernels the rocker does not change: the mechanism's own module ----")
-        w(wrap_line(f"from {shared[0]} import " + _tuple(names)))
-        w(sweep)
-        return _checked("\n".join(out))
 
-    # ---------------------------------------------------------------- constants(par)
-    consts = constants_of(plan, n, ems)
-    names_k = [c[0] for c in consts]
-    unpack = _unpack(names_k)
-    w(_fn("constants(par)",
-          "Every per-candidate constant of the mechanism, computed once per candidate\n"
-          "(before the position loop): the row's dimensions and what follows from them.",
-          [f"{k} = {v}" for k, v in consts] + ["return " + _tuple(names_k)]))
+def _shared_kernels(plan, n, ems, rocker, lanes_width, watch, shared):
+    """A sweep's module past its constants: the import of the kernels the rocker
+    does not change from the mechanism's own module (``shared``), then the
+    sweep's parts."""
+    sweep = _sweep_parts(plan, n, ems, rocker, lanes_width, watch)
+    own = set(defined_functions(sweep))
+    names = [f for f in shared[1] if f not in own]
+    return ["# ---- the kernels the rocker does not change: the mechanism's own module ----",
+            wrap_line(f"from {shared[0]} import " + _tuple(names)), sweep]
 
-    # ---------------------------------------------------------------- position
+
+def _position_fn(plan, n, ems, unpack):
+    """Source of ``position``: every group at one crank angle (careful path)."""
     body = [unpack, "sing = tols[T_SINGULAR]", "slack = tols[T_ASSEMBLY_SLACK]", "status = OK",
             "margins[N_GROUPS] = -1.0   # the first group that fails (-1: none)",
             "# fixed pivots: positions from the row, zero analogs"]
@@ -156,40 +180,40 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
                      "# ---- the centres of mass (force analysis and dynamics only)"]
         body += lines
     body.append("return status")
-    w(_fn("position(K, phi, order, tols, state, pos, d1, d2, margins, with_com)",
-          "Every group at crank angle ``phi`` (rad), in plan order (careful path).\n"
-          "Writes pos/d1/d2 (n_points, 2) to ``order`` (0 positions, 1 velocity\n"
-          "analogs, 2 acceleration analogs) and margins[g]; the centres of mass only\n"
-          "``with_com``.  Returns the first non-OK status (later groups still run\n"
-          "and give NaN); margins[N_GROUPS] is the index of the group that gave it.",
-          body, jit="**JIT_INNER"))
+    return _fn("position(K, phi, order, tols, state, pos, d1, d2, margins, with_com)",
+               "Every group at crank angle ``phi`` (rad), in plan order (careful path).\n"
+               "Writes pos/d1/d2 (n_points, 2) to ``order`` (0 positions, 1 velocity\n"
+               "analogs, 2 acceleration analogs) and margins[g]; the centres of mass only\n"
+               "``with_com``.  Returns the first non-OK status (later groups still run\n"
+               "and give NaN); margins[N_GROUPS] is the index of the group that gave it.",
+               body, jit="**JIT_INNER")
 
-    # ---------------------------------------------------------------- start
+
+def _start_fn(ems, unpack):
+    """Source of ``start``: every class III group from its declared guess."""
     triads = [e for e in ems if e.continued]
     body = [unpack]
     for e in triads:
         body.append(f"start_triad(state, np.int64({e.triad_row}), {e.k('a0')}, {e.k('b0')})")
     body.append(f"return {triads[0].k('phi_start')}" if triads else "return math.nan")
-    w(_fn("start(K, state)",
-          "Start every class III group from its declared guess; returns the crank\n"
-          "angle where the guesses apply (NaN without class III groups: closed form).",
-          body, jit="**JIT_INNER"))
+    return _fn("start(K, state)",
+               "Start every class III group from its declared guess; returns the crank\n"
+               "angle where the guesses apply (NaN without class III groups: closed form).",
+               body, jit="**JIT_INNER")
 
-    w(_spaced(part("advance_newton" if n_triads else "advance_closed")))
-    w(force_kernel(plan, n))
+
+def _transmission_fn(plan, ems, unpack):
+    """Source of ``transmission``: the smallest transmission angle at a position."""
     body = [unpack, "tr = math.inf"]
     for e in ems[:plan.n_kinematic]:
         body += e.transmission()
     body.append("return tr")
-    w(_fn("transmission(K, pos, best_cos=math.nan, best_sin=math.nan)",
-          "The smallest transmission angle at this position (rad, in [0, pi/2]) over the\n"
-          "dyads and the class III leads (``pipeline.peaks.transmission_items``); inf\n"
-          "where the mechanism has none, or where every angle is certainly above the\n"
-          "smallest so far, whose cos and sin are best_cos, best_sin (NaN: none yet).",
-          body))
-    w(_spaced(module_walk() + part("careful") + part("crank_dynamics") + part("batch")))
-    w(_sweep_parts(plan, n, ems, rocker, lanes_width, watch))
-    return _checked("\n".join(out))     # ends with the blank line after the last part
+    return _fn("transmission(K, pos, best_cos=math.nan, best_sin=math.nan)",
+               "The smallest transmission angle at this position (rad, in [0, pi/2]) over "
+               "the\ndyads and the class III leads (``pipeline.peaks.transmission_items``); "
+               "inf\nwhere the mechanism has none, or where every angle is certainly above "
+               "the\nsmallest so far, whose cos and sin are best_cos, best_sin (NaN: none yet).",
+               body)
 
 
 def module_walk() -> str:
