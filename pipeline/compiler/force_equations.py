@@ -202,18 +202,44 @@ def eliminated(plan, names, lanes=False):
     slide that turns with a link, the link's unit vector turned by them, in
     place of atan2 and sin/cos at every position (the same direction, to
     rounding); a link of no length sets ``bad``."""
-    nb, nj, ns = len(plan.body_names), len(plan.joint_names), len(plan.slide_names)
-    ni = plan.n_inputs
-    n = 3 * nb
-    col_m = 2 * nj + 2 * ns
-    has_crank = plan.crank_body >= 0
-    col_in = col_m + int(has_crank)            # first input's drive
-    sym = _Sym()
-    L = sym.lines
-    P = [names.I(i) for i in range(len(plan.point_names))]
-    A: dict = {}                       # (row, col) -> entry
+    s = _ForceSystem(plan, names, lanes)
+    s.load_entries()
+    s.joint_entries()
+    for k in range(len(plan.slide_names)):
+        s.slide_entries(k)
+    if s.has_crank:
+        s.add(3 * plan.crank_body + 2, s.col_m, 1.0)
+    shares = [s.input_entries(k) for k in range(plan.n_inputs)]     # q' of every input
+    pivots = s.eliminate()
+    body, x, m = s.solve_remaining()
+    body += s.back_substitution(pivots, x)
+    body += s.outputs(shares)
+    return body, m
 
-    def add(r, c, v):
+
+class _ForceSystem:
+    """The kinetostatic system of a square plan at one position, built in
+    generated locals (``_Sym``): its entries A[(row, col)] and right-hand side
+    b, three rows per body (x, y force balance, moment about the centre of
+    mass); columns 2j, 2j + 1 joint j's reaction, then each slide's (N, C),
+    the crank's balancing moment, each input's drive."""
+
+    def __init__(self, plan, names, lanes):
+        self.plan, self.names, self.lanes = plan, names, lanes
+        self.nj, self.ns = len(plan.joint_names), len(plan.slide_names)
+        self.n = 3 * len(plan.body_names)
+        self.col_m = 2 * self.nj + 2 * self.ns
+        self.has_crank = plan.crank_body >= 0
+        self.col_in = self.col_m + int(self.has_crank)            # first input's drive
+        self.sym = _Sym()
+        self.L = self.sym.lines
+        self.P = [names.I(i) for i in range(len(plan.point_names))]
+        self.A: dict = {}                       # (row, col) -> entry
+        self.b: dict = {}
+
+    def add(self, r, c, v):
+        """A[r, c] += v (a zero entry dropped)."""
+        sym, A = self.sym, self.A
         old = A.get((r, c), 0.0)
         if isinstance(old, float) and isinstance(v, float):
             val = old + v
@@ -226,111 +252,137 @@ def eliminated(plan, names, lanes=False):
         else:
             A[(r, c)] = val
 
-    L.append("# applied and inertia loads reduced to each centre of mass: (Fx, Fy, M)")
-    L.append("applied_loads(pos, d1, d2, omega1, eps1, GRAVITY, par, BODY_COM, BODY_TURN, "
-             "BODY_MASS_OFF,")
-    L.append("              LOAD_BODY, LOAD_POINT, loads_k, loads_out)")
-    b = {}
-    for i in range(nb):
-        for k in range(3):
-            b[3 * i + k] = sym.var(f"-loads_out[{i}, {k}]")
-    L.append("# revolute joints: R_j (force of the first body on the second) on both bodies,")
-    L.append("# with its moment about each body's centre of mass (levers in m)")
-    for j in range(nj):
-        p = int(plan.joint_point[j])
-        for side in range(2):
-            body = int(plan.joint_bodies[j, side])
-            if body < 0:
-                continue
-            sgn = 1.0 if side == 1 else -1.0
-            s = int(plan.body_com[body])
-            lx = sym.var(f"(pos[{P[p]}, 0] - pos[{P[s]}, 0]) * {MM}")
-            ly = sym.var(f"(pos[{P[p]}, 1] - pos[{P[s]}, 1]) * {MM}")
-            add(3 * body, 2 * j, sgn)
-            add(3 * body + 1, 2 * j + 1, sgn)
-            add(3 * body + 2, 2 * j, sym.mul(-sgn, ly))
-            add(3 * body + 2, 2 * j + 1, sym.mul(sgn, lx))
-    for k in range(ns):
-        q = int(plan.slide_bodies[k, 1])
-        sq = int(plan.body_com[q])
-        angle = slide_angle(plan, names, k)
-        if lanes:
+    def lever(self, p, s):
+        """The lever (x, y) from point ``s`` to point ``p``, in m."""
+        P, sym = self.P, self.sym
+        return (sym.var(f"(pos[{P[p]}, 0] - pos[{P[s]}, 0]) * {MM}"),
+                sym.var(f"(pos[{P[p]}, 1] - pos[{P[s]}, 1]) * {MM}"))
+
+    def load_entries(self):
+        """The right-hand side: the applied and inertia loads at each centre of mass."""
+        L = self.L
+        L.append("# applied and inertia loads reduced to each centre of mass: (Fx, Fy, M)")
+        L.append("applied_loads(pos, d1, d2, omega1, eps1, GRAVITY, par, BODY_COM, BODY_TURN, "
+                 "BODY_MASS_OFF,")
+        L.append("              LOAD_BODY, LOAD_POINT, loads_k, loads_out)")
+        for i in range(len(self.plan.body_names)):
+            for k in range(3):
+                self.b[3 * i + k] = self.sym.var(f"-loads_out[{i}, {k}]")
+
+    def joint_entries(self):
+        """Each revolute joint's reaction on both its bodies, and its moment."""
+        plan, sym = self.plan, self.sym
+        self.L.append("# revolute joints: R_j (force of the first body on the second) on "
+                      "both bodies,")
+        self.L.append("# with its moment about each body's centre of mass (levers in m)")
+        for j in range(self.nj):
+            p = int(plan.joint_point[j])
+            for side in range(2):
+                body = int(plan.joint_bodies[j, side])
+                if body < 0:
+                    continue
+                sgn = 1.0 if side == 1 else -1.0
+                lx, ly = self.lever(p, int(plan.body_com[body]))
+                self.add(3 * body, 2 * j, sgn)
+                self.add(3 * body + 1, 2 * j + 1, sgn)
+                self.add(3 * body + 2, 2 * j, sym.mul(-sgn, ly))
+                self.add(3 * body + 2, 2 * j + 1, sym.mul(sgn, lx))
+
+    def slide_normal(self, k):
+        """Slide ``k``'s unit normal (nx, ny): from atan2 and sin/cos of its angle,
+        or in the lanes from the hoisted cos/sin (a turning guide's link vector
+        turned by them; a link of no length sets ``bad``)."""
+        plan, sym, P = self.plan, self.sym, self.P
+        if self.lanes:
             c_, s_ = f"SLIDE_COS_{k}", f"SLIDE_SIN_{k}"
-            if plan.slide_dir[k, 0] >= 0:
-                a_, b_ = (int(v) for v in plan.slide_dir[k])
-                dx = sym.var(f"pos[{P[b_]}, 0] - pos[{P[a_]}, 0]")
-                dy = sym.var(f"pos[{P[b_]}, 1] - pos[{P[a_]}, 1]")
-                r2 = sym.var(f"{dx} * {dx} + {dy} * {dy}")
-                L.append(f"bad = bad | (not ({r2} > 0.0))")
-                f = sym.var(f"1.0 / math.sqrt({r2})")
-                nx = sym.var(f"-({f} * ({s_} * {dx} + {c_} * {dy}))")
-                ny = sym.var(f"{f} * ({c_} * {dx} - {s_} * {dy})")
-            else:
-                nx = sym.var(f"-{s_}")
-                ny = sym.var(c_)
+            if plan.slide_dir[k, 0] < 0:
+                return sym.var(f"-{s_}"), sym.var(c_)
+            a_, b_ = (int(v) for v in plan.slide_dir[k])
+            dx = sym.var(f"pos[{P[b_]}, 0] - pos[{P[a_]}, 0]")
+            dy = sym.var(f"pos[{P[b_]}, 1] - pos[{P[a_]}, 1]")
+            r2 = sym.var(f"{dx} * {dx} + {dy} * {dy}")
+            self.L.append(f"bad = bad | (not ({r2} > 0.0))")
+            f = sym.var(f"1.0 / math.sqrt({r2})")
+            return (sym.var(f"-({f} * ({s_} * {dx} + {c_} * {dy}))"),
+                    sym.var(f"{f} * ({c_} * {dx} - {s_} * {dy})"))
+        angle = slide_angle(plan, self.names, k)
+        if plan.slide_dir[k, 0] >= 0:
+            a_, b_ = (int(v) for v in plan.slide_dir[k])
+            th = sym.var(f"math.atan2(pos[{P[b_]}, 1] - pos[{P[a_]}, 1], pos[{P[b_]}, 0] - "
+                         f"pos[{P[a_]}, 0]) + {angle}")
         else:
-            if plan.slide_dir[k, 0] >= 0:
-                a_, b_ = (int(v) for v in plan.slide_dir[k])
-                th = sym.var(f"math.atan2(pos[{P[b_]}, 1] - pos[{P[a_]}, 1], pos[{P[b_]}, 0] - "
-                             f"pos[{P[a_]}, 0]) + {angle}")
-            else:
-                th = sym.var(angle)
-            nx = sym.var(f"-math.sin({th})")
-            ny = sym.var(f"math.cos({th})")
-        col = 2 * nj + 2 * k
+            th = sym.var(angle)
+        return sym.var(f"-math.sin({th})"), sym.var(f"math.cos({th})")
+
+    def slide_entries(self, k):
+        """Slide ``k``'s normal force N and moment C on both its bodies."""
+        plan, sym = self.plan, self.sym
+        sq = int(plan.body_com[int(plan.slide_bodies[k, 1])])
+        nx, ny = self.slide_normal(k)
+        col = 2 * self.nj + 2 * k
         for side in range(2):
             body = int(plan.slide_bodies[k, side])
             if body < 0:
                 continue
             sgn = 1.0 if side == 1 else -1.0
-            sb = int(plan.body_com[body])
-            lx = sym.var(f"(pos[{P[sq]}, 0] - pos[{P[sb]}, 0]) * {MM}")
-            ly = sym.var(f"(pos[{P[sq]}, 1] - pos[{P[sb]}, 1]) * {MM}")
+            lx, ly = self.lever(sq, int(plan.body_com[body]))
             fx = sym.mul(sgn, nx)
             fy = sym.mul(sgn, ny)
-            add(3 * body, col, fx)
-            add(3 * body + 1, col, fy)
-            add(3 * body + 2, col, sym.var(f"{lx} * {fy} - {ly} * {fx}"))
-            add(3 * body + 2, col + 1, sgn)
-    if has_crank:
-        add(3 * plan.crank_body + 2, col_m, 1.0)
-    shares = []                                   # q' of every input
-    for k in range(ni):
+            self.add(3 * body, col, fx)
+            self.add(3 * body + 1, col, fy)
+            self.add(3 * body + 2, col, sym.var(f"{lx} * {fy} - {ly} * {fx}"))
+            self.add(3 * body + 2, col + 1, sgn)
+
+    def input_entries(self, k):
+        """Input ``k``'s drive (a moment on a rotary input's link, a force along a
+        slider input's guide); returns its q' (the drive's share of M_bal)."""
+        plan, sym = self.plan, self.sym
         body = int(plan.input_body[k])
-        col = col_in + k
-        a_, b_ = (P[int(v)] for v in plan.input_points[k])
+        col = self.col_in + k
+        a_, b_ = (self.P[int(v)] for v in plan.input_points[k])
         label = text(plan.input_names[k])
         if int(plan.input_kind[k]) == ROTARY:
-            L.append(f"# input {label}: a drive moment on its link; q' = (r x r') / |r|^2")
-            add(3 * body + 2, col, 1.0)
-            shares.append(sym.var(
+            self.L.append(f"# input {label}: a drive moment on its link; q' = (r x r') / |r|^2")
+            self.add(3 * body + 2, col, 1.0)
+            return sym.var(
                 f"((pos[{b_}, 0] - pos[{a_}, 0]) * (d1[{b_}, 1] - d1[{a_}, 1]) - "
                 f"(pos[{b_}, 1] - pos[{a_}, 1]) * (d1[{b_}, 0] - d1[{a_}, 0])) / "
-                f"((pos[{b_}, 0] - pos[{a_}, 0]) ** 2 + (pos[{b_}, 1] - pos[{a_}, 1]) ** 2)"))
+                f"((pos[{b_}, 0] - pos[{a_}, 0]) ** 2 + (pos[{b_}, 1] - pos[{a_}, 1]) ** 2)")
+        self.L.append(f"# input {label}: a drive force along its guide at the block; "
+                      "q' = u . (block' - guide point') in m")
+        g = self.names.K(int(plan.input_group[k]), "guide_angle")
+        if self.lanes:       # (the input's hoisted cos/sin of the same angle: the same bits)
+            ux = sym.var(f"LANE_CONST({g}_cos)")
+            uy = sym.var(f"LANE_CONST({g}_sin)")
         else:
-            L.append(f"# input {label}: a drive force along its guide at the block; "
-                     "q' = u . (block' - guide point') in m")
-            g = names.K(int(plan.input_group[k]), "guide_angle")
-            if lanes:       # (the input's hoisted cos/sin of the same angle: the same bits)
-                ux = sym.var(f"LANE_CONST({g}_cos)")
-                uy = sym.var(f"LANE_CONST({g}_sin)")
-            else:
-                ux = sym.var(f"math.cos(par[PAR_{g}])")
-                uy = sym.var(f"math.sin(par[PAR_{g}])")
-            s_ = int(plan.body_com[body])
-            lx = sym.var(f"(pos[{b_}, 0] - pos[{P[s_]}, 0]) * {MM}")
-            ly = sym.var(f"(pos[{b_}, 1] - pos[{P[s_]}, 1]) * {MM}")
-            add(3 * body, col, ux)
-            add(3 * body + 1, col, uy)
-            add(3 * body + 2, col, sym.var(f"{lx} * {uy} - {ly} * {ux}"))
-            shares.append(sym.var(f"({ux} * (d1[{b_}, 0] - d1[{a_}, 0]) + "
-                                  f"{uy} * (d1[{b_}, 1] - d1[{a_}, 1])) * {MM}"))
+            ux = sym.var(f"math.cos(par[PAR_{g}])")
+            uy = sym.var(f"math.sin(par[PAR_{g}])")
+        s_ = int(plan.body_com[body])
+        lx = sym.var(f"(pos[{b_}, 0] - pos[{self.P[s_]}, 0]) * {MM}")
+        ly = sym.var(f"(pos[{b_}, 1] - pos[{self.P[s_]}, 1]) * {MM}")
+        self.add(3 * body, col, ux)
+        self.add(3 * body + 1, col, uy)
+        self.add(3 * body + 2, col, sym.var(f"{lx} * {uy} - {ly} * {ux}"))
+        return sym.var(f"({ux} * (d1[{b_}, 0] - d1[{a_}, 0]) + "
+                       f"{uy} * (d1[{b_}, 1] - d1[{a_}, 1])) * {MM}")
 
-    # ---- symbolic elimination with exact +-1 pivots, least fill first
-    L.append("# elimination with the exact pivots +-1 of the force-balance rows")
-    rows_left, cols_left = set(range(n)), set(range(n))
-    pivots = []                                   # (row, col) in elimination order
-    while True:
+    def eliminate(self):
+        """Symbolic elimination with exact +-1 pivots, least fill first; returns
+        the pivots (row, col) in elimination order."""
+        self.L.append("# elimination with the exact pivots +-1 of the force-balance rows")
+        self.rows_left, self.cols_left = set(range(self.n)), set(range(self.n))
+        pivots = []
+        while (best := self._least_fill_pivot()) is not None:
+            _, r, c = best
+            self.rows_left.discard(r)
+            self.cols_left.discard(c)
+            pivots.append((r, c))
+            self._eliminate_column(r, c)
+        return pivots
+
+    def _least_fill_pivot(self):
+        """(fill, row, col) of the +-1 entry whose elimination fills in least."""
+        A, rows_left, cols_left = self.A, self.rows_left, self.cols_left
         best = None
         for (r, c), v in A.items():
             if r in rows_left and c in cols_left and isinstance(v, float) and abs(v) == 1.0:
@@ -339,70 +391,83 @@ def eliminated(plan, names, lanes=False):
                 cost = (rc - 1) * (cc - 1)
                 if best is None or cost < best[0]:
                     best = (cost, r, c)
-        if best is None:
-            break
-        _, r, c = best
+        return best
+
+    def _eliminate_column(self, r, c):
+        """Column ``c`` eliminated from the rows left by pivot row ``r``."""
+        A, b, sym = self.A, self.b, self.sym
         piv = A[(r, c)]
-        rows_left.discard(r)
-        cols_left.discard(c)
-        pivots.append((r, c))
-        row = {c2: v for (r2, c2), v in A.items() if r2 == r and c2 in cols_left}
-        for r2 in sorted(rows_left):
+        row = {c2: v for (r2, c2), v in A.items() if r2 == r and c2 in self.cols_left}
+        for r2 in sorted(self.rows_left):
             f = A.get((r2, c))
             if f is None:
                 continue
             f = f if piv == 1.0 else sym.mul(-1.0, f)      # multiplier a[r2, c] / piv
             A.pop((r2, c))
             for c2, v in row.items():
-                add(r2, c2, sym.mul(sym.mul(-1.0, f), v))
+                self.add(r2, c2, sym.mul(sym.mul(-1.0, f), v))
             b[r2] = sym.sub(b[r2], sym.mul(f, b[r]))
-    rem_r, rem_c = sorted(rows_left), sorted(cols_left)
-    m = len(rem_r)
-    body = list(L)
-    body.append(f"# the remaining {m} x {m} system, partial pivoting at run time")
-    body.append("ok = True")
-    if m <= UNROLLED_MAX:
-        a = [[_s(A.get((r, c), 0.0)) for c in rem_c] for r in rem_r]
-        body += gauss_unrolled(a, [_s(b[r]) for r in rem_r]) if m else []
-        solved = [f"gb{jj}" for jj in range(m)]
-    else:
-        for i, r in enumerate(rem_r):
-            for jj, c in enumerate(rem_c):
-                v = A.get((r, c), 0.0)
-                body.append(f"work_a[{i}, {jj}] = {_s(v)}")
-            body.append(f"work_b[{i}] = {_s(b[r])}")
-        body.append(f"ok = gauss_solve(work_a, work_b, {m})")
-        solved = [f"work_b[{jj}]" for jj in range(m)]
-    x = {}
-    for c, value in zip(rem_c, solved):
-        x[c] = f"x{c}"
-        body.append(f"x{c} = {value}")
-    body.append("# back substitution through the eliminated rows")
-    for r, c in reversed(pivots):
-        piv = A[(r, c)]
-        terms = [f"{_s(v)} * x{c2}" for (r2, c2), v in sorted(A.items())
-                 if r2 == r and c2 != c and c2 in x]
-        rhs = _s(b[r]) + "".join(f" - {t}" for t in terms)
-        body.append(f"x{c} = {'' if piv == 1.0 else '-'}({rhs})")
-        x[c] = f"x{c}"
-    body.append("if not ok:")
-    body.append("    " + " = ".join(f"x{c}" for c in range(n)) + " = math.nan")
-    for j in range(nj):
-        body += [f"r_out[{j}, 0] = x{2 * j}", f"r_out[{j}, 1] = x{2 * j + 1}"]
-    for k in range(ns):
-        body += [f"slide_out[{k}, 0] = x{2 * nj + 2 * k}",
-                 f"slide_out[{k}, 1] = x{2 * nj + 2 * k + 1}"]
-    if ni:
-        body.append("# every input's drive, and its share of the main shaft's moment")
+
+    def solve_remaining(self):
+        """(lines, x, m): the lines so far, then the m x m system left solved at
+        run time, partial pivoting; x: the solved unknowns' locals by column."""
+        A, b = self.A, self.b
+        rem_r, rem_c = sorted(self.rows_left), sorted(self.cols_left)
+        m = len(rem_r)
+        body = list(self.L)
+        body.append(f"# the remaining {m} x {m} system, partial pivoting at run time")
+        body.append("ok = True")
+        if m <= UNROLLED_MAX:
+            a = [[_s(A.get((r, c), 0.0)) for c in rem_c] for r in rem_r]
+            body += gauss_unrolled(a, [_s(b[r]) for r in rem_r]) if m else []
+            solved = [f"gb{jj}" for jj in range(m)]
+        else:
+            for i, r in enumerate(rem_r):
+                for jj, c in enumerate(rem_c):
+                    body.append(f"work_a[{i}, {jj}] = {_s(A.get((r, c), 0.0))}")
+                body.append(f"work_b[{i}] = {_s(b[r])}")
+            body.append(f"ok = gauss_solve(work_a, work_b, {m})")
+            solved = [f"work_b[{jj}]" for jj in range(m)]
+        x = {}
+        for c, value in zip(rem_c, solved):
+            x[c] = f"x{c}"
+            body.append(f"x{c} = {value}")
+        return body, x, m
+
+    def back_substitution(self, pivots, x):
+        """The eliminated unknowns, back through the pivot rows (NaN where the
+        run-time system is singular)."""
+        out = ["# back substitution through the eliminated rows"]
+        for r, c in reversed(pivots):
+            piv = self.A[(r, c)]
+            terms = [f"{_s(v)} * x{c2}" for (r2, c2), v in sorted(self.A.items())
+                     if r2 == r and c2 != c and c2 in x]
+            rhs = _s(self.b[r]) + "".join(f" - {t}" for t in terms)
+            out.append(f"x{c} = {'' if piv == 1.0 else '-'}({rhs})")
+            x[c] = f"x{c}"
+        out.append("if not ok:")
+        out.append("    " + " = ".join(f"x{c}" for c in range(self.n)) + " = math.nan")
+        return out
+
+    def outputs(self, shares):
+        """The reactions into r_out, the slides' and inputs' into slide_out, and
+        the returned M_bal (the crank's own plus each input's share)."""
+        nj, ns, ni = self.nj, self.ns, self.plan.n_inputs
+        out = []
+        for j in range(nj):
+            out += [f"r_out[{j}, 0] = x{2 * j}", f"r_out[{j}, 1] = x{2 * j + 1}"]
+        for k in range(ns):
+            out += [f"slide_out[{k}, 0] = x{2 * nj + 2 * k}",
+                    f"slide_out[{k}, 1] = x{2 * nj + 2 * k + 1}"]
+        if not ni:
+            return out + [f"return x{self.col_m}"]
+        out.append("# every input's drive, and its share of the main shaft's moment")
         share = [f"slide_out[{ns + k}, 1]" for k in range(ni)]
-        if lanes:               # (the lanes keep no slide_out: locals)
+        if self.lanes:               # (the lanes keep no slide_out: locals)
             share = [f"drive_share{k}" for k in range(ni)]
         for k in range(ni):
-            if not lanes:
-                body.append(f"slide_out[{ns + k}, 0] = x{col_in + k}")
-            body.append(f"{share[k]} = x{col_in + k} * {shares[k]}")
-        total = " + ".join(([f"x{col_m}"] if has_crank else []) + share)
-        body.append(f"return {total}")
-    else:
-        body.append(f"return x{col_m}")
-    return body, m
+            if not self.lanes:
+                out.append(f"slide_out[{ns + k}, 0] = x{self.col_in + k}")
+            out.append(f"{share[k]} = x{self.col_in + k} * {shares[k]}")
+        total = " + ".join(([f"x{self.col_m}"] if self.has_crank else []) + share)
+        return out + [f"return {total}"]
