@@ -11,6 +11,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from ..study.objectives import Feasibility
 from ..study.search_spec import HV_REFERENCE, NORMALISATION, SearchSpec
 from .storage import COMPRESSION, attach, attr_text, coordinate, hdf5_writing, units_attr
 from .sweep_file import SweepFile, summarize
@@ -103,25 +104,27 @@ class SearchFile:
             d[f"search/{name}"] = f[f"search/{name}"]
         return d
 
-    def write(self, d, gen, x, status, metrics, row):
-        """Generation ``gen``'s candidates and its history ``row``."""
-        self.write_many(d, [(gen, x, status, metrics, row)])
+    def write(self, d, gen, x, status, metrics, judged: Feasibility, row):
+        """Generation ``gen``'s candidates, their constraints and feasibility
+        (``study.objectives.feasibility``) and its history ``row``."""
+        self.write_many(d, [(gen, x, status, metrics, judged, row)])
 
     def write_many(self, d, generations):
         """Consecutive generations at once, each ``(gen, x, status, metrics,
-        row)``: a few large writes instead of some thirty small ones per
-        generation (a search's generations are small)."""
+        judged, row)``: a few large writes instead of some thirty small ones
+        per generation (a search's generations are small)."""
         gens = [g[0] for g in generations]
         first, end = gens[0], gens[-1] + 1
         if gens != list(range(first, end)):
             raise ValueError(f"generations {gens} are not consecutive")
         x, status, metrics = (np.concatenate([g[i] for g in generations]) for i in (1, 2, 3))
-        self.sf.write_chunks(d, range(first, end), x, status, metrics,
+        judged = Feasibility.joined([g[4] for g in generations])
+        self.sf.write_chunks(d, range(first, end), x, status, metrics, judged,
                              np.zeros((len(gens), len(self.sf.spec.triangles)), np.int64))
         lo, hi = self.sf.spec.chunk_bounds(first)[0], self.sf.spec.chunk_bounds(end - 1)[1]
         d["candidates/generation"][lo:hi] = np.repeat(gens, [len(g[1]) for g in generations])
         for name, *_ in HISTORY:
-            d[f"search/{name}"][first:end] = [g[4][name] for g in generations]
+            d[f"search/{name}"][first:end] = [g[5][name] for g in generations]
 
 
 # ----------------------------------------------------------------- reading it back

@@ -12,8 +12,7 @@ from ..base.files import replacing
 from ..base.units import unit_text
 from ..kernels import config as kc
 from ..kernels import sweep as ks
-from ..study.objectives import (bounded_finite, constraint_names, constraint_units, constraints,
-                                constraints_text)
+from ..study.objectives import Feasibility, constraint_names, constraint_units, constraints_text
 from ..model.metric_catalogue import METRICS, metric_values
 from .storage import (COMPRESSION, STATUS_ENUM, attach, attr_text, coordinate, hdf5_image,
                       link_coordinates, put, room_for, status_table, units_attr, write_root_attrs)
@@ -40,7 +39,7 @@ def full_counts(counts):
     return np.concatenate([counts[..., :-1], zeros, counts[..., -1:]], axis=-1)
 
 
-def _counts(status, feasible):
+def counted(status, feasible):
     """Candidates per status code, then the feasible ones (COUNTED)."""
     return np.append(np.bincount(status.astype(np.int64), minlength=len(kc.STATUS_NAMES))
                      [:len(kc.STATUS_NAMES)], int(feasible.sum()))
@@ -172,7 +171,7 @@ class SweepFile:
 
     @property
     def has_margin(self):
-        return bool(np.isin(self.problem.plan.codes, kc.CLASS3_GROUPS).any())
+        return self.problem.has_margin
 
     def _reference(self, f):
         """The study's own design (the reference mechanism), evaluated the same way."""
@@ -193,33 +192,15 @@ class SweepFile:
     def _columns(self, metrics):
         return {name: metric_values(metrics, name) for name in self.spec.metrics}
 
-    def _rows(self, status, metrics):
-        """The stored columns of rows (status, metrics): the metrics in their
-        units, constraints G, violation cv and feasibility."""
-        cols = self._columns(metrics)
-        G, cv = constraints(self.spec, metrics, status, self.has_margin)
-        objectives = np.stack([cols[o] for o in self.spec.objectives], axis=1)
-        feasible = ((status == kc.OK) & (cv == 0) & np.isfinite(objectives).all(axis=1)
-                    & bounded_finite(self.spec, metrics))
-        return cols, G, cv, feasible
-
-    def kept(self, chunk, x, status, metrics):
-        """With store = feasible: (x, status, metrics, index, counts) of the chunk's
-        feasible rows, ``index`` their candidate indices and ``counts`` the
-        chunk's candidates per status and feasible (COUNTED); else None."""
-        if not self.feasible_only:
-            return None
-        feasible = self._rows(status, metrics)[3]
-        lo, _ = self.spec.chunk_bounds(chunk)
-        keep = np.flatnonzero(feasible)
-        return x[keep], status[keep], metrics[keep], lo + keep, _counts(status, feasible)
-
-    def write_chunk(self, d, chunk, x, status, metrics, rejected, index=None, counts=None):
+    def write_chunk(self, d, chunk, x, status, metrics, judged: Feasibility, rejected,
+                    index=None, counts=None):
         """Write one chunk's rows into the datasets ``d`` (``datasets(f)``): all
         its candidates, or (store = feasible) the rows ``index`` kept, appended,
-        with the chunk's ``counts``."""
+        with the chunk's ``counts``; ``judged``: the rows' constraints and
+        feasibility (``study.objectives.feasibility``)."""
         if index is None:
-            self.write_chunks(d, range(chunk, chunk + 1), x, status, metrics, [rejected])
+            self.write_chunks(d, range(chunk, chunk + 1), x, status, metrics, judged,
+                              [rejected])
             return
         room_for(self.path, 2 * (x.nbytes + metrics.nbytes) + status.nbytes)
         lo = d["candidate"].shape[0]
@@ -227,43 +208,42 @@ class SweepFile:
         for name in self.row_names():
             d[name].resize(hi, axis=0)
         d["candidate"][lo:hi] = index
-        self._write_rows(d, lo, hi, x, status, metrics)
+        self._write_rows(d, lo, hi, x, status, metrics, judged)
         if len(rejected):
             d["progress/rejected"][chunk] = rejected
         d["progress/status_counts"][chunk] = full_counts(counts)  # (an older journal's, too)
         d["progress/chunk_done"][chunk] = True
 
-    def write_chunks(self, d, chunks, x, status, metrics, rejected):
+    def write_chunks(self, d, chunks, x, status, metrics, judged: Feasibility, rejected):
         """Write the consecutive chunks ``chunks`` (a range) at once: their rows
-        one after the other in ``x``, ``status``, ``metrics``, and one row of
-        ``rejected`` per chunk (every candidate stored)."""
+        one after the other in ``x``, ``status``, ``metrics`` and ``judged``,
+        and one row of ``rejected`` per chunk (every candidate stored)."""
         room_for(self.path, 2 * (x.nbytes + metrics.nbytes) + status.nbytes)
         bounds = [self.spec.chunk_bounds(c) for c in chunks]
         lo, hi = bounds[0][0], bounds[-1][1]
-        feasible = self._write_rows(d, lo, hi, x, status, metrics)
+        self._write_rows(d, lo, hi, x, status, metrics, judged)
+        feasible = judged.feasible
         first, end = chunks[0], chunks[-1] + 1
         rejected = np.asarray(rejected, np.int64).reshape(len(bounds), -1)
         if rejected.shape[1]:
             d["progress/rejected"][first:end] = rejected
         d["progress/status_counts"][first:end] = np.stack(
-            [_counts(status[a - lo:b - lo], feasible[a - lo:b - lo]) for a, b in bounds])
+            [counted(status[a - lo:b - lo], feasible[a - lo:b - lo]) for a, b in bounds])
         d["progress/chunk_done"][first:end] = True
 
-    def _write_rows(self, d, lo, hi, x, status, metrics):
-        """Rows lo:hi of every per-candidate dataset; returns their feasibility."""
-        cols, G, cv, feasible = self._rows(status, metrics)
+    def _write_rows(self, d, lo, hi, x, status, metrics, judged: Feasibility):
+        """Rows lo:hi of every per-candidate dataset."""
         d["candidates/params"][lo:hi] = x
         d["candidates/status"][lo:hi] = status
         d["candidates/fail_phi"][lo:hi] = np.rad2deg(metrics[:, ks.M_FAIL_PHI])
         group = metrics[:, ks.M_FAIL_GROUP]
         d["candidates/fail_group"][lo:hi] = np.where(np.isfinite(group), group, -1).astype("i2")
         d["candidates/forces_evaluated"][lo:hi] = metrics[:, ks.M_FORCES_DONE] == 1.0
-        for name, col in cols.items():
+        for name, col in self._columns(metrics).items():
             d[f"metrics/{name}"][lo:hi] = col
-        d["candidates/constraints"][lo:hi] = G
-        d["candidates/cv"][lo:hi] = cv
-        d["candidates/feasible"][lo:hi] = feasible
-        return feasible
+        d["candidates/constraints"][lo:hi] = judged.g
+        d["candidates/cv"][lo:hi] = judged.cv
+        d["candidates/feasible"][lo:hi] = judged.feasible
 
     def row_names(self):
         """The datasets with a row per stored candidate."""

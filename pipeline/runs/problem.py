@@ -38,6 +38,11 @@ class SweepProblem:
     friction: object = None  # pipeline.runs.sweep_friction.SweepFriction: [mechanism.friction]
 
     @property
+    def has_margin(self) -> bool:
+        """Whether the plan has a class III group (its singularity margin is a constraint)."""
+        return bool(np.isin(self.plan.codes, kc.CLASS3_GROUPS).any())
+
+    @property
     def kernels(self):
         """The mechanism's generated kernels (compiled on first use, then cached)."""
         from ..compiler import kernels_for

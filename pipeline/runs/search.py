@@ -31,7 +31,6 @@ numbers do not depend on the thread count or the engine.
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import io
 import logging
@@ -54,8 +53,10 @@ from ..study.search_spec import METHODS, SearchSpec
 from ..results.storage import attr_text, hdf5_writing, open_results, same_study, study_digest
 from ..base.errors import ResultsError
 from ..results.journal import MANIFEST_DEFAULTS, Journal
-from .sweep import (SweepInterrupted, SweepOutcome, _connect, aside_or_done, build_problem,
-                    check_existing, finish_run, nothing_left_before_first)
+from .lifecycle import (SaveThenWrite, SweepOutcome, aside_or_done, check_existing, finish_run,
+                        journalled, stopping_safely)
+from .sweep import build_problem
+from ..study.objectives import feasibility
 from .problem import SweepProblem
 from ..compiler.notice import compile_notice
 from ..study.sweep_spec import SweepSpec, parameter_rows
@@ -286,34 +287,25 @@ def _run_locked(study, out, seed_from, resume, overwrite, scheduler, client, n_j
     n_seeded = 0 if seeds is None else len(seeds)
     want = manifest_for(study, search, x0, seed_from, n_seeded)
     _check_existing(out, journal, study, want, resume, overwrite)
-    done = aside_or_done(out, journal, resume, overwrite, "generation", search_summary)
+    done = aside_or_done(out, journal, resume, overwrite, search_summary)
     if done is not None:
         return done
-    fresh = not journal.exists()
-    if not fresh:
+    if journal.exists():
         man = journal.manifest()
         x0 = _load_first(journal)
         seed_from, n_seeded = man.get("seeded_from") or None, int(man.get("seeded", 0))
     problem = build_problem(study, spec)
-    own = scheduler is not None and client is None
-    if own:
-        client = _connect(scheduler)     # before anything is written
-    try:
-        with nothing_left_before_first(out, journal, fresh, "generation"):
-            if fresh:       # the first generation before the manifest that makes a journal
-                journal.dir.mkdir(parents=True, exist_ok=True)
-                _save_first(journal, x0)
-                journal.start(dict(want, replaces=out.exists()))
-            return _generations(study, out, journal, problem, x0, client, n_jobs, progress,
-                                on_generation, stop_after,
-                                {"search_method": search.method, "population": search.population,
-                                 "offspring": search.offspring, "generations": search.generations,
-                                 "pymoo_version": want["pymoo"],
-                                 "seeded_from": str(seed_from) if seed_from else "",
-                                 "n_seeded": n_seeded})
-    finally:
-        if own:
-            client.close()
+    attrs = {"search_method": search.method, "population": search.population,
+             "offspring": search.offspring, "generations": search.generations,
+             "pymoo_version": want["pymoo"], "seeded_from": str(seed_from) if seed_from else "",
+             "n_seeded": n_seeded}
+
+    def run_generations(client):
+        return _generations(study, out, journal, problem, x0, client, n_jobs, progress,
+                            on_generation, stop_after, attrs)
+    # the first generation goes into the journal before the manifest that makes one
+    return journalled(out, journal, want, "generation", scheduler, client, run_generations,
+                      first=lambda journal: _save_first(journal, x0))
 
 
 def _compile_the_search_steps(search, x0, problem, scale):
@@ -360,105 +352,84 @@ def _generations(study, out, journal, problem, x0, client, n_jobs, progress, on_
     watch = Watch(bar.update) if client is None else None     # told as a generation goes
     evaluate = _Dask(problem, client) if client is not None else _Local(problem, n_jobs, watch)
     t0 = time.perf_counter()
-    unsaved = []                # generations evaluated, not yet journalled
-    journalled = time.monotonic()
-
-    def save_unsaved():
-        """The evaluated generations not yet journalled, in one atomic write."""
-        nonlocal journalled
-        if unsaved:
-            journal.save_block(unsaved)
-            unsaved.clear()
-        journalled = time.monotonic()
-
-    try:
-        with hdf5_writing(work, expendable=False) as f:
-            d = sfile.datasets(f)
-            flushed = time.monotonic()
-            writing = True
-            pending = []        # generations evaluated, not yet in the file: written
-                                # together about once a second (and at the end)
-
-            def write_pending():
-                nonlocal flushed
-                save_unsaved()          # the journal first: it is the source of truth
-                if writing and pending:
-                    sfile.write_many(d, pending)
-                    f.flush()
-                pending.clear()
-                flushed = time.monotonic()
-
-            for gen in range(len(planned)):
-                repair.count = 0
-                told = False
-                X = algorithm.ask()
-                if len(X) == 0:
-                    log.info("generation %d: the algorithm proposes nothing new; the search "
-                             "ends here", gen)
-                    break
-                if gen in done:     # answered from the journal: nothing is evaluated again
-                    save_unsaved()      # a block holds consecutive generations
-                    x, status, metrics, _ = journal.load(gen)
-                    if x.shape != X.shape or not np.array_equal(x, X):
-                        raise ResultsError(journal.dir, f"generation {gen}: the algorithm asks "
-                                           "for other designs than the journal holds (another "
-                                           "pymoo or NumPy?); run the search again into a new "
-                                           "file")
-                else:
-                    status, metrics = evaluate(parameter_rows(problem.plan, problem.spec, X))
-                    told = watch is not None        # the bar was told of these as they went
-                    unsaved.append((gen, X, status, metrics,
-                                    np.array([repair.count], np.int64)))
-                    computed += len(X)
-                    evaluated += 1
-                F, G = box.view(status, metrics)
-                algorithm.tell(X, F, G)
-                hv = tracker.add(F, (G <= 0).all(axis=1))
-                sizes.append(len(X))
-                row = {"generation": gen, "evaluations": sum(sizes), "hypervolume": hv,
-                       "front_size": len(tracker.front), "feasible": tracker.feasible,
-                       "repaired": repair.count}
-                history.append(row)
-                writing = writing and len(X) == planned[gen]
-                if writing:
-                    pending.append((gen, X, status, metrics, row))
-                    if time.monotonic() - flushed > 1.0:
-                        write_pending()
-                if time.monotonic() - journalled > JOURNAL_EVERY_S:
-                    save_unsaved()
-                if not told:
-                    bar.update(len(X))
-                bar.set_postfix_str(f"generation {gen}/{len(planned) - 1}, "
-                                    f"hypervolume {hv:.4f}", refresh=False)
-                if on_generation is not None:
-                    on_generation(row)
-                if stop_after is not None and evaluated >= stop_after:
-                    raise KeyboardInterrupt  # test hook: an interruption between generations
-            write_pending()
-    except KeyboardInterrupt:
-        bar.close()
-        save_unsaved()          # every finished generation is kept
-        raise SweepInterrupted(f"{out}: interrupted with {len(journal.done())} of "
-                               f"{len(planned)} generations saved; run again with --resume "
-                               "to continue") from None
-    except BaseException:
-        bar.close()        # its redrawing thread ends with it (base.progress.bar)
-        with contextlib.suppress(Exception):
-            save_unsaved()      # what was finished is kept where the failure allows
-        raise
-    bar.close()
+    # generations finished within a quarter of a second are journalled in one block
+    # (one atomic write), written into the file together about once a second
+    # (a generation: gen, x, status, metrics, judged, history row, proposals repaired)
+    record = SaveThenWrite(lambda gens: journal.save_block([(*g[:4], g[6]) for g in gens]),
+                           save_every_s=JOURNAL_EVERY_S, write_every_s=1.0)
+    with stopping_safely(out, journal, bar, len(planned), "generation", record), \
+            hdf5_writing(work, expendable=False) as f:
+        d = sfile.datasets(f)
+        record.open(f, lambda gens: sfile.write_many(d, [g[:6] for g in gens]))
+        for gen in range(len(planned)):
+            repair.count = 0
+            told = False
+            X = algorithm.ask()
+            if len(X) == 0:
+                log.info("generation %d: the algorithm proposes nothing new; the search "
+                         "ends here", gen)
+                break
+            if gen in done:     # answered from the journal: nothing is evaluated again
+                record.save()       # a block holds consecutive generations
+                status, metrics = _journalled(journal, gen, X)
+            else:
+                status, metrics = evaluate(parameter_rows(problem.plan, problem.spec, X))
+                repaired = np.array([repair.count], np.int64)
+                told = watch is not None        # the bar was told of these as they went
+                computed += len(X)
+                evaluated += 1
+            F, G = box.view(status, metrics)
+            algorithm.tell(X, F, G)
+            hv = tracker.add(F, (G <= 0).all(axis=1))
+            sizes.append(len(X))
+            row = {"generation": gen, "evaluations": sum(sizes), "hypervolume": hv,
+                   "front_size": len(tracker.front), "feasible": tracker.feasible,
+                   "repaired": repair.count}
+            history.append(row)
+            if len(X) != planned[gen]:
+                record.stop_writing()   # the file is written again, to its true size, below
+            judged = feasibility(problem.spec, status, metrics, problem.has_margin)
+            record.add((gen, X, status, metrics, judged, row, None if gen in done else repaired),
+                       saved=gen in done)
+            if not told:
+                bar.update(len(X))
+            bar.set_postfix_str(f"generation {gen}/{len(planned) - 1}, "
+                                f"hypervolume {hv:.4f}", refresh=False)
+            if on_generation is not None:
+                on_generation(row)
+            if stop_after is not None and evaluated >= stop_after:
+                raise KeyboardInterrupt  # test hook: an interruption between generations
+        record.write()
     wall = time.perf_counter() - t0
     if sizes != planned:
         # a generation came out smaller (pymoo found too few new designs) or the
         # search ended early: the file is written again, to its true size, from the journal
-        sfile = SearchFile(work, study, problem, search, sizes, attrs)
-        sfile.create(scale)
-        with hdf5_writing(work, expendable=False) as f:
-            d = sfile.datasets(f)
-            for gen, row in enumerate(history):
-                sfile.write(d, gen, *journal.load(gen)[:3], row)
+        _rewrite(study, work, journal, problem, search, sizes, attrs, scale, history)
     return finish_run(out, journal, client, wall, prep[0], computed, search_summary,
                       "evaluations")
+
+
+def _journalled(journal: Journal, gen, X):
+    """(status, metrics) of generation ``gen`` from the journal, which must hold
+    the designs ``X`` the algorithm asks for now."""
+    x, status, metrics, _ = journal.load(gen)
+    if x.shape != X.shape or not np.array_equal(x, X):
+        raise ResultsError(journal.dir, f"generation {gen}: the algorithm asks for other "
+                           "designs than the journal holds (another pymoo or NumPy?); run the "
+                           "search again into a new file")
+    return status, metrics
+
+
+def _rewrite(study, work, journal, problem, search, sizes, attrs, scale, history):
+    """The search's file written again from the journal, its generations of ``sizes``."""
+    sfile = SearchFile(work, study, problem, search, sizes, attrs)
+    sfile.create(scale)
+    with hdf5_writing(work, expendable=False) as f:
+        d = sfile.datasets(f)
+        for gen, row in enumerate(history):
+            x, status, metrics = journal.load(gen)[:3]
+            judged = feasibility(problem.spec, status, metrics, problem.has_margin)
+            sfile.write(d, gen, x, status, metrics, judged, row)
 
 
 def _progress(search: SearchSpec, enabled):

@@ -66,7 +66,7 @@ class SweepBlackBox(Problem):
     def __init__(self, problem: SweepProblem, evaluate=None):
         spec = problem.spec
         self.sweep = problem
-        self.has_margin = bool(np.isin(problem.plan.codes, kc.CLASS3_GROUPS).any())
+        self.has_margin = problem.has_margin
         self.constraint_labels = constraint_names(self.has_margin, spec) + ["evaluable"]
         self._rows = evaluate or (lambda pars: problem.evaluate_rows(pars))
         super().__init__(n_var=len(spec.variables), n_obj=len(spec.objectives),

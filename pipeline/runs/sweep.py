@@ -1,6 +1,9 @@
 """Monte-Carlo sweeps: chunks of candidates evaluated by the compiled kernel,
-locally on all cores or on a Dask cluster, written to HDF5 chunk by chunk.
+locally on all cores, on a Dask cluster or on this machine's GPU, written to
+HDF5 chunk by chunk.
 
+The run's life (refusals, journal, save-then-write, completion) is
+``lifecycle``'s, shared with the adaptive search; here is what a chunk is.
 Never losing finished work: every finished chunk is first saved atomically
 (write to a temporary name, then rename) in a journal folder ``OUT.h5.parts``
 next to the results file, then written into the HDF5 file.  The journal is the
@@ -15,17 +18,16 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import os
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import h5py
+import numpy as np
 
-from ..base.files import RunLock, fault_point, replacing
+from ..base.files import RunLock, fault_point
 from ..base.limits import CHUNK_WHY, MAX_CHUNK
-from ..results.storage import FORMAT, hdf5_writing, room_for, same_study
-from ..base.errors import ResultsError
+from ..results.storage import hdf5_writing, same_study
+from ..study.objectives import feasibility
 from ..study.sweep_spec import SweepSpec
 # the problem a worker evaluates has a module of its own (problem.py)
 from .problem import SweepProblem, plain_problem
@@ -33,7 +35,9 @@ from ..compiler.notice import compile_notice
 from .builds import Watch
 # the journal and the results file have modules of their own
 from ..results.journal import MANIFEST_DEFAULTS, Journal, manifest_for
-from ..results.sweep_file import SweepFile, summarize
+from ..results.sweep_file import SweepFile, counted, summarize
+from .lifecycle import (SaveThenWrite, SweepOutcome, aside_or_done, check_existing, finish_run,
+                        journalled, stopping_safely)
 
 log = logging.getLogger("pipeline")
 
@@ -76,54 +80,6 @@ def evaluate_chunk_task(problem, chunk):
 
 
 # ----------------------------------------------------------------- running
-@dataclass
-class SweepOutcome:
-    kind: str
-    results: Path
-    pictures: list
-    summary: dict
-
-
-def check_existing(out: Path, journal: Journal, resume: bool, overwrite: bool, *,
-                   journal_diff, same_results, what: str, other: str):
-    """Refuse anything that would overwrite or mix results silently (a sweep's
-    or a search's): ``journal_diff(manifest)`` lists what differs in an
-    interrupted run's journal (or raises), ``same_results(f)`` says whether a
-    finished file holds this run's results; ``what`` names the run ("sweep"),
-    ``other`` what else a file may hold."""
-    if not resume:
-        if journal.exists():
-            raise ResultsError(journal.dir, "holds an unfinished run; continue it with --resume "
-                                            "(or delete the folder to start again)")
-        if out.exists() and not overwrite:
-            raise ResultsError(out, "already exists; --overwrite replaces it, -o writes "
-                                    "another file, --resume continues an interrupted run")
-        return
-    if journal.exists():
-        diff = journal_diff(journal.manifest())
-        if diff:
-            raise ResultsError(journal.dir, "belongs to another run (different "
-                               + ", ".join(diff) + "); refusing to mix results")
-        return
-    if out.exists():
-        try:
-            with h5py.File(out, "r") as f:
-                ours = f.attrs.get("format") == FORMAT
-                same = ours and same_results(f)
-                complete = bool(f.attrs.get("complete", False))
-        except OSError:
-            raise ResultsError(out, "is truncated or not an HDF5 file and there is no journal "
-                                    "to rebuild it from; refusing to touch it") from None
-        if not ours:
-            raise ResultsError(out, "is not a pipeline results file; refusing to write into it")
-        if not same:
-            raise ResultsError(out, f"holds another study's results ({other}); "
-                                    "refusing to write into it")
-        if not complete:
-            raise ResultsError(out, f"is an unfinished {what} whose journal is gone; "
-                                    "run again into a new file")
-
-
 def _check_existing(out: Path, journal: Journal, study, spec, resume: bool,
                     overwrite: bool = False):
     want = manifest_for(study, spec)
@@ -192,7 +148,7 @@ def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, 
                 stop_after_chunks):
     journal = Journal(out)
     _check_existing(out, journal, study, spec, resume, overwrite)
-    done = aside_or_done(out, journal, resume, overwrite, "chunk", summarize)
+    done = aside_or_done(out, journal, resume, overwrite, summarize)
     if done is not None:
         return done
     # said at once: what follows (the sampler's import, the kernels' load or
@@ -200,116 +156,88 @@ def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, 
     log.info("%s: a sweep of %s candidates into %s", study.name, f"{spec.candidates:,}", out)
     problem = build_problem(study, spec, device=_device(spec, scheduler or client))
     sf = SweepFile(out, study, problem)
-    fresh = not journal.exists()
-    own = scheduler is not None and client is None
-    if own:
-        client = _connect(scheduler)     # before anything is written
-    try:
-        with nothing_left_before_first(out, journal, fresh, "chunk"):
-            if fresh:
-                journal.start(dict(manifest_for(study, spec), replaces=out.exists()))
-            sf.path = journal.working_file(out)
-            return _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs,
-                               progress, stop_after_chunks)
-    finally:
-        if own:
-            client.close()
+
+    def run_chunks(client):
+        sf.path = journal.working_file(out)
+        return _run_chunks(spec, out, journal, problem, sf, client, n_jobs, progress,
+                           stop_after_chunks)
+    return journalled(out, journal, manifest_for(study, spec), "chunk", scheduler, client,
+                      run_chunks)
 
 
-def aside_or_done(out: Path, journal: Journal, resume: bool, overwrite: bool, unit: str,
-                  summary):
-    """Before a run (sweep or search) writes: with --overwrite the finished file
-    stays as it is, under its name, until the new run is complete (the new one
-    is written in the journal folder, ``Journal.working_file``); a --resume of
-    a finished run returns its outcome (``summary(out)``), else None."""
-    if overwrite and out.exists() and not resume:
-        log.info("replacing %s when the new run is complete (until then it stays as it is)",
-                 out)
-    if resume and not journal.exists() and out.exists():
-        log.info("%s is already complete; nothing to resume", out)
-        return SweepOutcome("sweep", out, [], summary(out))
-    return None
-
-
-@contextlib.contextmanager
-def nothing_left_before_first(out: Path, journal: Journal, fresh: bool, unit: str):
-    """A fresh run (sweep or search) that fails or is stopped before its first
-    ``unit`` is saved leaves nothing behind; a file it was to replace
-    (``--overwrite``) was never touched."""
-    replaces = out.exists()
-    try:
-        yield
-    except BaseException as e:
-        if fresh and not journal.done():
-            journal.remove()
-            if not replaces:
-                out.unlink(missing_ok=True)
-            if isinstance(e, KeyboardInterrupt):
-                raise SweepInterrupted(f"{out}: interrupted before the first {unit} finished; "
-                                       "nothing was written") from None
-        raise
-
-
-def _run_chunks(study, spec, out, journal, problem, sf, client, n_jobs, progress,
-                stop_after_chunks):
+def _run_chunks(spec, out, journal, problem, sf, client, n_jobs, progress, stop_after_chunks):
     # the file, fresh or rebuilt from the journal below; its reference design is the
     # first evaluation, which compiles a new mechanism's kernels (once, then cached)
     with compile_notice() as prep:
         sf.create()
     finished = set(journal.done())
     t0 = time.perf_counter()
-    work = sf.path
     if finished:
         log.info("resuming: %d of %d chunks already done", len(finished), spec.n_chunks)
-    # a resumed run's file is rebuilt from its journal: seconds for a large sweep
-    with hdf5_writing(work, expendable=False) as f, \
-            _reading_journal(journal, len(finished)) as line:
-        d = sf.datasets(f)
-        for i, c in enumerate(sorted(finished)):
-            line.set(f"{i:,}/{len(finished):,} chunks")
-            sf.write_chunk(d, c, *journal.load(c))    # kept rows and counts, if any
-        f.flush()
+    _rebuild(sf, journal, finished)
     todo = [c for c in range(spec.n_chunks) if c not in finished]
     bar = _progress(spec, len(finished), progress)
     # locally the bar is told as a chunk's work goes (its robust builds slice by slice)
     watch = Watch(bar.update) if client is None else None
+    record = SaveThenWrite(lambda chunks: [journal.save(*_journal_part(c)) for c in chunks],
+                           flush_every_s=1.0)     # the HDF5 file: once a second
     computed = 0
-    try:
-        with hdf5_writing(work, expendable=False) as f:
-            d = sf.datasets(f)
-            flushed = time.monotonic()
-            for c, x, status, metrics, rejected in _chunks(problem, todo, client, n_jobs,
-                                                           watch):
-                computed += len(status)
-                if watch is None:
-                    bar.update(len(status))
-                kept = sf.kept(c, x, status, metrics)     # store = feasible: those rows only
-                if kept is not None:
-                    x, status, metrics, index, counts = kept
-                    journal.save(c, x, status, metrics, rejected, index, counts)
-                    sf.write_chunk(d, c, x, status, metrics, rejected, index, counts)
-                else:
-                    journal.save(c, x, status, metrics, rejected)   # the source of truth
-                    sf.write_chunk(d, c, x, status, metrics, rejected)
-                fault_point("chunk-written", out)
-                if time.monotonic() - flushed > 1.0:    # the HDF5 file: once a second
-                    f.flush()
-                    flushed = time.monotonic()
-                if stop_after_chunks is not None and computed >= stop_after_chunks * spec.chunk_size:
-                    raise KeyboardInterrupt  # test hook: an interruption at a chunk boundary
-    except KeyboardInterrupt:
-        bar.close()
-        done = len(journal.done())
-        raise SweepInterrupted(f"{out}: interrupted with {done} of {spec.n_chunks} chunks "
-                               "saved; run again with --resume to continue") from None
-    except BaseException:
-        bar.close()        # its redrawing thread ends with it (base.progress.bar)
-        raise
-    bar.close()
-    with hdf5_writing(work, expendable=False) as f:
+    with stopping_safely(out, journal, bar, spec.n_chunks, "chunk", record), \
+            hdf5_writing(sf.path, expendable=False) as f:
+        d = sf.datasets(f)
+        record.open(f, lambda chunks: _write(sf, d, chunks, out))
+        for c, x, status, metrics, rejected in _chunks(problem, todo, client, n_jobs, watch):
+            computed += len(status)
+            if watch is None:
+                bar.update(len(status))
+            record.add(_stored(sf, c, x, status, metrics, rejected))
+            if stop_after_chunks is not None and computed >= stop_after_chunks * spec.chunk_size:
+                raise KeyboardInterrupt  # test hook: an interruption at a chunk boundary
+    with hdf5_writing(sf.path, expendable=False) as f:
         sf.sort_rows(f)
     return finish_run(out, journal, client, time.perf_counter() - t0, prep[0], computed,
                       summarize, "candidates", device=problem.device_name)
+
+
+def _stored(sf: SweepFile, c, x, status, metrics, rejected):
+    """What chunk ``c`` stores, (c, x, status, metrics, judged, rejected, index,
+    counts): every row (index and counts None), or with store = feasible its
+    feasible rows, ``index`` their candidate indices and ``counts`` the chunk's
+    candidates per status and feasible."""
+    judged = feasibility(sf.spec, status, metrics, sf.problem.has_margin)
+    if not sf.feasible_only:
+        return c, x, status, metrics, judged, rejected, None, None
+    keep = np.flatnonzero(judged.feasible)
+    lo, _ = sf.spec.chunk_bounds(c)
+    return (c, x[keep], status[keep], metrics[keep], judged.rows(keep), rejected, lo + keep,
+            counted(status, judged.feasible))
+
+
+def _journal_part(chunk):
+    """What the journal keeps of a stored chunk (``_stored``): all but ``judged``."""
+    c, x, status, metrics, _, rejected, index, counts = chunk
+    return c, x, status, metrics, rejected, index, counts
+
+
+def _write(sf: SweepFile, d, chunks, out):
+    """Stored chunks (``_stored``) into the datasets ``d``."""
+    for chunk in chunks:
+        sf.write_chunk(d, *chunk)
+        fault_point("chunk-written", out)
+
+
+def _rebuild(sf: SweepFile, journal: Journal, finished):
+    """A resumed run's file rebuilt from its journal (the chunks ``finished``):
+    seconds for a large sweep."""
+    with hdf5_writing(sf.path, expendable=False) as f, \
+            _reading_journal(journal, len(finished)) as line:
+        d = sf.datasets(f)
+        for i, c in enumerate(sorted(finished)):
+            line.set(f"{i:,}/{len(finished):,} chunks")
+            x, status, metrics, rejected, *kept = journal.load(c)   # kept rows and counts
+            judged = feasibility(sf.spec, status, metrics, sf.problem.has_margin)
+            sf.write_chunk(d, c, x, status, metrics, judged, rejected, *kept)
+        f.flush()
 
 
 def _reading_journal(journal: Journal, n: int):
@@ -324,39 +252,6 @@ def _reading_journal(journal: Journal, n: int):
 class _NoLine:
     def set(self, detail):
         pass
-
-
-def finish_run(out: Path, journal: Journal, client, wall: float, compile_s: float,
-               computed: int, summary, unit: str, device: str = "cpu") -> SweepOutcome:
-    """A run (sweep or search) has written everything: the file is marked
-    complete (a replacement is renamed over the file it replaces only now), the
-    journal goes, and its outcome says the wall time, the compile time apart
-    and the throughput (``summary(out)``: the file's own summary; ``unit``:
-    what was computed)."""
-    work = journal.working_file(out)
-    room_for(work, 0)
-    with hdf5_writing(work, expendable=False) as f:
-        f.attrs["complete"] = True
-        f.attrs["wall_time_s"] = wall
-        f.attrs["engine"] = "dask" if client is not None else "local"
-        f.attrs["device"] = device
-    if work != out:
-        with replacing(out) as tmp:     # the earlier file is replaced whole, now
-            os.replace(work, tmp)
-    journal.remove()
-    res = summary(out)
-    res["wall_time"] = f"{wall:.1f} s"
-    if compile_s > 1.0:
-        res["compile_time"] = f"{compile_s:.1f} s (not in the wall time; cached from now on)"
-    if computed:
-        res["throughput"] = f"{computed / wall:,.0f} {unit}/s"
-    if device != "cpu":
-        res["device"] = device
-    return SweepOutcome("sweep", out, [], res)
-
-
-class SweepInterrupted(KeyboardInterrupt):
-    """Raised after an interruption, once everything finished is safe."""
 
 
 def _progress(spec, done, enabled):
@@ -394,48 +289,6 @@ def _chunks(problem, todo, client, n_jobs, watch=None):
         raise
     finally:
         ahead.shutdown(wait=True, cancel_futures=True)
-
-
-CONNECT_TIMEOUT = "20s"     # how long to wait for a Dask scheduler to answer, unless
-CONNECT_TIMEOUT_ENV = "PIPELINE_CONNECT_TIMEOUT"    # this variable says (seconds, or "30s")
-
-
-def _connect_timeout() -> float:
-    """Seconds to wait for a Dask scheduler: $PIPELINE_CONNECT_TIMEOUT, else
-    CONNECT_TIMEOUT."""
-    from dask.utils import parse_timedelta
-    text = os.environ.get(CONNECT_TIMEOUT_ENV, "").strip() or CONNECT_TIMEOUT
-    try:
-        s = float(parse_timedelta(text, default="seconds"))
-    except (ValueError, KeyError, TypeError):
-        s = float("nan")
-    if not 0 < s < float("inf"):
-        raise ValueError(f"{CONNECT_TIMEOUT_ENV}: {text!r} is not a time to wait (seconds "
-                         "above 0, e.g. 30 or 30s)")
-    return s
-
-
-def _connect(scheduler):
-    """A client of the Dask scheduler at ``scheduler``; dask is imported only here.
-    The wait says what it waits for and how long at most, and counts its seconds
-    (an unreachable scheduler is retried until the timeout)."""
-    from ..base.progress import ticking
-    needs = "--scheduler needs dask: pip install 'pipeline[dask]'"
-    try:
-        timeout = _connect_timeout()
-    except ImportError:  # pragma: no cover - depends on the installation
-        raise ValueError(needs) from None
-    with ticking(f"connecting (at most {timeout:g} s) to the Dask scheduler {scheduler}",
-                 say_done=False):
-        try:
-            from dask.distributed import Client
-        except ImportError:  # pragma: no cover - depends on the installation
-            raise ValueError(needs) from None
-        try:
-            return Client(scheduler, timeout=timeout)
-        except (OSError, TimeoutError) as e:
-            raise ValueError(f"cannot reach the Dask scheduler {scheduler} within {timeout:g} s "
-                             f"({CONNECT_TIMEOUT_ENV} sets how long to wait): {e}") from None
 
 
 def _dask_chunks(problem, todo, client):

@@ -5,6 +5,7 @@ g <= 0 with their summed violation, and which rows are feasible."""
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -76,6 +77,36 @@ def constraints_text(spec: SweepSpec, has_margin: bool) -> str:
             out.append(f"{m} >= {lo:g}{u}" if math.isfinite(lo) else f"{m} <= {hi:g}{u}")
     return ", ".join(out) if out else ("none given ([sweep.constraints]): every design that "
                                        "assembles is feasible")
+
+
+class Feasibility(NamedTuple):
+    """What the constraints say of evaluated rows: ``g`` per constraint (g <= 0
+    is met; columns as ``constraint_names``), the summed violation ``cv`` (NaN
+    where the candidate failed) and whether each row is ``feasible``."""
+    g: np.ndarray
+    cv: np.ndarray
+    feasible: np.ndarray
+
+    def rows(self, index) -> "Feasibility":
+        """The rows ``index`` only."""
+        return Feasibility(self.g[index], self.cv[index], self.feasible[index])
+
+    @staticmethod
+    def joined(parts) -> "Feasibility":
+        """Several blocks of rows, one after the other."""
+        return Feasibility(*(np.concatenate([p[i] for p in parts]) for i in range(3)))
+
+
+def feasibility(spec: SweepSpec, status: np.ndarray, metrics, has_margin: bool) -> Feasibility:
+    """The constraints ``g``, the violation ``cv`` and feasibility of the
+    kernels' rows (status, metrics): a row is feasible when its status is OK,
+    it violates no constraint and its objectives and bounded metrics are
+    finite.  (has_margin: the plan has a class III group.)"""
+    g, cv = constraints(spec, metrics, status, has_margin)
+    objectives = np.stack([metric_values(metrics, o) for o in spec.objectives], axis=1)
+    feasible = ((status == kc.OK) & (cv == 0) & np.isfinite(objectives).all(axis=1)
+                & bounded_finite(spec, metrics))
+    return Feasibility(g, cv, feasible)
 
 
 def bounded_finite(spec: SweepSpec, metrics):

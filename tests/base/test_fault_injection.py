@@ -21,6 +21,7 @@ import pytest
 
 import pipeline
 import pipeline.base.files as files
+import pipeline.runs.lifecycle as lifecycle
 import pipeline.runs.sweep as sw
 from pipeline.cli import main
 from support.faults import digest, one_line_error
@@ -93,7 +94,7 @@ def test_overwrite_on_a_missing_gpu_keeps_the_earlier_file(sweep, studies, capsy
 
 def test_overwrite_with_an_unreachable_scheduler_keeps_the_earlier_file(sweep, studies, capsys,
                                                                        monkeypatch):
-    monkeypatch.setattr(sw, "CONNECT_TIMEOUT", "1s")
+    monkeypatch.setattr(lifecycle, "CONNECT_TIMEOUT", "1s")
     before = digest(sweep)
     assert main(["run", str(studies / "ov7_synthesis.toml"), "-o", str(sweep), "--candidates",
                  "300", "--overwrite", "--scheduler", "tcp://127.0.0.1:9", "-q"]) == 2

@@ -168,8 +168,8 @@ def test_second_run_on_the_same_file_is_refused_at_once(studies, tmp_path, capsy
 
 
 def test_unreachable_scheduler_leaves_nothing(studies, tmp_path, monkeypatch, capsys):
-    import pipeline.runs.sweep as sw
-    monkeypatch.setattr(sw, "CONNECT_TIMEOUT", "1s")
+    import pipeline.runs.lifecycle as lifecycle
+    monkeypatch.setattr(lifecycle, "CONNECT_TIMEOUT", "1s")
     out = tmp_path / "s.h5"
     assert main(["run", str(studies / "ov7_synthesis.toml"), "-o", str(out), "--candidates",
                  "100", "--scheduler", "tcp://127.0.0.1:9", "-q"]) == 2

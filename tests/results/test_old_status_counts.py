@@ -11,7 +11,8 @@ import pytest
 from pipeline.cli import main
 from pipeline.kernels import config as kc
 from pipeline.results.sweep_file import COUNTED, status_counts
-from pipeline.runs.sweep import SweepInterrupted, run_sweep
+from pipeline.runs.lifecycle import SweepInterrupted
+from pipeline.runs.sweep import run_sweep
 from pipeline.study.reader import load_study
 from support.sweep_helpers import assert_same_results
 

@@ -10,7 +10,8 @@ import pytest
 
 from pipeline.results.storage import study_digest
 from pipeline.base.errors import ResultsError
-from pipeline.runs.sweep import SweepInterrupted, run_sweep
+from pipeline.runs.lifecycle import SweepInterrupted
+from pipeline.runs.sweep import run_sweep
 from pipeline.study.reader import load_study
 
 N, CHUNK = 300, 100

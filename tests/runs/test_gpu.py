@@ -214,7 +214,7 @@ def test_store_feasible_keeps_the_feasible_rows_and_every_count(tmp_path):
 
 
 def test_store_feasible_resumes_to_the_same_file(tmp_path):
-    from pipeline.runs.sweep import SweepInterrupted
+    from pipeline.runs.lifecycle import SweepInterrupted
     from support.sweep_helpers import assert_same_results
     study = load_study(STUDIES / "ov7_synthesis.toml")
     once, twice = tmp_path / "once.h5", tmp_path / "twice.h5"

@@ -132,6 +132,7 @@ def test_a_keyboard_interrupt_between_slices_stops_the_sweep_at_the_next_slice(
     if threading.current_thread() is not threading.main_thread():
         pytest.skip("signals reach the main thread only")
     from pipeline.runs import sweep as sm
+    from pipeline.runs.lifecycle import SweepInterrupted
     monkeypatch.setattr(bm, "SLICE_BUILDS", 16)
     study = robust_study()
     slices_at_interrupt = []
@@ -155,7 +156,7 @@ def test_a_keyboard_interrupt_between_slices_stops_the_sweep_at_the_next_slice(
     monkeypatch.setattr(sm.SweepProblem, "evaluate_chunk", evaluate_chunk)
     old = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
-        with pytest.raises(sm.SweepInterrupted,
+        with pytest.raises(SweepInterrupted,
                            match="interrupted before the first chunk finished"):
             sm.run_sweep(study, tmp_path / "r.h5", candidates=120, chunk_size=40,
                          progress=False)

@@ -17,7 +17,8 @@ from pipeline.runs.search_problem import (FAILED_VIOLATION, SweepBlackBox, hv_sc
 from pipeline.base.errors import ResultsError
 from pipeline.study.reader import load_study
 from pipeline.base.errors import StudyError
-from pipeline.runs.sweep import SweepInterrupted, build_problem, run_sweep
+from pipeline.runs.lifecycle import SweepInterrupted
+from pipeline.runs.sweep import build_problem, run_sweep
 from pipeline.study.objectives import COLUMN
 from pipeline.study.sweep_spec import parameter_rows
 from support.naive_pareto import hypervolume_2d_ref

@@ -17,7 +17,8 @@ from pipeline.solve.scene import revolution_angles, solve_curves
 from pipeline.base.errors import ResultsError
 from pipeline.study.reader import load_study
 from pipeline.base.errors import StudyError
-from pipeline.runs.sweep import SweepInterrupted, build_problem, run_sweep
+from pipeline.runs.lifecycle import SweepInterrupted
+from pipeline.runs.sweep import build_problem, run_sweep
 from pipeline.study.sweep_spec import apply_design, parameter_rows
 from pipeline.study.sampling import draw_candidates
 from support.sweep_helpers import (SYNTHESIS_CHUNK, SYNTHESIS_N, assert_same_results, copy_of,
