@@ -88,19 +88,20 @@ def ternary_angle(l34, l45, l35, orientation):
     return orientation * math.acos(min(1.0, max(-1.0, c)))
 
 
-@njit(**JIT)
-def closure(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b):
-    """Residuals (F1, F2) and Jacobian d(F1, F2)/d(a, b) at (a, b), and the
-    cos/sin of a, b and b + U435 (``_place`` reuses them)."""
-    return closure_unit(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57,
-                        math.cos(a), math.sin(a), math.cos(b), math.sin(b),
-                        math.cos(b + u435), math.sin(b + u435))
+# A variant's geometry at the current crank position, one tuple for both
+# (``class3`` and ``class3_slider`` build it): the known points P2, P6 and P7
+# (the sliding variant's guide point G), the guide's unit normal n (0 for the
+# lead), the lengths L23, L34, L35, L46, L57 (NaN for the slider) and the
+# block's offset (0 for the lead).  ``slider`` says which: LEAD or SLIDER.
+LEAD = 0
+SLIDER = 1
 
 
 @njit(inline='always', **JIT)
 def closure_unit(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, ca, sa, cb, sb, cc, sc):
-    """``closure`` at the unit vectors e(a) = (ca, sa), e(b) = (cb, sb) and
-    e(b + U435) = (cc, sc)."""
+    """Residuals (F1, F2) and Jacobian d(F1, F2)/d(a, b) at the unit vectors
+    e(a) = (ca, sa), e(b) = (cb, sb) and e(b + U435) = (cc, sc), and those
+    cos/sin (``_place`` reuses them)."""
     p3x = p2x + l23 * ca
     p3y = p2y + l23 * sa
     r4x = p3x + l34 * cb - p6x
@@ -118,28 +119,73 @@ def closure_unit(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, ca, sa, 
 
 
 @njit(**JIT)
-def newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u435, a, b,
-           tol, maxiter, max_step, strikes_max):
-    """Damped Newton on the closure equations from (a, b).
+def slider_closure_unit(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, offset, ca, sa,
+                        cb, sb, cc, sc):
+    """Residuals (F1, F2) of the sliding variant and their Jacobian d(F1, F2)/d(a, b)
+    at the unit vectors e(a), e(b), e(b + U435): F1 = (|P4 - P6|^2 - L46^2) / 2
+    (mm^2), F2 = n.(P5 - G) - offset (mm), n the guide's unit normal."""
+    p3x = p2x + l23 * ca
+    p3y = p2y + l23 * sa
+    r4x = p3x + l34 * cb - p6x
+    r4y = p3y + l34 * sb - p6y
+    f1 = 0.5 * (r4x * r4x + r4y * r4y - l46 * l46)
+    f2 = nx * (p3x + l35 * cc - gx) + ny * (p3y + l35 * sc - gy) - offset
+    # d/da of P3, P4, P5 is L23 n(a); d/db of P4 is L34 n(b), of P5 L35 n(b + U435)
+    j11 = l23 * (-r4x * sa + r4y * ca)
+    j12 = l34 * (-r4x * sb + r4y * cb)
+    j21 = l23 * (-nx * sa + ny * ca)
+    j22 = l35 * (-nx * sc + ny * cc)
+    return f1, f2, j11, j12, j21, j22, (ca, sa, cb, sb, cc, sc)
+
+
+@njit(inline='always', **JIT)
+def _closure(slider, geo, ca, sa, cb, sb, cc, sc):
+    """The variant's closure (``closure_unit``, ``slider_closure_unit``) at the unit
+    vectors: (F1, F2, J, trig, the larger residual as a distance, mm).  The
+    distances: how far P4 is off its circle (|F1| / 2 L46, the slider's halved
+    F1 / L46) and P5 off its circle (|F2| / 2 L57) or its guide line (|F2|)."""
+    p2x, p2y, p6x, p6y, p7x, p7y, nx, ny, l23, l34, l35, l46, l57, offset = geo
+    if slider:
+        f1, f2, j11, j12, j21, j22, trig = slider_closure_unit(p2x, p2y, p6x, p6y, p7x, p7y, nx,
+                                                               ny, l23, l34, l35, l46, offset,
+                                                               ca, sa, cb, sb, cc, sc)
+        return f1, f2, j11, j12, j21, j22, trig, max(abs(f1) / l46, abs(f2))
+    f1, f2, j11, j12, j21, j22, trig = closure_unit(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35,
+                                                    l46, l57, ca, sa, cb, sb, cc, sc)
+    return f1, f2, j11, j12, j21, j22, trig, max(abs(f1) / (2.0 * l46), abs(f2) / (2.0 * l57))
+
+
+@njit(inline='always', **JIT)
+def _longer_lead(slider, geo):
+    """The length Newton's relative tolerance is taken of: the longer lead (L46 or
+    L57; with a slider L23 or L46)."""
+    if slider:
+        return max(geo[8], geo[11])
+    return max(geo[11], geo[12])
+
+
+@njit(**JIT)
+def newton(slider, geo, u435, a, b, tol, maxiter, max_step, strikes_max):
+    """Damped Newton on the closure equations of either variant from (a, b).
 
     Returns (outcome, a, b, iterations, det J, trig): outcome CONVERGED, MAXITER or
     SINGULAR_JACOBIAN; trig the cos/sin of a, b and b + U435 where it converged
-    (the last residual's: ``_place`` does not compute them again).  Converged means both closure residuals, expressed as
-    distances (|F| / 2L, mm), are at most ``tol`` times the longer lead
-    (a relative tolerance: the same digits at 1e-3 mm and at 1e4 mm).
-    Gives up (MAXITER, with the iterations taken) before ``maxiter`` after
-    ``strikes_max`` steps that did not contract (``_stalls``).
+    (the last residual's: ``_place`` does not compute them again).  Converged means
+    both closure residuals, as distances (``_closure``, mm), are at most ``tol``
+    times the longer lead (a relative tolerance: the same digits at 1e-3 mm and
+    at 1e4 mm).  Gives up (MAXITER, with the iterations taken) before ``maxiter``
+    after ``strikes_max`` steps that did not contract (``_stalls``).
     """
     det = math.nan
     trig = (math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
     last = math.inf       # the last full Newton step (rad)
     strikes = np.int64(0)   # (not the literal 0: one compiled _stalls)
-    tol_mm = tol * max(l46, l57)
+    tol_mm = tol * _longer_lead(slider, geo)
     for it in range(maxiter + 1):
-        f1, f2, j11, j12, j21, j22, trig = closure(p2x, p2y, p6x, p6y, p7x, p7y,
-                                             l23, l34, l35, l46, l57, u435, a, b)
+        f1, f2, j11, j12, j21, j22, trig, res = _closure(slider, geo, math.cos(a), math.sin(a),
+                                                         math.cos(b), math.sin(b),
+                                                         math.cos(b + u435), math.sin(b + u435))
         det = j11 * j22 - j12 * j21
-        res = max(abs(f1) / (2.0 * l46), abs(f2) / (2.0 * l57))
         if res <= tol_mm:
             return CONVERGED, a, b, it, det, trig
         if it == maxiter:
@@ -182,18 +228,16 @@ def _handed_angles(state, g):
 
 
 @njit(**JIT)
-def handed(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u_cos, u_sin, state, g, tol):
+def handed(slider, geo, u_cos, u_sin, state, g, tol):
     """The solution handed over in state row ``g`` as unit vectors e(a), e(b)
     (the lane path's, ``S_CA`` .. ``S_SB``): (taken, det J, the cos/sin of
-    a, b and b + U435).  Taken where its closure residual is within Newton's
+    a, b and b + U435).  Taken where its closure residuals are within Newton's
     tolerance (the test Newton's first iteration makes, without its cos and
     sin: the unit vectors are the solution); else the caller runs Newton
     from its angles.  Clears the hand-over flag."""
     ca, sa, cb, sb, cc, sc = _handed_unit(state, g, u_cos, u_sin)
-    f1, f2, j11, j12, j21, j22, trig = closure_unit(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34,
-                                                    l35, l46, l57, ca, sa, cb, sb, cc, sc)
-    taken = max(abs(f1) / (2.0 * l46), abs(f2) / (2.0 * l57)) <= tol * max(l46, l57)
-    return taken, j11 * j22 - j12 * j21, trig
+    f1, f2, j11, j12, j21, j22, trig, res = _closure(slider, geo, ca, sa, cb, sb, cc, sc)
+    return res <= tol * _longer_lead(slider, geo), j11 * j22 - j12 * j21, trig
 
 
 @njit(**JIT)
@@ -253,60 +297,62 @@ def _place_analogs(d, i2, i3, i4, i5, l23, l34, l35, a_k, b_k, a1, b1, ca, sa, c
 
 
 @njit(**JIT)
-def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
-           state, g, order, tols, u_cos=math.nan, u_sin=math.nan):
-    """Solve the class III group whose continuation state is row ``g`` of
-    ``state``, at the current crank position.
+def _nan_joints(pos, d1, d2, i3, i4, i5, order_from):
+    """NaN the three vertices from ``order_from`` on (0: positions and analogs,
+    1: the analogs only)."""
+    for i in (i3, i4, i5):
+        for k in range(2):
+            if order_from == 0:
+                pos[i, k] = math.nan
+            d1[i, k] = math.nan
+            d2[i, k] = math.nan
 
-    ``u435`` is the ternary link's angle at vertex 3 (``ternary_angle``, NaN
-    when the triangle cannot be built), computed once per candidate by the
-    caller (``u_cos``, ``u_sin``: its cos and sin, computed here if NaN).
-    ``state[g]`` carries the continuation: the last (a, b), the sign of det J
-    there (0 before the first solve), and receives the singularity margin and
-    the Newton iterations; or, flagged ``S_HANDED``, the solution at this
-    position as unit vectors (``handed``).  Returns (status, margin).
-    """
-    handed_over = state[g, S_HANDED] != 0.0     # (a hand-over holds for one solve only)
-    if not (math.isfinite(u435) and l23 > 0.0 and l46 > 0.0 and l57 > 0.0):
-        state[g, S_HANDED] = 0.0
-        _nan_joints(pos, d1, d2, i3, i4, i5, np.int64(0))
-        state[g, S_MARGIN] = 0.0
-        return BAD_GEOMETRY, 0.0
-    p2x = pos[i2, 0]
-    p2y = pos[i2, 1]
-    p6x = pos[i6, 0]
-    p6y = pos[i6, 1]
-    p7x = pos[i7, 0]
-    p7y = pos[i7, 1]
+
+@njit(inline='always', **JIT)
+def _fail(pos, d1, d2, i3, i4, i5, state, g, status):
+    """No solution: vertices 3, 4, 5 and their analogs NaN, no margin, no
+    hand-over left; returns (status, 0.0)."""
+    state[g, S_HANDED] = 0.0
+    _nan_joints(pos, d1, d2, i3, i4, i5, np.int64(0))
+    state[g, S_MARGIN] = 0.0
+    return status, 0.0
+
+
+@njit(**JIT)
+def _solve(slider, geo, u435, th1, th2, pos, d1, d2, i2, i6, i7, i3, i4, i5, state, g, order,
+           tols, u_cos, u_sin):
+    """Either variant at the current crank position (``class3``, ``class3_slider``
+    check the lengths and build ``geo``): the solution handed over or Newton's,
+    accepted (``_accept``) and placed, then the first and second analogs to
+    ``order``.  th1, th2: the slider's guide direction's first and second
+    analogs (0 for the lead).  Returns (status, margin)."""
+    p2x, p2y, p6x, p6y, p7x, p7y, nx, ny, l23, l34, l35, l46, l57, offset = geo
     a0 = state[g, S_A]
     b0 = state[g, S_B]
     taken = False
-    if handed_over:
+    if state[g, S_HANDED] != 0.0:   # (a hand-over holds for one solve only)
         if not (u_cos == u_cos and u_sin == u_sin):
             u_cos = math.cos(u435)
             u_sin = math.sin(u435)
-        taken, det, trig = handed(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35, l46, l57, u_cos,
-                                  u_sin, state, g, tols[T_NEWTON_TOL])
+        taken, det, trig = handed(slider, geo, u_cos, u_sin, state, g, tols[T_NEWTON_TOL])
         if taken:   # the angles are not needed: the next position is handed over too
             outcome, a, b, iters = CONVERGED, math.nan, math.nan, 0
         else:       # Newton from the handed angles, its move checked like any other
             a0, b0 = _handed_angles(state, g)
     if not taken:   # (one call site of newton: compile time)
-        outcome, a, b, iters, det, trig = newton(p2x, p2y, p6x, p6y, p7x, p7y, l23, l34, l35,
-                                                 l46, l57, u435, a0, b0, tols[T_NEWTON_TOL],
+        outcome, a, b, iters, det, trig = newton(slider, geo, u435, a0, b0, tols[T_NEWTON_TOL],
                                                  int(tols[T_NEWTON_MAXITER]),
                                                  tols[T_NEWTON_STEP], _give_up(state, g, tols))
     state[g, S_ITERS] = iters
-    scale = 4.0 * l23 * l46 * l57 * max(l34, l35)
     if outcome != CONVERGED:
-        _nan_joints(pos, d1, d2, i3, i4, i5, np.int64(0))
-        state[g, S_MARGIN] = 0.0
-        if outcome == SINGULAR_JACOBIAN:
-            return SINGULAR, 0.0
         # Where the group cannot be assembled Newton does not converge either;
         # the solver's own outcome is what is reported.
-        return NEWTON_MAXITER, 0.0
-    margin = abs(det) / scale
+        return _fail(pos, d1, d2, i3, i4, i5, state, g,
+                     SINGULAR if outcome == SINGULAR_JACOBIAN else NEWTON_MAXITER)
+    if slider:
+        margin = abs(det) / (l23 * l46 * max(l34, l35))
+    else:
+        margin = abs(det) / (4.0 * l23 * l46 * l57 * max(l34, l35))
     state[g, S_MARGIN] = margin
     status = _accept(state, g, a, b, a0, b0, det, margin, tols, not taken)
     ca, sa, cb, sb, cc, sc = _place(pos, i2, i3, i4, i5, l23, l34, l35, trig)
@@ -318,22 +364,36 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
 
     r4x = pos[i4, 0] - p6x
     r4y = pos[i4, 1] - p6y
-    r5x = pos[i5, 0] - p7x
-    r5y = pos[i5, 1] - p7y
-    # Jacobian of the half closure (r4.r4 - L46^2)/2, (r5.r5 - L57^2)/2
+    w5x = pos[i5, 0] - p7x     # P5 - P7 (the slider's P5 - G)
+    w5y = pos[i5, 1] - p7y
+    ux = ny                    # the guide's direction u, n = e(th + 90 deg)
+    uy = -nx
+    # Jacobian of the half closure: row 1 (r4.r4 - L46^2)/2, row 2 (w5.w5 - L57^2)/2
+    # along v = w5, or the slider's n.(P5 - G) - offset along v = n
+    if slider:
+        vx = nx
+        vy = ny
+    else:
+        vx = w5x
+        vy = w5y
     j11 = l23 * (-r4x * sa + r4y * ca)
     j12 = l34 * (-r4x * sb + r4y * cb)
-    j21 = l23 * (-r5x * sa + r5y * ca)
-    j22 = l35 * (-r5x * sc + r5y * cc)
-    # first analogs: r4.(P4' - P6') = 0, r5.(P5' - P7') = 0
+    j21 = l23 * (-vx * sa + vy * ca)
+    j22 = l35 * (-vx * sc + vy * cc)
+    # first analogs: r4.(P4' - P6') = 0, v.(P5' - P7') = 0 and, the slider's with
+    # n' = -th' u, n.(P5' - G') - th' u.(P5 - G) = 0
     rhs1 = -(r4x * (d1[i2, 0] - d1[i6, 0]) + r4y * (d1[i2, 1] - d1[i6, 1]))
-    rhs2 = -(r5x * (d1[i2, 0] - d1[i7, 0]) + r5y * (d1[i2, 1] - d1[i7, 1]))
+    rhs2 = -(vx * (d1[i2, 0] - d1[i7, 0]) + vy * (d1[i2, 1] - d1[i7, 1]))
+    if slider:
+        rhs2 = rhs2 + th1 * (ux * w5x + uy * w5y)
     a1, b1 = solve2(j11, j12, j21, j22, rhs1, rhs2)
     _place_analogs(d1, i2, i3, i4, i5, l23, l34, l35, a1, b1, 0.0, 0.0, ca, sa, cb, sb, cc, sc)
     if order < 2:
         return status, margin
     # second analogs: r4.(P4'' - P6'') + |P4' - P6'|^2 = 0 (and for 5, 7), with
-    # P4'' = P2'' + L23 (a'' n(a) - a'^2 e(a)) + L34 (b'' n(b) - b'^2 e(b))
+    # P4'' = P2'' + L23 (a'' n(a) - a'^2 e(a)) + L34 (b'' n(b) - b'^2 e(b)); the
+    # slider's n.(P5'' - G'') - 2 th' u.(P5' - G') - th'' u.(P5 - G) - th'^2 offset = 0,
+    # with P5'' = P2'' + L23 (a'' n(a) - a'^2 e(a)) + L35 (b'' n(c) - b'^2 e(c))
     q4x = d1[i4, 0] - d1[i6, 0]
     q4y = d1[i4, 1] - d1[i6, 1]
     q5x = d1[i5, 0] - d1[i7, 0]
@@ -345,106 +405,37 @@ def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
     k5x = k3x - l35 * b1 * b1 * cc - d2[i7, 0]
     k5y = k3y - l35 * b1 * b1 * sc - d2[i7, 1]
     rhs1 = -(q4x * q4x + q4y * q4y) - (r4x * k4x + r4y * k4y)
-    rhs2 = -(q5x * q5x + q5y * q5y) - (r5x * k5x + r5y * k5y)
+    if slider:
+        rhs2 = (-(nx * k5x + ny * k5y) + 2.0 * th1 * (ux * q5x + uy * q5y)
+                + th2 * (ux * w5x + uy * w5y) + th1 * th1 * offset)
+    else:
+        rhs2 = -(q5x * q5x + q5y * q5y) - (w5x * k5x + w5y * k5y)
     a2, b2 = solve2(j11, j12, j21, j22, rhs1, rhs2)
     _place_analogs(d2, i2, i3, i4, i5, l23, l34, l35, a2, b2, a1, b1, ca, sa, cb, sb, cc, sc)
     return status, margin
 
 
-# ---------------------------------------------------------------- the sliding variant
 @njit(**JIT)
-def slider_closure(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, u435, offset, a, b):
-    """Residuals (F1, F2) of the sliding variant at (a, b) and their Jacobian
-    d(F1, F2)/d(a, b): F1 = (|P4 - P6|^2 - L46^2) / 2 (mm^2), F2 = n.(P5 - G) -
-    offset (mm), n the guide's unit normal."""
-    return slider_closure_unit(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, offset,
-                               math.cos(a), math.sin(a), math.cos(b), math.sin(b),
-                               math.cos(b + u435), math.sin(b + u435))
+def class3(pos, d1, d2, i2, i6, i7, i3, i4, i5, l23, l34, u435, l35, l46, l57,
+           state, g, order, tols, u_cos=math.nan, u_sin=math.nan):
+    """Solve the class III group whose continuation state is row ``g`` of
+    ``state``, at the current crank position.
 
-
-@njit(**JIT)
-def slider_closure_unit(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, offset, ca, sa,
-                        cb, sb, cc, sc):
-    """``slider_closure`` at the unit vectors e(a), e(b), e(b + U435)."""
-    p3x = p2x + l23 * ca
-    p3y = p2y + l23 * sa
-    r4x = p3x + l34 * cb - p6x
-    r4y = p3y + l34 * sb - p6y
-    f1 = 0.5 * (r4x * r4x + r4y * r4y - l46 * l46)
-    f2 = nx * (p3x + l35 * cc - gx) + ny * (p3y + l35 * sc - gy) - offset
-    # d/da of P3, P4, P5 is L23 n(a); d/db of P4 is L34 n(b), of P5 L35 n(b + U435)
-    j11 = l23 * (-r4x * sa + r4y * ca)
-    j12 = l34 * (-r4x * sb + r4y * cb)
-    j21 = l23 * (-nx * sa + ny * ca)
-    j22 = l35 * (-nx * sc + ny * cc)
-    return f1, f2, j11, j12, j21, j22, (ca, sa, cb, sb, cc, sc)
-
-
-@njit(**JIT)
-def slider_handed(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, offset, u_cos, u_sin,
-                  state, g, tol):
-    """``handed`` for the sliding variant: the solution handed over in state row
-    ``g`` as unit vectors, (taken, det J, the cos/sin of a, b and b + U435),
-    taken where its residuals are within ``slider_newton``'s tolerance.  Clears
-    the hand-over flag."""
-    ca, sa, cb, sb, cc, sc = _handed_unit(state, g, u_cos, u_sin)
-    f1, f2, j11, j12, j21, j22, trig = slider_closure_unit(p2x, p2y, p6x, p6y, gx, gy, nx, ny,
-                                                           l23, l34, l35, l46, offset, ca, sa,
-                                                           cb, sb, cc, sc)
-    taken = max(abs(f1) / l46, abs(f2)) <= tol * max(l23, l46)
-    return taken, j11 * j22 - j12 * j21, trig
-
-
-@njit(**JIT)
-def slider_newton(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46, u435, offset, a, b,
-                  tol, maxiter, max_step, strikes_max):
-    """Damped Newton on the sliding variant's closure from (a, b), as ``newton``.
-
-    Converged means both residuals, as distances (|F1| / L46: how far P4 is
-    off its circle; |F2|: how far P5 is off its line, mm), are at most ``tol``
-    times the longer lead (L23 or L46)."""
-    det = math.nan
-    trig = (math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
-    last = math.inf       # the last full Newton step (rad)
-    strikes = np.int64(0)   # (not the literal 0: one compiled _stalls)
-    tol_mm = tol * max(l23, l46)
-    for it in range(maxiter + 1):
-        f1, f2, j11, j12, j21, j22, trig = slider_closure(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23,
-                                                    l34, l35, l46, u435, offset, a, b)
-        det = j11 * j22 - j12 * j21
-        res = max(abs(f1) / l46, abs(f2))
-        if res <= tol_mm:
-            return CONVERGED, a, b, it, det, trig
-        if it == maxiter:
-            break
-        if not (det != 0.0 and math.isfinite(det)):
-            return SINGULAR_JACOBIAN, a, b, it, det, trig
-        da, db = solve2(j11, j12, j21, j22, f1, f2)
-        step = max(abs(da), abs(db))
-        if not math.isfinite(step):
-            return SINGULAR_JACOBIAN, a, b, it, det, trig
-        strikes = _stalls(step, last, strikes)
-        if strikes >= strikes_max:
-            return MAXITER, a, b, it, det, trig
-        last = step
-        if step > max_step:
-            da *= max_step / step
-            db *= max_step / step
-        a -= da
-        b -= db
-    return MAXITER, a, b, maxiter, det, trig
-
-
-@njit(**JIT)
-def _nan_joints(pos, d1, d2, i3, i4, i5, order_from):
-    """NaN the three vertices from ``order_from`` on (0: positions and analogs,
-    1: the analogs only)."""
-    for i in (i3, i4, i5):
-        for k in range(2):
-            if order_from == 0:
-                pos[i, k] = math.nan
-            d1[i, k] = math.nan
-            d2[i, k] = math.nan
+    ``u435`` is the ternary link's angle at vertex 3 (``ternary_angle``, NaN
+    when the triangle cannot be built), computed once per candidate by the
+    caller (``u_cos``, ``u_sin``: its cos and sin, computed here if NaN).
+    ``state[g]`` carries the continuation: the last (a, b), the sign of det J
+    there (0 before the first solve), and receives the singularity margin and
+    the Newton iterations; or, flagged ``S_HANDED``, the solution at this
+    position as unit vectors (``handed``).  The margin is |det J| / (4 L23 L46
+    L57 max(L34, L35)).  Returns (status, margin).
+    """
+    if not (math.isfinite(u435) and l23 > 0.0 and l46 > 0.0 and l57 > 0.0):
+        return _fail(pos, d1, d2, i3, i4, i5, state, g, BAD_GEOMETRY)
+    geo = (pos[i2, 0], pos[i2, 1], pos[i6, 0], pos[i6, 1], pos[i7, 0], pos[i7, 1], 0.0, 0.0,
+           l23, l34, l35, l46, l57, 0.0)
+    return _solve(np.int64(LEAD), geo, u435, 0.0, 0.0, pos, d1, d2, i2, i6, i7, i3, i4, i5,
+                  state, g, order, tols, u_cos, u_sin)
 
 
 @njit(**JIT)
@@ -458,101 +449,15 @@ def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l
     (``groups._direction``).  The margin is |det J| / (L23 L46 max(L34, L35)),
     J the Jacobian of (F1, F2) above: scale-free, 0 at a singular position.
     Flagged ``S_HANDED``, the solution at this position as unit vectors
-    (``slider_handed``; u_cos, u_sin: cos and sin of U435, computed here if
-    NaN), as ``class3``.  Returns (status, margin).
+    (``handed``; u_cos, u_sin: cos and sin of U435, computed here if NaN), as
+    ``class3``.  Returns (status, margin).
     """
-    handed_over = state[g, S_HANDED] != 0.0     # (a hand-over holds for one solve only)
     if not (math.isfinite(u435) and l23 > 0.0 and l46 > 0.0):
-        state[g, S_HANDED] = 0.0
-        _nan_joints(pos, d1, d2, i3, i4, i5, np.int64(0))
-        state[g, S_MARGIN] = 0.0
-        return BAD_GEOMETRY, 0.0
+        return _fail(pos, d1, d2, i3, i4, i5, state, g, BAD_GEOMETRY)
     th, th1, th2 = guide_direction(pos, d1, d2, ga, gb, guide_angle, order)
     if not math.isfinite(th):   # the guide link has no length: no direction
-        state[g, S_HANDED] = 0.0
-        _nan_joints(pos, d1, d2, i3, i4, i5, np.int64(0))
-        state[g, S_MARGIN] = 0.0
-        return SINGULAR, 0.0
-    ux = math.cos(th)
-    uy = math.sin(th)
-    nx = -uy
-    ny = ux
-    p2x = pos[i2, 0]
-    p2y = pos[i2, 1]
-    p6x = pos[i6, 0]
-    p6y = pos[i6, 1]
-    gx = pos[i7, 0]
-    gy = pos[i7, 1]
-    a0 = state[g, S_A]
-    b0 = state[g, S_B]
-    taken = False
-    if handed_over:
-        if not (u_cos == u_cos and u_sin == u_sin):
-            u_cos = math.cos(u435)
-            u_sin = math.sin(u435)
-        taken, det, trig = slider_handed(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23, l34, l35, l46,
-                                         offset, u_cos, u_sin, state, g, tols[T_NEWTON_TOL])
-        if taken:   # the angles are not needed: the next position is handed over too
-            outcome, a, b, iters = CONVERGED, math.nan, math.nan, 0
-        else:       # Newton from the handed angles, its move checked like any other
-            a0, b0 = _handed_angles(state, g)
-    if not taken:   # (one call site of slider_newton: compile time)
-        outcome, a, b, iters, det, trig = slider_newton(p2x, p2y, p6x, p6y, gx, gy, nx, ny, l23,
-                                                        l34, l35, l46, u435, offset, a0, b0,
-                                                        tols[T_NEWTON_TOL],
-                                                        int(tols[T_NEWTON_MAXITER]),
-                                                        tols[T_NEWTON_STEP],
-                                                        _give_up(state, g, tols))
-    state[g, S_ITERS] = iters
-    if outcome != CONVERGED:
-        _nan_joints(pos, d1, d2, i3, i4, i5, np.int64(0))
-        state[g, S_MARGIN] = 0.0
-        if outcome == SINGULAR_JACOBIAN:
-            return SINGULAR, 0.0
-        return NEWTON_MAXITER, 0.0
-    margin = abs(det) / (l23 * l46 * max(l34, l35))
-    state[g, S_MARGIN] = margin
-    status = _accept(state, g, a, b, a0, b0, det, margin, tols, not taken)
-    ca, sa, cb, sb, cc, sc = _place(pos, i2, i3, i4, i5, l23, l34, l35, trig)
-    if order < 1:
-        return status, margin
-    if status == SINGULAR:
-        _nan_joints(pos, d1, d2, i3, i4, i5, np.int64(1))
-        return status, margin
-
-    r4x = pos[i4, 0] - p6x
-    r4y = pos[i4, 1] - p6y
-    w5x = pos[i5, 0] - gx
-    w5y = pos[i5, 1] - gy
-    j11 = l23 * (-r4x * sa + r4y * ca)
-    j12 = l34 * (-r4x * sb + r4y * cb)
-    j21 = l23 * (-nx * sa + ny * ca)
-    j22 = l35 * (-nx * sc + ny * cc)
-    # first analogs: r4.(P4' - P6') = 0 and, with n' = -th' u,
-    # n.(P5' - G') - th' u.(P5 - G) = 0
-    rhs1 = -(r4x * (d1[i2, 0] - d1[i6, 0]) + r4y * (d1[i2, 1] - d1[i6, 1]))
-    rhs2 = (-(nx * (d1[i2, 0] - d1[i7, 0]) + ny * (d1[i2, 1] - d1[i7, 1]))
-            + th1 * (ux * w5x + uy * w5y))
-    a1, b1 = solve2(j11, j12, j21, j22, rhs1, rhs2)
-    _place_analogs(d1, i2, i3, i4, i5, l23, l34, l35, a1, b1, 0.0, 0.0, ca, sa, cb, sb, cc, sc)
-    if order < 2:
-        return status, margin
-    # second analogs: r4.(P4'' - P6'') + |P4' - P6'|^2 = 0 (as class3) and
-    # n.(P5'' - G'') - 2 th' u.(P5' - G') - th'' u.(P5 - G) - th'^2 offset = 0, with
-    # P5'' = P2'' + L23 (a'' n(a) - a'^2 e(a)) + L35 (b'' n(c) - b'^2 e(c)), c = b + U435
-    q4x = d1[i4, 0] - d1[i6, 0]
-    q4y = d1[i4, 1] - d1[i6, 1]
-    v5x = d1[i5, 0] - d1[i7, 0]
-    v5y = d1[i5, 1] - d1[i7, 1]
-    k3x = d2[i2, 0] - l23 * a1 * a1 * ca
-    k3y = d2[i2, 1] - l23 * a1 * a1 * sa
-    k4x = k3x - l34 * b1 * b1 * cb - d2[i6, 0]
-    k4y = k3y - l34 * b1 * b1 * sb - d2[i6, 1]
-    k5x = k3x - l35 * b1 * b1 * cc - d2[i7, 0]
-    k5y = k3y - l35 * b1 * b1 * sc - d2[i7, 1]
-    rhs1 = -(q4x * q4x + q4y * q4y) - (r4x * k4x + r4y * k4y)
-    rhs2 = (-(nx * k5x + ny * k5y) + 2.0 * th1 * (ux * v5x + uy * v5y)
-            + th2 * (ux * w5x + uy * w5y) + th1 * th1 * offset)
-    a2, b2 = solve2(j11, j12, j21, j22, rhs1, rhs2)
-    _place_analogs(d2, i2, i3, i4, i5, l23, l34, l35, a2, b2, a1, b1, ca, sa, cb, sb, cc, sc)
-    return status, margin
+        return _fail(pos, d1, d2, i3, i4, i5, state, g, SINGULAR)
+    geo = (pos[i2, 0], pos[i2, 1], pos[i6, 0], pos[i6, 1], pos[i7, 0], pos[i7, 1],
+           -math.sin(th), math.cos(th), l23, l34, l35, l46, math.nan, offset)
+    return _solve(np.int64(SLIDER), geo, u435, th1, th2, pos, d1, d2, i2, i6, i7, i3, i4, i5,
+                  state, g, order, tols, u_cos, u_sin)

@@ -1002,8 +1002,9 @@ def _newton_steps(tri, p2, p6, p7, a, b, strikes_max):
         return solve2(*args)
     triad_kernels.solve2 = counted
     try:
+        geo = (*p2, *p6, *p7, 0.0, 0.0, tri.l23, tri.l34, tri.l35, tri.l46, tri.l57, 0.0)
         outcome, a, b, _, _, _ = triad_kernels.newton.py_func(
-            *p2, *p6, *p7, tri.l23, tri.l34, tri.l35, tri.l46, tri.l57, u435, a, b,
+            triad_kernels.LEAD, tuple(float(x) for x in geo), u435, a, b,
             TOLS[kc.T_NEWTON_TOL], int(TOLS[kc.T_NEWTON_MAXITER]), TOLS[kc.T_NEWTON_STEP],
             strikes_max)
     finally:
