@@ -1,7 +1,8 @@
 """The shape of the package: no import cycles between modules of pipeline/
 (imports inside functions count too), kernels that import nothing but numpy,
 numba, math and each other, a package per layer importing only from the layers
-below, and no import inside the package of a path kept for one release."""
+below, no import inside the package of a path kept for one release, and no
+function of the compiler over 80 lines."""
 
 import ast
 from pathlib import Path
@@ -355,3 +356,40 @@ def test_the_reexport_check_finds_one(tmp_path, monkeypatch):
     found = {(m, base, name) for m, _, base, name in _reexport_uses(_modules())}
     assert ("pipeline.views.tables", "pipeline.results.storage", "ResultsError") in found
     assert ("pipeline.views.tables", "pipeline.results.storage", "open_results") not in found
+
+
+COMPILER_FUNCTION_LINES = 80      # a function of the compiler, def line to last line, at most
+
+
+def _long_functions(folder, limit=COMPILER_FUNCTION_LINES):
+    """(module, function, lines) of every function and method under ``folder``
+    (sub-folders too, the skeleton's generated kernels' templates among them)
+    longer than ``limit`` lines."""
+    out = []
+    for f in sorted(folder.rglob("*.py")):
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = node.end_lineno - node.lineno + 1
+                if n > limit:
+                    out.append((str(f.relative_to(folder)), node.name, n))
+    return out
+
+
+def test_no_function_of_the_compiler_is_over_80_lines():
+    """What writes the generated module is small functions named for what each
+    writes: none over 80 lines in pipeline/compiler/ (its skeleton too)."""
+    long = _long_functions(PKG / "compiler")
+    assert not long, f"functions over {COMPILER_FUNCTION_LINES} lines: {long}"
+
+
+def test_the_function_length_check_finds_one(tmp_path):
+    """The check can fail: a planted 81-line function (and a method) is found,
+    one of 80 lines is not."""
+    body = "".join(f"    x{i} = {i}\n" for i in range(79))
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "m.py").write_text(
+        f"def long():\n{body}    return 0\n\n\ndef fits():\n{body}\n"
+        f"class K:\n    def method(self):\n{body.replace('    ', '        ')}"
+        "        return 0\n")
+    found = {(name, n) for _, name, n in _long_functions(tmp_path)}
+    assert found == {("long", 81), ("method", 81)}

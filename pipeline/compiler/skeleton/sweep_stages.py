@@ -285,7 +285,6 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
     order = 2 if (want_f or want_p) else 0
     iw = int(settings[SET_WORK_POINT])
     pos, d1, d2, margins, state, _ = wk
-    work_a, work_b, loads_out, r_out, slide_out = fw
     phi_prev = walk_start(K, phis[0], state)
     peak = -1.0
     peak_j = -1
@@ -300,71 +299,17 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
     trans_cos = math.nan
     trans_sin = math.nan
     for k in range(phis.shape[0]):
-        if use_trail:
-            # a walk of length zero at phis[k], the lane's solution handed over as
-            # unit vectors: the class III solve confirms it by its residual (Newton
-            # from its angles only where that is above the tolerance)
-            for j in range(N_TRIADS):
-                state[j, S_HANDED] = 1.0
-                state[j, S_CA] = trail[k, 4 * j]
-                state[j, S_SA] = trail[k, 4 * j + 1]
-                state[j, S_CB] = trail[k, 4 * j + 2]
-                state[j, S_SB] = trail[k, 4 * j + 3]
-            # (no continuation step to take: ``advance`` over a step of zero was
-            # its predictor and bookkeeping around this one solve, a tenth of a
-            # tolerance build's kernel time in perf, for nothing the solve reads:
-            # the same bits)
-            st = position(K, phis[k], order, tols, state, pos, d1, d2, margins, want_f)
-        else:
-            st = advance(K, phi_prev, phis[k], order, tols, state, pos, d1, d2, margins,
-                         want_f)
+        st = solve_position(K, k, phi_prev, phis, order, tols, trail, use_trail, want_f, wk)
         phi_prev = phis[k]
         if st != OK:  # cannot happen after stage 1 unless the solver is not deterministic
             out[M_FAIL_PHI] = phis[k]
             return st
         if want_f:
-            mb = forces_at(par, pos, d1, d2, omega1, eps1, loads[k], work_a, work_b,
-                           loads_out, r_out, slide_out)
-            if abs(mb) > abs(peak_m) or not math.isfinite(mb):
-                peak_m = mb
-            if want_eq:
-                eq = equilibrium_residual(pos, d1, d2, mb, loads_out, BODY_COM, BODY_TURN)
-                if eq > worst_eq or not math.isfinite(eq):
-                    worst_eq = eq
-            if want_sh:
-                sfx, sfy, sm = shaking(pos, d1, d2, omega1, eps1, par, BODY_COM, BODY_TURN,
-                                       BODY_MASS_OFF, CRANK_PIVOT)
-                if may_reach(sfx, sfy, peak_sf):
-                    sf = math.hypot(sfx, sfy)
-                    if sf > peak_sf or not math.isfinite(sf):
-                        peak_sf = sf
-                if abs(sm) > peak_sm or not math.isfinite(sm):
-                    peak_sm = abs(sm)
-            for j in range(N_JOINTS):
-                peak, peak_j, peak_phi = reaction_peak(r_out[j, 0], r_out[j, 1], j, phis[k],
-                                                       peak, peak_j, peak_phi)
+            peak, peak_j, peak_phi, peak_m, worst_eq, peak_sf, peak_sm = force_peaks_at(
+                par, phis[k], loads[k], omega1, eps1, want_eq, want_sh, wk, fw, peak, peak_j,
+                peak_phi, peak_m, worst_eq, peak_sf, peak_sm)
         if want_p:
-            # |a| = |r'' omega1^2 + r' eps1| of the working point (mm/s^2)
-            ax = d2[iw, 0] * omega1 ** 2 + d1[iw, 0] * eps1
-            ay = d2[iw, 1] * omega1 ** 2 + d1[iw, 1] * eps1
-            if may_reach(ax, ay, peak_a):
-                a = math.hypot(ax, ay)
-                if a > peak_a or not math.isfinite(a):
-                    peak_a = a
-            # the rocker's angle analogs (geometry.angle_analogs), eps = theta'' w^2 + theta' eps1
-            dx = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]
-            dy = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]
-            d1x = d1[ROCKER_POINT, 0] - d1[ROCKER_PIVOT, 0]
-            d1y = d1[ROCKER_POINT, 1] - d1[ROCKER_PIVOT, 1]
-            d2x = d2[ROCKER_POINT, 0] - d2[ROCKER_PIVOT, 0]
-            d2y = d2[ROCKER_POINT, 1] - d2[ROCKER_PIVOT, 1]
-            r2 = dx * dx + dy * dy
-            c1 = dx * d1y - dy * d1x
-            th1 = c1 / r2
-            th2 = (dx * d2y - dy * d2x) / r2 - 2.0 * (dx * d1x + dy * d1y) * c1 / (r2 * r2)
-            e = abs(th2 * omega1 ** 2 + th1 * eps1)
-            if e > peak_e or not math.isfinite(e):
-                peak_e = e
+            peak_a, peak_e = motion_peaks_at(pos, d1, d2, iw, omega1, eps1, peak_a, peak_e)
         if want_t:
             # (angles certainly above the smallest so far need no atan2: the same minimum)
             t = transmission(K, pos, trans_cos, trans_sin)
@@ -382,6 +327,90 @@ def force_stage(par, K, phis, tols, settings, loads, out, trail, use_trail, wk, 
         out[M_MIN_TRANS] = trans if trans <= 0.5 * math.pi else math.nan
     out[M_FORCES_DONE] = 1.0
     return OK
+
+
+@njit(inline='always', **JIT)
+def solve_position(K, k, phi_prev, phis, order, tols, trail, use_trail, with_com, wk):
+    """Every group at phis[k] to ``order`` (the centres of mass ``with_com``):
+    directly from the lane path's class III solution there (``use_trail``), or
+    by the careful continuation from phi_prev; returns its status."""
+    pos, d1, d2, margins, state, _ = wk
+    if use_trail:
+        # a walk of length zero at phis[k], the lane's solution handed over as
+        # unit vectors: the class III solve confirms it by its residual (Newton
+        # from its angles only where that is above the tolerance)
+        for j in range(N_TRIADS):
+            state[j, S_HANDED] = 1.0
+            state[j, S_CA] = trail[k, 4 * j]
+            state[j, S_SA] = trail[k, 4 * j + 1]
+            state[j, S_CB] = trail[k, 4 * j + 2]
+            state[j, S_SB] = trail[k, 4 * j + 3]
+        # (no continuation step to take: ``advance`` over a step of zero was
+        # its predictor and bookkeeping around this one solve, a tenth of a
+        # tolerance build's kernel time in perf, for nothing the solve reads:
+        # the same bits)
+        return position(K, phis[k], order, tols, state, pos, d1, d2, margins, with_com)
+    return advance(K, phi_prev, phis[k], order, tols, state, pos, d1, d2, margins, with_com)
+
+
+@njit(inline='always', **JIT)
+def force_peaks_at(par, phi, loads_k, omega1, eps1, want_eq, want_sh, wk, fw, peak, peak_j,
+                   peak_phi, peak_m, worst_eq, peak_sf, peak_sm):
+    """Kinetostatics at one position (``forces_at``, at crank angle ``phi``) and
+    the running peaks after it: |R| (with its joint and angle), |M_bal|, the
+    virtual-power residual (``want_eq``), |shaking force| and |shaking moment|
+    (``want_sh``); NaN and inf take them."""
+    pos, d1, d2, margins, state, _ = wk
+    work_a, work_b, loads_out, r_out, slide_out = fw
+    mb = forces_at(par, pos, d1, d2, omega1, eps1, loads_k, work_a, work_b, loads_out, r_out,
+                   slide_out)
+    if abs(mb) > abs(peak_m) or not math.isfinite(mb):
+        peak_m = mb
+    if want_eq:
+        eq = equilibrium_residual(pos, d1, d2, mb, loads_out, BODY_COM, BODY_TURN)
+        if eq > worst_eq or not math.isfinite(eq):
+            worst_eq = eq
+    if want_sh:
+        sfx, sfy, sm = shaking(pos, d1, d2, omega1, eps1, par, BODY_COM, BODY_TURN,
+                               BODY_MASS_OFF, CRANK_PIVOT)
+        if may_reach(sfx, sfy, peak_sf):
+            sf = math.hypot(sfx, sfy)
+            if sf > peak_sf or not math.isfinite(sf):
+                peak_sf = sf
+        if abs(sm) > peak_sm or not math.isfinite(sm):
+            peak_sm = abs(sm)
+    for j in range(N_JOINTS):
+        peak, peak_j, peak_phi = reaction_peak(r_out[j, 0], r_out[j, 1], j, phi, peak, peak_j,
+                                               peak_phi)
+    return peak, peak_j, peak_phi, peak_m, worst_eq, peak_sf, peak_sm
+
+
+@njit(inline='always', **JIT)
+def motion_peaks_at(pos, d1, d2, iw, omega1, eps1, peak_a, peak_e):
+    """The running peaks of the working point's |a| (mm/s^2) and of the output
+    rocker's |angular acceleration| after this position; NaN and inf take them."""
+    # |a| = |r'' omega1^2 + r' eps1| of the working point (mm/s^2)
+    ax = d2[iw, 0] * omega1 ** 2 + d1[iw, 0] * eps1
+    ay = d2[iw, 1] * omega1 ** 2 + d1[iw, 1] * eps1
+    if may_reach(ax, ay, peak_a):
+        a = math.hypot(ax, ay)
+        if a > peak_a or not math.isfinite(a):
+            peak_a = a
+    # the rocker's angle analogs (geometry.angle_analogs), eps = theta'' w^2 + theta' eps1
+    dx = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]
+    dy = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]
+    d1x = d1[ROCKER_POINT, 0] - d1[ROCKER_PIVOT, 0]
+    d1y = d1[ROCKER_POINT, 1] - d1[ROCKER_PIVOT, 1]
+    d2x = d2[ROCKER_POINT, 0] - d2[ROCKER_PIVOT, 0]
+    d2y = d2[ROCKER_POINT, 1] - d2[ROCKER_PIVOT, 1]
+    r2 = dx * dx + dy * dy
+    c1 = dx * d1y - dy * d1x
+    th1 = c1 / r2
+    th2 = (dx * d2y - dy * d2x) / r2 - 2.0 * (dx * d1x + dy * d1y) * c1 / (r2 * r2)
+    e = abs(th2 * omega1 ** 2 + th1 * eps1)
+    if e > peak_e or not math.isfinite(e):
+        peak_e = e
+    return peak_a, peak_e
 
 
 @njit(inline='always', **JIT)
