@@ -286,16 +286,6 @@ def motion_force_summary(name, records, constant) -> dict:
 
 
 # ----------------------------------------------------------------- tolerance analysis
-def tolerance_output(source, origin):
-    """results/<study>_tolerance.h5 for a study file; next to a results file
-    <name>[_candidate<ID>]_tolerance.h5."""
-    source = Path(source)
-    tag = f"_candidate{safe_name(origin['candidate'])}" if "candidate" in origin else ""
-    if source.suffix.lower() == ".toml":
-        return Path("results") / f"{safe_name(source.stem, 'study')}_tolerance.h5"
-    return source.with_name(f"{source.stem}{tag}_tolerance.h5")
-
-
 def tolerance_setup(source, candidate=None, *, samples=None, metrics=None):
     """(study, design mechanism, label, sweep spec or None, origin attrs,
     ToleranceSpec) of a tolerance analysis: the design (``tolerance_design``),
@@ -331,7 +321,7 @@ def run_tolerance(source, candidate=None, out=None, *, samples=None, pictures=Tr
 
 def _run_tolerance(source, candidate, out, *, samples, pictures, overwrite, n_jobs, metrics):
     from .results.storage import results_output
-    from .results.tolerance_file import write_tolerance
+    from .results.tolerance_file import tolerance_output, write_tolerance
     from .runs.tolerance import analyse
 
     def check(out):     # before the builds: never the source, nor a file not a results file

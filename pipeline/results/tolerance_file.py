@@ -27,13 +27,24 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from ..base.files import replacing
+from ..base.files import replacing, safe_name
 from ..kernels import config as kc
 from ..model.metric_catalogue import BY_NAME
 from .storage import (STATUS_ENUM, attr_text, coordinate, hdf5_image, open_results, put,
                       read_units, write_root_attrs)
 
 QUANTILES = (("p05", 0.05), ("p50", 0.50), ("p95", 0.95))
+
+
+def tolerance_output(source, origin):
+    """Where ``pipeline tolerance`` writes a design's file by default:
+    results/<study>_tolerance.h5 for a study file; next to a results file
+    <name>[_candidate<ID>]_tolerance.h5 (``origin``: its ``candidate``, if any)."""
+    source = Path(source)
+    tag = f"_candidate{safe_name(origin['candidate'])}" if "candidate" in origin else ""
+    if source.suffix.lower() == ".toml":
+        return Path("results") / f"{safe_name(source.stem, 'study')}_tolerance.h5"
+    return source.with_name(f"{source.stem}{tag}_tolerance.h5")
 
 
 def write_tolerance(a, study, path, **attrs):
@@ -137,15 +148,24 @@ def _stat(fn, v):
 
 
 def read_tolerance(path):
-    """The summary of a tolerance results file as a dict (for show and tests)."""
+    """The summary of a tolerance results file as a dict (for the report, show
+    and tests): besides the summary, each dimension's sigma, the candidate it
+    is of ('' for a scene's), every build's metrics (``values``, (build, metric))
+    and the constraints as (metric, min, max)."""
     with open_results(path, "tolerance") as f:
         metrics = [attr_text(x) for x in f["summary/metric"][()]]
         out = {"design": attr_text(f.attrs["design"]), "yield": float(f.attrs["yield"]),
                "samples": int(f.attrs["samples"]), "metrics": metrics,
+               "candidate": attr_text(f.attrs.get("candidate", "")),
                "dimensions": [attr_text(x) for x in f["dimensions/dimension"][()]],
+               "sigma": f["dimensions/sigma"][()],
                "units": read_units(f["summary/nominal"], len(metrics))}
         for key in ("nominal", "mean", "std", "std_linear", "p05", "p50", "p95"):
             out[key] = f[f"summary/{key}"][()]
         out["sensitivity"] = np.stack([f[f"sensitivity/{m}"][()] for m in metrics])
         out["status"] = f["builds/status"][()]
+        out["values"] = np.stack([f[f"builds/{m}"][()] for m in metrics], axis=1)
+        c = f["constraints"]
+        out["constraints"] = tuple((attr_text(m), float(lo), float(hi)) for m, lo, hi in zip(
+            c["metric"][()], c["min"][()], c["max"][()]) if attr_text(m))
     return out

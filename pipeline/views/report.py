@@ -19,6 +19,7 @@ import datetime as _dt
 import html
 import logging
 import math
+import shlex
 import time
 from pathlib import Path
 
@@ -124,49 +125,89 @@ def motion_html(path, ana, data, drawn=()) -> str:
 
 
 # ----------------------------------------------------------------- page parts
-TOLERANCE_BUILDS = 256      # builds per design in the report's tolerance section (pipeline tolerance: more)
 TOLERANCE_METRICS = ("dwell_error", "stroke", "peak_reaction")
 
 
+class _StoredTolerance:
+    """A tolerance file's contents (``results.tolerance_file.read_tolerance``)
+    as ``charts.tolerance_chart`` reads a runs.tolerance.ToleranceAnalysis: the
+    spreads and percentiles are the file's own."""
+
+    def __init__(self, t):
+        self._t = t
+        self.metrics, self.units, self.nominal = t["metrics"], t["units"], t["nominal"]
+        self.status, self.values, self.constraints = t["status"], t["values"], t["constraints"]
+        self.label, self.yield_ = t["design"], t["yield"]
+
+    def sigma_linear(self):
+        return self._t["std_linear"]
+
+    def sigma_sampled(self):
+        return self._t["std"]
+
+    def quantiles(self, q):
+        return self._t[{0.05: "p05", 0.5: "p50", 0.95: "p95"}[q]]
+
+
 def tolerance_html(path, ana, data) -> str:
-    """The knee and each representative design built TOLERANCE_BUILDS times
-    within the study's [tolerance] (ISO 2768-f without one): the yield, the
-    5-95 % range of the main metrics and the dimension that moves each most;
-    the knee's distributions drawn.  ``pipeline tolerance FILE --candidate ID``
-    gives the whole analysis."""
-    from ..analysis.candidate import tolerance_design
-    from ..runs.tolerance import analyse
-    from ..study.tolerance_spec import ToleranceSpec
-    rows, knee_chart = [], None
+    """The knee, each representative design and the reference design as their
+    tolerance files beside the results file hold them (``pipeline tolerance FILE
+    --candidate ID`` writes one): the yield, the 5-95 % range of the main
+    metrics and the dimension that moves each most; the knee's distributions
+    drawn.  Nothing is computed here: a design without its file gets the
+    command that writes it."""
+    from ..base.errors import ResultsError
+    from ..results.tolerance_file import read_tolerance, tolerance_output
+    rows, missing, knee_chart = [], [], None
     designs = list(dict.fromkeys([i for i in [ana.knee] + list(ana.representatives) if i >= 0]))
     for i in designs + ["reference"]:
         cid = design_key(data, i)
-        study, mech, label, sweep, _ = tolerance_design(path, cid)
-        a = analyse(study, mech, study.tolerance or ToleranceSpec(), label=label,
-                    sweep_spec=sweep, samples=TOLERANCE_BUILDS)
+        label = "reference design" if i == "reference" else f"candidate #{cid}"
+        label += " (knee)" if i == ana.knee else ""
+        file = tolerance_output(path, {"candidate": cid})
+        if not file.exists():
+            missing.append(cid)
+            continue
+        try:
+            t = read_tolerance(file)
+        except (ResultsError, OSError, KeyError) as e:
+            log.warning("report: %s not read (%s)", file, e)
+            missing.append(cid)
+            continue
+        if t["candidate"] != cid:       # a file renamed from another design's
+            log.warning("report: %s is the tolerance file of candidate %s, not %s", file,
+                        t["candidate"], cid)
+            missing.append(cid)
+            continue
         if i == ana.knee:
-            label += " (knee)"
-            knee_chart = chart_html(tolerance_chart(a), "the knee's builds")
-        p05, p95 = a.quantiles(0.05), a.quantiles(0.95)
-        share = a.contributions()
-        cells = [html.escape(label), f"{100 * a.yield_:.1f} %"]
+            knee_chart = chart_html(tolerance_chart(_StoredTolerance(t)), "the knee's builds")
+        share = np.abs(t["sensitivity"]) * t["sigma"][None, :]
+        cells = [html.escape(label), f"{100 * t['yield']:.1f} % of {t['samples']:,}"]
         for m in TOLERANCE_METRICS:
-            if m not in a.metrics:
+            if m not in t["metrics"]:
                 cells.append("&ndash;")
                 continue
-            k = a.metrics.index(m)
+            k = t["metrics"].index(m)
             j = int(np.nanargmax(share[k])) if np.isfinite(share[k]).any() else 0
-            cells.append(f"{_fmt(a.nominal[k])} [{_fmt(p05[k])}, {_fmt(p95[k])}]<br>"
-                         f"<small>most: {html.escape(a.dimensions[j].param)}</small>")
+            cells.append(f"{_fmt(t['nominal'][k])} [{_fmt(t['p05'][k])}, "
+                         f"{_fmt(t['p95'][k])}]<br>"
+                         f"<small>most: {html.escape(t['dimensions'][j])}</small>")
         rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
-    head = "".join(f"<th>{h}</th>" for h in ["design", "yield"] + [
+    command = html.escape(f"pipeline tolerance {shlex.quote(str(path))} --candidate ")
+    if not rows:
+        return (f'<p class="note">No tolerance analysis of these designs yet: <code>{command}'
+                f"{html.escape(missing[0])}</code> writes one (any design: its number, knee "
+                "or reference) beside the results file, which this page then shows.</p>")
+    head = "".join(f"<th>{h}</th>" for h in ["design", "yield (builds)"] + [
         f"{m} (5-95 %)" for m in TOLERANCE_METRICS])
-    out = [f'<p class="note">Each design built {TOLERANCE_BUILDS:,} times with its '
-           "dimensions drawn within the study's tolerances ([tolerance]; ISO 2768-f by "
-           "default), every build through the exact kernels; the yield is the share that "
-           "assembles and meets the constraints. <code>pipeline tolerance FILE --candidate "
-           "ID</code> writes the whole analysis (sensitivities, tornado chart).</p>",
+    out = ['<p class="note">Each design built with its dimensions drawn within the '
+           "study's tolerances ([tolerance]; ISO 2768-f by default), every build through "
+           "the exact kernels, as its tolerance file holds it; the yield is the share that "
+           "assembles and meets the constraints.</p>",
            f'<div class="wide"><table><tr>{head}</tr>{"".join(rows)}</table></div>']
+    if missing:
+        out.append('<p class="note">Not analysed yet: ' + ", ".join(
+            f"<code>{command}{html.escape(c)}</code>" for c in missing) + "</p>")
     if knee_chart is not None:
         out.append(knee_chart)
     return "".join(out)
