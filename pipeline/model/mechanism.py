@@ -193,6 +193,58 @@ def group_label(g, k):
     return f"{type(g).__name__}[{k}]"
 
 
+def transmission_items(mech):
+    """The mechanism's transmission angles, in order: (label, kind, what).
+
+    A transmission angle is 90 deg minus the pressure angle, the angle between
+    the line of the force a group passes to the member it drives (frictionless
+    joints, links without their own loads) and that member's velocity; 90 deg
+    is best, 0 a dead position.  Every angle is folded into [0, 90] deg
+    (min(mu, 180 - mu)).
+
+    * an RRR dyad A-B-C ("dyad", (A, B, C)): the angle at the middle joint B
+      between B->A and B->C (the force along A-B, B moving across C-B);
+    * each lead of a class III group that joins the ternary link at J to a
+      fixed pivot P (leads 4-6 and 5-7; "lead", (J, P, A, B, C, D)): the angle
+      at J between the lead J-P and the line from J through Q, the point where
+      the lines A-B and C-D of the other two leads meet.  With axial forces in
+      those leads, the ternary link (three forces in equilibrium meet in one
+      point) passes its force to this lead along J-Q: the four-bar's
+      transmission angle (coupler against rocker) generalised.  It is 0 when
+      the three leads' lines meet in one point, the group's singular position.
+
+    The groups with a sliding pair give two lines, ("lines", ((a, b, alpha),
+    (c, d, beta))): the link a->b turned by alpha (the absolute direction
+    alpha where a is None) against c->d turned by beta
+    (``kernels.metrics.lines_transmission``):
+
+    * RRP (slider B on its guide, link A-B): the force along A-B drives the
+      slider along the guide, so mu = 90 deg - angle(A-B, guide) = the angle
+      between A-B and the guide's normal (the slider-crank's: coupler against
+      the normal to the slider's path); 0 where A-B lies across the guide,
+      the group's toggle (its margin is sin mu);
+    * RPR (coulisse: block at A on a guide turning about C, guide end E): the
+      block pushes the guide along its normal n, and the guide's point under
+      the block moves across C->A, so mu = angle(C->A, n) = 90 deg -
+      angle(C->A, C->E); 90 deg with no offset, 0 where the block passes the
+      foot of the perpendicular from C (the group's toggle);
+    * PRP (two blocks joined at B, on guides 1 and 2): block 1 passes the
+      force to the pin along the normal of guide 1, and block 2 moves along
+      guide 2 (either way round), so mu = the angle between the two guides
+      (0 where they are parallel; sin mu is the group's margin);
+    * RPP (Scotch yoke; and PPR, the same chain): the block pushes the yoke along the slot's normal,
+      and the yoke moves along its guide, so mu = the angle between the slot
+      and the guide, |slot_angle| folded: constant over the revolution, a
+      design quantity (90 deg for the classic yoke).
+
+    Each group type gives its own items (its ``transmission`` hook,
+    ``pipeline.model.groups``)."""
+    out = []
+    for g in mech.groups:
+        out += g.transmission()     # the group type's items (pipeline.model.groups)
+    return out
+
+
 def compile_mechanism(m: Mechanism) -> Plan:
     """Compile a declared mechanism into the flat plan.  Declaration errors are
     caught by the study parser; this assumes a consistent mechanism."""

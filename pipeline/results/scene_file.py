@@ -254,7 +254,7 @@ def _coordinates(f, plan, study):
     coordinate(f, "slide_component", ["N", "C"], "1", "normal force, couple")
     coordinate(f, "parameter", list(plan.par_names), "1", "compiled mechanism parameter")
     coordinate(f, "tolerance", [n for n, _ in TOLERANCES], "1", "solver tolerance")
-    from ..solve.peaks import transmission_items
+    from ..model.mechanism import transmission_items
     coordinate(f, "dyad", [label for label, _, _ in transmission_items(study.mechanism)], "1",
                "transmission angle: RRR dyad (A-B-C, at the middle joint B), class III lead "
                "(J-P: the lead against the line to the meet of the other two leads), or a dyad "

@@ -29,7 +29,7 @@ def available_metrics(study, plan):
     """The toleranced metrics this mechanism has (forces need bodies, friction
     [mechanism.friction], the law error a motion law, the transmission angle a dyad or a class III group,
     the singularity margin a class III group)."""
-    from ..solve.peaks import transmission_items
+    from ..model.mechanism import transmission_items
     mech, out = study.mechanism, study.output
     has_margin = bool(np.isin(plan.codes, kc.CLASS3_GROUPS).any())
     keep = []

@@ -7,6 +7,7 @@ import math
 from dataclasses import dataclass
 
 from ..base import limits as lim
+from ..model.drive import check_drive
 from ..model.mechanism import Mechanism
 from .section import Section
 
@@ -77,7 +78,6 @@ def parse_dynamics(sec: Section, mech: Mechanism) -> DynamicsSpec:
         c.check_range("damping", cases[-1].damping, lim.DAMPING)
         c.done()
         # M1 and the loads must be constant, 2*pi-periodic in phi, or functions of t alone
-        from ..solve.crank_drive import check_drive
         check_drive(mech, cases[-1], c.file)
     flywheel = None
     if sec.has("flywheel"):      # size a flywheel for a case's steady rotation

@@ -369,7 +369,7 @@ def _check_available(sec, key, m, mech, output):
     if METRICS[m][2] == "law" and output.motion_law is None:
         raise sec.error(key, f"{m} needs the required motion law: declare [output.motion_law]")
     if METRICS[m][2] == "transmission":
-        from ..solve.peaks import transmission_items
+        from ..model.mechanism import transmission_items
         if not transmission_items(mech):
             raise sec.error(key, f"{m} needs a dyad or a class III group (the "
                                  "transmission angles of pipeline.peaks); this mechanism has "

@@ -80,7 +80,7 @@ def test_the_unnamed_ppr_is_labelled_as_a_ppr(studies):
     text = (studies / f"{SCENE}.toml").read_text().replace('name = "carriage"\n', "", 1)
     m = parse_study(text, "x.toml").mechanism
     assert m.compile().group_names[3] == "PPR[3]"
-    from pipeline.solve.peaks import transmission_items
+    from pipeline.model.mechanism import transmission_items
     assert transmission_items(m)[-1][0] == "PPR P7-P6"
 
 

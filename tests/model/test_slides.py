@@ -17,7 +17,8 @@ from pipeline.solve.reactions import slide_action
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
 from pipeline.model.groups.rpp import RPP
-from pipeline.solve.peaks import _magnitudes, scene_peaks, transmission_items
+from pipeline.model.mechanism import transmission_items
+from pipeline.solve.peaks import _magnitudes, scene_peaks
 from pipeline.runner import peak_summary
 from pipeline.solve.scene_study import solve_scene
 from pipeline.solve.scene import run_scene, solve_curves

@@ -90,7 +90,7 @@ class GroupType:
         return -1
 
     def transmission(self):
-        """(label, kind, data) items of ``pipeline.solve.peaks.transmission_items``."""
+        """(label, kind, data) items of ``pipeline.model.mechanism.transmission_items``."""
         return []
 
     def segments(self):
