@@ -182,7 +182,8 @@ def _run_chunks(spec, out, journal, problem, sf, client, n_jobs, progress, stop_
     record = SaveThenWrite(lambda chunks: [journal.save(*_journal_part(c)) for c in chunks],
                            flush_every_s=1.0)     # the HDF5 file: once a second
     computed = 0
-    with stopping_safely(out, journal, bar, spec.n_chunks, "chunk", record), \
+    # each chunk is journalled as it comes: on a failure nothing is kept back to save
+    with stopping_safely(out, journal, bar, spec.n_chunks, "chunk"), \
             hdf5_writing(sf.path, expendable=False) as f:
         d = sf.datasets(f)
         record.open(f, lambda chunks: _write(sf, d, chunks, out))
