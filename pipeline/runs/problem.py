@@ -116,11 +116,16 @@ class SweepProblem:
             share.reached(1.0)
         return status, metrics
 
-    def evaluate_chunk(self, chunk, parallel=True, n_jobs=None, watch=None):
-        """(chunk, x, status, metrics, rejected draws per triangle)."""
+    def draw_chunk(self, chunk):
+        """(x, rejected draws per triangle, parameter rows) of chunk ``chunk``."""
         x, rejected = draw_checked(self.spec, chunk)
-        status, metrics = self.evaluate_rows(parameter_rows(self.plan, self.spec, x), parallel,
-                                             n_jobs, watch)
+        return x, rejected, parameter_rows(self.plan, self.spec, x)
+
+    def evaluate_chunk(self, chunk, parallel=True, n_jobs=None, watch=None, drawn=None):
+        """(chunk, x, status, metrics, rejected draws per triangle); ``drawn``:
+        the chunk's ``draw_chunk``, where the caller drew it ahead."""
+        x, rejected, pars = self.draw_chunk(chunk) if drawn is None else drawn
+        status, metrics = self.evaluate_rows(pars, parallel, n_jobs, watch)
         return chunk, x, status, metrics, rejected
 
 

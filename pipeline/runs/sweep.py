@@ -271,15 +271,25 @@ def _chunks(problem, todo, client, n_jobs, watch=None):
         return
     if n_jobs is not None and n_jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {n_jobs}")
-    # the next chunk is drawn and evaluated while the caller journals and writes
-    # this one (the kernels run on the worker threads, HDF5 on this one)
+    # the next chunk is evaluated while the caller journals and writes this one
+    # (the kernels run on the worker threads, HDF5 on this one), and the chunk
+    # after it is drawn meanwhile, in order (a Sobol sequence continues), so that
+    # no core waits on the sampler between two chunks
     from concurrent.futures import ThreadPoolExecutor
     watch = Watch() if watch is None else watch
     ahead = ThreadPoolExecutor(1, thread_name_prefix="pipeline-chunks")
+    drawer = ThreadPoolExecutor(1, thread_name_prefix="pipeline-draws")
+    draws = {c: drawer.submit(problem.draw_chunk, c) for c in todo[:1]}
+
+    def evaluate(c, nxt):
+        drawn = draws.pop(c).result()
+        if nxt is not None:
+            draws[nxt] = drawer.submit(problem.draw_chunk, nxt)
+        return problem.evaluate_chunk(c, True, n_jobs, watch, drawn)
     try:
         pending = None
-        for c in todo:
-            nxt = ahead.submit(problem.evaluate_chunk, c, True, n_jobs, watch)
+        for i, c in enumerate(todo):
+            nxt = ahead.submit(evaluate, c, todo[i + 1] if i + 1 < len(todo) else None)
             if pending is not None:
                 yield pending.result()
             pending = nxt
@@ -290,6 +300,7 @@ def _chunks(problem, todo, client, n_jobs, watch=None):
         raise
     finally:
         ahead.shutdown(wait=True, cancel_futures=True)
+        drawer.shutdown(wait=True, cancel_futures=True)
 
 
 def _dask_chunks(problem, todo, client):
