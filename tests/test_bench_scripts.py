@@ -31,6 +31,7 @@ SMOKE = {
     "bench_search.py": (["--smoke", "-o", "{tmp}"], "search.md"),
     "bench_compiler.py": (["--smoke", "-o", "{tmp}"], "compiler.md"),
     "agreement.py": (["--smoke", "--out", "{tmp}"], "agreement.md"),
+    "bench_yardstick.py": (["--smoke", "-o", "{tmp}"], "yardstick.md"),
 }
 
 
