@@ -12,9 +12,10 @@ from the process's start to its exit, so it counts the interpreter's start-up, t
 the kernels' load from numba's cache, the reference design, the sampler, the journal and the
 HDF5 file.  Both count candidate-positions (every candidate x 360 positions) per second.
 
-"On k cores": the process is confined to k cores (CPU affinity, so the journal and the HDF5
-writer share them with the kernels), and the yardstick runs k OpenMP threads pinned to
-cores.  Each round runs the yardstick and the project alternately, for 1 core then all
+"On k cores": the process runs its kernels on k threads (``-j k``, as issue 53 measured it;
+the journal and the HDF5 file are written on the process's main thread, beside them), and
+the yardstick runs k OpenMP threads pinned to cores.  ``--confined`` also confines the
+process to k cores (CPU affinity), so that the main thread's writing shares them.  Each round runs the yardstick and the project alternately, for 1 core then all
 cores; the table gives each round and the median ratio (the machine's speed drifts, so only
 ratios taken side by side mean anything).  The run's own wall time (``wall_time_s``: the
 chunks, from the first to the file complete) is shown beside, so the fixed cost of a process
@@ -75,11 +76,16 @@ def yardstick_rate(exe: Path, threads: int, candidates: int) -> float:
     return float(m.group(1))
 
 
-def process_run(cores: list[int], candidates: int, out: Path) -> tuple[float, float]:
+def process_run(cores: list[int], candidates: int, out: Path, confined: bool
+                ) -> tuple[float, float]:
     """(seconds from the process's start to its exit, the run's own wall_time_s)
-    of ``pipeline run`` of the default study confined to ``cores``."""
+    of ``pipeline run`` of the default study on len(cores) kernel threads, and
+    confined to ``cores`` where ``confined``."""
     cmd = [sys.executable, "-m", "pipeline.cli", "run", str(STUDY), "--candidates",
-           str(candidates), "-o", str(out), "--overwrite", "-q", "--no-pictures"]
+           str(candidates), "-o", str(out), "--overwrite", "-q", "--no-pictures",
+           "-j", str(len(cores))]
+    every = sorted(os.sched_getaffinity(0))
+    cores = cores if confined else every
     env = dict(os.environ, PIPELINE_COMPILE_BESIDE="0")
     t = time.perf_counter()
     r = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=1800,
@@ -93,7 +99,8 @@ def process_run(cores: list[int], candidates: int, out: Path) -> tuple[float, fl
     return wall, inner
 
 
-def measure(candidates: int, rounds: int, core_counts: list[int], echo=print) -> list[dict]:
+def measure(candidates: int, rounds: int, core_counts: list[int], confined=False,
+            echo=print) -> list[dict]:
     """One row per round and core count: the yardstick's and the process's rates."""
     rows = []
     all_cores = sorted(os.sched_getaffinity(0))
@@ -101,12 +108,12 @@ def measure(candidates: int, rounds: int, core_counts: list[int], echo=print) ->
         d = Path(d)
         exe = build_triad_full(d)
         out = d / "syn.h5"
-        process_run(all_cores, 2_000, out)       # the kernels in numba's cache, imports warm
+        process_run(all_cores, 2_000, out, False)  # the kernels in numba's cache, imports warm
         for r in range(rounds):
             for k in core_counts:
                 c_rate = (yardstick_rate(exe, k, min(C_CANDIDATES, candidates) * k)
                           if exe is not None else float("nan"))
-                wall, inner = process_run(all_cores[:k], candidates, out)
+                wall, inner = process_run(all_cores[:k], candidates, out, confined)
                 rate = candidates * POSITIONS / wall
                 rows.append({"round": r + 1, "cores": k, "yardstick": c_rate, "process": rate,
                              "wall": wall, "run_wall": inner, "ratio": rate / c_rate})
@@ -116,11 +123,13 @@ def measure(candidates: int, rounds: int, core_counts: list[int], echo=print) ->
     return rows
 
 
-def table(rows: list[dict], candidates: int) -> str:
+def table(rows: list[dict], candidates: int, confined=False) -> str:
+    how = ("confined to k cores (CPU affinity), its kernels on k threads" if confined else
+           "its kernels on k threads (-j k), its main thread writing beside them")
     lines = [f"# The whole process against triad_full ({candidates:,} candidates)", "",
              f"Machine: {hardware()}.", "",
              "Million candidate-positions per second (every candidate x 360 positions); the "
-             "process timed from its start to its exit; on k cores: confined to k cores "
+             f"process timed from its start to its exit; on k cores: {how} "
              "(the yardstick: k pinned threads).", "",
              "| round | cores | triad_full | pipeline run | ratio | process s | chunks s |",
              "|---|---|---|---|---|---|---|"]
@@ -136,16 +145,16 @@ def table(rows: list[dict], candidates: int) -> str:
     return "\n".join(lines) + "\n"
 
 
-def run(smoke=False, quick=False, rounds=None, out=None, echo=print):
+def run(smoke=False, quick=False, rounds=None, out=None, confined=False, echo=print):
     candidates = 2_000 if smoke else 200_000 if quick else 1_000_000
     rounds = rounds or (1 if smoke or quick else 3)
     n = len(os.sched_getaffinity(0))
     core_counts = [1] if smoke else sorted({1, n})
-    rows = measure(candidates, rounds, core_counts, echo)
+    rows = measure(candidates, rounds, core_counts, confined, echo)
     folder = Path(out) if out else ROOT / "results" / "bench"
     folder.mkdir(parents=True, exist_ok=True)
     from pipeline.base.files import write_text
-    text = table(rows, candidates)
+    text = table(rows, candidates, confined)
     write_text(folder / "yardstick.md", text)
     echo(text)
     return rows
@@ -157,9 +166,11 @@ def main(argv=None):
     size.add_argument("--smoke", action="store_true", help="2,000 candidates, 1 round, 1 core")
     size.add_argument("--quick", action="store_true", help="200,000 candidates, 1 round")
     ap.add_argument("--rounds", type=int, help="rounds (default 3; 1 with --smoke or --quick)")
+    ap.add_argument("--confined", action="store_true",
+                    help="confine the process to k cores (its writing shares them)")
     ap.add_argument("-o", "--output", help="folder for yardstick.md (default results/bench/)")
     a = ap.parse_args(argv)
-    run(a.smoke, a.quick, a.rounds, a.output)
+    run(a.smoke, a.quick, a.rounds, a.output, a.confined)
 
 
 if __name__ == "__main__":

@@ -850,7 +850,17 @@ def test_rows_run_in_ranges_on_threads():
     def kernel(pars, lo, hi, tag):
         calls.append((lo, hi, tag))
     run_rows(kernel, np.zeros((1000, 1)), "x", n_jobs=2, task_rows=256)
-    assert sorted(calls) == [(0, 256, "x"), (256, 512, "x"), (512, 768, "x"), (768, 1000, "x")]
+    got = sorted(calls)
+    # every row once, in ranges of at most task_rows and of whole lane blocks (the
+    # last excepted); the last ones shorter, so that the two threads end together
+    assert [lo for lo, _, _ in got] == [0] + [hi for _, hi, _ in got[:-1]]
+    assert got[-1][1] == 1000 and {t for _, _, t in got} == {"x"}
+    sizes = [hi - lo for lo, hi, _ in got]
+    assert sizes[0] == 256 and all(s % LANE_WIDTH == 0 for s in sizes[:-1])
+    assert sizes == sorted(sizes, reverse=True) and sizes[-2] == LANE_WIDTH
+    calls.clear()
+    run_rows(kernel, np.zeros((1000, 1)), "z", n_jobs=1, task_rows=256)   # one thread
+    assert sorted(calls) == [(0, 256, "z"), (256, 512, "z"), (512, 768, "z"), (768, 1000, "z")]
     calls.clear()       # a search's generation: shared out in whole lane blocks
     run_rows(kernel, np.zeros((100, 1)), "y", n_jobs=2, task_rows=256)
     split = -(-50 // LANE_WIDTH) * LANE_WIDTH      # half the rows, up to a whole block

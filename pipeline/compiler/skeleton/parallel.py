@@ -53,6 +53,7 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
     wk = work(N_POINTS, N_GROUPS, N_TRIADS)
     fw = force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS)
     ww = watch_work(N_WATCH, N_TRIADS)
+    pos, d1, d2, margins, state, _ = wk
     fast = lanes_apply(phis, tols)
     # the force lanes: candidates the lanes vouched for that reach the force stage
     # gather in a block of their own (fidx), solved together when it is full
@@ -70,7 +71,8 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
         if i < hi:
             filled = candidate_into_lane(pars, i, filled, fast, phis, phi_close, close, tols,
                                          settings, loads, S, theta, col, trail, qmax, qmin, wk,
-                                         fw, ww, corr, idx, status, metrics)
+                                         fw, ww, corr, idx, status, metrics, pos, d1, d2,
+                                         margins, state)
         if filled == LANES or (i == hi and filled > 0):
             pad_block(S, theta, filled, npos)
             block_walk(S, theta, cph, sph, phis, tols, settings)
@@ -109,12 +111,13 @@ def crank_table(phis, close, cph, sph):
 @njit(inline='always', **JIT)
 def candidate_into_lane(pars, i, filled, fast, phis, phi_close, close, tols, settings, loads,
                         S, theta, col, trail, qmax, qmin, wk, fw, ww, corr, idx, status,
-                        metrics):
+                        metrics, pos, d1, d2, margins, state):
     """Candidate ``i`` into the next free lane (``filled``) where it assembles at
     phis[0] and the lanes apply; else its report: a failure at phis[0] as the
     careful path's first step gives it, or the careful path's metrics.  Returns
-    the lanes filled after it."""
-    pos, d1, d2, margins, state, _ = wk
+    the lanes filled after it.  pos .. state: ``wk``'s arrays, unpacked once by
+    the caller (an unpacking here, per candidate, counts every array's references:
+    2 % of the sweep's time)."""
     code = -1
     if fast:
         # np.int64(...): no literal argument, one compiled version
