@@ -15,9 +15,10 @@ HDF5 file.  Both count candidate-positions (every candidate x 360 positions) per
 "On k cores": the process runs its kernels on k threads (``-j k``, as issue 53 measured it;
 the journal and the HDF5 file are written on the process's main thread, beside them), and
 the yardstick runs k OpenMP threads pinned to cores.  ``--confined`` also confines the
-process to k cores (CPU affinity), so that the main thread's writing shares them.  Each round runs the yardstick and the project alternately, for 1 core then all
-cores; the table gives each round and the median ratio (the machine's speed drifts, so only
-ratios taken side by side mean anything).  The run's own wall time (``wall_time_s``: the
+process to k cores (CPU affinity), so that the main thread's writing shares them.  Each
+round runs the yardstick and the project alternately, for 1 core then all cores; the table
+gives each round and the median ratio (the machine's speed drifts, so only ratios taken side
+by side mean anything).  The run's own wall time (``wall_time_s``: the
 chunks, from the first to the file complete) is shown beside, so the fixed cost of a process
 is seen apart.
 
