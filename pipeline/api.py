@@ -49,6 +49,8 @@ def solve_scene(study):
     if study.kind != "scene":
         raise ValueError(f"{study.path}: pipeline.solve_scene solves a scene; this study is a "
                          f"{study.kind} (use pipeline.run)")
+    from .solve.scene import check_centres_of_mass
+    check_centres_of_mass(study)
     return solve(study)
 
 

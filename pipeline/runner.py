@@ -39,6 +39,8 @@ def run_study(path, out=None, *, candidates=None, resume=False, overwrite=False,
     ``seed_from`` if given."""
     from .study.reader import Study
     study = path if isinstance(path, Study) else load_study(path)
+    from .solve.scene import check_centres_of_mass
+    check_centres_of_mass(study)        # its CAD bodies on its links, before anything else
     path = study.path
     out = Path(out) if out else default_output(study)
     from .results.storage import results_output
@@ -297,6 +299,8 @@ def tolerance_setup(source, candidate=None, *, samples=None, metrics=None):
     from .model.metric_catalogue import TOLERANCED_METRICS
     from .study.tolerance_spec import MAX_SAMPLES, ToleranceSpec
     study, mech, label, sweep, origin = tolerance_design(source, candidate)
+    from .solve.scene import check_centres_of_mass
+    check_centres_of_mass(study)
     spec = study.tolerance or ToleranceSpec()
     if metrics:
         unknown = [m for m in metrics if m not in TOLERANCED_METRICS]

@@ -110,7 +110,9 @@ def test_importing_the_package_keeps_the_callers_matplotlib_backend():
 # The layers of pipeline/, lowest first: a module's layer is its subpackage
 # (docs/architecture.md draws them), and the face is the modules at the top.  A
 # module imports only from its own layer and the layers below.
-LAYERS = ("base", "kernels", "model", "compiler", "solve", "study", "results", "runs",
+# study sits below compiler and solve: reading and checking a study's TOML needs no solver
+# (what needs a solved position, the CAD bodies' centres of mass, is checked by the run).
+LAYERS = ("base", "kernels", "model", "study", "compiler", "solve", "results", "runs",
           "analysis", "views")
 FACE = ("api", "cli", "runner", "compile", "bench", "old_paths")
 
@@ -157,6 +159,19 @@ def test_the_layer_check_finds_an_upward_import(tmp_path, monkeypatch):
     f.write_text(f.read_text() + "\n\ndef _planted():\n    from ..cli import main\n")
     monkeypatch.setattr(__import__(__name__), "PKG", pkg)
     assert ("pipeline.solve.scene", "pipeline.cli") in _upward(_modules())
+
+
+def test_the_layer_check_finds_a_lazy_import_of_the_solver_from_a_study(tmp_path, monkeypatch):
+    """A study's reader that reached for the solver inside a function (as the CAD
+    check once did, to place the bodies at phi0) is an upward import."""
+    import shutil
+    pkg = tmp_path / "pipeline"
+    shutil.copytree(PKG, pkg, ignore=shutil.ignore_patterns("__pycache__"))
+    f = pkg / "study" / "cad_report.py"
+    f.write_text(f.read_text() + "\n\ndef _planted():\n"
+                                 "    from ..solve.scene import solve_curves\n")
+    monkeypatch.setattr(__import__(__name__), "PKG", pkg)
+    assert ("pipeline.study.cad_report", "pipeline.solve.scene") in _upward(_modules())
 
 
 # ---------------------------------------------------------------- old paths

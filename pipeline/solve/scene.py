@@ -122,6 +122,24 @@ class SceneResult:
                 "points": [names[int(i)] for i in self.plan.gidx[g] if i >= 0] if g >= 0 else []}
 
 
+def check_centres_of_mass(study):
+    """Refuse a study whose CAD reports put a centre of mass far outside its link
+    (``study.cad_report.check_placed``), the links' points solved at the crank's
+    first position (phi0) of the mechanism as declared: where a study is run,
+    before it computes or writes anything.  A mechanism that does not assemble
+    there is not checked here (its run reports where it fails)."""
+    if not study.cad_bodies:
+        return
+    from ..study.cad_report import check_placed
+    mech = study.mechanism
+    plan = mech.compile()
+    curves = solve_curves(plan, [mech.crank.phi0], kc.POSITIONS)
+    if curves.status[0] != kc.OK:
+        return
+    pos = curves.pos[0]
+    check_placed(study.cad_bodies, mech, lambda p: tuple(pos[plan.point(p)]))
+
+
 def run_scene(study, tols=None) -> SceneResult:
     """Tables at the study's table positions (closing row included) and dense
     curves over one revolution, with the forces if the study asks for them."""

@@ -442,8 +442,8 @@ class CadReports:
     """The reports a study's bodies read (``cad = { report = ... }``): from the
     study file's folder, or from the copies a results file keeps (``stored``:
     {report as the study writes it: its text}); ``texts`` collects what was
-    read, for the results file, and ``bodies`` what ``check`` places on
-    the mechanism."""
+    read, for the results file, and ``bodies`` what they place on the
+    mechanism, for the run to check where they lie (``check_placed``)."""
 
     def __init__(self, folder, stored=None, origin=""):
         self.folder = Path(folder)
@@ -495,24 +495,18 @@ class CadReports:
         self.bodies.append((b.data.get("name"), props, origin, x_axis, where))
         return props.mass, props.J_S, CentreOfMass(origin, x_axis, lS, US)
 
-    def check(self, mech):
-        """Refuse a centre of mass far outside its link (``far_outside``), its
-        link's points taken at the crank's first position (phi0) of the
-        mechanism as declared; a mechanism that does not assemble there is
-        not checked here (its run reports where it fails)."""
-        if not self.bodies:
-            return
-        from ..kernels import config as kc
-        from ..solve.scene import solve_curves
-        plan = mech.compile()
-        curves = solve_curves(plan, [mech.crank.phi0], kc.POSITIONS)
-        if curves.status[0] != kc.OK:
-            return
-        pos = curves.pos[0]
-        by_name = {b.name: b for b in mech.bodies}
-        for name, props, origin, x_axis, where in self.bodies:
-            names = dict.fromkeys((*by_name[name].joints, origin, *x_axis))
-            points = {p: tuple(pos[plan.point(p)]) for p in names}
-            problem = far_outside(props, points, origin, x_axis)
-            if problem:
-                raise _error(props.file, props.com_line, f"{problem} ({where})")
+
+def check_placed(bodies, mech, point_at):
+    """Refuse a centre of mass far outside its link (``far_outside``).
+
+    ``bodies``: what a study's CAD reports placed on its mechanism
+    (``Study.cad_bodies``: ``CadReports.bodies``); ``point_at(name)``: the
+    point's (x, y) mm at the crank's first position (phi0) of ``mech`` as
+    declared, which the run solves (``solve.scene.check_centres_of_mass``)."""
+    by_name = {b.name: b for b in mech.bodies}
+    for name, props, origin, x_axis, where in bodies:
+        names = dict.fromkeys((*by_name[name].joints, origin, *x_axis))
+        points = {p: point_at(p) for p in names}
+        problem = far_outside(props, points, origin, x_axis)
+        if problem:
+            raise _error(props.file, props.com_line, f"{problem} ({where})")

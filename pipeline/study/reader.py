@@ -67,6 +67,9 @@ class Study:
     # the CAD reports its bodies read (cad = { report = ... }): {as written: text},
     # kept in a results file beside the study's text
     cad_reports: dict = field(default_factory=dict)
+    # what those reports place on the mechanism (cad_report.CadReports.bodies): where
+    # each centre of mass lies is checked where the study is run, on its solved points
+    cad_bodies: tuple = ()
 
 
 KINDS = ("scene", "sweep")
@@ -145,10 +148,10 @@ def parse_study(text: str, path="<study>", cad_reports=None) -> Study:
         from .tolerance_spec import parse_tolerance
         tolerance = parse_tolerance(root, mech, output, sweep)
     root.done()
-    cad.check(mech)
     return Study(path=Path(path), text=text, kind=kind, name=name, title=title,
                  mechanism=mech, output=output, dynamics=dynamics, sweep=sweep, search=search,
-                 tolerance=tolerance, cycle=cycle, cad_reports=cad.texts)
+                 tolerance=tolerance, cycle=cycle, cad_reports=cad.texts,
+                 cad_bodies=tuple(cad.bodies))
 
 
 # ----------------------------------------------------------------- mechanism

@@ -222,6 +222,25 @@ def test_a_centre_of_mass_far_outside_its_link_is_one_line_through_run(studies, 
     assert main(["bodies", str(tmp_path / "parts" / "body0.txt")]) == 0
 
 
+def test_reading_a_study_places_no_body_and_each_run_of_it_refuses(studies, tmp_path, capsys):
+    """Where a centre of mass lies needs the mechanism solved at phi0: reading the
+    study (pipeline.study, below the solver) keeps what the reports say, and the
+    run, the API's scene and a tolerance analysis refuse it, in the same line."""
+    import pipeline
+    name, _, _, _, lS, US, m, J = MECH_B[0]
+    text = solidworks_report(name, lS, US, m, J).replace("Center of mass: ( millimeters )",
+                                                         "Center of mass: ( inches )")
+    study = cad_study(studies, tmp_path, reports={0: text})
+    read = load_study(study)
+    assert [b[0] for b in read.cad_bodies] == [b[0] for b in MECH_B]
+    said = "farther than the link is long (50 mm)"
+    with pytest.raises(StudyError, match=re.escape(said)):
+        pipeline.solve_scene(read)
+    assert main(["tolerance", str(study), "-o", str(tmp_path / "t.h5"), "-q"]) == 2
+    assert said in _one_line_error(capsys, "tolerance")
+    assert not (tmp_path / "t.h5").exists()
+
+
 def test_a_part_not_symmetric_about_the_plane_is_warned_of(studies, tmp_path, capsys,
                                                            caplog):
     name, _, _, _, lS, US, m, J = MECH_B[2]
