@@ -37,6 +37,8 @@ from .charts import chart_html, comparison_chart, importance_chart, tolerance_ch
 from .report_figures import _letters, _png, pareto_figure, search_figure
 from ..results.storage import attr_text, open_results
 from ..results.sweep_file import status_counts
+from ..study.reader import stored_study
+
 log = logging.getLogger("pipeline")
 
 
@@ -301,6 +303,9 @@ def build_html(path, top=20, drawings=None) -> str:
     step = _Progress()
     data = read_sweep(path)
     with open_results(path, "sweep") as f:
+        # the study stored in the file, read first: one that cannot be read stops the
+        # report in one line (the designs the page re-runs would each be lost to it)
+        stored_study(f.attrs, path)
         ana = read_analysis(f)
         a = {k: attr_text(f.attrs[k]) for k in f.attrs}
         counts = status_counts(f)
