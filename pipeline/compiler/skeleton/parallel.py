@@ -5,7 +5,7 @@ The text below the marker line is pasted into the generated module
 (``pipeline.compiler.generate``); the imports above it declare, for linters and
 readers, the names the generated module gives it."""
 
-from .header import (math, np, njit, JIT, JIT_ALLOC, OK, work, force_work, dwell_lanes,
+from .header import (math, np, njit, JIT_ALLOC, OK, work, force_work, dwell_lanes,
                      M_FAIL_PHI, M_FAIL_GROUP, SET_DWELL_W,
                      SET_WANT_LAW)
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
@@ -35,7 +35,10 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
     cph = np.empty(npos + 3)
     sph = np.empty(npos + 3)
     close = phi_close if math.isfinite(phi_close) else phis[0]
-    crank_table(phis, close, cph, sph)
+    for k in range(npos + 3):
+        phi = walk_angle(phis, k, close)
+        cph[k] = math.cos(phi)
+        sph[k] = math.sin(phi)
     # work arrays: once per call, never per candidate
     S = np.empty((N_LANE_ROWS, LANES))
     theta = np.empty((npos + 3, LANES * THETA_COLS))
@@ -69,18 +72,64 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
     filled = 0
     for i in range(lo, hi + 1):          # i == hi: the last, partial block
         if i < hi:
-            filled = candidate_into_lane(pars, i, filled, fast, phis, phi_close, close, tols,
-                                         settings, loads, S, theta, col, trail, qmax, qmin, wk,
-                                         fw, ww, corr, idx, status, metrics, pos, d1, d2,
-                                         margins, state)
+            code = -1
+            if fast:
+                # np.int64(...): no literal argument, one compiled version
+                code = setup_lane(pars, i, np.int64(filled), phis, close, tols, S, theta, pos,
+                                  d1, d2, margins, state)
+            if code == OK:
+                idx[filled] = i
+                filled += 1
+            elif code > 0:
+                # it fails at phis[0], the careful path's first step: that is its report
+                no_metrics(metrics[i])
+                metrics[i, M_FAIL_PHI] = phis[0]
+                metrics[i, M_FAIL_GROUP] = margins[N_GROUPS]
+                status[i] = code
+            else:
+                status[i] = settle(pars[i], np.int64(-1), phis, phi_close, tols, settings,
+                                   loads, col, trail, qmax, qmin, 0.0, np.int64(-1), 0.0,
+                                   0.0, wk, fw, ww, corr, metrics[i])
         if filled == LANES or (i == hi and filled > 0):
-            pad_block(S, theta, filled, npos)
+            for l in range(filled, LANES):     # pad a partial block with lane 0
+                for r in range(N_LANE_ROWS):
+                    S[r, l] = S[r, 0]
+                for q in range(THETA_COLS):
+                    theta[0, q * LANES + l] = theta[0, q * LANES]
+                for k in range(1, npos + 3):   # (the inputs' laws: every step)
+                    for q in range(THETA_IN, THETA_COLS):
+                        theta[k, q * LANES + l] = theta[k, q * LANES]
             block_walk(S, theta, cph, sph, phis, tols, settings)
             dwell_lanes(theta, npos, w, LANES, W5, err, start_k, full)
             for l in range(filled):
-                st = lane_metrics(pars, idx[l], l, phis, phi_close, tols, settings, loads, S,
-                                  theta, col, trail, qmax, qmin, err, start_k, full, want_law,
-                                  in_force_lanes, wk, fw, ww, corr, metrics)
+                # the lane vouches for its candidate unless it flagged itself
+                vouched = np.int64(1) if S[R_flag, l] == 0.0 else np.int64(0)
+                for k in range(npos):
+                    for q in range(THETA_COLS - 1):
+                        trail[k, q] = theta[k, (1 + q) * LANES + l]
+                if vouched == 0:
+                    # a lane that flagged itself: first the careful walk from two
+                    # positions before its first flag (the lane vouched for the
+                    # revolution up to there) to the failure it most likely meets,
+                    # at most to two positions past its last flag
+                    k0 = np.int64(S[R_first_flag, l]) - 2
+                    k1 = min(np.int64(S[R_last_flag, l]) + 3, npos)
+                    if k0 > 3 and k0 < npos:
+                        no_metrics(metrics[idx[l]])
+                        st = careful_tail(constants(pars[idx[l]]), phis, k0, k1, trail, tols,
+                                          metrics[idx[l]], wk, ww)
+                        if st != OK:
+                            status[idx[l]] = st
+                            continue
+                if want_law:     # the lane's rocker angles, for the law error
+                    for k in range(npos):
+                        col[k] = theta[k, l]
+                how = vouched
+                if in_force_lanes and vouched > 0:
+                    how = np.int64(LANE_METRICS)    # the force stage in the force lanes
+                st = settle(pars[idx[l]], how, phis, phi_close, tols, settings, loads, col,
+                            trail, qmax, qmin, err[l], start_k[l], full[l], S[R_margin, l],
+                            wk, fw, ww, corr, metrics[idx[l]])
                 if st != NEEDS_FORCES:
                     status[idx[l]] = st
                     continue
@@ -88,113 +137,16 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                 fidx[forced] = idx[l]
                 forced += 1
                 if forced == LANES:
-                    force_lanes_solved(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols,
-                                       settings, loads, col, trail, qmax, qmin, wk, fw, ww,
-                                       corr, status, metrics)
+                    # np.int64(...): no literal argument, one compiled version
+                    force_flush(fidx, np.int64(forced), FS, FT, RB, phis, tols, settings,
+                                loads, status, metrics)
+                    force_refused(pars, fidx, np.int64(forced), FS, FT, phis, phi_close, tols,
+                                  settings, loads, col, trail, qmax, qmin, wk, fw, ww, corr,
+                                  status, metrics)
                     forced = 0
             filled = 0
     if forced > 0:
-        force_lanes_solved(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols, settings,
-                           loads, col, trail, qmax, qmin, wk, fw, ww, corr, status, metrics)
-
-
-@njit(inline='always', **JIT)
-def crank_table(phis, close, cph, sph):
-    """The crank's cos/sin at the walk's positions (``walk_angle``: the grid, the
-    closing angle ``close`` and two past it) into cph, sph."""
-    for k in range(phis.shape[0] + 3):
-        phi = walk_angle(phis, k, close)
-        cph[k] = math.cos(phi)
-        sph[k] = math.sin(phi)
-
-
-@njit(inline='always', **JIT)
-def candidate_into_lane(pars, i, filled, fast, phis, phi_close, close, tols, settings, loads,
-                        S, theta, col, trail, qmax, qmin, wk, fw, ww, corr, idx, status,
-                        metrics, pos, d1, d2, margins, state):
-    """Candidate ``i`` into the next free lane (``filled``) where it assembles at
-    phis[0] and the lanes apply; else its report: a failure at phis[0] as the
-    careful path's first step gives it, or the careful path's metrics.  Returns
-    the lanes filled after it.  pos .. state: ``wk``'s arrays, unpacked once by
-    the caller (an unpacking here, per candidate, counts every array's references:
-    2 % of the sweep's time)."""
-    code = -1
-    if fast:
-        # np.int64(...): no literal argument, one compiled version
-        code = setup_lane(pars, i, np.int64(filled), phis, close, tols, S, theta, pos,
-                          d1, d2, margins, state)
-    if code == OK:
-        idx[filled] = i
-        return filled + 1
-    if code > 0:
-        # it fails at phis[0], the careful path's first step: that is its report
-        no_metrics(metrics[i])
-        metrics[i, M_FAIL_PHI] = phis[0]
-        metrics[i, M_FAIL_GROUP] = margins[N_GROUPS]
-        status[i] = code
-    else:
-        status[i] = settle(pars[i], np.int64(-1), phis, phi_close, tols, settings,
-                           loads, col, trail, qmax, qmin, 0.0, np.int64(-1), 0.0,
-                           0.0, wk, fw, ww, corr, metrics[i])
-    return filled
-
-
-@njit(inline='always', **JIT)
-def pad_block(S, theta, filled, npos):
-    """A partial block's free lanes filled with lane 0 (the walk runs every lane)."""
-    for l in range(filled, LANES):
-        for r in range(N_LANE_ROWS):
-            S[r, l] = S[r, 0]
-        for q in range(THETA_COLS):
-            theta[0, q * LANES + l] = theta[0, q * LANES]
-        for k in range(1, npos + 3):   # (the inputs' laws: every step)
-            for q in range(THETA_IN, THETA_COLS):
-                theta[k, q * LANES + l] = theta[k, q * LANES]
-
-
-@njit(inline='always', **JIT)
-def lane_metrics(pars, i, l, phis, phi_close, tols, settings, loads, S, theta, col, trail,
-                 qmax, qmin, err, start_k, full, want_law, in_force_lanes, wk, fw, ww, corr,
-                 metrics):
-    """Metrics of candidate ``i`` from lane ``l`` after the block's walk: its
-    class III solutions into ``trail``, the careful walk where the lane flagged
-    itself, then ``settle``.  Returns its status, or NEEDS_FORCES where the
-    force lanes are to run its force stage."""
-    npos = phis.shape[0]
-    # the lane vouches for its candidate unless it flagged itself
-    vouched = np.int64(1) if S[R_flag, l] == 0.0 else np.int64(0)
-    for k in range(npos):
-        for q in range(THETA_COLS - 1):
-            trail[k, q] = theta[k, (1 + q) * LANES + l]
-    if vouched == 0:
-        # a lane that flagged itself: first the careful walk from two
-        # positions before its first flag (the lane vouched for the
-        # revolution up to there) to the failure it most likely meets,
-        # at most to two positions past its last flag
-        k0 = np.int64(S[R_first_flag, l]) - 2
-        k1 = min(np.int64(S[R_last_flag, l]) + 3, npos)
-        if k0 > 3 and k0 < npos:
-            no_metrics(metrics[i])
-            st = careful_tail(constants(pars[i]), phis, k0, k1, trail, tols, metrics[i], wk, ww)
-            if st != OK:
-                return st
-    if want_law:     # the lane's rocker angles, for the law error
-        for k in range(npos):
-            col[k] = theta[k, l]
-    how = vouched
-    if in_force_lanes and vouched > 0:
-        how = np.int64(LANE_METRICS)    # the force stage in the force lanes
-    return settle(pars[i], how, phis, phi_close, tols, settings, loads, col, trail, qmax, qmin,
-                  err[l], start_k[l], full[l], S[R_margin, l], wk, fw, ww, corr, metrics[i])
-
-
-@njit(inline='always', **JIT)
-def force_lanes_solved(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols, settings, loads,
-                       col, trail, qmax, qmin, wk, fw, ww, corr, status, metrics):
-    """The force lanes' block of candidates fidx[:forced] solved together, and
-    those whose lane could not vouch for them on the scalar force stage."""
-    # np.int64(...): no literal argument, one compiled version
-    force_flush(fidx, np.int64(forced), FS, FT, RB, phis, tols, settings, loads, status,
-                metrics)
-    force_refused(pars, fidx, np.int64(forced), FS, FT, phis, phi_close, tols, settings,
-                  loads, col, trail, qmax, qmin, wk, fw, ww, corr, status, metrics)
+        force_flush(fidx, np.int64(forced), FS, FT, RB, phis, tols, settings, loads, status,
+                    metrics)
+        force_refused(pars, fidx, np.int64(forced), FS, FT, phis, phi_close, tols, settings,
+                      loads, col, trail, qmax, qmin, wk, fw, ww, corr, status, metrics)
