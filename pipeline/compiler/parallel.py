@@ -56,20 +56,28 @@ def _ranges(n, task_rows, jobs):
 
 def run_rows(kernel, pars, *args, n_jobs=None, task_rows=TASK_ROWS):
     """``kernel(pars, lo, hi, *args)`` over all rows of ``pars`` in ranges of
-    ``task_rows``, on ``n_jobs`` threads (all cores by default; 1: this thread).
+    ``task_rows``, on ``n_jobs`` threads (all cores by default; 1: this thread,
+    every row in one call).
     A batch of fewer than ``task_rows`` rows per thread (a search's generation)
     is shared out evenly, in whole lane blocks, so that every thread has some."""
     n = pars.shape[0]
     jobs = default_jobs() if n_jobs is None else int(n_jobs)
     if jobs < 1:
         raise ValueError(f"n_jobs must be at least 1, got {n_jobs}")
-    if jobs > 1 and n < jobs * task_rows:
+    if jobs == 1:
+        # one call: between two ranges the thread needs the GIL back, and while the
+        # main thread writes a chunk that waited up to the interpreter's switch
+        # interval (5 ms) each time (3-4 % of a 1-thread sweep)
+        if n:
+            kernel(pars, 0, n, *args)
+        return
+    if n < jobs * task_rows:
         share = -(-n // jobs)
         task_rows = max(LANE_WIDTH, -(-share // LANE_WIDTH) * LANE_WIDTH)
         ranges = _ranges(n, task_rows, 1)
     else:
         ranges = _ranges(n, task_rows, jobs)
-    if jobs == 1 or len(ranges) <= 1:
+    if len(ranges) <= 1:
         for lo, hi in ranges:
             kernel(pars, lo, hi, *args)
         return

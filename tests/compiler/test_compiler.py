@@ -859,8 +859,11 @@ def test_rows_run_in_ranges_on_threads():
     assert sizes[0] == 256 and all(s % LANE_WIDTH == 0 for s in sizes[:-1])
     assert sizes == sorted(sizes, reverse=True) and sizes[-2] == LANE_WIDTH
     calls.clear()
-    run_rows(kernel, np.zeros((1000, 1)), "z", n_jobs=1, task_rows=256)   # one thread
-    assert sorted(calls) == [(0, 256, "z"), (256, 512, "z"), (512, 768, "z"), (768, 1000, "z")]
+    run_rows(kernel, np.zeros((1000, 1)), "z", n_jobs=1, task_rows=256)   # one thread: one call
+    assert calls == [(0, 1000, "z")]
+    calls.clear()
+    run_rows(kernel, np.zeros((0, 1)), "z", n_jobs=1)
+    assert calls == []
     calls.clear()       # a search's generation: shared out in whole lane blocks
     run_rows(kernel, np.zeros((100, 1)), "y", n_jobs=2, task_rows=256)
     split = -(-50 // LANE_WIDTH) * LANE_WIDTH      # half the rows, up to a whole block
