@@ -114,7 +114,7 @@ def class3_lines(e, c, t):
 
 
 def class3_slider_lines(e, c, t):
-    """kernels.triad.class3_slider at a solution handed over (``slider_handed``,
+    """kernels.triad.class3_slider at a solution handed over (``handed`` of the slider variant,
     ``_accept`` without a move, ``_place``, first and second analogs), operation
     for operation; the guide's direction as ``rrp``'s (hoisted for a fixed one:
     the same bits)."""

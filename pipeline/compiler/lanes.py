@@ -80,7 +80,7 @@ def _triad_predictor_lines(e, T):
     if T["slider"]:
         out = [f"# {e.title()}: Newton on |P4 - P6| = L46 and n.(P5 - {T['P7']}) = offset, "
                "n the",
-               "# guide's unit normal (kernels.triad.slider_closure)"]
+               "# guide's unit normal (kernels.triad.slider_closure_unit)"]
         out += lane_direction(e, "gu", "guide_angle", 6) + ["gnx = -guy", "gny = gux"]
     else:
         out = [f"# {e.title()}: Newton on the closure |P4 - P6| = L46, |P5 - P7| = L57"]

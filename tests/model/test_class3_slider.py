@@ -431,11 +431,11 @@ def test_the_scene_runs_and_exports(studies, tmp_path):
 def test_class3_slider_lanes_agree_with_the_careful_path(studies):
     """The class III group with a block on a guide (the shipped sweep: forces,
     a return spring) in the lanes: Newton on |P4 - P6| = L46 and the block's
-    line, as the careful path's slider_closure on unit vectors; the lanes
+    line, as the careful path's slider_closure_unit; the lanes
     against the careful path alone (statuses, failing groups and angles, the
     metrics and the singularity margin to the lanes' figures), and the force
     lanes, from the lanes' solutions handed over (the careful kernel's
-    ``slider_handed``), against the scalar force stage: the same bits.  The
+    ``handed``, the slider variant), against the scalar force stage: the same bits.  The
     guide's offset and lead 4-6 widened so that some draws fold or cannot
     assemble somewhere in the revolution."""
     pb, pars = widened_draws(studies, "ov7_class3_slider_sweep",
