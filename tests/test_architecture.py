@@ -150,27 +150,29 @@ def test_layers_import_only_downward():
     assert not up, f"upward imports (a lower layer importing a higher one): {up}"
 
 
-def test_the_layer_check_finds_an_upward_import(tmp_path, monkeypatch):
-    """The check can fail: a planted import of the command line from one design's scene."""
+def _planted(tmp_path, monkeypatch, module, *imports):
+    """A copy of the package whose ``module`` (a path under pipeline/) gains a
+    function holding ``imports`` (lines), made the package the checks read."""
     import shutil
     pkg = tmp_path / "pipeline"
     shutil.copytree(PKG, pkg, ignore=shutil.ignore_patterns("__pycache__"))
-    f = pkg / "solve" / "scene.py"
-    f.write_text(f.read_text() + "\n\ndef _planted():\n    from ..cli import main\n")
+    f = pkg / module
+    f.write_text(f.read_text() + "\n\ndef _planted():\n"
+                 + "".join(f"    {line}\n" for line in imports))
     monkeypatch.setattr(__import__(__name__), "PKG", pkg)
+
+
+def test_the_layer_check_finds_an_upward_import(tmp_path, monkeypatch):
+    """The check can fail: a planted import of the command line from one design's scene."""
+    _planted(tmp_path, monkeypatch, "solve/scene.py", "from ..cli import main")
     assert ("pipeline.solve.scene", "pipeline.cli") in _upward(_modules())
 
 
 def test_the_layer_check_finds_a_lazy_import_of_the_solver_from_a_study(tmp_path, monkeypatch):
     """A study's reader that reached for the solver inside a function (as the CAD
     check once did, to place the bodies at phi0) is an upward import."""
-    import shutil
-    pkg = tmp_path / "pipeline"
-    shutil.copytree(PKG, pkg, ignore=shutil.ignore_patterns("__pycache__"))
-    f = pkg / "study" / "cad_report.py"
-    f.write_text(f.read_text() + "\n\ndef _planted():\n"
-                                 "    from ..solve.scene import solve_curves\n")
-    monkeypatch.setattr(__import__(__name__), "PKG", pkg)
+    _planted(tmp_path, monkeypatch, "study/cad_report.py",
+             "from ..solve.scene import solve_curves")
     assert ("pipeline.study.cad_report", "pipeline.solve.scene") in _upward(_modules())
 
 
@@ -199,13 +201,8 @@ def test_no_module_imports_an_old_path():
 
 def test_the_old_path_check_finds_one(tmp_path, monkeypatch):
     """The check can fail: planted imports of an old path and of a re-export."""
-    import shutil
-    pkg = tmp_path / "pipeline"
-    shutil.copytree(PKG, pkg, ignore=shutil.ignore_patterns("__pycache__"))
-    f = pkg / "views" / "tables.py"
-    f.write_text(f.read_text() + "\n\ndef _planted():\n    from ..storage import put\n"
-                 "    from ..study import load_study\n")
-    monkeypatch.setattr(__import__(__name__), "PKG", pkg)
+    _planted(tmp_path, monkeypatch, "views/tables.py", "from ..storage import put",
+             "from ..study import load_study")
     found = _old_path_imports(_modules())
     assert ("pipeline.views.tables", "pipeline.storage") in found
     assert ("pipeline.views.tables", "pipeline.study") in found
@@ -361,13 +358,8 @@ def test_no_module_imports_a_name_from_a_module_that_does_not_define_it():
 def test_the_reexport_check_finds_one(tmp_path, monkeypatch):
     """The check can fail: a planted import of ResultsError (base.errors') through
     results.storage, and of a function's name through a module that imports it."""
-    import shutil
-    pkg = tmp_path / "pipeline"
-    shutil.copytree(PKG, pkg, ignore=shutil.ignore_patterns("__pycache__"))
-    f = pkg / "views" / "tables.py"
-    f.write_text(f.read_text() + "\n\ndef _planted():\n"
-                 "    from ..results.storage import ResultsError, open_results\n")
-    monkeypatch.setattr(__import__(__name__), "PKG", pkg)
+    _planted(tmp_path, monkeypatch, "views/tables.py",
+             "from ..results.storage import ResultsError, open_results")
     found = {(m, base, name) for m, _, base, name in _reexport_uses(_modules())}
     assert ("pipeline.views.tables", "pipeline.results.storage", "ResultsError") in found
     assert ("pipeline.views.tables", "pipeline.results.storage", "open_results") not in found
