@@ -17,6 +17,7 @@ from pipeline.cli import main
 from pipeline.kernels import config as kc
 from pipeline.solve.scene import run_scene
 from pipeline.study.reader import load_study, parse_study
+from support.friction_sections import TAKEUP_FRICTION_EDGES
 
 ENERGY_REL = 1e-9        # issue 52: the energy balance, relative
 CLOSED_FORM_REL = 1e-10  # issue 52: the slider-crank's driving force, the four-bar's Newton
@@ -150,16 +151,6 @@ def test_energy_balance_of_mechanism_b_at_every_position(mech_b):
     assert mean_power == pytest.approx(fr.mean_loss(), rel=1e-9)
 
 
-TAKEUP_FRICTION = """[mechanism.friction]
-revolute = 0.06
-slide = 0.12
-pin_diameter = 6.0
-pin_length = 8.0
-block_length = 12.0
-blocks = { "needle bar" = 30.0 }
-"""
-
-
 def _sliding_analogs(plan, curves):
     """The take-up's slides' sliding analogs from the kinematics: the needle bar's
     S along the vertical, the block's S along P5->P4 against the coulisse's
@@ -183,7 +174,7 @@ def test_energy_balance_of_the_takeup_with_both_slides(studies):
     the kinematics; its slides' friction is f max(|N|, 2000 |C| / l)."""
     base = (studies / "takeup_dynamics.toml").read_text()
     base = base[:base.index("[dynamics]")]
-    res = run_scene(parse_study(_with(base, TAKEUP_FRICTION), "takeup.toml"))
+    res = run_scene(parse_study(_with(base, TAKEUP_FRICTION_EDGES), "takeup.toml"))
     free = run_scene(parse_study(base, "takeup.toml"))
     c = res.dense
     sl = _sliding_analogs(res.plan, c)

@@ -27,15 +27,8 @@ from pipeline.solve import crank_motion as dy
 from pipeline.solve.flywheel import _Orbit, size_flywheel
 from pipeline.solve.motion_forces import case_forces
 from pipeline.study.reader import parse_study
+from support.friction_sections import TAKEUP_FRICTION_EDGES
 
-FRICTION = """[mechanism.friction]
-revolute = 0.06
-slide = 0.12
-pin_diameter = 6.0
-pin_length = 8.0
-block_length = 12.0
-blocks = { "needle bar" = 30.0 }
-"""
 ENERGY_REL = 1e-6       # issue 52: the steady speed and flywheel against the energy balance
 IMPLICIT_REL = 1e-9     # M_bal with friction against M1 - b omega1 along the motion
 
@@ -52,7 +45,7 @@ def _takeup(studies, section=None):
 @pytest.fixture(scope="module")
 def runs(studies):
     out = {}
-    for key, section in (("without", None), ("with", FRICTION)):
+    for key, section in (("without", None), ("with", TAKEUP_FRICTION_EDGES)):
         study, plan, case = _takeup(studies, section)
         case = dy.with_changes(case, t_end=2.0)
         out[key] = (study, plan, case, dy.integrate(plan, study.mechanism, case))
@@ -89,7 +82,7 @@ def test_steady_speed_and_flywheel_against_the_energy_balance(studies):
     falls by the friction's work per revolution (Simpson on the orbit's own
     samples, as its RK4 integrates them) over 2 pi b."""
     plain, plan0, case0 = _takeup(studies)
-    fric, plan1, case1 = _takeup(studies, FRICTION)
+    fric, plan1, case1 = _takeup(studies, TAKEUP_FRICTION_EDGES)
     o0 = _Orbit(plan0, plain.mechanism, case0)
     o1 = _Orbit(plan1, fric.mechanism, case1)
     assert (o1.friction >= 0).all() and o1.friction.max() > 0

@@ -10,15 +10,7 @@ import pytest
 
 from pipeline.cli import main
 from pipeline.views.tables import FRICTION_JOINT_COLUMNS, FRICTION_SLIDE_COLUMNS
-
-TAKEUP_FRICTION = """[mechanism.friction]
-revolute = 0.06
-slide = 0.12
-pin_diameter = 6.0
-pin_length = 8.0
-block_length = 12.0
-"""
-
+from support.friction_sections import TAKEUP_FRICTION
 
 @pytest.fixture(scope="module")
 def runs(studies, tmp_path_factory):
