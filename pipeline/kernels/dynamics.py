@@ -189,6 +189,14 @@ def eps_at(gravity, body_com, body_turn, body_mass_off, load_body, load_point, p
 
 
 @njit(inline='always', **JIT)
+def step_counts(out_t, tail_t, n_sub):
+    """(the RK4 steps of a run, the first step the fine tail records) for
+    samples ``out_t`` every ``n_sub`` steps and a tail of ``tail_t``'s length."""
+    n_steps = (out_t.shape[0] - 1) * n_sub
+    return n_steps, n_steps - tail_t.shape[0] + 1
+
+
+@njit(inline='always', **JIT)
 def record(n, n_sub, tail0, h, p, w, e, out_t, out_phi, out_omega, out_eps, tail_t, tail_phi,
            tail_omega, tail_eps):
     """The state (phi1, omega1, eps1) after step n (t = n h) into the samples
@@ -229,10 +237,7 @@ def rk4(advance, start, K, sizes, masses, par, tols, const, tab_phi, h_phi, tab_
     pos, d1, d2, margins, state, _ = work(n_points, n_groups, n_triads)
     last = np.empty(1)
     loads_k = np.empty((masses[4].shape[0], 3))       # (load_body: the loads)
-    n_samples = out_t.shape[0]
-    n_steps = (n_samples - 1) * n_sub
-    n_tail = tail_t.shape[0]
-    tail0 = n_steps - n_tail + 1
+    n_steps, tail0 = step_counts(out_t, tail_t, n_sub)
     begin(start, K, phi0, state, last)
     p = phi0
     w = omega0

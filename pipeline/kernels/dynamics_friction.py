@@ -36,7 +36,7 @@ from numba import njit, types
 from .config import FRICTION_LOCK, JIT, JIT_ALLOC, OK, SINGULAR
 from .continuation import work
 from .dynamics import (_DRIVE, _F1, _I1, _I2, MASSES, OMEGA_STOP, SIZES, TOO_FAST, acceleration,
-                       begin, channel, lagrange_terms, record)
+                       begin, channel, lagrange_terms, record, step_counts)
 from .walk import ADVANCE, START
 from .friction import friction_forces, relative_speed_slopes
 
@@ -275,10 +275,7 @@ def rk4_friction(advance, start, K, sizes, masses, par, tols, const, tab_phi, h_
     speed1 = np.empty((2, nj + ns))     # ... at a trial's end
     speed_sw = np.empty((2, nj + ns))   # ... at the end of the piece past a switch
     end = np.empty(2)
-    n_samples = out_t.shape[0]
-    n_steps = (n_samples - 1) * n_sub
-    n_tail = tail_t.shape[0]
-    tail0 = n_steps - n_tail + 1
+    n_steps, tail0 = step_counts(out_t, tail_t, n_sub)
     begin(start, K, phi0, state, last)
     p = phi0
     w = omega0
