@@ -172,6 +172,12 @@ class Plan:
         return len(self.input_group)
 
     @property
+    def has_class3(self) -> bool:
+        """Whether a class III group (with a lead or a slider) is in the plan: its
+        singularity margin is then a metric and a constraint."""
+        return bool(np.isin(self.codes, kc.CLASS3_GROUPS).any())
+
+    @property
     def crank_pivot(self):
         """Point index of the crank's pivot (the crank is the plan's first group)."""
         return int(self.gidx[0, 0])

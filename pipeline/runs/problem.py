@@ -40,7 +40,7 @@ class SweepProblem:
     @property
     def has_margin(self) -> bool:
         """Whether the plan has a class III group (its singularity margin is a constraint)."""
-        return bool(np.isin(self.plan.codes, kc.CLASS3_GROUPS).any())
+        return self.plan.has_class3
 
     @property
     def kernels(self):
