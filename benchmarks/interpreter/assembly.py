@@ -27,14 +27,22 @@ import math
 import numpy as np
 from numba import njit
 
-from pipeline.kernels.config import (JIT_ALLOC as JIT, OK, G_CRANK, G_RRR, G_RRP, G_RPR, G_CLASS3, G_ATTACH,
+from pipeline.group_types import G_ATTACH, G_CRANK
+from pipeline.group_types.class3 import G_CLASS3
+from pipeline.group_types.class3.kernels import _wrap, class3, ternary_angle
+from pipeline.group_types.rpr import G_RPR
+from pipeline.group_types.rpr.kernels import rpr
+from pipeline.group_types.rrp import G_RRP
+from pipeline.group_types.rrp.kernels import rrp
+from pipeline.group_types.rrr import G_RRR
+from pipeline.group_types.rrr.kernels import rrr
+from pipeline.kernels.config import (JIT_ALLOC as JIT, OK,
                      S_A, S_B, S_ITERS, S_MARGIN, N_STATE,
                      T_SINGULAR, T_ASSEMBLY_SLACK, T_SUBSTEP, T_CLOSE, T_MIN_STEP,
                      BRANCH_JUMP, NEWTON_MAXITER, T_STEP_CHANGE, T_FIRST_STEP, S_SLOPE_A,
                      S_SLOPE_B, S_HAS_SLOPE, S_A_OLD, S_B_OLD, S_SIGN_OLD, S_DET_SIGN)
 from pipeline.kernels.geometry import angle_analogs
-from pipeline.kernels.groups import attach, crank, rpr, rrp, rrr
-from pipeline.kernels.triad import class3, ternary_angle, _wrap
+from pipeline.kernels.groups import attach, crank
 
 
 @njit(**JIT)

@@ -24,7 +24,8 @@ import numpy as np
 from numba import njit, prange
 
 from .assembly import advance, closes, has_newton, init_state, kinematic_work, start_angle
-from pipeline.kernels.config import BRANCH_JUMP, G_CLASS3, JIT_ALLOC as JIT, OK, S_ITERS
+from pipeline.group_types.class3 import G_CLASS3
+from pipeline.kernels.config import BRANCH_JUMP, JIT_ALLOC as JIT, OK, S_ITERS
 from pipeline.kernels.forces import force_work, kinetostatics
 from pipeline.kernels.metrics import dwell_error, relative_angle
 

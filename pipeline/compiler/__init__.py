@@ -50,13 +50,14 @@ def library_digest(lanes=True) -> str:
     if lanes not in _DIGEST:
         here = Path(__file__).resolve().parent
         files = (sorted(here.glob("*.py")) + sorted((here / "skeleton").glob("*.py"))
-                 + sorted((here.parent / "kernels").glob("*.py")))
+                 + sorted((here.parent / "kernels").glob("*.py"))
+                 + sorted((here.parent / "group_types").glob("**/*.py")))
         h = hashlib.sha256()
         from ..kernels.config import FASTMATH, LANE_FASTMATH
         for flags in (FASTMATH, LANE_FASTMATH) if lanes else (FASTMATH,):    # the flags too
             h.update(repr(sorted(flags) if flags else "strict").encode())
         for f in files:
-            h.update(f.name.encode())
+            h.update(str(f.relative_to(here.parent)).encode())
             h.update(f.read_bytes())
         _DIGEST[lanes] = h.hexdigest()[:16]
     return _DIGEST[lanes]

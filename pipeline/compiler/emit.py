@@ -10,17 +10,29 @@ An emitter writes the lines of its group for the generated kernels:
   formulas in ``pipeline.kernels`` with constant point indices;
 * ``lanes`` (where the group has a fast form): the lock-step lane path of the
   sweep's positions stage, written out in full: division and square root
-  only, no library call.
+  only, no library call;
+* ``force_lines`` (where ``force_lanes`` says it has them): its lines of the
+  force lanes (``pipeline.compiler.lane_forces``).
 
-Adding a group type means adding one emitter here and its tests.
+Here: the base and the emitters of the mechanism's own elements (the crank, an
+attached point, an input); each structural group type's emitters are in its
+folder (``pipeline.group_types``), found by ``emitter_classes``.
 """
 
 from __future__ import annotations
 
-from ..kernels import config as kc
+from functools import cache
+
+from .. import group_types
+from ..group_types import G_ATTACH, G_CRANK, G_INPUT
 from ..kernels import inputs as ik
-from .lane_geometry import hoisted_cos_sin, lane_direction, lane_meet
+from .lane_force_groups import attach_lines
+from .lane_geometry import hoisted_cos_sin
 from .names import NO_POINT, lane, text, wrap_line
+
+
+SAME_BITS = "the same bits"
+TO_ROUNDING = "to rounding"
 
 
 class Emitter:
@@ -29,6 +41,12 @@ class Emitter:
     watched = False         # can fail between positions: its margin is watched
     continued = False       # solved by Newton: keeps a row of the continuation state
                             # (``triad_row``: start, predictor, step control, closing)
+    takes_law = False       # an input: the lane walk's table holds its law (``law_steps``)
+    # its lines of the force lanes (``force_lines``): SAME_BITS, the careful kernel's
+    # operations; TO_ROUNDING, its lane form's; None: the force lanes do not know it
+    force_lanes = None
+    guide_col = None        # gidx column of a guide link: on a guide of fixed direction
+                            # (none there) its TO_ROUNDING lines give the same bits
 
     def __init__(self, plan, names, g, triad_row=-1):
         self.plan = plan
@@ -72,6 +90,13 @@ class Emitter:
     def lanes(self):
         raise NotImplementedError
 
+    def force_lines(self, c, t):
+        """Its lines of the force lanes (``pipeline.compiler.lane_forces``): positions,
+        velocity and acceleration analogs of its points on the lane's locals
+        (P3_0, V3_0, A3_0), a constant by ``c(name)``, a column of the table
+        handed over by ``t(col)``."""
+        raise NotImplementedError
+
     def module_constants(self):
         """Lines of module-level constants the group's kernels read (none by default)."""
         return []
@@ -103,7 +128,8 @@ class Emitter:
 
 
 class CrankEmitter(Emitter):
-    code = kc.G_CRANK
+    code = G_CRANK
+    force_lanes = SAME_BITS
     fast = True
 
     def careful(self):
@@ -127,111 +153,7 @@ class CrankEmitter(Emitter):
                 f"{t}y = {o}y + {L} * es"]
 
 
-class RRREmitter(Emitter):
-    watched = True
-    code = kc.G_RRR
-    fast = True
-
-    def careful(self):
-        return [f"# {self.title()}: {self.pname(2)} at L_AB from {self.pname(0)} and L_CB "
-                f"from {self.pname(1)}, assembly mode W (circle intersection)",
-                f"st, m = rrr(pos, d1, d2, {self.p(0)}, {self.p(1)}, {self.p(2)}, "
-                f"{self.k('L_AB')}, {self.k('L_CB')}, {self.k('W')}, order, sing, slack)"]
-
-    def derived(self):
-        # the lane form divides by nothing that is fixed per candidate
-        lab, lcb = self.k("L_AB"), self.k("L_CB")
-        return [(self.k("inv_cb"), f"1.0 / {lcb}"),
-                (self.k("inv_ab_cb"), f"1.0 / ({lab} * {lcb})"),
-                (self.k("k"), f"{lcb} * {lcb} - {lab} * {lab}")]
-
-    def lanes(self):
-        A, C, B = (self.xy(j) for j in range(3))
-        lab, lcb, w = (lane(self.k(x)) for x in ("L_AB", "L_CB", "W"))
-        inv_cb, inv_ab_cb, kk = (lane(self.k(x)) for x in ("inv_cb", "inv_ab_cb", "k"))
-        return [
-            f"# {self.title()}: {B} from {A} and {C}, cosine law without acos:",
-            "# C->B = L_CB (cos U r/|r| - W sin U n(r)/|r|), r = A - C, cos U = arg",
-            f"rx = {A}x - {C}x",
-            f"ry = {A}y - {C}y",
-            "r2 = rx * rx + ry * ry",
-            "ir = 1.0 / math.sqrt(r2)",
-            f"cu = (r2 + {kk}) * (0.5 * ir * {inv_cb})",
-            "q = 1.0 - cu * cu",
-            "bad = bad | (q < 0.0) | (r2 <= 0.0)",
-            "su = math.sqrt(max(q, 0.0))",
-            f"{B}x = {C}x + {lcb} * ir * (cu * rx + {w} * su * ry)",
-            f"{B}y = {C}y + {lcb} * ir * (cu * ry - {w} * su * rx)",
-            f"# margin |sin| of the angle at {B}",
-            f"m = abs(({B}x - {A}x) * ({B}y - {C}y) - ({B}y - {A}y) * ({B}x - {C}x)) "
-            f"* {inv_ab_cb}",
-            "low = low | (not (m >= margin_safe))",
-        ]
-
-    def transmission_items(self):
-        a, c, b = self.ix[:3]
-        return f"the angle at {self.pname(2)} between the links", [("dyad", (a, b, c))]
-
-
-class RRPEmitter(Emitter):
-    watched = True
-    code = kc.G_RRP
-    fast = True
-
-    def derived(self):
-        # the lane form's guide direction: the hoisted cos/sin of its angle
-        return hoisted_cos_sin(self, "guide_angle")
-
-    def lanes(self):
-        # kernels.groups.rrp's lines on the guide's unit vector (a guide of fixed
-        # direction: its operations, the same bits)
-        A, G, B = self.xy(0), self.xy(1), self.xy(2)
-        lab, w = lane(self.k("L_AB")), lane(self.k("W"))
-        return ([f"# {self.title()}: slider {B} on the guide through {G}, link from {A}"]
-                + lane_direction(self, "u1", "guide_angle", 3)
-                + ["nx = -u1y", "ny = u1x",
-                   f"dx = {A}x - {G}x", f"dy = {A}y - {G}y",
-                   "p = u1x * dx + u1y * dy", "h = nx * dx + ny * dy",
-                   f"q2 = {lab} * {lab} - h * h",
-                   "bad = bad | (q2 < 0.0)",
-                   "q = math.sqrt(max(q2, 0.0))",
-                   f"s = p + {w} * q",
-                   f"{B}x = {G}x + s * u1x", f"{B}y = {G}y + s * u1y",
-                   "# margin |cos| of the angle between the link and the guide",
-                   f"m = q / {lab}",
-                   "low = low | (not (m >= margin_safe))"])
-
-    def careful(self):
-        ga = self.p(3) if self.ix[3] >= 0 else NO_POINT
-        gb = self.p(4) if self.ix[4] >= 0 else NO_POINT
-        return [f"# {self.title()}: slider {self.pname(2)} on the guide through "
-                f"{self.pname(1)}, link from {self.pname(0)}",
-                f"st, m = rrp(pos, d1, d2, {self.p(0)}, {self.p(1)}, {self.p(2)}, {ga}, {gb}, "
-                f"{self.k('L_AB')}, {self.k('guide_angle')}, {self.k('W')}, order, sing, slack)"]
-
-    def transmission_items(self):
-        return (f"link {self.pname(0)}-{self.pname(2)} against the guide's normal",
-                [("lines", (self.ix[0], self.ix[2], "0.0", self.ix[3], self.ix[4],
-                            f"{self.k('guide_angle')} + 0.5 * math.pi"))])
-
-
-class RPREmitter(Emitter):
-    watched = True
-    code = kc.G_RPR
-
-    def careful(self):
-        return [f"# {self.title()}: coulisse about {self.pname(1)} through the block at "
-                f"{self.pname(0)}; guide end {self.pname(2)}",
-                f"st, m = rpr(pos, d1, d2, {self.p(0)}, {self.p(1)}, {self.p(2)}, "
-                f"{self.k('offset')}, {self.k('guide_length')}, {self.k('W')}, order, sing, slack)"]
-
-    def transmission_items(self):
-        c, a, e = self.ix[1], self.ix[0], self.ix[2]
-        return (f"{self.pname(1)}->{self.pname(0)} against the guide's normal",
-                [("lines", (c, a, "0.0", c, e, "0.5 * math.pi"))])
-
-
-def _guide_link(e, j):
+def guide_link(e, j):
     """Point index constants of a guide link's ends at gidx columns j, j + 1
     (NO_POINT for a guide of fixed direction)."""
     if e.ix[j] < 0:
@@ -239,85 +161,16 @@ def _guide_link(e, j):
     return e.p(j), e.p(j + 1)
 
 
-def _guide_words(e, j, link_j, angle_key):
+def guide_words(e, j, link_j, angle_key):
     if e.ix[link_j] < 0:
         return f"through {e.pname(j)} at the absolute {angle_key}"
     return (f"through {e.pname(j)} along {e.pname(link_j)}->{e.pname(link_j + 1)} "
             f"+ {angle_key}")
 
 
-class PRPEmitter(Emitter):
-    watched = True
-    code = kc.G_PRP
-    fast = True
-
-    def derived(self):
-        # the lane form turns unit vectors by the guides' angles: their cos/sin, hoisted
-        return hoisted_cos_sin(self, "guide1_angle", "guide2_angle")
-
-    def lanes(self):
-        return ([f"# {self.title()}: {self.xy(6)} where the two guide lines meet"]
-                + lane_direction(self, "u1", "guide1_angle", 1)
-                + lane_direction(self, "u2", "guide2_angle", 4)
-                + lane_meet(self.xy(0), lane(self.k("guide1_offset")), self.xy(3),
-                             lane(self.k("guide2_offset")), self.xy(6)))
-
-    def careful(self):
-        a1, b1 = _guide_link(self, 1)
-        a2, b2 = _guide_link(self, 4)
-        k = self.k
-        return [f"# {self.title()}: {self.pname(6)} where the guide lines of two blocks meet",
-                "# (linear: B from a 2x2 system);",
-                f"# guide 1 {_guide_words(self, 0, 1, 'guide1_angle')},",
-                f"# guide 2 {_guide_words(self, 3, 4, 'guide2_angle')}",
-                f"st, m = prp(pos, d1, d2, {self.p(0)}, {a1}, {b1}, {self.p(3)}, {a2}, {b2}, "
-                f"{self.p(6)}, {k('guide1_angle')}, {k('guide1_offset')}, {k('guide2_angle')}, "
-                f"{k('guide2_offset')}, order, sing)"]
-
-    def transmission_items(self):
-        return "the angle between the two guides", [
-            ("lines", (self.ix[1], self.ix[2], self.k("guide1_angle"), self.ix[4], self.ix[5],
-                       self.k("guide2_angle")))]
-
-
-class RPPEmitter(Emitter):
-    watched = True
-    code = kc.G_RPP
-    fast = True
-
-    def derived(self):
-        return hoisted_cos_sin(self, "guide_angle", "slot_angle")
-
-    def lanes(self):
-        # kernels.groups.rpp: the guide's line through G at guide_offset, and the
-        # slot's line through A (the guide's direction turned by slot_angle) at
-        # -slot_offset
-        cs, ss = lane(f"{self.k('slot_angle')}_cos"), lane(f"{self.k('slot_angle')}_sin")
-        return ([f"# {self.title()}: {self.xy(4)} where the guide and the slot through "
-                 f"{self.xy(0)} meet"]
-                + lane_direction(self, "u1", "guide_angle", 2)
-                + [f"u2x = {cs} * u1x - {ss} * u1y", f"u2y = {ss} * u1x + {cs} * u1y"]
-                + lane_meet(self.xy(1), lane(self.k("guide_offset")), self.xy(0),
-                             f"-{lane(self.k('slot_offset'))}", self.xy(4)))
-
-    def careful(self):
-        ga, gb = _guide_link(self, 2)
-        k = self.k
-        return [f"# {self.title()}: yoke point {self.pname(4)} on the guide",
-                f"# {_guide_words(self, 1, 2, 'guide_angle')}, its slot through the block "
-                f"at {self.pname(0)}",
-                f"st, m = rpp(pos, d1, d2, {self.p(0)}, {self.p(1)}, {ga}, {gb}, {self.p(4)}, "
-                f"{k('guide_angle')}, {k('guide_offset')}, {k('slot_angle')}, "
-                f"{k('slot_offset')}, order, sing)"]
-
-    def transmission_items(self):
-        ga, gb, g = self.ix[2], self.ix[3], self.k("guide_angle")
-        return "the angle between the slot and the guide", [
-            ("lines", (ga, gb, g, ga, gb, f"{g} + {self.k('slot_angle')}"))]
-
-
 class AttachEmitter(Emitter):
-    code = kc.G_ATTACH
+    code = G_ATTACH
+    force_lanes = SAME_BITS
 
     @property
     def fast(self):
@@ -370,6 +223,9 @@ class AttachEmitter(Emitter):
     def derived(self):
         return hoisted_cos_sin(self, "angle")
 
+    def force_lines(self, c, t):
+        return attach_lines(self, c)
+
     def lanes(self):
         base, a, b, out = (self.xy(j) for j in (0, 1, 2, 3))
         c, s, L = lane(f"{self.k('angle')}_cos"), lane(f"{self.k('angle')}_sin"), \
@@ -387,7 +243,9 @@ class InputEmitter(Emitter):
     """A rotary or slider input moved by its law of the crank angle phi
     (``pipeline.kernels.inputs``); a table law's spline is a constant of the
     module."""
-    code = kc.G_INPUT
+    code = G_INPUT
+    force_lanes = SAME_BITS
+    takes_law = True
 
     def __init__(self, plan, names, g, triad_row=-1):
         super().__init__(plan, names, g, triad_row)
@@ -478,82 +336,14 @@ class InputEmitter(Emitter):
                 f"{tip}y = {piv}y + theta[k, {c} * LANES + l] * {lane(a + '_sin')}"]
 
 
-class ClassIIIEmitter(Emitter):
-    watched = True
-    continued = True
-    code = kc.G_CLASS3
-    fast = True
-
-    def derived(self):
-        u = self.k("U435")
-        return [(u, f"ternary_angle({self.k('L34')}, {self.k('L45')}, {self.k('L35')}, "
-                    f"{self.k('orientation')})"),
-                (f"{u}_cos", f"math.cos({u})"), (f"{u}_sin", f"math.sin({u})")]
-
-    def careful(self):
-        i2, i6, i7, i3, i4, i5 = (self.p(j) for j in range(6))
-        k = self.k
-        return [f"# {self.title()}: ternary link {self.pname(3)}-{self.pname(4)}-"
-                f"{self.pname(5)} on leads from {self.pname(0)}, {self.pname(1)}, "
-                f"{self.pname(2)}; Newton on the closure from the continuation state row "
-                f"{self.triad_row}",
-                f"st, m = class3(pos, d1, d2, {i2}, {i6}, {i7}, {i3}, {i4}, {i5}, {k('L23')}, "
-                f"{k('L34')}, {k('U435')}, {k('L35')}, {k('L46')}, {k('L57')}, state, "
-                f"{_row(self)}, order, tols, {k('U435')}_cos, {k('U435')}_sin)"]
-
-    def transmission_items(self):
-        i2, i6, i7, i3, i4, i5 = self.ix[:6]
-        n = self.pname
-        return (f"leads {n(4)}-{n(1)} and {n(5)}-{n(2)}, each against the line to the meet of "
-                "the other two leads",
-                [("lead", (i4, i6, i2, i3, i5, i7)), ("lead", (i5, i7, i2, i3, i4, i6))])
-
-
-def _row(e):
-    """A class III group's row of the continuation state as its kernel's
-    argument: np.int64, not a literal (numba would compile the kernel once per
-    row: once for each class III group of a mechanism, and again for a
-    mechanism whose group has another row than the one the library warm-up
-    compiled, pipeline.compiler.warmup)."""
-    return f"np.int64({e.triad_row})"
-
-
-class ClassIIISliderEmitter(Emitter):
-    """The class III group with a block on a guide in place of lead 5-7: the
-    continuation state, the watch and the lane form (``lanes._triad_lines``)
-    like ``ClassIIIEmitter``'s."""
-    watched = True
-    continued = True
-    code = kc.G_CLASS3_SLIDER
-    fast = True
-
-    def derived(self):
-        u = self.k("U435")
-        return [(u, f"ternary_angle({self.k('L34')}, {self.k('L45')}, {self.k('L35')}, "
-                    f"{self.k('orientation')})"),
-                (f"{u}_cos", f"math.cos({u})"), (f"{u}_sin", f"math.sin({u})")] \
-            + hoisted_cos_sin(self, "guide_angle")    # (the lane form's guide direction)
-
-    def careful(self):
-        i2, i6, i7, i3, i4, i5 = (self.p(j) for j in range(6))
-        ga, gb = _guide_link(self, 6)
-        k = self.k
-        return [f"# {self.title()}: ternary link {self.pname(3)}-{self.pname(4)}-"
-                f"{self.pname(5)}",
-                f"# on leads from {self.pname(0)}, {self.pname(1)} and a block at {self.pname(5)} "
-                f"on the guide {_guide_words(self, 2, 6, 'guide_angle')}",
-                "# (P5 at guide_offset from it); Newton on |P4 - P6| = L46, n.(P5 - G) = offset",
-                f"# from the continuation state row {self.triad_row}",
-                wrap_line(f"st, m = class3_slider(pos, d1, d2, {i2}, {i6}, {i7}, {i3}, {i4}, "
-                           f"{i5}, {ga}, {gb}, {k('L23')}, {k('L34')}, {k('U435')}, "
-                           f"{k('L35')}, {k('L46')}, {k('guide_angle')}, {k('guide_offset')}, "
-                           f"state, {_row(self)}, order, tols, {k('U435')}_cos, "
-                           f"{k('U435')}_sin)")]
-
-
-EMITTERS = {e.code: e for e in (CrankEmitter, RRREmitter, RRPEmitter, RPREmitter,
-                                PRPEmitter, RPPEmitter, AttachEmitter, ClassIIIEmitter,
-                                InputEmitter, ClassIIISliderEmitter)}
+@cache
+def emitter_classes() -> dict:
+    """Every plan code -> its emitter class: the mechanism's own elements' and
+    each group-type folder's (``emitter.EMITTERS``)."""
+    out = {e.code: e for e in (CrankEmitter, AttachEmitter, InputEmitter)}
+    for mod in group_types.part("emitter"):
+        out.update((e.code, e) for e in mod.EMITTERS)
+    return out
 
 
 def emitters_for(plan, names):
@@ -561,7 +351,7 @@ def emitters_for(plan, names):
     continuation gets the next row of the continuation state."""
     out, row = [], 0
     for g, code in enumerate(plan.codes):
-        cls = EMITTERS[int(code)]
+        cls = emitter_classes()[int(code)]
         if cls.continued:
             out.append(cls(plan, names, g, row))
             row += 1

@@ -28,6 +28,7 @@ import re
 
 import numpy as np
 
+from .. import group_types
 from .emit import constants_of, emitters_for
 from .force_equations import force_kernel
 from .lane_forces import lane_force_kernel
@@ -41,6 +42,13 @@ def _array(name, a, dtype):
     body = repr(a.tolist()) if a.size else "[]"
     shape = a.shape
     return f"{name} = np.array({body}, dtype=np.{dtype}).reshape({shape})"
+
+
+def group_type_imports() -> list[str]:
+    """The generated module's imports of the group types' library kernels: each
+    folder's ``kernels.__all__`` (``pipeline.group_types``)."""
+    return [f"from {mod.__name__} import {', '.join(mod.__all__)}"
+            for mod in group_types.part("kernels")]
 
 
 def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=None) -> str:
@@ -62,6 +70,7 @@ def generate(plan, rocker=None, digest="", lanes_width=8, watch=True, shared=Non
     # the study's names are data: in comments only, as ascii() writes them
     # (pipeline.compiler.names); every identifier comes from an index
     out = [part("header").format(n_groups=plan.n_kinematic, digest=digest)]
+    out += group_type_imports()
     out += _group_list(plan, ems)
     out += _plan_constants(plan, n, n_triads)
     out += _force_constants(plan, ems, watch)
@@ -110,7 +119,7 @@ def _plan_constants(plan, n, n_triads):
            f"GRAVITY = {literal(plan.gravity)}",
            ""]
     # np.int64: numba types a plain int global as a literal, and every call of a
-    # library kernel (rrr, class3, ...) with other literal indices compiled a
+    # library kernel (a group type's) with other literal indices compiled a
     # version of that kernel of its own, for each group and each mechanism; as
     # int64 values one compiled version serves them all (from numba's cache)
     out.append("# point indices in pos/d1/d2")

@@ -9,19 +9,19 @@ the working point's acceleration, and |u x w|, |u . w| of every transmission
 item (``Emitter.transmission_items``); the lane loop is the innermost loop,
 straight-line code, so LLVM turns it into packed vector instructions.
 
-Two kinds of lines (``BIT_FOR_BIT``, ``TO_ROUNDING``):
+Two kinds of lines (each emitter's ``force_lanes``: ``SAME_BITS``, ``TO_ROUNDING``):
 
 * the careful kernels' own operations in their own order
-  (``kernels.groups.crank``, ``kernels.triad.class3`` from a solution handed
+  (``kernels.groups.crank``, a class III group's kernel from a solution handed
   over, the centres of mass as ``AttachEmitter.careful``, an input's tip by
-  ``polar_point`` or ``slider_input``, an RRP on a guide of fixed direction,
+  ``polar_point`` or ``slider_input``, a slider dyad on a guide of fixed direction,
   ``kernels.forces.applied_loads``), compiled without contraction like them:
   the numbers of the scalar force stage to the bit.  Their library calls come
   from tables made by the same calls: the crank's cos/sin of phi1 + phiM0
   (once per value of phiM0), an input's law and e(q) (the lane walk's table,
   handed over like a class III solution), a fixed slide's sin/cos (once per
   candidate);
-* where the careful kernel calls the library at every position (an RRR's
+* where the careful kernel calls the library at every position (a dyad's
   acos, a guide or slide turning with a link: atan2 then sin/cos), the
   positions stage's lane form without a library call (the cosine law without
   acos, the link's unit vector turned by the hoisted cos/sin of the angle),
@@ -46,31 +46,18 @@ from __future__ import annotations
 
 import re
 
-from .emit import (AttachEmitter, ClassIIIEmitter, ClassIIISliderEmitter, CrankEmitter,
-                   InputEmitter, PRPEmitter, RPPEmitter, RRPEmitter, RRREmitter,
-                   constant_names)
+from .emit import SAME_BITS, CrankEmitter, constant_names
 from .force_equations import MM, UNROLLED_MAX, eliminated, is_square, slide_angle
-from .lane_force_groups import (attach_lines, class3_lines, class3_slider_lines,
-                                direction_lines, from_position_lanes, input_lines, meet_lines,
-                                peak_lines, rrp_lines, rrr_lines, transmission_lines)
-from .names import lane, wrap_line
+from .lane_force_groups import input_lines, peak_lines, transmission_lines
+from .names import wrap_line
 from .skeleton import part
-
-# the groups whose careful kernels the force lanes repeat operation for operation
-# (a candidate gets the scalar force stage's bits; an RRP only on a guide of fixed
-# direction), and those whose lane form takes the positions stage's way without a
-# library call (the cosine law without acos, guide directions as link vectors
-# turned by hoisted cos/sin): the scalar force stage's numbers to rounding
-BIT_FOR_BIT = (CrankEmitter, ClassIIIEmitter, AttachEmitter, InputEmitter)
-TO_ROUNDING = (RRREmitter, PRPEmitter, RPPEmitter, RRPEmitter, ClassIIISliderEmitter)
-
 
 def lane_form(plan, ems) -> str:
     """Why the force stage of ``plan`` has no lane form ('' where it has one)."""
     if not is_square(plan):
         return "its force system is not square"
-    for e in ems:
-        if not isinstance(e, BIT_FOR_BIT + TO_ROUNDING):
+    for e in ems:       # (each emitter's ``force_lanes``: SAME_BITS or TO_ROUNDING)
+        if e.force_lanes is None:
             return (f"{type(e).__name__[:-len('Emitter')]} groups have no lane form of "
                     "their forces")
     return ""
@@ -80,16 +67,15 @@ def same_bits(plan, ems) -> bool:
     """Whether the force lanes of ``plan`` give the scalar force stage's bits:
     every group's lines are its careful kernel's, and every slide has a fixed
     direction (its normal from the same sin/cos of the same angle)."""
-    return (all(isinstance(e, BIT_FOR_BIT) or _on_a_fixed_guide(e) for e in ems)
+    return (all(e.force_lanes == SAME_BITS or _on_a_fixed_guide(e) for e in ems)
             and all(int(plan.slide_dir[k, 0]) < 0 for k in range(len(plan.slide_names))))
 
 
 def _on_a_fixed_guide(e) -> bool:
-    """An RRP or a class III group with a slider whose guide has a fixed
-    direction: its lines are the careful kernel's (the hoisted cos/sin of the
-    guide's angle is the same call on the same angle)."""
-    col = {RRPEmitter: 3, ClassIIISliderEmitter: 6}.get(type(e))     # the guide link's column
-    return col is not None and e.ix[col] < 0
+    """A group on a guide (``guide_col``, its link's column) of fixed direction:
+    its lines are the careful kernel's (the hoisted cos/sin of the guide's angle
+    is the same call on the same angle)."""
+    return e.guide_col is not None and e.ix[e.guide_col] < 0
 
 
 def _c(name):
@@ -118,7 +104,7 @@ def lane_force_kernel(plan, names, ems, rocker) -> str:
     consts = constant_names(plan, names, ems)
     triads = [e for e in ems if e.continued]
     crank = [e for e in ems if isinstance(e, CrankEmitter)]
-    inputs = [e for e in ems if isinstance(e, InputEmitter)]
+    inputs = [e for e in ems if e.takes_law]
     handed = 4 * len(triads) + 4 * len(inputs)      # the lane walk's columns handed over
     # the transmission items (transmission()'s), their angles' cos/sin hoisted
     items = [it for e in ems[:plan.n_kinematic] for it in e.transmission_items()[1]]
@@ -177,15 +163,15 @@ def _position_lines(plan, names, ems, handed, n_triads):
         L += [f"P{i}_0 = {_c(names.par(off))}", f"P{i}_1 = {_c(names.par(int(off) + 1))}",
               f"V{i}_0 = 0.0", f"V{i}_1 = 0.0", f"A{i}_0 = 0.0", f"A{i}_1 = 0.0"]
     crank = [e for e in ems if isinstance(e, CrankEmitter)]
-    inputs = [e for e in ems if isinstance(e, InputEmitter)]
+    inputs = [e for e in ems if e.takes_law]
     for e in ems:
         L += [f"# {e.title()}"]
         if isinstance(e, CrankEmitter):
             L += _crank_lines(e, handed + 2 * crank.index(e))
-        elif isinstance(e, InputEmitter):
+        elif e.takes_law:
             L += input_lines(e, _c, _t, 4 * n_triads + 4 * inputs.index(e))
         else:
-            L += _group_lines(e)
+            L += e.force_lines(_c, _t)
     return L
 
 
@@ -197,32 +183,6 @@ def _crank_lines(e, q):
             f"P{tip}_0 = P{o}_0 + {ln} * cc", f"P{tip}_1 = P{o}_1 + {ln} * sc",
             f"V{tip}_0 = V{o}_0 - {ln} * sc", f"V{tip}_1 = V{o}_1 + {ln} * cc",
             f"A{tip}_0 = A{o}_0 - {ln} * cc", f"A{tip}_1 = A{o}_1 - {ln} * sc"]
-
-
-def _group_lines(e):
-    """A lane's lines of a group other than a crank or an input."""
-    if isinstance(e, ClassIIIEmitter):
-        return class3_lines(e, _c, _t)
-    if isinstance(e, ClassIIISliderEmitter):
-        return class3_slider_lines(e, _c, _t)
-    if isinstance(e, RRPEmitter):
-        return rrp_lines(e)
-    if isinstance(e, RRREmitter):
-        return rrr_lines(e)
-    if isinstance(e, PRPEmitter):
-        return (direction_lines(e, "u1", "t1", "guide1_angle", 1)
-                + direction_lines(e, "u2", "t2", "guide2_angle", 4)
-                + meet_lines(e.ix[0], lane(e.k("guide1_offset")), e.ix[3],
-                             lane(e.k("guide2_offset")), e.ix[6]))
-    if isinstance(e, RPPEmitter):
-        cs, ss = lane(f"{e.k('slot_angle')}_cos"), lane(f"{e.k('slot_angle')}_sin")
-        return (direction_lines(e, "u1", "t1", "guide_angle", 2)
-                + from_position_lanes([f"u2x = {cs} * u1x - {ss} * u1y",
-                                       f"u2y = {ss} * u1x + {cs} * u1y"])
-                + ["t21 = t11", "t22 = t12"]
-                + meet_lines(e.ix[1], lane(e.k("guide_offset")), e.ix[0],
-                             f"-{lane(e.k('slot_offset'))}", e.ix[4]))
-    return attach_lines(e, _c)
 
 
 def _load_lines(plan):

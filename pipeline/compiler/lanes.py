@@ -35,164 +35,12 @@ import re
 
 from ..kernels.continuation import FOLD_SHARE
 from ..kernels.watch import ERR_FACTOR
-from .emit import ClassIIISliderEmitter, InputEmitter, constant_names
-from .lane_geometry import lane_direction
-from .names import lane, text, wrap_line
+from .emit import constant_names
+from .names import text, wrap_line
 from .skeleton import part
 
 NEWTON_STEPS = 2          # Newton steps per position after the predictor
-SMALL_ANGLE = 0.05        # largest rotation taken by the cos/sin series, rad
 ATAN_ARG = 0.1            # largest tan of a rocker step taken by the atan series
-
-
-def _rot_lines(c, s, delta):
-    """e <- e rotated by ``delta`` (a small angle): cos/sin by their series."""
-    return [
-        f"z = {delta} * {delta}",
-        "cd = 1.0 - z * (0.5 - z * (1.0 / 24.0 - z * (1.0 / 720.0 - z * (1.0 / 40320.0"
-        " - z * (1.0 / 3628800.0)))))",
-        f"sd = {delta} * (1.0 - z * (1.0 / 6.0 - z * (1.0 / 120.0 - z * (1.0 / 5040.0"
-        " - z * (1.0 / 362880.0 - z * (1.0 / 39916800.0))))))",
-        f"{c}, {s} = {c} * cd - {s} * sd, {s} * cd + {c} * sd",
-    ]
-
-
-def _triad_terms(e):
-    """The names a class III group's lane lines use: its points, its lengths (and
-    the slider's guide offset), the cos/sin of its fixed angle U435, and its rows
-    of the lane array."""
-    k = e.k
-    t = f"t{e.triad_row}"
-    P2, P6, P7, P3, P4, P5 = (e.xy(j) for j in range(6))
-    T = dict(P2=P2, P6=P6, P7=P7, P3=P3, P4=P4, P5=P5,
-             slider=isinstance(e, ClassIIISliderEmitter),
-             cu=lane(f"{k('U435')}_cos"), su=lane(f"{k('U435')}_sin"),
-             r={x: f"S[R_{t}_{x}, l]" for x in ("ca", "sa", "cb", "sb", "dca", "dsa", "dcb",
-                                                 "dsb", "sign")})
-    T.update((x, lane(k(x))) for x in ("L23", "L34", "L35", "L46"))
-    T["off" if T["slider"] else "L57"] = lane(k("guide_offset" if T["slider"] else "L57"))
-    return T
-
-
-def _triad_predictor_lines(e, T):
-    """The closure solved, then e(a), e(b) turned by the last increment."""
-    r = T["r"]
-    if T["slider"]:
-        out = [f"# {e.title()}: Newton on |P4 - P6| = L46 and n.(P5 - {T['P7']}) = offset, "
-               "n the",
-               "# guide's unit normal (kernels.triad.slider_closure_unit)"]
-        out += lane_direction(e, "gu", "guide_angle", 6) + ["gnx = -guy", "gny = gux"]
-    else:
-        out = [f"# {e.title()}: Newton on the closure |P4 - P6| = L46, |P5 - P7| = L57"]
-    return out + [
-        "# predictor: e(a), e(b) turned by the last increment (secant)",
-        f"ca0 = {r['ca']}", f"sa0 = {r['sa']}", f"cb0 = {r['cb']}", f"sb0 = {r['sb']}",
-        f"ca = ca0 * {r['dca']} - sa0 * {r['dsa']}",
-        f"sa = sa0 * {r['dca']} + ca0 * {r['dsa']}",
-        f"cb = cb0 * {r['dcb']} - sb0 * {r['dsb']}",
-        f"sb = sb0 * {r['dcb']} + cb0 * {r['dsb']}",
-        "corr_a = 0.0", "corr_b = 0.0"]
-
-
-def _triad_residual_lines(T):
-    """The closure's residual F = (f1, f2) and its Jacobian J at e(a), e(b)."""
-    P2, P3, P6, P7 = T["P2"], T["P3"], T["P6"], T["P7"]
-    L23, L34, L35, L46, cu, su = (T[x] for x in ("L23", "L34", "L35", "L46", "cu", "su"))
-    out = [f"cc = cb * {cu} - sb * {su}", f"sc = sb * {cu} + cb * {su}",
-           f"{P3}x = {P2}x + {L23} * ca", f"{P3}y = {P2}y + {L23} * sa",
-           f"r4x = {P3}x + {L34} * cb - {P6}x", f"r4y = {P3}y + {L34} * sb - {P6}y"]
-    if T["slider"]:      # (slider_closure_unit: F1 halved, F2 a distance)
-        return out + [
-            f"f1 = 0.5 * (r4x * r4x + r4y * r4y - {L46} * {L46})",
-            f"f2 = gnx * ({P3}x + {L35} * cc - {P7}x) + gny * ({P3}y + {L35} * sc - {P7}y)"
-            f" - {T['off']}",
-            f"j11 = {L23} * (r4y * ca - r4x * sa)",
-            f"j12 = {L34} * (r4y * cb - r4x * sb)",
-            f"j21 = {L23} * (gny * ca - gnx * sa)",
-            f"j22 = {L35} * (gny * cc - gnx * sc)",
-            "det = j11 * j22 - j12 * j21",
-        ]
-    return out + [
-        f"r5x = {P3}x + {L35} * cc - {P7}x", f"r5y = {P3}y + {L35} * sc - {P7}y",
-        f"f1 = r4x * r4x + r4y * r4y - {L46} * {L46}",
-        f"f2 = r5x * r5x + r5y * r5y - {T['L57']} * {T['L57']}",
-        f"j11 = 2.0 * {L23} * (r4y * ca - r4x * sa)",
-        f"j12 = 2.0 * {L34} * (r4y * cb - r4x * sb)",
-        f"j21 = 2.0 * {L23} * (r5y * ca - r5x * sa)",
-        f"j22 = 2.0 * {L35} * (r5y * cc - r5x * sc)",
-        "det = j11 * j22 - j12 * j21",
-    ]
-
-
-def _triad_newton_lines(T):
-    """NEWTON_STEPS Newton steps, each a rotation of e(a), e(b) by small angles."""
-    out = []
-    for step in range(NEWTON_STEPS):
-        out += [f"# Newton step {step + 1}: J (da, db) = F, then e(a), e(b) turned by -da, -db"]
-        out += _triad_residual_lines(T)
-        out += ["da = (f1 * j22 - j12 * f2) / det", "db = (j11 * f2 - f1 * j21) / det",
-                "corr_a += da", "corr_b += db",
-                f"big = big | (abs(da) > {SMALL_ANGLE}) | (abs(db) > {SMALL_ANGLE})",
-                "na = -da", "nb = -db"]
-        out += _rot_lines("ca", "sa", "na") + _rot_lines("cb", "sb", "nb")
-    return out
-
-
-def _triad_check_lines(T):
-    """The confirming evaluation: residual, margin and branch checked."""
-    L23, L34, L35, L46 = (T[x] for x in ("L23", "L34", "L35", "L46"))
-    out = ["# renormalise the unit vectors (one Newton step for 1/|e|, no division)",
-           "g = 1.5 - 0.5 * (ca * ca + sa * sa)", "ca *= g", "sa *= g",
-           "g = 1.5 - 0.5 * (cb * cb + sb * sb)", "cb *= g", "sb *= g",
-           "# confirming evaluation: the residual, and det J for the margin and the branch"]
-    out += _triad_residual_lines(T)
-    if T["slider"]:
-        out += [f"res = max(abs(f1) / {L46}, abs(f2))",
-                f"conv = res <= tol * max({L23}, {L46})",
-                f"m = abs(det) / ({L23} * {L46} * max({L34}, {L35}))"]
-    else:
-        L57 = T["L57"]
-        out += [f"res = max(abs(f1) / (2.0 * {L46}), abs(f2) / (2.0 * {L57}))",
-                f"conv = res <= tol * max({L46}, {L57})",
-                f"m = abs(det) / (4.0 * {L23} * {L46} * {L57} * max({L34}, {L35}))"]
-    return out + [
-        "sgn = 1.0 if det > 0.0 else -1.0",
-        f"big = big | (not conv) | (sgn != {T['r']['sign']}) | (abs(corr_a) > jump) | "
-        "(abs(corr_b) > jump)",
-        "low = low | (not (m >= margin_safe))",
-        "margin = min(margin, m)"]
-
-
-def _triad_handover_lines(e, T):
-    """The step's increment kept (the next predictor), the solution handed to
-    the force stage, and P4, P5."""
-    r, P3, P4, P5 = T["r"], T["P3"], T["P4"], T["P5"]
-    L34, L35 = T["L34"], T["L35"]
-    return [
-        "# the increment of this step: the next predictor, and the careful walk's step bound",
-        "ia_c = ca0 * ca + sa0 * sa", "ia_s = ca0 * sa - sa0 * ca",
-        "ib_c = cb0 * cb + sb0 * sb", "ib_s = cb0 * sb - sb0 * cb",
-        "big = big | (abs(ia_s) > step_change) | (abs(ib_s) > step_change) | (ia_c <= 0.0)"
-        " | (ib_c <= 0.0)",
-        f"{r['dca']} = ia_c", f"{r['dsa']} = ia_s", f"{r['dcb']} = ib_c", f"{r['dsb']} = ib_s",
-        f"{r['ca']} = ca", f"{r['sa']} = sa", f"{r['cb']} = cb", f"{r['sb']} = sb",
-        "# the solution at this position, handed to the force stage",
-        f"theta[k, {1 + 4 * e.triad_row} * LANES + l] = ca",
-        f"theta[k, {2 + 4 * e.triad_row} * LANES + l] = sa",
-        f"theta[k, {3 + 4 * e.triad_row} * LANES + l] = cb",
-        f"theta[k, {4 + 4 * e.triad_row} * LANES + l] = sb",
-        f"{P4}x = {P3}x + {L34} * cb", f"{P4}y = {P3}y + {L34} * sb",
-        f"{P5}x = {P3}x + {L35} * cc", f"{P5}y = {P3}y + {L35} * sc",
-    ]
-
-
-def _triad_lines(e):
-    """Lane lines of one class III group (or its sliding variant: P5 on a line
-    instead of a lead): predictor, NEWTON_STEPS Newton steps, the confirming
-    evaluation and the checks."""
-    T = _triad_terms(e)
-    return (_triad_predictor_lines(e, T) + _triad_newton_lines(T) + _triad_check_lines(T)
-            + _triad_handover_lines(e, T))
 
 
 TRIAD_ROWS = ("ca", "sa", "cb", "sb", "dca", "dsa", "dcb", "dsb", "sign", "a0c", "a0s", "b0c",
@@ -235,8 +83,8 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
     (pivot, point) names, LANES = ``width``."""
     kin = ems[:plan.n_kinematic]
     fast = all(e.fast for e in kin)
-    triads = [e for e in kin if e.continued]    # (with a lane form: class3 only)
-    inputs = [e for e in kin if isinstance(e, InputEmitter)]
+    triads = [e for e in kin if e.continued]    # (the groups solved by continuation)
+    inputs = [e for e in kin if e.takes_law]
     for j, e in enumerate(inputs):      # their columns of the table, after the triads'
         e.theta_col = 1 + 4 * len(triads) + 4 * j
     consts = constant_names(plan, names, ems)
@@ -266,7 +114,7 @@ def _setup_lane(consts, inputs, triads, watched):
              "             d1, d2, margins, np.bool_(False))",
              "ok = st == OK"]
     for e in triads:
-        body += _setup_triad_lines(e)
+        body += e.setup_lines()
     body += _setup_rocker_lines(triads)
     for i, e in enumerate(watched):
         body.append(f"# {e.title()}: the watch's history starts with margin^2 at phis[0]")
@@ -286,48 +134,6 @@ def _setup_lane(consts, inputs, triads, watched):
         "    # OK (0): in the lane; a failure at phis[0] is the careful path's own first",
         "    # step, reported as it is; -1: assembled, but the lane cannot start (careful)",
         "    return (0 if ok else -1) if st == OK else st", "", ""]
-
-
-def _setup_triad_lines(e):
-    """setup_lane's lines of one class III group: e(a), e(b) at phis[0] from the
-    careful solve, and the first increment from the analogs (a', b')."""
-    t = f"t{e.triad_row}"
-    j = e.triad_row
-    P2, P3, P4 = (e.p(x) for x in (0, 3, 4))
-    out = [f"# {e.title()}: e(a), e(b) at phis[0] and the first increment from the analogs",
-           f"av = state[{j}, S_A]",
-           f"bv = state[{j}, S_B]",
-           f"S[R_{t}_ca, l] = math.cos(av)",
-           f"S[R_{t}_sa, l] = math.sin(av)",
-           f"S[R_{t}_cb, l] = math.cos(bv)",
-           f"S[R_{t}_sb, l] = math.sin(bv)",
-           f"S[R_{t}_a0c, l] = S[R_{t}_ca, l]",
-           f"S[R_{t}_a0s, l] = S[R_{t}_sa, l]",
-           f"S[R_{t}_b0c, l] = S[R_{t}_cb, l]",
-           f"S[R_{t}_b0s, l] = S[R_{t}_sb, l]",
-           f"S[R_{t}_sign, l] = state[{j}, S_DET_SIGN]"]
-    out += [f"theta[0, {1 + 4 * j + q} * LANES + l] = S[R_{t}_{v}, l]"
-            for q, v in enumerate(("ca", "sa", "cb", "sb"))]
-    return out + [
-        "# a' = (P3' - P2') . n(a) / L23, b' = (P4' - P3') . n(b) / L34",
-        f"ad = ((d1[{P3}, 1] - d1[{P2}, 1]) * math.cos(av) - (d1[{P3}, 0] - d1[{P2}, 0])"
-        f" * math.sin(av)) / {e.k('L23')}",
-        f"bd = ((d1[{P4}, 1] - d1[{P3}, 1]) * math.cos(bv) - (d1[{P4}, 0] - d1[{P3}, 0])"
-        f" * math.sin(bv)) / {e.k('L34')}",
-        "h = phis[1] - phis[0]",
-        "ok = ok and math.isfinite(ad) and math.isfinite(bd)",
-        "if not ok:",
-        "    ad = 0.0",
-        "    bd = 0.0",
-        f"S[R_{t}_dca, l] = math.cos(ad * h)",
-        f"S[R_{t}_dsa, l] = math.sin(ad * h)",
-        f"S[R_{t}_dcb, l] = math.cos(bd * h)",
-        f"S[R_{t}_dsb, l] = math.sin(bd * h)",
-        "if not ok:",
-        f"    S[R_{t}_ca, l] = 1.0",
-        f"    S[R_{t}_sa, l] = 0.0",
-        f"    S[R_{t}_cb, l] = 1.0",
-        f"    S[R_{t}_sb, l] = 0.0"]
 
 
 def _setup_rocker_lines(triads):
@@ -387,7 +193,7 @@ def _walk(plan, names, kin, triads, watched, rocker_xy):
         inner += [f"{pn}x = S[R_{names.par(off)}, l]",
                   f"{pn}y = S[R_{names.par(int(off) + 1)}, l]"]
     for e in kin:
-        inner += (_triad_lines(e) if e.continued else e.lanes())
+        inner += e.lanes()
         if e in watched:
             inner += _watch_lines(watched.index(e), e)
     inner += _rocker_step_lines(*rocker_xy)

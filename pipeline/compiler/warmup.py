@@ -1,7 +1,8 @@
 """The kernel library compiled once per installation, for every group type.
 
 A generated module's ``position`` calls a library kernel per group type and
-input law (``pipeline.kernels.groups``, ``triad``, ``inputs``), and numba
+input law (``pipeline.kernels.groups``, ``inputs``, each group type's
+``pipeline.group_types.*.kernels``), and numba
 compiles each for the types the call passes the first time a mechanism with
 that group is compiled: about half a second a type, added to the first scene
 that has it.  The call's types do not depend on the mechanism (points and
@@ -19,46 +20,24 @@ from __future__ import annotations
 
 
 def mechanism():
-    """Every group type (pipeline.model.groups) and input law, each on points of
-    its own; no bodies (the force kernels compile in a scene's process beside)."""
+    """Every group type and input law, each on points of its own: the
+    mechanism's own elements (attached points, inputs) and each group-type
+    folder's ``emitter.warmup`` (``pipeline.group_types``); no bodies (the force
+    kernels compile in a scene's process beside)."""
     import math
 
-    from ..model.groups.ppr import PPR
-    from ..model.groups.prp import PRP
-    from ..model.groups.rpp import RPP
-    from ..model.groups.rpr import RPR
-    from ..model.groups.rrp import RRP
-    from ..model.groups.rrr import RRR
+    from .. import group_types
     from ..model.groups.attach import Attach
-    from ..model.groups.class3 import ClassIII
-    from ..model.groups.class3_slider import ClassIIISlider
     from ..model.groups.law import Law
     from ..model.groups.rotary_input import RotaryInput
     from ..model.groups.slider_input import SliderInput
     from ..model.mechanism import Crank, Mechanism
     deg = math.radians
-    fixed = {"P1": (0.0, 0.0), "P4": (38.0, 0.0), "P6": (38.0, 50.0), "P9": (0.0, 60.0),
-             "P15": (195.0, 226.0), "P16": (46.0, 533.0), "P25": (-30.0, 0.0),
-             "P27": (0.0, -40.0), "P29": (30.0, -30.0)}
-    triad = dict(L23=272.5, L34=81.0, L45=104.5, L35=174.0, L46=104.5, a0=deg(44.0),
-                 b0=deg(128.7))
-    groups = (
-        RRR(A="P2", C="P4", B="P3", L_AB=41.0, L_CB=40.0, W=1),
-        Attach(point="P7", base="P4", along=("P4", "P3"), angle=0.0, length=55.0),
+    fixed = {"P1": (0.0, 0.0), "P4": (38.0, 0.0), "P25": (-30.0, 0.0), "P27": (0.0, -40.0),
+             "P29": (30.0, -30.0)}
+    groups = [
+        Attach(point="P7", base="P1", along=("P1", "P2"), angle=0.0, length=55.0),
         Attach(point="P8", base="P2", along=None, angle=deg(30.0), length=5.0),
-        RRP(A="P2", B="P10", guide_point="P1", guide_angle=deg(90.0), L_AB=44.2, W=-1),
-        RRP(A="P3", B="P11", guide_point="P4", guide_angle=deg(10.0), L_AB=30.0, W=1,
-            guide_link=("P4", "P3")),
-        RPR(block="P2", pivot="P6", guide_end="P12", guide_length=60.0),
-        PRP(B="P5", guide1_point="P4", guide1_angle=0.0, guide2_point="P6", guide2_angle=0.0,
-            guide1_link=("P4", "P3")),
-        RPP(A="P2", B="P13", guide_point="P1", guide_angle=0.0, slot_angle=deg(90.0)),
-        PPR(pin="P7", B="P14", guide_point="P9", guide_angle=0.0, slot_angle=deg(60.0)),
-        ClassIII(input="P2", pivot_4="P15", pivot_5="P16", joints=("P17", "P18", "P19"),
-                 L57=261.0, **triad),
-        ClassIIISlider(input="P2", pivot_4="P15", guide_point="P16",
-                       joints=("P20", "P21", "P22"), guide_angle=deg(171.0),
-                       guide_offset=261.0, **triad),
         RotaryInput(pivot="P4", tip="P23", length=35.0,
                     law=Law("cycloidal", start=deg(30.0), travel=deg(40.0), rise=deg(150.0))),
         RotaryInput(pivot="P25", tip="P24", length=20.0,
@@ -68,9 +47,13 @@ def mechanism():
                                                  ((0, 0.0), (90, 3.0), (180, 5.0), (270, 1.0))))),
         SliderInput(guide_point="P29", block="P28", guide_angle=deg(45.0),
                     law=Law("harmonic", start=0.0, travel=10.0, rise=deg(120.0))),
-    )
+    ]
+    for mod in group_types.part("emitter"):
+        points, more = mod.warmup("P2")
+        fixed.update(points)
+        groups += more
     return Mechanism("library_warmup", fixed, Crank(pivot="P1", tip="P2", length=15.0,
-                                                    omega1=60.0), groups)
+                                                    omega1=60.0), tuple(groups))
 
 
 def compile_group_kernels() -> None:

@@ -77,25 +77,6 @@ STATUS_NAMES = {
     FRICTION_LOCK: "FRICTION_LOCK",
 }
 
-# ---- group codes of the compiled plan ---------------------------------------
-G_CRANK = 0
-G_RRR = 1
-G_RRP = 2
-G_RPR = 3
-G_CLASS3 = 4
-G_ATTACH = 5
-G_PRP = 6
-G_RPP = 7
-G_INPUT = 8        # a rotary or slider input moved by a law of the crank angle
-G_CLASS3_SLIDER = 9   # class III group with a slider in place of lead 5-7
-
-GROUP_NAMES = {G_CRANK: "crank", G_RRR: "RRR", G_RRP: "RRP", G_RPR: "RPR",
-               G_CLASS3: "class3", G_ATTACH: "attach", G_PRP: "PRP", G_RPP: "RPP",
-               G_INPUT: "input", G_CLASS3_SLIDER: "class3_slider"}
-# class III groups, either kind: solved by continuation, with the singularity margin
-# |det J| normalised that the sweep's margin constraint bounds
-CLASS3_GROUPS = (G_CLASS3, G_CLASS3_SLIDER)
-
 # ---- what to compute --------------------------------------------------------
 POSITIONS = 0
 VELOCITIES = 1      # positions + first analogs
@@ -138,7 +119,7 @@ S_B_OLD = 9
 S_SIGN_OLD = 10
 S_HANDED = 11     # 1.0: the solution at this position is handed over as unit vectors
 S_CA = 12         # e(a) = (cos a, sin a) and e(b) handed over (the lane path's solution:
-S_SA = 13         # ``triad.class3`` confirms it by its residual, without a cos or sin)
+S_SA = 13         # the class III kernel confirms it by its residual, without a cos or sin)
 S_CB = 14
 S_SB = 15
 S_MAY_STOP = 16  # 1.0: this solve's Newton may stop where it does not contract (a

@@ -287,7 +287,7 @@ def fold_cd(c, d, best_cos=math.nan, best_sin=math.nan):
 
 @njit(**JIT)
 def dyad_transmission(pos, ia, ib, ic, best_cos=math.nan, best_sin=math.nan):
-    """Transmission angle of an RRR dyad A-B-C at its middle joint B: the
+    """Transmission angle of a two-link dyad A-B-C at its middle joint B: the
     angle between B->A and B->C, folded into [0, pi/2] (``pipeline.solve.peaks``;
     best_cos, best_sin: ``fold_angle``'s running minimum)."""
     return fold_angle(pos[ia, 0] - pos[ib, 0], pos[ia, 1] - pos[ib, 1],

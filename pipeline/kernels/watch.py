@@ -4,10 +4,9 @@ A walk solves a mechanism at a sequence of crank angles; a group can fail
 between two of them and be whole again at both (a crank that cannot pass a
 range narrower than the step, a parallelogram that passes its collinear
 position and comes back as the antiparallelogram).  Every group that can fail
-has a margin m (``pipeline.kernels.groups``, ``triad``): |sin| of the
-transmission angle of an RRR dyad, |cos| of the link against the guide of an
-RRP, the block's distance over the guide length of an RPR, |det J| scaled of
-a class III group.  Its square D = m^2 is a smooth function of the crank angle
+has a margin m (its kernel's, ``pipeline.group_types``): for instance |sin|
+of the transmission angle of a two-link dyad, |cos| of the link against the
+guide of a slider dyad, |det J| scaled of a class III group.  Its square D = m^2 is a smooth function of the crank angle
 (for a dyad a polynomial of the known points: the assembly discriminant,
 negative where the dyad cannot be assembled); D reaches zero exactly where the
 group folds or passes a toggle.

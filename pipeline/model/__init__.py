@@ -10,26 +10,20 @@ import each from the module that defines it.
 """
 
 from ..base.old_names import by_name as _by_name
+from ..base.old_names import group_type_names as _group_type_names
 from ..base.old_names import old_names as _old_names
 
 # the flat package's names, kept for one release: the module that defines them -> names
 _OLD_NAMES = _by_name({
     "pipeline.model.mechanism": "GIDX_WIDTH Body CentreOfMass Crank Group Load Mechanism Plan"
                                 " Slide compile_mechanism group_label natural_key",
-    "pipeline.model.groups.ppr": "PPR",
-    "pipeline.model.groups.prp": "PRP",
-    "pipeline.model.groups.rpp": "RPP",
-    "pipeline.model.groups.rpr": "RPR",
-    "pipeline.model.groups.rrp": "RRP",
-    "pipeline.model.groups.rrr": "RRR",
     "pipeline.model.groups.attach": "Attach",
-    "pipeline.model.groups.class3": "ClassIII",
-    "pipeline.model.groups.class3_slider": "ClassIIISlider",
-    "pipeline.model.groups.base": "GroupType",
+    "pipeline.model.group_base": "GroupType",
     "pipeline.model.groups.law": "Law",
     "pipeline.model.groups.rotary_input": "RotaryInput",
     "pipeline.model.groups.slider_input": "SliderInput",
 })
-__getattr__ = _old_names(__name__, _OLD_NAMES)
+# (and the group types' classes, now in their folders of pipeline.group_types)
+__getattr__ = _old_names(__name__, lambda: {**_OLD_NAMES, **_group_type_names()})
 
 

@@ -12,7 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .groups.base import GroupType
+from ..group_types import G_ATTACH, G_CRANK, continued_codes
+from .group_base import GroupType
 from ..kernels import config as kc
 
 
@@ -109,7 +110,7 @@ class Mechanism:
 
 
 # ----------------------------------------------------------------- compiled plan
-GIDX_WIDTH = 8                         # point indices per group row (class3_slider uses 8)
+GIDX_WIDTH = 8                         # point indices per group row (the widest type's)
 
 @dataclass(frozen=True)
 class Plan:
@@ -172,10 +173,11 @@ class Plan:
         return len(self.input_group)
 
     @property
-    def has_class3(self) -> bool:
-        """Whether a class III group (with a lead or a slider) is in the plan: its
-        singularity margin is then a metric and a constraint."""
-        return bool(np.isin(self.codes, kc.CLASS3_GROUPS).any())
+    def has_continued(self) -> bool:
+        """Whether a group solved by continuation is in the plan
+        (``group_types.continued_codes``): its singularity margin is then a
+        metric and a constraint."""
+        return bool(np.isin(self.codes, continued_codes()).any())
 
     @property
     def crank_pivot(self):
@@ -208,43 +210,14 @@ def transmission_items(mech):
     is best, 0 a dead position.  Every angle is folded into [0, 90] deg
     (min(mu, 180 - mu)).
 
-    * an RRR dyad A-B-C ("dyad", (A, B, C)): the angle at the middle joint B
-      between B->A and B->C (the force along A-B, B moving across C-B);
-    * each lead of a class III group that joins the ternary link at J to a
-      fixed pivot P (leads 4-6 and 5-7; "lead", (J, P, A, B, C, D)): the angle
-      at J between the lead J-P and the line from J through Q, the point where
-      the lines A-B and C-D of the other two leads meet.  With axial forces in
-      those leads, the ternary link (three forces in equilibrium meet in one
-      point) passes its force to this lead along J-Q: the four-bar's
-      transmission angle (coupler against rocker) generalised.  It is 0 when
-      the three leads' lines meet in one point, the group's singular position.
-
-    The groups with a sliding pair give two lines, ("lines", ((a, b, alpha),
-    (c, d, beta))): the link a->b turned by alpha (the absolute direction
-    alpha where a is None) against c->d turned by beta
-    (``kernels.metrics.lines_transmission``):
-
-    * RRP (slider B on its guide, link A-B): the force along A-B drives the
-      slider along the guide, so mu = 90 deg - angle(A-B, guide) = the angle
-      between A-B and the guide's normal (the slider-crank's: coupler against
-      the normal to the slider's path); 0 where A-B lies across the guide,
-      the group's toggle (its margin is sin mu);
-    * RPR (coulisse: block at A on a guide turning about C, guide end E): the
-      block pushes the guide along its normal n, and the guide's point under
-      the block moves across C->A, so mu = angle(C->A, n) = 90 deg -
-      angle(C->A, C->E); 90 deg with no offset, 0 where the block passes the
-      foot of the perpendicular from C (the group's toggle);
-    * PRP (two blocks joined at B, on guides 1 and 2): block 1 passes the
-      force to the pin along the normal of guide 1, and block 2 moves along
-      guide 2 (either way round), so mu = the angle between the two guides
-      (0 where they are parallel; sin mu is the group's margin);
-    * RPP (Scotch yoke; and PPR, the same chain): the block pushes the yoke along the slot's normal,
-      and the yoke moves along its guide, so mu = the angle between the slot
-      and the guide, |slot_angle| folded: constant over the revolution, a
-      design quantity (90 deg for the classic yoke).
-
-    Each group type gives its own items (its ``transmission`` hook,
-    ``pipeline.model.groups``)."""
+    Each group type gives its own items (its ``transmission`` hook, whose
+    docstring says which angle it is: ``pipeline.group_types``): a two-link
+    dyad's angle at its middle joint ("dyad", (A, B, C): between B->A and
+    B->C); a lead of a group of higher class against the line from its joint
+    to the meet of the other leads ("lead", (J, P, A, B, C, D)); a group with
+    a sliding pair gives two lines ("lines", ((a, b, alpha), (c, d, beta))):
+    the link a->b turned by alpha (the absolute direction alpha where a is
+    None) against c->d turned by beta (``kernels.metrics.lines_transmission``)."""
     out = []
     for g in mech.groups:
         out += g.transmission()     # the group type's items (pipeline.model.groups)
@@ -290,7 +263,7 @@ def compile_mechanism(m: Mechanism) -> Plan:
             add(f"{label}.{key}", v)
 
     c = m.crank
-    emit(kc.G_CRANK, [pt(c.pivot), pt(c.tip)], c.name,
+    emit(G_CRANK, [pt(c.pivot), pt(c.tip)], c.name,
          [("length", c.length), ("phiM0", c.phiM0)])
     for k, g in enumerate(m.groups, start=1):
         label = group_label(g, k)
@@ -308,7 +281,7 @@ def compile_mechanism(m: Mechanism) -> Plan:
         s = f"S[{b.name}]"
         com = b.com
         ia, ib = (index[com.along[0]], index[com.along[1]]) if com.along else (-1, -1)
-        emit(kc.G_ATTACH, [index[com.base], ia, ib, pt(s)], s,
+        emit(G_ATTACH, [index[com.base], ia, ib, pt(s)], s,
              [("angle", com.US), ("length", com.lS)])
         body_com.append(index[s])
         turn = b.turns_with if b.turns_with is not None else com.along

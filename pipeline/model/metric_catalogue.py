@@ -104,7 +104,7 @@ CATALOGUE = (
            "largest of the grid's positions (not refined between them)",
            "kinematics", ks.M_PEAK_EPS),
     Metric("min_transmission_angle", "deg",
-           "smallest transmission angle (RRR dyads at the middle joint, class III leads, the "
+           "smallest transmission angle (two-link dyads at the middle joint, class III leads, the "
            "slider dyads' force against the driven member's motion) over the revolution, the "
            "smallest of the grid's positions (not refined between them)",
            "transmission", ks.M_MIN_TRANS, RAD_TO_DEG,

@@ -256,9 +256,9 @@ def _coordinates(f, plan, study):
     coordinate(f, "tolerance", [n for n, _ in TOLERANCES], "1", "solver tolerance")
     from ..model.mechanism import transmission_items
     coordinate(f, "dyad", [label for label, _, _ in transmission_items(study.mechanism)], "1",
-               "transmission angle: RRR dyad (A-B-C, at the middle joint B), class III lead "
-               "(J-P: the lead against the line to the meet of the other two leads), or a dyad "
-               "with a sliding pair (RRP, RPR, PRP, RPP: pipeline.peaks.transmission_items)")
+               "transmission angle: a two-link dyad's (A-B-C, at the middle joint B), a class III "
+               "lead's (J-P: the lead against the line to the meet of the other two leads), or a "
+               "sliding pair's (each group type's: pipeline.model.mechanism.transmission_items)")
 
 
 PEAK_DIMS = {"velocity": "point", "acceleration": "point", "omega": "link", "eps": "link",

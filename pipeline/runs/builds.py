@@ -31,7 +31,7 @@ def available_metrics(study, plan):
     the singularity margin a class III group)."""
     from ..model.mechanism import transmission_items
     mech, out = study.mechanism, study.output
-    has_margin = plan.has_class3
+    has_margin = plan.has_continued
     keep = []
     for m in TOLERANCED_METRICS:
         stage = BY_NAME[m].stage
@@ -179,7 +179,7 @@ class RobustBuilds:
         if "build_yield" in self.names:
             base += ["stroke"] + [m for m, _, _ in self.spec.bounds]
         plan = study.mechanism.compile()
-        if plan.has_class3:
+        if plan.has_continued:
             base.append("singularity_margin")
         self.builds = BuildEvaluator(study, study.mechanism, tuple(dict.fromkeys(base)))
         self.has_margin = "singularity_margin" in base

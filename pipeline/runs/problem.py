@@ -40,7 +40,7 @@ class SweepProblem:
     @property
     def has_margin(self) -> bool:
         """Whether the plan has a class III group (its singularity margin is a constraint)."""
-        return self.plan.has_class3
+        return self.plan.has_continued
 
     @property
     def kernels(self):

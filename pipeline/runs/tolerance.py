@@ -191,7 +191,7 @@ def _wanted(spec, sweep_spec, mech):
     bounds = [b[0] for b in spec.bounds]
     if sweep_spec is not None:
         bounds += [b[0] for b in sweep_spec.bounds]
-        if mech.compile().has_class3:
+        if mech.compile().has_continued:
             bounds.append("singularity_margin")
     return tuple(dict.fromkeys(spec.metrics + tuple(bounds)))
 
@@ -202,7 +202,7 @@ def _meets(ev, status, values, rows, sweep_spec, spec):
     ok = status == kc.OK
     if sweep_spec is not None:
         from ..study.objectives import bounded_finite, constraints
-        has_margin = ev.plan.has_class3
+        has_margin = ev.plan.has_continued
         _, cv = constraints(sweep_spec, rows, status, has_margin)
         meets = ok & (cv == 0) & bounded_finite(sweep_spec, rows)
         return meets, sweep_spec.stated_constraints(has_margin)

@@ -391,7 +391,7 @@ def _check_law_grids(path, mech, output, sweep):
 def _check_labels(sec, groups, bodies):
     """A group's name is the label of its parameters (label.key: the sweep's
     variables name them): it must differ from the labels the plan gives the
-    crank ('crank'), the unnamed groups ('RRR[2]': type and position) and the
+    crank ('crank'), the unnamed groups (their type and position: 'TYPE[2]') and the
     centres of mass ('S[body]')."""
     taken = {"crank": "the crank"}
     for k, g in enumerate(groups, start=1):

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from ..model.groups.base import along_words as _along_words, deg as _deg
+from ..model.group_base import along_words as _along_words, deg as _deg
 from ..model.mechanism import group_label
 
 SLIDE_ANGLE_TOL = math.radians(1e-3)   # rad: two lines closer than 0.001 deg are one
@@ -37,7 +37,7 @@ def _same_directions(groups):
     by ``angle`` (the absolute angle where link is None), modulo 180 deg, by
     the groups' own geometry: an attached point, a coulisse without offset
     (pivot->block along its guide), a guide's point and the point sliding on
-    it without offset (RRP, PRP, RPP), the yoke's point and the block in its
+    it without offset (the slider dyads), the yoke's point and the block in its
     slot without offset."""
     same = {}
     for g in groups:

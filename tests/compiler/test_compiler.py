@@ -105,7 +105,8 @@ def test_every_kernel_of_the_sweep_compiles_once(problem, candidates):
     in this run calls has."""
     from numba.core import event
     from pipeline.compiler.beside import compile_standalone
-    from pipeline.kernels import continuation, triad
+    from pipeline.group_types.class3 import kernels as triad
+    from pipeline.kernels import continuation
     mod = problem.kernels
     with event.install_recorder("numba:compile") as rec:
         problem.evaluate_rows(np.ascontiguousarray(candidates[:64]), parallel=False)

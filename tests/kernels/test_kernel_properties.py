@@ -28,12 +28,15 @@ from hypothesis import HealthCheck, assume, event, example, given, note, setting
 from hypothesis import strategies as st
 
 from pipeline.kernels import config as kc
-from pipeline.kernels.groups import attach, crank, rpr, rrp, rrr
-from pipeline.kernels import triad as triad_kernels
-from pipeline.kernels.triad import class3, ternary_angle
+from pipeline.group_types.rpr.kernels import rpr
+from pipeline.group_types.rrp.kernels import rrp
+from pipeline.group_types.rrr.kernels import rrr
+from pipeline.kernels.groups import attach, crank
+from pipeline.group_types.class3 import kernels as triad_kernels
+from pipeline.group_types.class3.kernels import class3, ternary_angle
 from pipeline.model.mechanism import Crank, Mechanism
-from pipeline.model.groups.class3 import ClassIII
-from pipeline.model.groups.rrr import RRR
+from pipeline.group_types.class3.model import ClassIII
+from pipeline.group_types.rrr.model import RRR
 from pipeline.solve.scene import solve_curves
 from support.tolerances import CLOSURE_MM, KERNEL_EXACT_REL, LENGTH_REL, SELF_FD_REL, WELL_INSIDE_REL
 

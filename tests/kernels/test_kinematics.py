@@ -80,8 +80,8 @@ def test_link_angle_analogs_match_independent_solver(scene):
 
 
 def _link_lengths(study):
-    from pipeline.model.groups.rrr import RRR
-    from pipeline.model.groups.class3 import ClassIII
+    from pipeline.group_types.rrr.model import RRR
+    from pipeline.group_types.class3.model import ClassIII
     from pipeline.model.groups.attach import Attach
     out = [(study.mechanism.crank.pivot, study.mechanism.crank.tip, study.mechanism.crank.length)]
     for g in study.mechanism.groups:

@@ -15,11 +15,13 @@ import pytest
 
 from support import naive
 from pipeline.compiler import source_for
-from pipeline.compiler.emit import EMITTERS
+from pipeline.compiler.emit import emitter_classes
+from pipeline.group_types import code_names
+from pipeline.group_types.class3 import G_CLASS3_SLIDER
 from pipeline.solve.reactions import scene_forces
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
-from pipeline.model.groups.class3_slider import ClassIIISlider
+from pipeline.group_types.class3.model import ClassIIISlider
 from pipeline.solve.scene import revolution_angles, run_scene, solve_curves
 from pipeline.study.reader import load_study, parse_study
 from pipeline.base.errors import StudyError
@@ -112,8 +114,8 @@ def test_the_group_is_declared_as_written(studies):
                         "x.toml").mechanism.groups[0]
     assert moved.guide_link == ("P1", "P2")
     plan = load_study(studies / f"{SCENE}.toml").mechanism.compile()
-    assert plan.codes[1] == kc.G_CLASS3_SLIDER
-    assert kc.GROUP_NAMES[kc.G_CLASS3_SLIDER] == "class3_slider"
+    assert plan.codes[1] == G_CLASS3_SLIDER
+    assert code_names()[G_CLASS3_SLIDER] == "class3_slider"
     first = plan.param("triad.L23")
     assert list(plan.par_names[first:first + 11]) == [
         f"triad.{k}" for k in ("L23", "L34", "L45", "L35", "L46", "guide_angle",
@@ -287,7 +289,7 @@ def _deg_err(got, want):
 
 def test_the_group_is_watched(studies):
     plan = load_study(studies / f"{SCENE}.toml").mechanism.compile()
-    emitter = EMITTERS[kc.G_CLASS3_SLIDER]
+    emitter = emitter_classes()[G_CLASS3_SLIDER]
     assert emitter.watched and emitter.continued and emitter.fast
     # (the generated source's constants: compiling the module would add nothing)
     src = source_for(plan, ("P7", "P5"))

@@ -15,6 +15,7 @@ import pytest
 
 from support import naive
 from support.references import against_mp_reference
+from pipeline.group_types import G_CRANK, G_INPUT
 from pipeline.kernels import config as kc
 from pipeline.kernels.inputs import linear_law, rise_return, table_law
 from pipeline.model.groups.law import Law
@@ -177,7 +178,7 @@ def test_the_inputs_are_declared_as_written(studies):
     assert list(plan.par_names[plan.goff[1]:plan.goff[1] + 5]) == \
         ["rocker.length", "rocker.start_angle", "rocker.travel_angle", "rocker.phase_angle",
          "rocker.rise_angle"]
-    assert list(plan.codes[:2]) == [kc.G_CRANK, kc.G_INPUT]
+    assert list(plan.codes[:2]) == [G_CRANK, G_INPUT]
     assert plan.input_names == ("rocker",) and list(plan.input_body) == [1]
 
 

@@ -13,11 +13,13 @@ import pytest
 
 from support import naive
 from pipeline.compiler import kernels_for
-from pipeline.compiler.emit import EMITTERS
+from pipeline.compiler.emit import emitter_classes
 from pipeline.solve.reactions import scene_forces
 from pipeline.kernels import config as kc
-from pipeline.model.groups.prp import PRP
-from pipeline.model.groups.rpp import RPP
+from pipeline.group_types.prp import G_PRP
+from pipeline.group_types.prp.model import PRP
+from pipeline.group_types.rpp import G_RPP
+from pipeline.group_types.rpp.model import RPP
 from pipeline.solve.scene import revolution_angles, solve_curves
 from pipeline.study.reader import load_study, parse_study
 from pipeline.base.errors import StudyError
@@ -330,12 +332,12 @@ def test_reactions_and_slide_forces_match_the_dense_solve(studies, name, referen
 
 # ------------------------------------------------------------------ the between-sample watch
 def test_the_new_groups_are_watched(studies):
-    assert EMITTERS[kc.G_PRP].watched and EMITTERS[kc.G_RPP].watched
+    assert emitter_classes()[G_PRP].watched and emitter_classes()[G_RPP].watched
     for name in ("slotted_rocker_prp", "scotch_yoke_rpp"):
         study = load_study(studies / f"{name}.toml")
         plan = study.mechanism.compile()
         k = kernels_for(plan)
-        g = next(i for i, code in enumerate(plan.codes) if code in (kc.G_PRP, kc.G_RPP))
+        g = next(i for i, code in enumerate(plan.codes) if code in (G_PRP, G_RPP))
         assert g in list(k.WATCH_G), name
 
 

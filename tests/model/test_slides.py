@@ -16,7 +16,7 @@ from pipeline.cli import main
 from pipeline.solve.reactions import slide_action
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
-from pipeline.model.groups.rpp import RPP
+from pipeline.group_types.rpp.model import RPP
 from pipeline.model.mechanism import transmission_items
 from pipeline.solve.peaks import _magnitudes, scene_peaks
 from pipeline.runner import peak_summary

@@ -1,51 +1,55 @@
-"""The group types of ``[[mechanism.groups]]``: one module per type, each
-holding everything about it (its study fields and their errors, its plan row
-and emitter, its transmission angles, how it is drawn, its sliding pairs: the
-hooks of ``base.GroupType``), and this table, the one place a type is
-registered.  The study reader, the model, the peaks and the plots look a type
-up here and call its hooks.
+"""The group types of ``[[mechanism.groups]]``: the structural groups, a folder
+each in ``pipeline.group_types`` (their study fields and plan rows, kernels
+and emitters together), and the mechanism's own elements here (a point
+attached to a link, a rotary or slider input moved by a law).  Each holds
+everything about it as the hooks of ``base.GroupType``; this table, derived
+from the folders, is where the study reader, the model, the peaks and the
+plots look a type up.
 
-Adding a type: a module with its ``GroupType`` subclass, one line in
-``GROUP_TYPES``, a README row and its tests.
+Adding a structural group type: a folder in ``pipeline.group_types``
+(``docs/architecture.md`` walks through one); nothing here changes.
 """
 
 from __future__ import annotations
 
+from ... import group_types
+from ...base.old_names import group_type_names, old_names
 from .attach import Attach
-from .base import GroupType
-from .class3 import ClassIII
-from .class3_slider import ClassIIISlider
+from ..group_base import GroupType
 from .law import LAW_TYPES, Law, parse_law
-from .ppr import PPR
-from .prp import PRP
 from .rotary_input import RotaryInput
-from .rpp import RPP
-from .rpr import RPR
-from .rrp import RRP
-from .rrr import RRR
 from .slider_input import SliderInput
+
+
+def _structural():
+    """(study types, classes their parsers build) of the group-type folders, in the
+    order of their first plan code."""
+    declared, built = [], []
+    for mod in group_types.part("model"):
+        declared += mod.STUDY_TYPES
+        built += getattr(mod, "BUILT", ())
+    return declared, built
+
+
+_DECLARED, _BUILT = _structural()
 
 # the study's `type` -> its class (the order is that of the study's error message)
 GROUP_TYPES: dict[str, type[GroupType]] = {
-    "RRR": RRR,
-    "RRP": RRP,
-    "RPR": RPR,
-    "PRP": PRP,
-    "RPP": RPP,
-    "class3": ClassIII,             # with a `slider` table: ClassIIISlider
+    **{t.TYPE: t for t in _DECLARED},
     "attach": Attach,
     "rotary_input": RotaryInput,
     "slider_input": SliderInput,
-    "PPR": PPR,
 }
 
-# every class a declared group can be (a type's parser may build another: class3)
-GROUP_CLASSES = tuple(dict.fromkeys(list(GROUP_TYPES.values()) + [ClassIIISlider]))
+# every class a declared group can be (a type's parser may build another)
+GROUP_CLASSES = tuple(dict.fromkeys(list(GROUP_TYPES.values()) + _BUILT))
 
 # the study keys that name (list) points some group solves (the parser's "solved later")
 SOLVED_KEYS = tuple(dict.fromkeys(k for t in GROUP_CLASSES for k in t.SOLVES))
 SOLVED_LISTS = tuple(dict.fromkeys(k for t in GROUP_CLASSES for k in t.SOLVES_LISTS))
 
-__all__ = ["GROUP_TYPES", "GROUP_CLASSES", "SOLVED_KEYS", "SOLVED_LISTS", "GroupType", "Law", "LAW_TYPES",
-           "parse_law", "Attach", "ClassIII", "ClassIIISlider", "PPR", "PRP", "RotaryInput",
-           "RPP", "RPR", "RRP", "RRR", "SliderInput"]
+__all__ = ["GROUP_TYPES", "GROUP_CLASSES", "SOLVED_KEYS", "SOLVED_LISTS", "GroupType", "Law",
+           "LAW_TYPES", "parse_law", "Attach", "RotaryInput", "SliderInput"]
+
+# the group types' classes, once importable from here: in their folders now (one release)
+__getattr__ = old_names(__name__, group_type_names)

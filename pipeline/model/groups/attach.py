@@ -10,8 +10,8 @@ import math
 from dataclasses import dataclass
 
 from ...base import limits as lim
-from ...kernels import config as kc
-from .base import GroupType, link_points
+from ...group_types import G_ATTACH
+from ..group_base import GroupType, link_points
 
 
 @dataclass(frozen=True)
@@ -26,7 +26,6 @@ class Attach(GroupType):
     name: str = ""
 
     TYPE = "attach"
-    EMITTER = "AttachEmitter"
     SOLVES = ("point",)
 
     @classmethod
@@ -45,7 +44,7 @@ class Attach(GroupType):
 
     def plan_row(self, pt):
         ia, ib = link_points(pt, self.along)
-        return (kc.G_ATTACH, [pt(self.base), ia, ib, pt(self.point)],
+        return (G_ATTACH, [pt(self.base), ia, ib, pt(self.point)],
                 [("angle", self.angle), ("length", self.length)])
 
     def segments(self):

@@ -11,10 +11,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...base import limits as lim
-from ...kernels import config as kc
+from ...group_types import G_INPUT
 from ...kernels import inputs as ik
 from ...base.limits import MAX_TABLE_POINTS, TABLE_POINTS_WHY
-from .base import GroupType
+from ..group_base import GroupType
 
 LAW_TYPES = ("harmonic", "cycloidal", "table", "linear")
 
@@ -199,7 +199,6 @@ class Input(GroupType):
     (the fixed one, the one moved by the law); ``ROTARY`` says which kind."""
     ROTARY = True
     ENDS = ("pivot", "tip")
-    EMITTER = "InputEmitter"
 
     @classmethod
     def parse_ends(cls, g, f):
@@ -228,7 +227,7 @@ class Input(GroupType):
 
     def plan_row(self, pt):
         a, b = self.ends()
-        return (kc.G_INPUT, [pt(a), pt(b)],
+        return (G_INPUT, [pt(a), pt(b)],
                 self.first_parameters() + self.law.parameters(self.ROTARY))
 
     def input_row(self, pt):

@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass
 
 from ...base import limits as lim
-from .base import guide_words
+from ..group_base import guide_words
 from .law import Input, Law
 
 

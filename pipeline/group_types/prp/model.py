@@ -14,8 +14,8 @@ import math
 from dataclasses import dataclass
 
 from ...base import limits as lim
-from ...kernels import config as kc
-from .base import PARALLEL_SIN, GroupType, guide_words, host, link_points
+from ...model.group_base import PARALLEL_SIN, GroupType, guide_words, host, link_points
+from . import G_PRP
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,6 @@ class PRP(GroupType):
     name: str = ""
 
     TYPE = "PRP"
-    EMITTER = "PRPEmitter"
     SOLVES = ("B",)
 
     @classmethod
@@ -78,12 +77,15 @@ class PRP(GroupType):
         links = []
         for link in (self.guide1_link, self.guide2_link):
             links += link_points(pt, link)
-        return (kc.G_PRP, [pt(self.guide1_point), links[0], links[1], pt(self.guide2_point),
+        return (G_PRP, [pt(self.guide1_point), links[0], links[1], pt(self.guide2_point),
                            links[2], links[3], pt(self.B)],
                 [("guide1_angle", self.guide1_angle), ("guide1_offset", self.guide1_offset),
                  ("guide2_angle", self.guide2_angle), ("guide2_offset", self.guide2_offset)])
 
     def transmission(self):
+        """Block 1 passes the force to the pin along the normal of guide 1, and
+        block 2 moves along guide 2 (either way round), so mu = the angle between
+        the two guides (0 where they are parallel; sin mu is the group's margin)."""
         a1, b1 = self.guide1_link or (None, None)
         a2, b2 = self.guide2_link or (None, None)
         return [(self.name or f"PRP {self.B}", "lines",
@@ -100,3 +102,7 @@ class PRP(GroupType):
     def same_directions(self):
         return [((gp, self.B), (link, angle)) for gp, link, angle, off in self._lines()
                 if off == 0.0]
+
+
+# the study types this folder declares (``pipeline.model.groups.GROUP_TYPES``)
+STUDY_TYPES = (PRP,)

@@ -10,8 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ...base import limits as lim
-from ...kernels import config as kc
-from .base import HALF, GroupType
+from ...model.group_base import HALF, GroupType
+from . import G_RPR
 
 
 @dataclass(frozen=True)
@@ -27,7 +27,6 @@ class RPR(GroupType):
     name: str = ""
 
     TYPE = "RPR"
-    EMITTER = "RPREmitter"
     SOLVES = ("guide_end",)
 
     @classmethod
@@ -44,10 +43,14 @@ class RPR(GroupType):
         return (self.guide_end,)
 
     def plan_row(self, pt):
-        return (kc.G_RPR, [pt(self.block), pt(self.pivot), pt(self.guide_end)],
+        return (G_RPR, [pt(self.block), pt(self.pivot), pt(self.guide_end)],
                 [("offset", self.offset), ("guide_length", self.guide_length), ("W", self.W)])
 
     def transmission(self):
+        """The block at A pushes the guide along its normal n, and the guide's
+        point under the block moves across C->A, so mu = angle(C->A, n) = 90 deg -
+        angle(C->A, C->E); 90 deg with no offset, 0 where the block passes the
+        foot of the perpendicular from C (the group's toggle)."""
         return [(self.name or f"RPR {self.pivot}-{self.block}", "lines",
                  ((self.pivot, self.block, 0.0), (self.pivot, self.guide_end, HALF)))]
 
@@ -66,3 +69,7 @@ class RPR(GroupType):
 
     def carried(self, pts):
         return (self.guide_end,) if self.pivot in pts else ()
+
+
+# the study types this folder declares (``pipeline.model.groups.GROUP_TYPES``)
+STUDY_TYPES = (RPR,)

@@ -10,8 +10,8 @@ import math
 from dataclasses import dataclass
 
 from ...base import limits as lim
-from ...kernels import config as kc
-from .base import HALF, GroupType, guide_words, host, link_points
+from ...model.group_base import HALF, GroupType, guide_words, host, link_points
+from . import G_RRP
 
 
 @dataclass(frozen=True)
@@ -28,7 +28,6 @@ class RRP(GroupType):
     name: str = ""
 
     TYPE = "RRP"
-    EMITTER = "RRPEmitter"
     SOLVES = ("B",)
 
     @classmethod
@@ -47,10 +46,14 @@ class RRP(GroupType):
 
     def plan_row(self, pt):
         ga, gb = link_points(pt, self.guide_link)
-        return (kc.G_RRP, [pt(self.A), pt(self.guide_point), pt(self.B), ga, gb],
+        return (G_RRP, [pt(self.A), pt(self.guide_point), pt(self.B), ga, gb],
                 [("L_AB", self.L_AB), ("guide_angle", self.guide_angle), ("W", self.W)])
 
     def transmission(self):
+        """The force along A-B drives the slider along the guide, so mu = 90 deg -
+        angle(A-B, guide) = the angle between A-B and the guide's normal (the
+        slider-crank's: coupler against the normal to the slider's path); 0 where
+        A-B lies across the guide, the group's toggle (its margin is sin mu)."""
         ga, gb = self.guide_link or (None, None)
         return [(self.name or f"RRP {self.A}-{self.B}", "lines",
                  ((self.A, self.B, 0.0), (ga, gb, self.guide_angle + HALF)))]
@@ -65,3 +68,7 @@ class RRP(GroupType):
 
     def same_directions(self):
         return [((self.guide_point, self.B), (self.guide_link, self.guide_angle))]
+
+
+# the study types this folder declares (``pipeline.model.groups.GROUP_TYPES``)
+STUDY_TYPES = (RRP,)

@@ -26,12 +26,14 @@ import math
 import numpy as np
 from numba import njit
 
-from .config import (JIT, OK, NEWTON_MAXITER, SINGULAR, BRANCH_JUMP,
+from ...kernels.config import (JIT, OK, NEWTON_MAXITER, SINGULAR, BRANCH_JUMP,
                      BAD_GEOMETRY, S_A, S_B, S_DET_SIGN, S_MARGIN, S_ITERS, S_HANDED, S_CA,
                      S_SA, S_CB, S_SB, S_MAY_STOP,
                      T_NEWTON_TOL, T_NEWTON_MAXITER, T_NEWTON_STEP, T_SINGULAR, T_JUMP)
-from .geometry import solve2
-from .groups import _direction as guide_direction
+from ...kernels.geometry import solve2
+from ...kernels.groups import guide_direction
+
+__all__ = ("class3", "class3_slider", "ternary_angle")
 
 # Newton outcomes
 CONVERGED = 0
@@ -446,7 +448,7 @@ def class3_slider(pos, d1, d2, i2, i6, i7, i3, i4, i5, ga, gb, l23, l34, u435, l
 
     The guide runs through the known point i7 with the absolute direction
     ``guide_angle`` (ga < 0) or that of the link ga->gb plus ``guide_angle``
-    (``groups._direction``).  The margin is |det J| / (L23 L46 max(L34, L35)),
+    (``kernels.groups.guide_direction``).  The margin is |det J| / (L23 L46 max(L34, L35)),
     J the Jacobian of (F1, F2) above: scale-free, 0 at a singular position.
     Flagged ``S_HANDED``, the solution at this position as unit vectors
     (``handed``; u_cos, u_sin: cos and sin of U435, computed here if NaN), as

@@ -8,8 +8,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ...base import limits as lim
-from ...kernels import config as kc
-from .base import GroupType
+from ...model.group_base import GroupType
+from . import G_RRR
 
 
 @dataclass(frozen=True)
@@ -24,7 +24,6 @@ class RRR(GroupType):
     name: str = ""
 
     TYPE = "RRR"
-    EMITTER = "RRREmitter"
     SOLVES = ("B",)
 
     @classmethod
@@ -41,11 +40,17 @@ class RRR(GroupType):
         return (self.B,)
 
     def plan_row(self, pt):
-        return (kc.G_RRR, [pt(self.A), pt(self.C), pt(self.B)],
+        return (G_RRR, [pt(self.A), pt(self.C), pt(self.B)],
                 [("L_AB", self.L_AB), ("L_CB", self.L_CB), ("W", self.W)])
 
     def transmission(self):
+        """The angle at the middle joint B between B->A and B->C ("dyad", (A, B,
+        C)): the force along A-B, B moving across C-B."""
         return [(self.name or f"{self.A}-{self.B}-{self.C}", "dyad", (self.A, self.B, self.C))]
 
     def segments(self):
         return [(self.A, self.B), (self.C, self.B)]
+
+
+# the study types this folder declares (``pipeline.model.groups.GROUP_TYPES``)
+STUDY_TYPES = (RRR,)

@@ -1,8 +1,10 @@
 """The base of a group type: the hooks every type of ``[[mechanism.groups]]``
-answers (pymoo-style: one base class, one small module per type, one
-name-to-class table in ``pipeline.model.groups``).
+answers (pymoo-style: one base class, a folder per type, one name-to-class
+table derived from them in ``pipeline.model.groups``).
 
-A group type is the frozen dataclass of the declared group (its fields are the
+The structural groups (Assur groups) are each a folder of
+``pipeline.group_types``; the crank's attached points and the inputs, the
+mechanism's own elements, are modules here.  A group type is the frozen dataclass of the declared group (its fields are the
 model's, angles in rad) and, as class attributes and methods, everything the
 package needs to know about that type:
 
@@ -12,8 +14,7 @@ package needs to know about that type:
   helpers: a known point, a link, a point defined here, the assembly mode);
 * ``reads``/``writes``: the points it needs and the points it solves;
 * ``plan_row``: its row of the compiled plan (group code, point indices,
-  parameters) and ``EMITTER``, the name of its class in
-  ``pipeline.compiler.emit`` (chosen there by the row's code);
+  parameters; the compiler picks the row's emitter by its code);
 * ``input_row``: for an input besides the crank, its entry of the plan's inputs;
 * ``transmission``: its transmission angle items (``pipeline.solve.peaks``);
 * ``segments``: the links drawn for it (``pipeline.views.plots``);
@@ -60,7 +61,6 @@ class GroupType:
     """The hooks of a group type (see the module docstring); the defaults are
     those of a group without sliding pairs, inputs or drawn links."""
     TYPE = ""               # the study's `type`
-    EMITTER = ""            # its emitter class in pipeline.compiler.emit
     SOLVES = ()             # study keys naming the points it solves
     SOLVES_LISTS = ()       # study keys listing points it solves
 

@@ -1,0 +1,11 @@
+"""RPP (the Scotch yoke) and PPR (the same chain read from its other end, solved as one).
+
+This folder holds everything about the type, by layer: ``model`` (its study
+fields and plan row), ``kernels`` (its library kernels), ``emitter`` (its lines
+of the generated module: careful path, lane form, force lanes, warm-up).
+``CODES`` gives each plan code it adds its name (``pipeline.group_types``
+derives every table from it)."""
+
+G_RPP = 7
+
+CODES = {G_RPP: "RPP"}
