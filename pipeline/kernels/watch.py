@@ -6,10 +6,10 @@ range narrower than the step, a parallelogram that passes its collinear
 position and comes back as the antiparallelogram).  Every group that can fail
 has a margin m (its kernel's, ``pipeline.group_types``): for instance |sin|
 of the transmission angle of a two-link dyad, |cos| of the link against the
-guide of a slider dyad, |det J| scaled of a class III group.  Its square D = m^2 is a smooth function of the crank angle
-(for a dyad a polynomial of the known points: the assembly discriminant,
-negative where the dyad cannot be assembled); D reaches zero exactly where the
-group folds or passes a toggle.
+guide of a slider dyad, |det J| scaled of a class III group.  Its square
+D = m^2 is a smooth function of the crank angle (for a dyad a polynomial of
+the known points: the assembly discriminant, negative where the dyad cannot be
+assembled); D reaches zero exactly where the group folds or passes a toggle.
 
 The certificate of an interval uses what the walk already has: D at three
 consecutive positions.  The quadratic through them bounds D between them up

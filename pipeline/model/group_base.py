@@ -3,10 +3,11 @@ answers (pymoo-style: one base class, a folder per type, one name-to-class
 table derived from them in ``pipeline.model.groups``).
 
 The structural groups (Assur groups) are each a folder of
-``pipeline.group_types``; the crank's attached points and the inputs, the
-mechanism's own elements, are modules here.  A group type is the frozen dataclass of the declared group (its fields are the
-model's, angles in rad) and, as class attributes and methods, everything the
-package needs to know about that type:
+``pipeline.group_types``; the attached points and the inputs, the mechanism's
+own elements, are modules of ``pipeline.model.groups``.  A group type is the
+frozen dataclass of the declared group (its fields are the model's, angles in
+rad) and, as class attributes and methods, everything the package needs to
+know about that type:
 
 * ``TYPE``: the study's ``type``; ``SOLVES`` (``SOLVES_LISTS``): the study
   keys that name (list) the points it solves (for the parser's "solved later");

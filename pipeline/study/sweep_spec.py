@@ -207,7 +207,8 @@ def parse_sweep(root, mech, output) -> SweepSpec:
         if param not in plan.par_names:
             close = [p for p in plan.par_names if not p.startswith("S[")]
             raise v.error("param", f"no mechanism parameter {param!r}; known: {', '.join(close)}")
-        if param.endswith(".ratio"):
+        label, _, key = param.rpartition(".")
+        if key == "ratio" and label in {plan.group_names[int(g)] for g in plan.input_group}:
             raise v.error("param", f"{param} is a gear ratio, a whole number (the cycle is one "
                                    "revolution of the main crank): it cannot be drawn from a "
                                    "range; run one study per ratio")
