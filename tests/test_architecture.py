@@ -375,11 +375,6 @@ def test_the_reexport_check_finds_one(tmp_path, monkeypatch):
 
 
 COMPILER_FUNCTION_LINES = 80      # a function of the compiler, def line to last line, at most
-# the one exception, measured: the generated sweep kernel's evaluate (the skeleton's
-# template, 131 lines) split into five helper kernels ran 3.4 % slower (a chunk's thread
-# CPU time, 4 chunks x 3 rounds alternated, 0.648-0.658 s against 0.622-0.640 s), inlined
-# at numba's IR or called; whole until a split that keeps its speed is found (issue 56)
-COMPILER_LONG_KEPT = {("skeleton/parallel.py", "evaluate")}
 
 
 def _long_functions(folder, limit=COMPILER_FUNCTION_LINES):
@@ -400,8 +395,7 @@ def test_no_function_of_the_compiler_is_over_80_lines():
     """What writes the generated module is small functions named for what each
     writes: none over 80 lines in pipeline/compiler/ (its skeleton too), nor in
     a group type's compiler layer (its emitter and lane lines)."""
-    long = [(m, f, n) for m, f, n in _long_functions(PKG / "compiler")
-            if (m, f) not in COMPILER_LONG_KEPT]
+    long = list(_long_functions(PKG / "compiler"))
     long += [(m, f, n) for m, f, n in _long_functions(PKG / "group_types")
              if Path(m).stem in [k for k, v in TYPE_LAYERS.items() if v == "compiler"]]
     assert not long, f"functions over {COMPILER_FUNCTION_LINES} lines: {long}"
