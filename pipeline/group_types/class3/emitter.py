@@ -16,19 +16,30 @@ from .lanes import force_lines, setup_lines, slider_force_lines, walk_lines
 from .model import ClassIII, ClassIIISlider
 
 
-class ClassIIIEmitter(Emitter):
+class _Triad(Emitter):
+    """What either kind shares: the continuation state, the watch, the fixed angle
+    U435 of the ternary link (its cos/sin hoisted) and the lane form."""
     watched = True
     continued = True
-    code = G_CLASS3
-    force_lanes = SAME_BITS
-    slider = False
     fast = True
+    slider = False
 
     def derived(self):
         u = self.k("U435")
         return [(u, f"ternary_angle({self.k('L34')}, {self.k('L45')}, {self.k('L35')}, "
                     f"{self.k('orientation')})"),
                 (f"{u}_cos", f"math.cos({u})"), (f"{u}_sin", f"math.sin({u})")]
+
+    def lanes(self):
+        return walk_lines(self)
+
+    def setup_lines(self):
+        return setup_lines(self)
+
+
+class ClassIIIEmitter(_Triad):
+    code = G_CLASS3
+    force_lanes = SAME_BITS
 
     def careful(self):
         i2, i6, i7, i3, i4, i5 = (self.p(j) for j in range(6))
@@ -48,12 +59,6 @@ class ClassIIIEmitter(Emitter):
                 "the other two leads",
                 [("lead", (i4, i6, i2, i3, i5, i7)), ("lead", (i5, i7, i2, i3, i4, i6))])
 
-    def lanes(self):
-        return walk_lines(self)
-
-    def setup_lines(self):
-        return setup_lines(self)
-
     def force_lines(self, c, t):
         return force_lines(self, c, t)
 
@@ -67,24 +72,18 @@ def _row(e):
     return f"np.int64({e.triad_row})"
 
 
-class ClassIIISliderEmitter(Emitter):
+class ClassIIISliderEmitter(_Triad):
     """The class III group with a block on a guide in place of lead 5-7: the
     continuation state, the watch and the lane form (``lanes.walk_lines``)
     like ``ClassIIIEmitter``'s."""
-    watched = True
-    continued = True
     code = G_CLASS3_SLIDER
     force_lanes = TO_ROUNDING
     guide_col = 6
     slider = True
-    fast = True
 
     def derived(self):
-        u = self.k("U435")
-        return [(u, f"ternary_angle({self.k('L34')}, {self.k('L45')}, {self.k('L35')}, "
-                    f"{self.k('orientation')})"),
-                (f"{u}_cos", f"math.cos({u})"), (f"{u}_sin", f"math.sin({u})")] \
-            + hoisted_cos_sin(self, "guide_angle")    # (the lane form's guide direction)
+        # (and the lane form's guide direction)
+        return super().derived() + hoisted_cos_sin(self, "guide_angle")
 
     def careful(self):
         i2, i6, i7, i3, i4, i5 = (self.p(j) for j in range(6))
@@ -101,12 +100,6 @@ class ClassIIISliderEmitter(Emitter):
                            f"{k('L35')}, {k('L46')}, {k('guide_angle')}, {k('guide_offset')}, "
                            f"state, {_row(self)}, order, tols, {k('U435')}_cos, "
                            f"{k('U435')}_sin)")]
-
-    def lanes(self):
-        return walk_lines(self)
-
-    def setup_lines(self):
-        return setup_lines(self)
 
     def force_lines(self, c, t):
         return slider_force_lines(self, c, t)
