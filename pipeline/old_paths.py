@@ -31,7 +31,7 @@ import warnings
 REEXPORTED = ("model", "study", "analysis")
 
 # old module, under pipeline. -> where it is now; an old package's name covers
-# its modules too (pipeline.groups.ppr -> pipeline.model.groups.ppr)
+# its modules too (pipeline.groups.prp -> pipeline.model.groups.prp, which moved again)
 MOVED = {
     "errors": "base.errors",
     "limits": "base.limits",
@@ -89,8 +89,7 @@ MOVED = {
 }
 
 
-def new_name(name: str) -> str | None:
-    """Where the module ``name`` (``pipeline.X...``) is now, or None if it did not move."""
+def _moved_once(name: str) -> str | None:
     head, _, rest = name.partition(".")
     if head != "pipeline" or not rest:
         return None
@@ -100,6 +99,16 @@ def new_name(name: str) -> str | None:
         if old in MOVED:
             return ".".join(["pipeline", MOVED[old], *parts[i:]])
     return None
+
+
+def new_name(name: str) -> str | None:
+    """Where the module ``name`` (``pipeline.X...``) is now, or None if it did not
+    move: followed to the end where it moved twice (``pipeline.groups.rrr``, to
+    ``pipeline.model.groups.rrr``, then to ``pipeline.group_types.rrr.model``)."""
+    new = _moved_once(name)
+    while new is not None and _moved_once(new) is not None:
+        new = _moved_once(new)
+    return new
 
 
 def deprecated(old: str, new: str) -> str:

@@ -22,17 +22,19 @@ OLD_PATHS = "old_paths.py"
 
 def _type_words():
     """{folder: the words that name its type}: the names of its plan codes and
-    their constants, its study types and classes, its library kernels."""
+    their constants, its study types and classes, its library kernels, its
+    emitters."""
     from pipeline import group_types
     words = {}
     for f in group_types.folders():
         init = importlib.import_module(f"pipeline.group_types.{f}")
         model = importlib.import_module(f"pipeline.group_types.{f}.model")
         kernels = importlib.import_module(f"pipeline.group_types.{f}.kernels")
+        emitter = importlib.import_module(f"pipeline.group_types.{f}.emitter")
         classes = model.STUDY_TYPES + getattr(model, "BUILT", ())
         words[f] = (set(init.CODES.values()) | {k for k in vars(init) if k.startswith("G_")}
                     | {c.TYPE for c in classes} | {c.__name__ for c in classes}
-                    | set(kernels.__all__))
+                    | set(kernels.__all__) | {e.__name__ for e in emitter.EMITTERS})
     return words
 
 
@@ -71,6 +73,41 @@ def test_the_name_check_finds_a_type_named_elsewhere(tmp_path):
     f.write_text(f.read_text() + "\n# an RRR dyad's margin\nX = G_PRP\n")
     found = {(m, w) for m, _, w in _named_outside(pkg, _type_words())}
     assert {("runs/sweep.py", "RRR"), ("runs/sweep.py", "G_PRP")} <= found
+
+
+def test_the_moved_modules_and_classes_warn_and_are_the_same_objects():
+    """The group types' modules and classes that moved into the folders stay
+    importable for one release from where they were: each warns, naming the new
+    path, and gives the very object; a path that moved twice names the last."""
+    code = textwrap.dedent("""
+        import importlib, warnings
+        warnings.simplefilter("error", DeprecationWarning)
+        from pipeline.group_types.class3.model import ClassIIISlider
+        from pipeline.group_types.rpp import model as rpp
+        from pipeline.group_types.rrr.model import RRR
+        import pipeline.model, pipeline.model.groups
+        for get, want, new in (
+                (lambda: pipeline.model.RRR, RRR, "pipeline.group_types.rrr.model"),
+                (lambda: pipeline.model.groups.ClassIIISlider, ClassIIISlider,
+                 "pipeline.group_types.class3.model"),
+                (lambda: importlib.import_module("pipeline.model.groups.ppr"), rpp,
+                 "pipeline.group_types.rpp.model"),
+                # (the old package's own warning comes first)
+                (lambda: importlib.import_module("pipeline.groups.rrr").RRR, RRR,
+                 "import pipeline.model.groups ")):
+            try:
+                get()
+                raise SystemExit("no warning")
+            except DeprecationWarning as w:
+                assert new in str(w), w
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", DeprecationWarning)
+                assert get() is want
+        print("ok")
+        """)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=TESTS.parent)
+    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr[-3000:]
 
 
 # ------------------------------------------------------------------ a new type
@@ -258,8 +295,9 @@ def test_a_new_group_type_is_one_folder(tmp_path, studies):
         text = text.replace(old, new)
     study = tmp_path / "fourbar_ratio.toml"
     study.write_text(text)
+    # (numba's cache of its own: the copy's kernel sources are not the checkout's)
     env = dict(os.environ, PYTHONPATH=f"{tmp_path}{os.pathsep}{TESTS}",
-               PIPELINE_CACHE_DIR=str(tmp_path / "cache"))
+               PIPELINE_CACHE_DIR=str(tmp_path / "cache"), NUMBA_CACHE_DIR=str(tmp_path / "nb"))
     out = subprocess.run([sys.executable, "-c", SCRIPT, str(pkg), str(study)], cwd=tmp_path,
                          env=env, capture_output=True, text=True, timeout=900)
     assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-6000:]

@@ -17,7 +17,7 @@ from __future__ import annotations
 # the per-thread work arrays of ``settle``, in its argument order, by name: the
 # host (``pipeline.runs.gpu``) takes their shapes and dtypes from the CPU's own
 # allocators, so the two paths cannot disagree on a work array
-WORK = ("col", "qmax", "qmin", "corr")      # as ``evaluate`` allocates them
+WORK = ("col", "qmax", "qmin", "corr")      # as ``evaluate`` has them
 WALK = ("pos", "d1", "d2", "margins", "state", "start_state")          # continuation.work
 FORCE = ("work_a", "work_b", "loads_out", "r_out", "slide_out")        # forces.force_work
 WATCH = ("hist_phi", "hist_val", "hist_state", "sub_phi", "sub_val",  # the module's watch_work

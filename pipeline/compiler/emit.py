@@ -39,14 +39,19 @@ class Emitter:
     code = None
     fast = False            # has a lane form
     watched = False         # can fail between positions: its margin is watched
-    continued = False       # solved by Newton: keeps a row of the continuation state
-                            # (``triad_row``: start, predictor, step control, closing)
     takes_law = False       # an input: the lane walk's table holds its law (``law_steps``)
     # its lines of the force lanes (``force_lines``): SAME_BITS, the careful kernel's
     # operations; TO_ROUNDING, its lane form's; None: the force lanes do not know it
     force_lanes = None
     guide_col = None        # gidx column of a guide link: on a guide of fixed direction
                             # (none there) its TO_ROUNDING lines give the same bits
+
+    @property
+    def continued(self):
+        """Solved by Newton: keeps a row of the continuation state (``triad_row``:
+        start, predictor, step control, closing); its folder's ``CONTINUED``
+        (``group_types.continued_codes``), the one place that says it."""
+        return self.code in group_types.continued_codes()
 
     def __init__(self, plan, names, g, triad_row=-1):
         self.plan = plan
@@ -88,6 +93,12 @@ class Emitter:
         raise NotImplementedError
 
     def lanes(self):
+        raise NotImplementedError
+
+    def setup_lines(self):
+        """(A group solved by continuation) its lines of the lane path's
+        ``setup_lane``: its row of the lane state at phis[0], from the careful
+        solve there."""
         raise NotImplementedError
 
     def force_lines(self, c, t):
@@ -247,6 +258,13 @@ class InputEmitter(Emitter):
     force_lanes = SAME_BITS
     takes_law = True
 
+    @property
+    def continued(self):
+        """Solved by Newton: keeps a row of the continuation state (``triad_row``:
+        start, predictor, step control, closing); its folder's ``CONTINUED``
+        (``group_types.continued_codes``), the one place that says it."""
+        return self.code in group_types.continued_codes()
+
     def __init__(self, plan, names, g, triad_row=-1):
         super().__init__(plan, names, g, triad_row)
         self.i = [int(x) for x in plan.input_group].index(g)
@@ -342,7 +360,11 @@ def emitter_classes() -> dict:
     each group-type folder's (``emitter.EMITTERS``)."""
     out = {e.code: e for e in (CrankEmitter, AttachEmitter, InputEmitter)}
     for mod in group_types.part("emitter"):
-        out.update((e.code, e) for e in mod.EMITTERS)
+        for e in mod.EMITTERS:
+            if e.code not in group_types.folder_codes(mod) or e.code in out:
+                raise ValueError(f"{mod.__name__}.{e.__name__}: its code {e.code} is not one "
+                                 "of its folder's CODES, or another emitter's")
+            out[e.code] = e
     return out
 
 
@@ -352,7 +374,7 @@ def emitters_for(plan, names):
     out, row = [], 0
     for g, code in enumerate(plan.codes):
         cls = emitter_classes()[int(code)]
-        if cls.continued:
+        if int(code) in group_types.continued_codes():
             out.append(cls(plan, names, g, row))
             row += 1
         else:

@@ -84,7 +84,7 @@ def input_lines(e, c, t, col):
 
 
 def direction_analogs(e, t, j):
-    """The analogs ``t``1, ``t``2 of a guide's angle after ``emit.lane_direction``'s
+    """The analogs ``t``1, ``t``2 of a guide's angle after ``lane_geometry.lane_direction``'s
     lines (``geometry.angle_analogs``' lines on the guide link's vector vx, vy
     and its r2; 0 for a guide of fixed direction)."""
     if e.ix[j] < 0:
@@ -101,7 +101,7 @@ def direction_analogs(e, t, j):
 
 def direction_lines(e, u, t, key, j):
     """A guide's unit direction ``u``x, ``u``y by the positions stage's lane form
-    (``emit.lane_direction``) and the analogs ``t``1, ``t``2 of its angle
+    (``lane_geometry.lane_direction``) and the analogs ``t``1, ``t``2 of its angle
     (``geometry.angle_analogs``' lines on the guide link's vector; 0 for a
     guide of fixed direction)."""
     return from_position_lanes(lane_direction(e, u, key, j)) + direction_analogs(e, t, j)
@@ -109,7 +109,7 @@ def direction_lines(e, u, t, key, j):
 
 def meet_lines(g1, e1, g2, e2, b):
     """B (point ``b``) where two guide lines meet, by the positions stage's lane
-    form (``emit.lane_meet``), and its analogs (``kernels.groups._line_meet``'s
+    form (``lane_geometry.lane_meet``), and its analogs (``kernels.groups.line_meet``'s
     lines on the directions u1, u2 and the analogs t11 ... t22 of their
     angles)."""
     return from_position_lanes(lane_meet(f"p{g1}", e1, f"p{g2}", e2, f"p{b}") + [

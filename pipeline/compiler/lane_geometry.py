@@ -17,7 +17,7 @@ def hoisted_cos_sin(e, *keys):
 
 
 def lane_direction(e, u, angle_key, j):
-    """Lane lines of a guide's unit direction ``u``x, ``u``y (kernels.groups._direction
+    """Lane lines of a guide's unit direction ``u``x, ``u``y (kernels.groups.guide_direction
     as a vector): e(angle) hoisted, or, for a guide turning with the link at gidx
     columns j, j + 1, that link's vector normalised and turned by the hoisted
     cos/sin of the angle (a link of no length: the careful path)."""
@@ -33,7 +33,7 @@ def lane_direction(e, u, angle_key, j):
 
 
 def lane_meet(G1, e1, G2, e2, B):
-    """Lane lines of ``B`` where two lines meet (kernels.groups._line_meet): line i
+    """Lane lines of ``B`` where two lines meet (kernels.groups.line_meet): line i
     through G_i along u_i (locals u1x ... u2y) at the offset e_i along n_i = u_i
     turned +90 deg; ``m`` the margin |sin| of the angle between them (near 0:
     the careful path)."""

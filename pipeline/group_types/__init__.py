@@ -40,9 +40,18 @@ CORE_CODES = {G_CRANK: "crank", G_ATTACH: "attach", G_INPUT: "input"}
 
 @cache
 def folders() -> tuple[str, ...]:
-    """The group-type folders, in the order of their first plan code."""
+    """The group-type folders, in the order of their first plan code; a code
+    taken twice (by two folders, or a folder and the mechanism's own elements)
+    is an error naming both."""
     names = [m.name for m in pkgutil.iter_modules(__path__) if m.ispkg]
     mods = {n: importlib.import_module(f"{__name__}.{n}") for n in names}
+    taken = {code: f"the mechanism's own {name}" for code, name in CORE_CODES.items()}
+    for n in sorted(names):
+        for code in mods[n].CODES:
+            if code in taken:
+                raise ValueError(f"group type folder {n!r}: plan code {code} is already "
+                                 f"{taken[code]}'s")
+            taken[code] = f"folder {n!r}"
     return tuple(sorted(names, key=lambda n: min(mods[n].CODES)))
 
 
@@ -60,16 +69,17 @@ def part(module: str) -> tuple:
 
 @cache
 def code_names() -> dict[int, str]:
-    """Every plan code -> its name: the mechanism's own elements' and each
-    folder's; a code taken twice is an error naming both."""
+    """Every plan code -> its name: the mechanism's own elements' and each folder's."""
     out = dict(CORE_CODES)
     for f in folders():
-        for code, name in importlib.import_module(f"{__name__}.{f}").CODES.items():
-            if code in out:
-                raise ValueError(f"group type folder {f!r}: plan code {code} is already "
-                                 f"{out[code]!r}'s")
-            out[code] = name
+        out.update(importlib.import_module(f"{__name__}.{f}").CODES)
     return dict(sorted(out.items()))
+
+
+def folder_codes(module) -> tuple[int, ...]:
+    """The plan codes of the folder a module of it (``module.__name__``) is in."""
+    folder = module.__name__.split(".")[2]
+    return tuple(importlib.import_module(f"{__name__}.{folder}").CODES)
 
 
 @cache

@@ -7,7 +7,7 @@ numba's on-disk cache checks only the timestamp of a function's own file, so a
 cached kernel keeps an old copy of a kernel it calls from another file.  On
 import, the cached kernels are therefore dropped whenever any kernel source
 changed, here or a group type's (``pipeline/group_types/*/kernels.py``; a
-digest of all of them is kept beside the cache).
+digest of all of them is kept in each of their cache folders).
 """
 
 import hashlib as _hashlib
@@ -15,27 +15,30 @@ import os as _os
 from pathlib import Path as _Path
 
 
-def _drop_stale_cache():
-    here = _Path(__file__).resolve().parent
-    types = sorted(here.parent.glob("group_types/*/kernels.py"))
-    sources = sorted(here.glob("*.py")) + types
-    digest = _hashlib.sha256(b"".join(p.read_bytes() for p in sources)).hexdigest()
-    modules = {p.stem for p in sources}
-    package = here / "__pycache__"
+def _cache_folders(sources):
+    """The folders numba caches the kernels of ``sources`` in: beside each
+    source folder (``__pycache__``), or, with NUMBA_CACHE_DIR set, that
+    folder's own subfolder for it (``<name>_<sha1 of its path>``, as numba
+    names it: another checkout's or project's are left alone)."""
     user = _os.environ.get("NUMBA_CACHE_DIR")
-    # numba caches in NUMBA_CACHE_DIR when it is set, else beside the sources (here and
-    # in each group type's folder): only those folders are checked
-    dirs = [_Path(user)] if user else [package] + [t.parent / "__pycache__" for t in types]
-    for d in dirs:
+    folders = sorted({_os.path.dirname(_os.path.abspath(p)) for p in sources})
+    if not user:
+        return [_Path(f) / "__pycache__" for f in folders]
+    return [_Path(user) / f"{_os.path.basename(f)}_{_hashlib.sha1(f.encode()).hexdigest()}"
+            for f in folders]
+
+
+def _drop_stale_cache():
+    here = _Path(_os.path.dirname(_os.path.abspath(__file__)))
+    sources = sorted(here.glob("*.py")) + sorted(here.parent.glob("group_types/*/kernels.py"))
+    digest = _hashlib.sha256(b"".join(p.read_bytes() for p in sources)).hexdigest()
+    for d in _cache_folders(sources):
         stamp = d / "pipeline_kernels.sha256"
         try:
             if stamp.exists() and stamp.read_text() == digest:
                 continue
-            if d.exists():
-                for f in d.rglob("*.nb[ic]"):
-                    if f.name.split(".", 1)[0] in modules and (not d.match("__pycache__")
-                                                               or f.parent == d):
-                        f.unlink(missing_ok=True)
+            for f in d.glob("*.nb[ic]") if d.exists() else ():
+                f.unlink(missing_ok=True)
             d.mkdir(parents=True, exist_ok=True)
             stamp.write_text(digest)
         except OSError:  # a read-only installation: numba then does not cache either

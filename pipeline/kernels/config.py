@@ -43,6 +43,7 @@ JIT_ALLOC = dict(JIT, _nrt=True)
 # and links for every function (measured: a fifth of a new scene's compile time).
 # The machine code of the kernel itself is the same.
 JIT_INNER = dict(JIT, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+JIT_ALLOC_INNER = dict(JIT_ALLOC, no_cpython_wrapper=True, no_cfunc_wrapper=True)   # allocating
 # JIT_FIRST_CLASS: a generated kernel that other kernels also take as an argument
 # (``advance`` and ``start``: pipeline.kernels.walk's revolution calls them through
 # their address, numba's first-class functions, which is the C wrapper's).

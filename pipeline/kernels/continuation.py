@@ -122,7 +122,7 @@ def predict(state, dphi):
 @njit(**JIT)
 def may_stop(state, flag):
     """Whether the next solve's Newton may stop where its steps do not contract
-    (``triad._give_up``): 1.0 where the continuation retries a failure at half
+    (the class III kernel's ``_give_up``): 1.0 where the continuation retries a failure at half
     the step; 0.0 (the default) where this try decides: Newton runs to its cap."""
     for g in range(state.shape[0]):
         state[g, S_MAY_STOP] = flag

@@ -1,6 +1,7 @@
 """The model layer: a mechanism declared once (frozen dataclasses,
 ``mechanism``) and compiled once into the arrays the kernels read (``Plan``);
-one module per group type (``groups/``, with its table ``GROUP_TYPES``); the
+the group types' base (``group_base``), the mechanism's own elements and the
+table ``GROUP_TYPES`` derived from the group-type folders (``groups/``); the
 required motion law (``motion_law``); the catalogue of a sweep's metrics
 (``metrics``).
 

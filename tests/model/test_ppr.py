@@ -115,9 +115,13 @@ def test_a_slide_across_the_ppr_slot_is_refused(studies):
     assert "the PPR group 'carriage' guides P7 along its slot, 60 deg from its guide" in msg, msg
 
 
+# the emitter of each group class, where it is not the class's name + "Emitter"
+EMITTER_OF = {"PPR": "RPPEmitter", "RotaryInput": "InputEmitter", "SliderInput": "InputEmitter"}
+
+
 def test_every_types_plan_code_picks_an_emitter_of_its_own_folder(studies):
-    """A group type's plan row picks, by its code, an emitter of the type's own
-    folder (pipeline.group_types; the mechanism's own elements: compiler.emit),
+    """A group type's plan row picks, by its code, its own emitter, in the type's
+    own folder (pipeline.group_types; the mechanism's own elements: compiler.emit),
     for every group of every shipped study."""
     seen = set()
     for path in sorted(studies.glob("*.toml")):
@@ -129,6 +133,8 @@ def test_every_types_plan_code_picks_an_emitter_of_its_own_folder(studies):
             assert (emitter.__module__.rsplit(".", 1)[0] == home
                     or (emitter.__module__, home) == ("pipeline.compiler.emit",
                                                       "pipeline.model.groups")), (path.name, g)
+            assert emitter.__name__ == EMITTER_OF.get(type(g).__name__,
+                                                      type(g).__name__ + "Emitter"), (path.name, g)
             seen.add(type(g).__name__)
     assert {"RRR", "RRP", "RPR", "PRP", "RPP", "PPR", "ClassIII", "ClassIIISlider", "Attach",
             "RotaryInput", "SliderInput"} <= seen

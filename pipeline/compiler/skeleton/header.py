@@ -18,7 +18,8 @@ import math
 import numpy as np
 from numba import njit
 
-from pipeline.kernels.config import (JIT, JIT_ALLOC, JIT_INNER, JIT_FIRST_CLASS, JIT_LANES, OK,
+from pipeline.kernels.config import (JIT, JIT_ALLOC, JIT_ALLOC_INNER, JIT_INNER, JIT_FIRST_CLASS,
+                                     JIT_LANES, OK,
                                      BRANCH_JUMP,
                                      NEWTON_MAXITER, SINGULAR, NO_ASSEMBLY, BAD_GEOMETRY, S_A, S_B,
                                      S_DET_SIGN, S_ITERS, S_MARGIN, S_HANDED, S_CA, S_SA, S_CB, S_SB,
@@ -56,8 +57,8 @@ from pipeline.kernels.watch import (FOLD_BACK, LOCATE_MIN_STEP,
                                    third_difference, uniform_hit, window_score,
                                    window_vertex)
 # ---- end of the skeleton ----
-__all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_INNER', 'JIT_FIRST_CLASS', 'JIT_LANES',
-           'OK',
+__all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_ALLOC_INNER', 'JIT_INNER',
+           'JIT_FIRST_CLASS', 'JIT_LANES', 'OK',
            'BRANCH_JUMP', 'NEWTON_MAXITER', 'SINGULAR', 'NO_ASSEMBLY', 'BAD_GEOMETRY', 'S_A', 'S_B',
            'S_DET_SIGN', 'S_ITERS', 'S_MARGIN', 'S_HANDED', 'S_CA', 'S_SA', 'S_CB', 'S_SB',
            'N_STATE', 'N_TOLS', 'T_SINGULAR',

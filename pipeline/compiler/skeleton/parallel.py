@@ -12,8 +12,8 @@ The text below the marker line is pasted into the generated module
 (``pipeline.compiler.generate``); the imports above it declare, for linters and
 readers, the names the generated module gives it."""
 
-from .header import (math, np, njit, JIT_ALLOC, OK, work, force_work, dwell_lanes,
-                     M_FAIL_PHI, M_FAIL_GROUP, SET_DWELL_W,
+from .header import (math, np, njit, JIT_ALLOC, JIT_ALLOC_INNER, JIT_INNER, OK, work,
+                     force_work, dwell_lanes, M_FAIL_PHI, M_FAIL_GROUP, SET_DWELL_W,
                      SET_WANT_LAW)
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, LANES, N_LANE_ROWS, THETA_COLS, THETA_IN,
@@ -25,7 +25,7 @@ from .sweep_stages import careful_tail, no_metrics, settle, LANE_METRICS, NEEDS_
 from .lane_forces import lane_forces_apply, force_flush, force_refused
 
 # ---- the skeleton: from here on, pasted into the generated module ----
-@njit(**JIT_ALLOC)
+@njit(**JIT_ALLOC_INNER)
 def crank_table(phis, close):
     """The crank's cos/sin at the walk's angles, shared by every candidate: the
     positions, the closing angle and two past it (the watch's windows wrap
@@ -40,7 +40,7 @@ def crank_table(phis, close):
     return cph, sph
 
 
-@njit(**JIT_ALLOC)
+@njit(**JIT_ALLOC_INNER)
 def lane_work(npos, w):
     """The work arrays of ``evaluate``: once per call, never per candidate (the
     lanes' S and theta, a rocker column, the handed-over trail, the dwell
@@ -52,14 +52,14 @@ def lane_work(npos, w):
             np.empty(LANES, np.int64), np.empty(npos), np.empty(LANES, np.int64))
 
 
-@njit(**JIT_ALLOC)
+@njit(**JIT_ALLOC_INNER)
 def walk_work():
     """The careful walk's, the force stage's and the watch's work arrays."""
     return (work(N_POINTS, N_GROUPS, N_TRIADS), force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS),
             watch_work(N_WATCH, N_TRIADS))
 
 
-@njit(**JIT_ALLOC)
+@njit(**JIT_INNER)
 def fails_at_start(code, phis, margins, m):
     """A candidate that fails at phis[0], the careful path's first step: that is
     its report (its metrics row ``m``); returns its status ``code``."""
@@ -69,7 +69,7 @@ def fails_at_start(code, phis, margins, m):
     return code
 
 
-@njit(**JIT_ALLOC)
+@njit(**JIT_ALLOC_INNER)
 def force_lane_work(nf):
     """The force lanes' arrays (``nf`` positions: 0 where they do not run): the
     block's constants FS, the table handed over FT, the reactions RB, the
@@ -80,7 +80,7 @@ def force_lane_work(nf):
             np.empty((nf, N_RCOLS * LANES)), crank_tab)
 
 
-@njit(**JIT_ALLOC)
+@njit(**JIT_INNER)
 def pad_block(S, theta, filled, npos):
     """A partial block's lanes from ``filled`` on: copies of lane 0 (their
     constants, their start, and the inputs' laws at every step)."""
@@ -94,7 +94,7 @@ def pad_block(S, theta, filled, npos):
                 theta[k, q * LANES + l] = theta[k, q * LANES]
 
 
-@njit(**JIT_ALLOC)
+@njit(**JIT_ALLOC_INNER)
 def flush_forces(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols, settings, loads, col,
                  trail, qmax, qmin, wk, fw, ww, corr, status, metrics):
     """The force lanes' block of ``forced`` candidates solved together, then those
@@ -107,12 +107,12 @@ def flush_forces(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols, settings
 
 @njit(**JIT_ALLOC)
 def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metrics):
-    """The sweep's stages for rows lo .. hi - 1 of ``pars`` (the module's
-    docstring: lanes, the careful path for the rest; the candidates the lanes
-    vouched for that reach the force stage gather in a block of their own, fidx,
-    solved together in the force lanes when it is full).  Serial: the caller runs
-    ranges on threads (``pipeline.compiler.parallel``; the kernels release the
-    GIL)."""
+    """The sweep's stages for rows lo .. hi - 1 of ``pars``: candidates that
+    assemble at phis[0] fill a block of lanes walked in lock-step, the others and
+    every lane the lanes cannot vouch for take the careful path; those vouched
+    for that reach the force stage gather in a block (fidx) for the force lanes.
+    A lane's numbers do not depend on its neighbours.  Serial: the caller runs
+    ranges on threads (``pipeline.compiler.parallel``; the GIL released)."""
     npos = phis.shape[0]
     w = int(settings[SET_DWELL_W])
     close = phi_close if math.isfinite(phi_close) else phis[0]

@@ -20,7 +20,6 @@ class _Triad(Emitter):
     """What either kind shares: the continuation state, the watch, the fixed angle
     U435 of the ternary link (its cos/sin hoisted) and the lane form."""
     watched = True
-    continued = True
     fast = True
     slider = False
 

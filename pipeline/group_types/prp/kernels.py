@@ -21,7 +21,7 @@ def prp(pos, d1, d2, ig1, ga1, gb1, ig2, ga2, gb2, ib, angle1, offset1, angle2, 
     (ga_i < 0: the absolute ``angle_i``) or one that turns with the link
     ga_i->gb_i (``angle_i`` relative to it); block i carries B at the
     perpendicular distance ``offset_i`` from its guide (on the +90 deg side).
-    B is where the two lines of B meet (``_line_meet``); the margin |sin| of
+    B is where the two lines of B meet (``kernels.groups.line_meet``); the margin |sin| of
     the angle between the guides is 0 where they are parallel (SINGULAR)."""
     th1, t11, t12 = guide_direction(pos, d1, d2, ga1, gb1, angle1, order)
     th2, t21, t22 = guide_direction(pos, d1, d2, ga2, gb2, angle2, order)

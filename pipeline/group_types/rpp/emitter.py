@@ -26,7 +26,7 @@ class RPPEmitter(Emitter):
         return hoisted_cos_sin(self, "guide_angle", "slot_angle")
 
     def lanes(self):
-        # kernels.groups.rpp: the guide's line through G at guide_offset, and the
+        # kernels.rpp: the guide's line through G at guide_offset, and the
         # slot's line through A (the guide's direction turned by slot_angle) at
         # -slot_offset
         cs, ss = lane(f"{self.k('slot_angle')}_cos"), lane(f"{self.k('slot_angle')}_sin")

@@ -7,7 +7,7 @@ where the slot's centre line crosses it), ``guide_point`` (known),
 ``guide_offset`` (mm: B's distance from the guide's line), ``slot_angle``
 (deg: the slot in the yoke, from the guide; default 90), ``slot_offset`` (mm:
 A's distance from the slot's line through B).  The slot may not run along the
-guide.  A PPR (``pipeline.model.groups.ppr``) is this chain read from its other end."""
+guide.  A PPR (``PPR`` below) is this chain read from its other end."""
 
 from __future__ import annotations
 
@@ -119,7 +119,7 @@ class RPP(Yoke):
         return self.A
 
 
-# PPR: PPR: a slider on a sliding guide.  A sliding guide (a carriage) moves along
+# PPR: a slider on a sliding guide.  A sliding guide (a carriage) moves along
 # a guide; a slider runs in a slot of the sliding guide and is pinned at a known
 # point.  Read from the frame: prismatic (the sliding guide on its guide),
 # prismatic (the slider in its slot), revolute (the slider's pin).

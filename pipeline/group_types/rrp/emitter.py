@@ -27,7 +27,7 @@ class RRPEmitter(Emitter):
         return hoisted_cos_sin(self, "guide_angle")
 
     def lanes(self):
-        # kernels.groups.rrp's lines on the guide's unit vector (a guide of fixed
+        # kernels.rrp's lines on the guide's unit vector (a guide of fixed
         # direction: its operations, the same bits)
         A, G, B = self.xy(0), self.xy(1), self.xy(2)
         lab, w = lane(self.k("L_AB")), lane(self.k("W"))
@@ -63,7 +63,7 @@ class RRPEmitter(Emitter):
 
 
 def _force_lines(e):
-    """An RRP dyad by the positions stage's lane form (``kernels.groups.rrp``'s
+    """An RRP dyad by the positions stage's lane form (``kernels.rrp``'s
     lines on the guide's unit vector), its analogs by ``rrp``'s lines."""
     a, g, b = e.ix[:3]
     return from_position_lanes(e.lanes()) + direction_analogs(e, "t1", 3) + [

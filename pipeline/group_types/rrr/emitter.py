@@ -64,7 +64,7 @@ class RRREmitter(Emitter):
 
 def _force_lines(e):
     """An RRR dyad by the positions stage's lane form (the cosine law without
-    acos), its analogs by ``kernels.groups.rrr``'s 2 x 2 solves."""
+    acos), its analogs by ``kernels.rrr``'s 2 x 2 solves."""
     a, cc, b = e.ix[:3]
     return from_position_lanes(e.lanes()) + [
         f"pax = P{b}_0 - P{a}_0", f"pay = P{b}_1 - P{a}_1",

@@ -2,12 +2,12 @@
 each in ``pipeline.group_types`` (their study fields and plan rows, kernels
 and emitters together), and the mechanism's own elements here (a point
 attached to a link, a rotary or slider input moved by a law).  Each holds
-everything about it as the hooks of ``base.GroupType``; this table, derived
+everything about it as the hooks of ``group_base.GroupType``; this table, derived
 from the folders, is where the study reader, the model, the peaks and the
 plots look a type up.
 
 Adding a structural group type: a folder in ``pipeline.group_types``
-(``docs/architecture.md`` walks through one); nothing here changes.
+(``docs/guide/architecture.md`` walks through one); nothing here changes.
 """
 
 from __future__ import annotations
@@ -33,13 +33,15 @@ def _structural():
 
 _DECLARED, _BUILT = _structural()
 
-# the study's `type` -> its class (the order is that of the study's error message)
-GROUP_TYPES: dict[str, type[GroupType]] = {
-    **{t.TYPE: t for t in _DECLARED},
-    "attach": Attach,
-    "rotary_input": RotaryInput,
-    "slider_input": SliderInput,
-}
+# the study's `type` -> its class, in the order of the study's error message: the
+# folders' (by their first plan code), then the mechanism's own elements
+GROUP_TYPES: dict[str, type[GroupType]] = {}
+for _t in _DECLARED + [Attach, RotaryInput, SliderInput]:
+    if _t.TYPE in GROUP_TYPES:
+        raise ValueError(f"{_t.__module__}.{_t.__name__}: the study type {_t.TYPE!r} is "
+                         f"already {GROUP_TYPES[_t.TYPE].__module__}'s")
+    GROUP_TYPES[_t.TYPE] = _t
+del _t
 
 # every class a declared group can be (a type's parser may build another)
 GROUP_CLASSES = tuple(dict.fromkeys(list(GROUP_TYPES.values()) + _BUILT))
