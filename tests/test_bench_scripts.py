@@ -20,6 +20,8 @@ from support.checkout import BENCH_OUT, BENCHMARKS, child_env, snapshot
 IN_PROCESS = {"run_all.py", "bench_accuracy.py", "bench_throughput.py", "bench_tolerance.py",
               "bench_robust.py", "bench_report.py"}
 LIBRARIES = {"common.py", "baselines.py"}       # imported by the scripts, not run
+# run by benchmarks/gpu_session.sh, whose smoke run is below (under numba's CUDA simulator)
+IN_SESSION = {"bench_gpu.py"}
 # run below as a user runs them: the script, its smoke flag, and what it writes
 SMOKE = {
     "bench_sweep.py": (["--smoke"], None),
@@ -27,7 +29,6 @@ SMOKE = {
     "bench_dynamics.py": (["--smoke"], None),
     "bench_friction.py": (["--smoke"], None),
     "bench_watch.py": (["--smoke"], None),
-    "bench_gpu.py": (["--smoke"], None),         # under numba's CUDA simulator
     "bench_search.py": (["--smoke", "-o", "{tmp}"], "search.md"),
     "bench_compiler.py": (["--smoke", "-o", "{tmp}"], "compiler.md"),
     "agreement.py": (["--smoke", "--out", "{tmp}"], "agreement.md"),
@@ -38,8 +39,8 @@ SMOKE = {
 def test_every_benchmark_script_has_a_smoke_run_in_the_suite():
     """A new script in benchmarks/ must be named here with the way the suite runs it."""
     scripts = {p.name for p in BENCHMARKS.glob("*.py")}
-    assert scripts == IN_PROCESS | LIBRARIES | set(SMOKE), scripts ^ (IN_PROCESS | LIBRARIES
-                                                                     | set(SMOKE))
+    named = IN_PROCESS | LIBRARIES | IN_SESSION | set(SMOKE)
+    assert scripts == named, scripts ^ named
 
 
 @pytest.mark.parametrize("script", sorted(SMOKE))
@@ -48,7 +49,7 @@ def test_benchmark_script_smoke_mode_runs(script, tmp_path):
     where the kernels disagree with the interpreter), no traceback, its table
     written where it was told (never into results/bench/)."""
     argv, written = SMOKE[script]
-    env = child_env(**({"NUMBA_ENABLE_CUDASIM": "1"} if script == "bench_gpu.py" else {}))
+    env = child_env()
     before = snapshot(BENCH_OUT)
     r = subprocess.run([sys.executable, str(BENCHMARKS / script)]
                        + [a.format(tmp=tmp_path) for a in argv],
@@ -57,6 +58,31 @@ def test_benchmark_script_smoke_mode_runs(script, tmp_path):
     assert "Traceback" not in r.stderr and r.stdout.strip(), r.stderr[-3000:]
     if written:
         assert (tmp_path / written).read_text().startswith("#")
-    if script == "bench_gpu.py":
-        assert "end to end" in r.stdout, r.stdout     # it ran, not "no usable GPU"
     assert snapshot(BENCH_OUT) == before
+
+
+def test_the_gpu_session_script_smoke_run_writes_its_table(tmp_path):
+    """benchmarks/gpu_session.sh, the one call a lent GPU machine gets (issue 54), at
+    smoke size under numba's CUDA simulator: both steps pass (the real-GPU test
+    skipped, saying why; bench_gpu.py to its end to end row) and the table says
+    so, with each step's log beside it."""
+    before = snapshot(BENCH_OUT)
+    r = subprocess.run(["bash", str(BENCHMARKS / "gpu_session.sh"), "--smoke", "--out",
+                        str(tmp_path)], env=child_env(PYTHON=sys.executable),
+                       capture_output=True, text=True, timeout=900)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    table = (tmp_path / "gpu_session.md").read_text()
+    assert table.startswith("# GPU session under numba's CUDA simulator"), table
+    assert "| pytest -m gpu | passed" in table and "skipped" in table, table
+    assert "| bench_gpu.py | passed" in table and "| bench_gpu.py | end to end" in table, table
+    assert "| machine | numba |" in table, table
+    for log in ("machine.log", "tests.log", "bench.log"):
+        assert (tmp_path / log).stat().st_size > 0, log
+    assert snapshot(BENCH_OUT) == before
+
+
+def test_the_gpu_session_script_refuses_an_unknown_option(tmp_path):
+    r = subprocess.run(["bash", str(BENCHMARKS / "gpu_session.sh"), "--fast"],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert "unknown option --fast" in r.stderr
