@@ -11,7 +11,9 @@ cores of the same machine, same process, same drawn candidates.
   in the size; a size that the last rate says would take over --max-seconds
   is left out, saying so).
 
-Compile time is reported apart (the first evaluation of each path).  Exits
+Compile time is reported apart (the first evaluation of each path).  Where the
+host's time goes end to end: the GPU run at ``--profile-size`` (10^6) again under
+cProfile, its functions by own time (the profiled run is not the timed one).  Exits
 with a message, and status 0, where numba.cuda finds no usable GPU (see
 ``pipeline doctor``); under NUMBA_ENABLE_CUDASIM=1 it runs with tiny sizes as a
 smoke test of this script (the simulator's speed means nothing).
@@ -47,6 +49,8 @@ def main(argv=None):
     ap.add_argument("--chunk-size", type=int, default=1_000_000)
     ap.add_argument("--store", choices=("all", "feasible"), default="feasible")
     ap.add_argument("--max-seconds", type=float, default=float("inf"))
+    ap.add_argument("--profile-size", type=int, default=1_000_000,
+                    help="end to end on the GPU again at this size under cProfile (0: not)")
     ap.add_argument("--smoke", action="store_true",
                     help="that it runs, at the simulator's tiny sizes (the test suite runs it "
                          "under NUMBA_ENABLE_CUDASIM=1)")
@@ -59,6 +63,7 @@ def main(argv=None):
         return 0
     if SIMULATOR or a.smoke:
         a.sizes, a.cpu_max, a.kernel_rows, a.repeat, a.chunk_size = [200], 200, 64, 1, 100
+        a.profile_size = min(a.profile_size, 200)
     print(hardware())
     print(f"device: {gpu.describe(p)}")
     study = load_study(STUDIES / "ov7_synthesis.toml")
@@ -103,7 +108,30 @@ def main(argv=None):
                 row.append(f"{device.upper()} {s:.1f} s ({n / s:,.0f}/s)")
                 out.unlink()
             print(" ".join(row), flush=True)
+        if a.profile_size:
+            _profiled(study, Path(tmp) / "profiled.h5", a.profile_size,
+                      min(a.chunk_size, a.profile_size), a.store)
     return 0
+
+
+def _profiled(study, out, n, chunk_size, store):
+    """The GPU run end to end once more under cProfile: where the main thread's
+    time goes (transfers, waiting for the kernel and the drawing thread, the
+    journal, HDF5), the top functions by their own time."""
+    import cProfile
+    import pstats
+    prof = cProfile.Profile()
+    t = time.perf_counter()
+    prof.runcall(run_sweep, study, out, candidates=n, chunk_size=chunk_size, device="gpu",
+                 progress=False, store=store)
+    print(f"profiled end to end, {n:,} candidates on the GPU: {time.perf_counter() - t:.1f} s "
+          "(under cProfile; the main thread's functions, its waits for the drawing thread "
+          "and the device as lock acquire), by own time:")
+    stats = pstats.Stats(prof)
+    rows = sorted(stats.stats.items(), key=lambda kv: -kv[1][2])[:15]
+    for (file, line, name), (_, calls, own, total, _) in rows:
+        where = f"{Path(file).name}:{line}" if line else file
+        print(f"  own {own:7.2f} s  total {total:7.2f} s  calls {calls:8d}  {name} ({where})")
 
 
 def _occupancy(kernel):
