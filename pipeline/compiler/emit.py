@@ -258,13 +258,6 @@ class InputEmitter(Emitter):
     force_lanes = SAME_BITS
     takes_law = True
 
-    @property
-    def continued(self):
-        """Solved by Newton: keeps a row of the continuation state (``triad_row``:
-        start, predictor, step control, closing); its folder's ``CONTINUED``
-        (``group_types.continued_codes``), the one place that says it."""
-        return self.code in group_types.continued_codes()
-
     def __init__(self, plan, names, g, triad_row=-1):
         super().__init__(plan, names, g, triad_row)
         self.i = [int(x) for x in plan.input_group].index(g)

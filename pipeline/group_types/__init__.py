@@ -3,8 +3,9 @@
 A folder here holds everything about its type, by layer (each module imports
 only from its own layer and below, as the package's layers do):
 
-* ``__init__.py`` (base): its plan codes, ``G_<NAME> = code``, and ``CODES``,
-  each code's name;
+* ``__init__.py`` (base): a line on the type, its plan codes,
+  ``G_<NAME> = code``, and ``CODES``, each code's name (and ``CONTINUED``:
+  its codes solved by continuation);
 * ``model.py`` (model): its ``GroupType`` classes, the study fields and their
   errors, the plan row, the transmission angles, the drawing, the sliding
   pairs; ``STUDY_TYPES`` (and ``BUILT``: classes its parsers build instead);
@@ -39,20 +40,25 @@ CORE_CODES = {G_CRANK: "crank", G_ATTACH: "attach", G_INPUT: "input"}
 
 
 @cache
-def folders() -> tuple[str, ...]:
-    """The group-type folders, in the order of their first plan code; a code
-    taken twice (by two folders, or a folder and the mechanism's own elements)
-    is an error naming both."""
-    names = [m.name for m in pkgutil.iter_modules(__path__) if m.ispkg]
+def _inits() -> dict:
+    """{folder: its ``__init__`` module}, in the order of their first plan code; a
+    code taken twice (by two folders, or a folder and the mechanism's own
+    elements) is an error naming both."""
+    names = sorted(m.name for m in pkgutil.iter_modules(__path__) if m.ispkg)
     mods = {n: importlib.import_module(f"{__name__}.{n}") for n in names}
     taken = {code: f"the mechanism's own {name}" for code, name in CORE_CODES.items()}
-    for n in sorted(names):
+    for n in names:
         for code in mods[n].CODES:
             if code in taken:
                 raise ValueError(f"group type folder {n!r}: plan code {code} is already "
                                  f"{taken[code]}'s")
             taken[code] = f"folder {n!r}"
-    return tuple(sorted(names, key=lambda n: min(mods[n].CODES)))
+    return {n: mods[n] for n in sorted(names, key=lambda n: min(mods[n].CODES))}
+
+
+def folders() -> tuple[str, ...]:
+    """The group-type folders, in the order of their first plan code."""
+    return tuple(_inits())
 
 
 @cache
@@ -71,15 +77,14 @@ def part(module: str) -> tuple:
 def code_names() -> dict[int, str]:
     """Every plan code -> its name: the mechanism's own elements' and each folder's."""
     out = dict(CORE_CODES)
-    for f in folders():
-        out.update(importlib.import_module(f"{__name__}.{f}").CODES)
+    for init in _inits().values():
+        out.update(init.CODES)
     return dict(sorted(out.items()))
 
 
 def folder_codes(module) -> tuple[int, ...]:
     """The plan codes of the folder a module of it (``module.__name__``) is in."""
-    folder = module.__name__.split(".")[2]
-    return tuple(importlib.import_module(f"{__name__}.{folder}").CODES)
+    return tuple(_inits()[module.__name__.split(".")[2]].CODES)
 
 
 @cache
@@ -87,5 +92,4 @@ def continued_codes() -> tuple[int, ...]:
     """The plan codes of the groups solved by continuation (a row of the
     continuation state, the singularity margin |det J| the sweep bounds): each
     folder's ``CONTINUED``."""
-    return tuple(c for f in folders()
-                 for c in getattr(importlib.import_module(f"{__name__}.{f}"), "CONTINUED", ()))
+    return tuple(c for init in _inits().values() for c in getattr(init, "CONTINUED", ()))

@@ -1,11 +1,8 @@
-"""The class III group (triad) of DOMAIN.md section 5, and its variant with a block on a
-guide in place of lead 5-7: solved by Newton and continued along the revolution.
+"""The class III group (triad) of DOMAIN.md section 5, and its variant with a
+block on a guide in place of lead 5-7: solved by Newton and continued along
+the revolution.
 
-This folder holds everything about the type, by layer: ``model`` (its study
-fields and plan row), ``kernels`` (its library kernels), ``emitter`` (its lines
-of the generated module: careful path, lane form, force lanes, warm-up).
-``CODES`` gives each plan code it adds its name (``pipeline.group_types``
-derives every table from it)."""
+Its folder's modules, by layer: ``pipeline.group_types``."""
 
 G_CLASS3 = 4
 G_CLASS3_SLIDER = 9
