@@ -15,7 +15,8 @@ from ..kernels import sweep as ks
 from ..study.objectives import Feasibility, constraint_names, constraint_units, constraints_text
 from ..model.metric_catalogue import METRICS, metric_values
 from .storage import (COMPRESSION, STATUS_ENUM, attach, attr_text, coordinate, hdf5_image,
-                      link_coordinates, put, room_for, status_table, units_attr, write_root_attrs)
+                      link_coordinates, put, room_for, status_table, units_attr, write_root_attrs,
+                      write_rows)
 from ..base.errors import ResultsError
 
 
@@ -208,7 +209,7 @@ class SweepFile:
         for name in self.row_names():
             d[name].resize(hi, axis=0)
         d["candidate"][lo:hi] = index
-        self._write_rows(d, lo, hi, x, status, metrics, judged)
+        self._write_rows(d, lo, x, status, metrics, judged)
         if len(rejected):
             d["progress/rejected"][chunk] = rejected
         d["progress/status_counts"][chunk] = full_counts(counts)  # (an older journal's, too)
@@ -220,8 +221,8 @@ class SweepFile:
         and one row of ``rejected`` per chunk (every candidate stored)."""
         room_for(self.path, 2 * (x.nbytes + metrics.nbytes) + status.nbytes)
         bounds = [self.spec.chunk_bounds(c) for c in chunks]
-        lo, hi = bounds[0][0], bounds[-1][1]
-        self._write_rows(d, lo, hi, x, status, metrics, judged)
+        lo = bounds[0][0]
+        self._write_rows(d, lo, x, status, metrics, judged)
         feasible = judged.feasible
         first, end = chunks[0], chunks[-1] + 1
         rejected = np.asarray(rejected, np.int64).reshape(len(bounds), -1)
@@ -231,19 +232,19 @@ class SweepFile:
             [counted(status[a - lo:b - lo], feasible[a - lo:b - lo]) for a, b in bounds])
         d["progress/chunk_done"][first:end] = True
 
-    def _write_rows(self, d, lo, hi, x, status, metrics, judged: Feasibility):
-        """Rows lo:hi of every per-candidate dataset."""
-        d["candidates/params"][lo:hi] = x
-        d["candidates/status"][lo:hi] = status
-        d["candidates/fail_phi"][lo:hi] = np.rad2deg(metrics[:, ks.M_FAIL_PHI])
+    def _write_rows(self, d, lo, x, status, metrics, judged: Feasibility):
+        """Rows from ``lo`` on of every per-candidate dataset (``storage.write_rows``:
+        whole chunks filtered here)."""
         group = metrics[:, ks.M_FAIL_GROUP]
-        d["candidates/fail_group"][lo:hi] = np.where(np.isfinite(group), group, -1).astype("i2")
-        d["candidates/forces_evaluated"][lo:hi] = metrics[:, ks.M_FORCES_DONE] == 1.0
-        for name, col in self._columns(metrics).items():
-            d[f"metrics/{name}"][lo:hi] = col
-        d["candidates/constraints"][lo:hi] = judged.g
-        d["candidates/cv"][lo:hi] = judged.cv
-        d["candidates/feasible"][lo:hi] = judged.feasible
+        columns = {"candidates/params": x, "candidates/status": status,
+                   "candidates/fail_phi": np.rad2deg(metrics[:, ks.M_FAIL_PHI]),
+                   "candidates/fail_group": np.where(np.isfinite(group), group, -1).astype("i2"),
+                   "candidates/forces_evaluated": metrics[:, ks.M_FORCES_DONE] == 1.0}
+        columns.update({f"metrics/{name}": col for name, col in self._columns(metrics).items()})
+        columns.update({"candidates/constraints": judged.g, "candidates/cv": judged.cv,
+                        "candidates/feasible": judged.feasible})
+        for name, values in columns.items():
+            write_rows(d[name], lo, values)
 
     def row_names(self):
         """The datasets with a row per stored candidate."""
