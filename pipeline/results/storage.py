@@ -91,21 +91,29 @@ def write_rows(d, lo, values):
     (the byte shuffle in NumPy, deflate by ISA-L) and written as it is stored
     (``write_direct_chunk``): HDF5's own deflate of a sweep's chunk took a quarter
     of the main thread's time, which on 2 cores the kernels' threads shared.  The
-    stored chunk is what HDF5's filters would store (any reader inflates it);
-    rows outside whole chunks (a sweep's last, short chunk) go through HDF5."""
+    stored chunk is what HDF5's filters would store (any reader inflates it).
+    The rows of a chunk covered in part (before the first whole chunk: rows
+    appended with store = feasible; after the last: a sweep's last, short chunk)
+    go through HDF5, whose chunk cache keeps that chunk until it is complete."""
     values = np.asarray(values)
     hi = lo + len(values)
     ch = _direct_rows(d)
-    whole = (hi - lo) // ch * ch if ch and lo % ch == 0 else 0
-    if whole:
-        rows = np.ascontiguousarray(values[:whole], dtype=d.dtype)
+    if not ch:
+        d[lo:hi] = values
+        return
+    a = min(-(-lo // ch) * ch, hi)      # the rows before the first whole chunk: lo .. a
+    b = max(a, hi // ch * ch)           # the whole chunks: a .. b
+    if a > lo:
+        d[lo:a] = values[:a - lo]
+    if b > a:
+        rows = np.ascontiguousarray(values[a - lo:b - lo], dtype=d.dtype)
         size = d.dtype.itemsize
         offset = (0,) * (rows.ndim - 1)
-        for a in range(0, whole, ch):
-            b = rows[a:a + ch].view(np.uint8).reshape(-1, size)
-            d.id.write_direct_chunk((lo + a,) + offset, _deflate(b.T.tobytes(), 1))
-    if whole < len(values):
-        d[lo + whole:hi] = values[whole:]
+        for r in range(0, b - a, ch):
+            c = rows[r:r + ch].view(np.uint8).reshape(-1, size)
+            d.id.write_direct_chunk((a + r,) + offset, _deflate(c.T.tobytes(), 1))
+    if hi > b:
+        d[b:hi] = values[b - lo:]
 
 
 def _direct_rows(d):
@@ -270,6 +278,12 @@ def put(group, name, data, units, long_name, dims=None, **attrs):
     return d
 
 
+# HDF5's chunk cache per dataset while a run writes: a chunk that rows are appended to
+# (store = feasible) stays in it until full, instead of being inflated and deflated again
+# at each append (the default 1 MiB holds no chunk of a sweep's params)
+WRITE_CACHE = 16 << 20
+
+
 @contextmanager
 def hdf5_writing(path, mode="r+", expendable=True):
     """``h5py.File(path, mode)`` for a file this run can rebuild or throw away,
@@ -296,7 +310,7 @@ def hdf5_writing(path, mode="r+", expendable=True):
         elif not isinstance(u.exc_value, (OSError, RuntimeError)):
             hook(u)
     sys.unraisablehook = collect
-    f = h5py.File(path, mode)
+    f = h5py.File(path, mode, rdcc_nbytes=WRITE_CACHE)
     try:
         yield f
         if lost:

@@ -19,6 +19,11 @@ from .storage import (COMPRESSION, STATUS_ENUM, attach, attr_text, coordinate, h
                       write_rows)
 from ..base.errors import ResultsError
 
+# rows of an HDF5 chunk of a sweep that stores its feasible candidates only: the rows
+# arrive appended, a chunk filled by several sweep chunks; HDF5 rewrote a chunk of 10^6
+# rows (a GPU's) whole at each append
+KEPT_CHUNK_ROWS = 16_384
+
 
 # the columns of progress/status_counts: every status, then the feasible candidates
 COUNTED = tuple(kc.STATUS_NAMES.values()) + ("feasible",)
@@ -65,6 +70,8 @@ class SweepFile:
         spec, plan = self.spec, self.problem.plan
         n, nv = spec.candidates, len(spec.variables)
         ch = min(spec.chunk_size, n)
+        if self.feasible_only:     # rows appended: chunks that fill (a GPU's sweep chunk is
+            ch = min(ch, KEPT_CHUNK_ROWS)   # 10^6 candidates; its kept rows ~10^5)
         with replacing(self.path) as tmp, hdf5_image(tmp) as f:
             write_root_attrs(f, "sweep", self.study, seed=spec.seed, sampler=spec.sampler,
                              n_candidates=n, chunk_size=spec.chunk_size,

@@ -36,10 +36,12 @@ def counted(monkeypatch):
     return calls
 
 
-@pytest.mark.parametrize("lo", [0, CH])
-def test_whole_chunks_filtered_here_hold_hdf5s_values(tmp_path, counted, lo):
-    """Rows lo .. lo + 2.5 chunks: two whole chunks written filtered by the
-    package, the half chunk by HDF5; every value as HDF5's own write stores it."""
+@pytest.mark.parametrize("lo, whole", [(0, 2), (CH, 2), (CH // 4, 1), (CH + 3, 1)])
+def test_whole_chunks_filtered_here_hold_hdf5s_values(tmp_path, counted, lo, whole):
+    """2.5 chunks of rows from ``lo``: the ``whole`` chunks they cover written
+    filtered by the package, the rows of chunks covered in part (before them:
+    rows appended, store = feasible; after them) by HDF5; every value as
+    HDF5's own write stores it."""
     rng = np.random.default_rng(7)
     n = lo + 5 * CH // 2
     path = tmp_path / "rows.h5"
@@ -53,18 +55,37 @@ def test_whole_chunks_filtered_here_hold_hdf5s_values(tmp_path, counted, lo):
                     write_rows(d, lo, values)
                 else:
                     d[lo:n] = values
-    assert len(counted) == 2 * 5       # two whole chunks of each of the five datasets
+    assert len(counted) == whole * 5       # the whole chunks of each of the five datasets
+    first = -(-lo // CH) * CH               # the first whole chunk's first row
     with h5py.File(path, "r") as f:
         for name in _cases(1, rng):
             here, hdf5 = f[f"here/{name}"][()], f[f"hdf5/{name}"][()]
             assert here.dtype == hdf5.dtype and here.tobytes() == hdf5.tobytes(), name
             # the stored chunk is a zlib stream of the shuffled bytes: any reader inflates it
             d = f[f"here/{name}"]
-            mask, raw = d.id.read_direct_chunk((lo + CH,) + (0,) * (d.ndim - 1))
-            rows = here[lo + CH:lo + 2 * CH]
+            mask, raw = d.id.read_direct_chunk((first,) + (0,) * (d.ndim - 1))
+            rows = here[first:first + CH]
             size = rows.dtype.itemsize
             assert mask == 0
             assert zlib.decompress(raw) == rows.view(np.uint8).reshape(-1, size).T.tobytes()
+
+
+def test_rows_appended_chunk_by_chunk(tmp_path, counted):
+    """Rows appended to a growing dataset (store = feasible) in runs that start
+    and end anywhere in a chunk: the same values as HDF5 stores, the chunks
+    they fill written filtered here."""
+    rng = np.random.default_rng(3)
+    sizes = [5, CH - 5, 3 * CH + 7, 11, CH // 2, 2 * CH]
+    values = rng.normal(size=sum(sizes))
+    with h5py.File(tmp_path / "kept.h5", "w") as f:
+        d = f.create_dataset("x", (0,), "f8", maxshape=(None,), chunks=(CH,), **COMPRESSION)
+        lo = 0
+        for k in sizes:
+            d.resize(lo + k, axis=0)
+            write_rows(d, lo, values[lo:lo + k])
+            lo += k
+        assert d[()].tobytes() == values.tobytes()
+    assert len(counted) == 4        # chunks 1, 2, 3 (by the third run) and 5 (by the last)
 
 
 def test_h5dump_reads_chunks_filtered_here(tmp_path):
@@ -80,17 +101,14 @@ def test_h5dump_reads_chunks_filtered_here(tmp_path):
     assert f"({CH + 3}): {values[CH + 3]:g}, {values[CH + 4]:g}" in out, out
 
 
-@pytest.mark.parametrize("make, lo", [
-    (dict(compression="gzip", compression_opts=1), 0),          # no shuffle
-    (dict(compression="lzf", shuffle=True), 0),
-    (dict(**COMPRESSION, fletcher32=True), 0),
-    (dict(**COMPRESSION), CH // 4)])                            # not on a chunk's boundary
-def test_other_filters_and_unaligned_rows_go_through_hdf5(tmp_path, counted, make, lo):
-    """Another filter pipeline is written by HDF5, and so are rows that do not
-    start on a chunk's boundary."""
+@pytest.mark.parametrize("make", [dict(compression="gzip", compression_opts=1),   # no shuffle
+                                  dict(compression="lzf", shuffle=True),
+                                  dict(**COMPRESSION, fletcher32=True)])
+def test_other_filters_go_through_hdf5(tmp_path, counted, make):
+    """A dataset with another filter pipeline is written by HDF5 alone."""
     values = np.linspace(0, 1, 3 * CH)
     with h5py.File(tmp_path / "other.h5", "w") as f:
         d = f.create_dataset("x", (4 * CH,), "f8", chunks=(CH,), **make)
-        write_rows(d, lo, values)
-        assert d[lo:lo + len(values)].tobytes() == values.tobytes()
+        write_rows(d, 0, values)
+        assert d[:len(values)].tobytes() == values.tobytes()
     assert counted == []
