@@ -71,17 +71,22 @@ def draw_checked(spec, chunk: int):
     if not spec.triangles:
         return x, rejected
     rng = None
+    redrawn = None      # the rows redrawn in the last round (None: every row, the first)
     for _ in range(REDRAW_ROUNDS):
-        bad = np.zeros(x.shape[0], bool)
+        # only the rows just redrawn are looked at again: the others were buildable (a
+        # GPU's chunk of 10^6 rows took 13 rounds over all of them, 0.26 s)
+        xs = x if redrawn is None else x[redrawn]
+        bad = np.zeros(xs.shape[0], bool)
         for k, t in enumerate(spec.triangles):
-            b = t.broken(x) & ~bad       # counted once, for the first triangle it breaks
+            b = t.broken(xs) & ~bad       # counted once, for the first triangle it breaks
             rejected[k] += int(b.sum())
             bad |= b
         if not bad.any():
             return x, rejected
         if rng is None:
             rng = np.random.default_rng([spec.seed, chunk, 0x7EDA])
-        x[bad] = low + rng.random((int(bad.sum()), len(low))) * (high - low)
+        redrawn = np.flatnonzero(bad) if redrawn is None else redrawn[bad]   # (in row order)
+        x[redrawn] = low + rng.random((len(redrawn), len(low))) * (high - low)
     raise ValueError(f"chunk {chunk}: designs still break a triangle inequality after "
                      f"{REDRAW_ROUNDS} redraws; narrow the bounds of "
                      + ", ".join(n for t in spec.triangles for n in t.names))

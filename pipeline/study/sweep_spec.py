@@ -482,42 +482,27 @@ def triangles_of(plan, variables):
     return tuple(out)
 
 
-def scaled_mass_data(m0, J0, lS0, ratio):
-    """The mass model of DOMAIN.md section 9 for a body whose characteristic
-    length changes by ``ratio`` = L/L0: (m, J_S, lS) = (m0 L/L0, J0 (L/L0)^3,
-    lS0 L/L0).
-
-    The one place both the sweep (``parameter_rows``, NumPy arrays over the
-    candidates) and the scene path (``apply_design``, Python scalars) scale the
-    mass data.  Only plain IEEE multiplications are used (the cube as
-    ``ratio * ratio * ratio``, never ``** 3``, whose array and scalar routes
-    round differently), so array and scalar inputs give bit-identical results.
-    """
-    cube = ratio * ratio * ratio
-    return m0 * ratio, J0 * cube, lS0 * ratio
-
-
 def parameter_rows(plan, spec: SweepSpec, x: np.ndarray) -> np.ndarray:
     """Full kernel parameter rows for design-variable rows ``x``: the reference
     row with the variables set, then the mass model (DOMAIN.md section 9:
-    m = m0 L/L0, J_S = J0 (L/L0)^3, lS = lS0 L/L0)."""
-    base = plan.par
-    pars = np.repeat(base[None, :], x.shape[0], axis=0)
-    for j, v in enumerate(spec.variables):
-        pars[:, plan.param(v.param)] = x[:, j] * v.factor
-    for ms in spec.mass_model:
-        k = plan.param(ms.length_param)
-        mass = plan.param(f"{ms.body}.mass")
-        inertia = plan.param(f"{ms.body}.J_S")
-        arm = plan.param(f"S[{ms.body}].length")
-        pars[:, mass], pars[:, inertia], pars[:, arm] = scaled_mass_data(
-            base[mass], base[inertia], base[arm], pars[:, k] / base[k])
-    return np.ascontiguousarray(pars)
+    m = m0 L/L0, J_S = J0 (L/L0)^3, lS = lS0 L/L0; ``kernels.candidates``)."""
+    from ..kernels.candidates import parameter_rows_into
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    var_cols = np.array([plan.param(v.param) for v in spec.variables], np.int64)
+    factors = np.array([float(v.factor) for v in spec.variables], np.float64)
+    mass_cols = np.array([[plan.param(ms.length_param), plan.param(f"{ms.body}.mass"),
+                           plan.param(f"{ms.body}.J_S"), plan.param(f"S[{ms.body}].length")]
+                          for ms in spec.mass_model], np.int64).reshape(-1, 4)
+    pars = np.empty((x.shape[0], plan.par.shape[0]))
+    parameter_rows_into(np.ascontiguousarray(plan.par, dtype=np.float64), x, var_cols, factors,
+                        mass_cols, pars)
+    return pars
 
 
 def apply_design(mech, spec: SweepSpec, x) -> "Mechanism":
     """The declared mechanism of one candidate (design-variable row ``x``), with
     the mass model applied: the scene path's twin of ``parameter_rows``."""
+    from ..kernels.candidates import scaled_mass_data   # (numba: imported when used)
     from dataclasses import replace
     base_plan = mech.compile()
     values = {v.param: float(xi) * v.factor for v, xi in zip(spec.variables, x)}
