@@ -4,9 +4,11 @@
 #     bash benchmarks/gpu_session.sh            # on a lent GPU machine: at most 8 minutes
 #     bash benchmarks/gpu_session.sh --smoke    # under numba's CUDA simulator, tiny sizes
 #
-# It runs the real-GPU tests (pytest -m gpu) and benchmarks/bench_gpu.py at 10^6, 10^7 and
+# It runs the real-GPU tests (pytest -m gpu), benchmarks/bench_gpu.py at 10^6, 10^7 and
 # 10^8 candidates of the default study (a size the last rate says would not finish in
-# time is left out, saying so), each step under a time limit, and writes one table,
+# time is left out, saying so) and benchmarks/bench_host.py (the host's side alone at
+# 10^7: the ceiling of the end to end rate there), each step under a time limit, and
+# writes one table,
 # gpu_session.md, with the machine, the driver, the numba and numba-cuda versions and every
 # step's figures, and each step's whole log beside it: into $OUT (the device tool's folder
 # that comes back), else --out DIR, else results/gpu_session/.  The suite runs --smoke
@@ -40,12 +42,14 @@ fi
 if [ "$smoke" = 1 ]; then
   export NUMBA_ENABLE_CUDASIM=1
   bench=(--smoke)
-  limits=(300 300)
+  host=(--smoke)
+  limits=(300 300 300)
 else
   unset NUMBA_ENABLE_CUDASIM
   # 10^8 end to end is left out where the 10^7 rate says it would take over 150 s
   bench=(--sizes 1000000 10000000 100000000 --repeat 3 --max-seconds 150)
-  limits=(150 300)
+  host=(--sizes 10000000)
+  limits=(150 270 60)
 fi
 
 step() {   # step NAME LIMIT_S COMMAND...: its log in $out/NAME.log, its exit status kept
@@ -79,6 +83,7 @@ for name in ('numba', 'numba-cuda', 'numpy'):
 
 step tests "${limits[0]}" "$PY" -m pytest -m gpu -n 0 -q -p no:cacheprovider -rs tests/runs/test_gpu.py
 step bench "${limits[1]}" "$PY" benchmarks/bench_gpu.py "${bench[@]}"
+step host "${limits[2]}" "$PY" benchmarks/bench_host.py "${host[@]}" --output "$out"
 
 "$PY" - "$out" "$smoke" <<'EOF'
 """gpu_session.md: one table of what the logs say."""
@@ -109,15 +114,19 @@ keep = ("device:", "compile,", "CUDA kernel:", "kernel only,", "end to end,",
 rows += [("bench_gpu.py", status("bench"), "")]
 rows += [("bench_gpu.py", line.split(":", 1)[0], line.split(":", 1)[1].strip())
          for line in log("bench") if line.startswith(keep)]
+rows += [("bench_host.py", status("host"), "")]
+rows += [("bench_host.py", line.split(":", 1)[0], line.split(":", 1)[1].strip())
+         for line in log("host") if line.startswith(("drawing a chunk", "host alone,"))]
 title = "under numba's CUDA simulator (--smoke: sizes and times mean nothing)" if smoke else \
     "on the lent GPU"
 text = [f"# GPU session {title}", "", "| step | what | result |", "|---|---|---|"]
 text += [f"| {a} | {b} | {c.replace('|', '/')} |" for a, b, c in rows]
-text += ["", "Each step's whole log is beside this file (machine.log, tests.log, bench.log)."]
+text += ["", "Each step's whole log is beside this file (machine.log, tests.log, bench.log, "
+         "host.log; host.md: bench_host.py's table)."]
 (out / "gpu_session.md").write_text("\n".join(text) + "\n")
 print("\n".join(text))
 EOF
-# the exit status: 0 where both steps passed (the table is written either way)
-for name in tests bench; do
+# the exit status: 0 where every step passed (the table is written either way)
+for name in tests bench host; do
   read -r rc _ < "$out/$name.rc" && [ "$rc" = 0 ] || exit 1
 done

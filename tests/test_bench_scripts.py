@@ -33,6 +33,7 @@ SMOKE = {
     "bench_compiler.py": (["--smoke", "-o", "{tmp}"], "compiler.md"),
     "agreement.py": (["--smoke", "--out", "{tmp}"], "agreement.md"),
     "bench_yardstick.py": (["--smoke", "-o", "{tmp}"], "yardstick.md"),
+    "bench_host.py": (["--smoke", "-o", "{tmp}"], "host.md"),
 }
 
 
@@ -75,8 +76,9 @@ def test_the_gpu_session_script_smoke_run_writes_its_table(tmp_path):
     assert table.startswith("# GPU session under numba's CUDA simulator"), table
     assert "| pytest -m gpu | passed" in table and "skipped" in table, table
     assert "| bench_gpu.py | passed" in table and "| bench_gpu.py | end to end" in table, table
+    assert "| bench_host.py | passed" in table and "| bench_host.py | host alone" in table, table
     assert "| machine | numba |" in table, table
-    for log in ("machine.log", "tests.log", "bench.log"):
+    for log in ("machine.log", "tests.log", "bench.log", "host.log", "host.md"):
         assert (tmp_path / log).stat().st_size > 0, log
     assert snapshot(BENCH_OUT) == before
 
