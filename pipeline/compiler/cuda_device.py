@@ -6,6 +6,9 @@ imports numba.cuda (the ``[gpu]`` extra); the CPU path never does."""
 
 from __future__ import annotations
 
+import contextlib
+import threading
+
 import numpy as np
 
 # numba-cuda's import still names np.row_stack, which numpy 2.5 removed: the same
@@ -17,6 +20,16 @@ from numba import config as _config     # noqa: E402
 from numba import cuda                  # noqa: E402
 
 SIMULATOR = bool(_config.ENABLE_CUDASIM)
+# the simulator runs one kernel at a time in a process (a kernel launched from a second
+# thread meanwhile fails): launches from the thread drawing the next chunk
+# (pipeline.runs.gpu_draws) and the one evaluating this chunk take turns there; a GPU runs
+# them side by side
+_ONE_AT_A_TIME = threading.Lock()
+
+
+def launching():
+    """Around a kernel's launch: the simulator's turn, nothing on a GPU."""
+    return _ONE_AT_A_TIME if SIMULATOR else contextlib.nullcontext()
 
 if SIMULATOR:
     def own(a):

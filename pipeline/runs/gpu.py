@@ -36,7 +36,8 @@ import numpy as np
 
 log = logging.getLogger("pipeline")
 
-from ..compiler.cuda_device import SIMULATOR  # noqa: E402  (first: its numpy fix precedes numba.cuda)
+# first: cuda_device's numpy fix precedes numba.cuda's import
+from ..compiler.cuda_device import SIMULATOR, launching  # noqa: E402
 from numba import cuda                  # noqa: E402
 
 THREADS = 128            # threads per CUDA block
@@ -206,8 +207,10 @@ class GpuSweep:
                     d_metrics=cuda.device_array((self.batch, self.n_metrics)))
 
     def evaluate_rows(self, pars):
-        """(status int8 (n,), metrics (n, N_METRICS)) of the rows ``pars``."""
-        pars = np.ascontiguousarray(pars, dtype=np.float64)
+        """(status int8 (n,), metrics (n, N_METRICS)) of the rows ``pars``: a host
+        array, or a device array (the device's own draws: ``gpu_draws``)."""
+        if not hasattr(pars, "copy_to_host"):
+            pars = np.ascontiguousarray(pars, dtype=np.float64)
         n = pars.shape[0]
         status = np.empty(n, np.int8)
         metrics = np.empty((n, self.n_metrics))
@@ -225,13 +228,18 @@ class GpuSweep:
     def _launch(self, s, rows):
         k = rows.shape[0]
         st, stream = self.stage[s], self.streams[s]
-        st["pars"][:k] = rows
-        st["d_pars"][:k].copy_to_device(st["pars"][:k], stream=stream)
+        if hasattr(rows, "copy_to_host"):      # already on the device
+            d_rows = rows
+        else:
+            st["pars"][:k] = rows
+            d_rows = st["d_pars"][:k]
+            d_rows.copy_to_device(st["pars"][:k], stream=stream)
         phis, tols, settings, loads, trail = self.d_in
         blocks = (k + THREADS - 1) // THREADS
-        self.mod.sweep_kernel[blocks, THREADS, stream](
-            st["d_pars"][:k], phis, self.problem.phi_close, tols, settings, loads, trail,
-            st["d_status"][:k], st["d_metrics"][:k], *(a[:k] for a in self.work[s]))
+        with launching():
+            self.mod.sweep_kernel[blocks, THREADS, stream](
+                d_rows, phis, self.problem.phi_close, tols, settings, loads, trail,
+                st["d_status"][:k], st["d_metrics"][:k], *(a[:k] for a in self.work[s]))
         st["d_status"][:k].copy_to_host(st["status"][:k], stream=stream)
         st["d_metrics"][:k].copy_to_host(st["metrics"][:k], stream=stream)
 

@@ -6,6 +6,7 @@ the first evaluation, which compiles a new mechanism's kernels, is
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,6 +15,9 @@ from ..kernels import config as kc
 from ..kernels import sweep as ks
 from ..study.sampling import draw_checked
 from ..study.sweep_spec import SweepSpec, parameter_rows
+
+
+_DRAWS_LOCK = threading.Lock()
 
 
 @dataclass
@@ -78,6 +82,7 @@ class SweepProblem:
     def __getstate__(self):
         state = dict(self.__dict__)
         state.pop("_gpu", None)
+        state.pop("_draws", None)
         return state
 
     def evaluate_rows(self, pars, parallel=True, n_jobs=None, watch=None):
@@ -117,9 +122,29 @@ class SweepProblem:
         return status, metrics
 
     def draw_chunk(self, chunk):
-        """(x, rejected draws per triangle, parameter rows) of chunk ``chunk``."""
+        """(x, rejected draws per triangle, parameter rows) of chunk ``chunk``; on
+        the GPU, a Sobol sweep's are drawn there and its parameter rows stay there
+        (``gpu_draws``: the same bits)."""
+        draws = self._device_draws()
+        if draws is not None:
+            return draws.draw(chunk)
         x, rejected = draw_checked(self.spec, chunk)
         return x, rejected, parameter_rows(self.plan, self.spec, x)
+
+    def _device_draws(self):
+        """The device's draws (made once), or None where the host draws: not on
+        the GPU, another sampler, or robust metrics or friction, whose stages
+        read the rows on the host."""
+        if self.device != "gpu" or self.robust is not None or self.friction is not None:
+            return None
+        with _DRAWS_LOCK:
+            draws = self.__dict__.get("_draws")
+            if draws is None:
+                from .gpu_draws import DeviceDraws, applies
+                if not applies(self.spec):
+                    return None
+                draws = self.__dict__["_draws"] = DeviceDraws(self)
+        return draws
 
     def evaluate_chunk(self, chunk, parallel=True, n_jobs=None, watch=None, drawn=None):
         """(chunk, x, status, metrics, rejected draws per triangle); ``drawn``:

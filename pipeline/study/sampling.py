@@ -64,29 +64,54 @@ def draw_checked(spec, chunk: int):
     accepted designs are distributed as the sampler's over the buildable part
     of the box, and the same on any number of threads or workers."""
     u = draw_unit(spec, chunk)
-    low = np.array([v.low for v in spec.variables])
-    high = np.array([v.high for v in spec.variables])
-    x = low + u * (high - low)
+    low, span = bounds(spec)
+    x = low + u * span
     rejected = np.zeros(len(spec.triangles), np.int64)
     if not spec.triangles:
         return x, rejected
-    rng = None
-    redrawn = None      # the rows redrawn in the last round (None: every row, the first)
+    bad = broken_rows(spec, x, rejected)
+    if bad.any():
+        bad = np.flatnonzero(bad)
+        x[bad] = redrawn(spec, chunk, bad, rejected)
+    return x, rejected
+
+
+def bounds(spec):
+    """(low, high - low) of the design variables, as the draws map the unit cube."""
+    low = np.array([v.low for v in spec.variables])
+    high = np.array([v.high for v in spec.variables])
+    return low, high - low
+
+
+def broken_rows(spec, xs, rejected):
+    """Which rows of ``xs`` break a triangle, each counted into ``rejected`` once,
+    for the first triangle it breaks."""
+    bad = np.zeros(xs.shape[0], bool)
+    for k, t in enumerate(spec.triangles):
+        b = t.broken(xs) & ~bad
+        rejected[k] += int(b.sum())
+        bad |= b
+    return bad
+
+
+def redrawn(spec, chunk, rows, rejected):
+    """The rows ``rows`` (indices in row order) of chunk ``chunk``'s first draws
+    broke a triangle: their values drawn again, uniformly in the bounds from the
+    chunk's own stream (seeded by (seed, chunk)), round after round until each
+    is buildable, every rejection counted into ``rejected``.  Only the rows just
+    redrawn are looked at again (the others are buildable: a GPU's chunk of
+    10^6 rows took 13 rounds over all of them, 0.26 s).  The GPU's draws
+    (``runs.gpu_draws``) check the first round there and redraw here alike."""
+    low, span = bounds(spec)
+    rng = np.random.default_rng([spec.seed, chunk, 0x7EDA])
+    out = np.empty((len(rows), len(low)))
+    todo = np.arange(len(rows))
     for _ in range(REDRAW_ROUNDS):
-        # only the rows just redrawn are looked at again: the others were buildable (a
-        # GPU's chunk of 10^6 rows took 13 rounds over all of them, 0.26 s)
-        xs = x if redrawn is None else x[redrawn]
-        bad = np.zeros(xs.shape[0], bool)
-        for k, t in enumerate(spec.triangles):
-            b = t.broken(xs) & ~bad       # counted once, for the first triangle it breaks
-            rejected[k] += int(b.sum())
-            bad |= b
+        out[todo] = low + rng.random((len(todo), len(low))) * span
+        bad = broken_rows(spec, out[todo], rejected)
         if not bad.any():
-            return x, rejected
-        if rng is None:
-            rng = np.random.default_rng([spec.seed, chunk, 0x7EDA])
-        redrawn = np.flatnonzero(bad) if redrawn is None else redrawn[bad]   # (in row order)
-        x[redrawn] = low + rng.random((len(redrawn), len(low))) * (high - low)
+            return out
+        todo = todo[bad]
     raise ValueError(f"chunk {chunk}: designs still break a triangle inequality after "
                      f"{REDRAW_ROUNDS} redraws; narrow the bounds of "
                      + ", ".join(n for t in spec.triangles for n in t.names))

@@ -482,17 +482,25 @@ def triangles_of(plan, variables):
     return tuple(out)
 
 
+def parameter_columns(plan, spec: SweepSpec):
+    """Where a candidate's row takes its values: each design variable's column
+    and factor, and each mass-model body's columns (its characteristic length,
+    mass, J_S, centre-of-mass arm)."""
+    var_cols = np.array([plan.param(v.param) for v in spec.variables], np.int64)
+    factors = np.array([float(v.factor) for v in spec.variables], np.float64)
+    mass_cols = np.array([[plan.param(ms.length_param), plan.param(f"{ms.body}.mass"),
+                           plan.param(f"{ms.body}.J_S"), plan.param(f"S[{ms.body}].length")]
+                          for ms in spec.mass_model], np.int64).reshape(-1, 4)
+    return var_cols, factors, mass_cols
+
+
 def parameter_rows(plan, spec: SweepSpec, x: np.ndarray) -> np.ndarray:
     """Full kernel parameter rows for design-variable rows ``x``: the reference
     row with the variables set, then the mass model (DOMAIN.md section 9:
     m = m0 L/L0, J_S = J0 (L/L0)^3, lS = lS0 L/L0; ``kernels.candidates``)."""
     from ..kernels.candidates import parameter_rows_into
     x = np.ascontiguousarray(x, dtype=np.float64)
-    var_cols = np.array([plan.param(v.param) for v in spec.variables], np.int64)
-    factors = np.array([float(v.factor) for v in spec.variables], np.float64)
-    mass_cols = np.array([[plan.param(ms.length_param), plan.param(f"{ms.body}.mass"),
-                           plan.param(f"{ms.body}.J_S"), plan.param(f"S[{ms.body}].length")]
-                          for ms in spec.mass_model], np.int64).reshape(-1, 4)
+    var_cols, factors, mass_cols = parameter_columns(plan, spec)
     pars = np.empty((x.shape[0], plan.par.shape[0]))
     parameter_rows_into(np.ascontiguousarray(plan.par, dtype=np.float64), x, var_cols, factors,
                         mass_cols, pars)

@@ -162,6 +162,45 @@ def test_sweep_on_the_simulated_gpu_writes_the_cpu_file(tmp_path):
                                        atol=0, err_msg=m)
 
 
+def test_device_draws_are_the_cpus_to_the_bit():
+    """Issue 54: a Sobol sweep's chunks drawn on the device (``runs.gpu_draws``:
+    each point from its index, the triangles checked there, the broken rows
+    redrawn on the host, the parameter rows written there) are the host's draws
+    bit for bit: the design variables, the rejections per triangle and the
+    parameter rows; for the first chunk, later ones drawn without those before
+    them and the short last one.  A GPU sweep takes them where nothing reads its
+    rows on the host (another sampler's, robust metrics' and friction's draws
+    stay there)."""
+    out = _run("""
+import json
+from dataclasses import replace
+from pathlib import Path
+from pipeline.study.reader import load_study
+from pipeline.runs.sweep import build_problem
+from pipeline.runs.gpu_draws import DeviceDraws
+study = load_study(Path("studies/ov7_synthesis.toml"))
+spec = replace(study.sweep.with_candidates(1000), chunk_size=300)
+problem = build_problem(study, spec)
+host = build_problem(study, spec)
+draws, res = DeviceDraws(problem), []
+for c in (3, 2, 0, 1):
+    x, rejected, pars = draws.draw(c)
+    x0, rejected0, pars0 = host.draw_chunk(c)
+    res.append([c, len(x), x.tobytes() == x0.tobytes(), rejected.tolist(), rejected0.tolist(),
+                pars.copy_to_host().tobytes() == pars0.tobytes()])
+gpu = build_problem(study, spec, device="gpu")
+uniform = build_problem(study, replace(spec, sampler="uniform"), device="gpu")
+print(json.dumps({"chunks": res, "gpu": gpu._device_draws() is not None,
+                  "uniform": uniform._device_draws() is None,
+                  "cpu": problem._device_draws() is None}))
+""")
+    res = json.loads(out.strip().splitlines()[-1])
+    for c, n, same_x, rejected, rejected0, same_pars in res["chunks"]:
+        assert n == (100 if c == 3 else 300)
+        assert same_x and same_pars and rejected == rejected0 and sum(rejected) > 0, c
+    assert res["gpu"] and res["uniform"] and res["cpu"]
+
+
 def test_gpu_asked_for_without_one_names_what_is_missing(tmp_path):
     study = load_study(STUDIES / "ov7_synthesis.toml")
     out = tmp_path / "x.h5"
