@@ -32,12 +32,33 @@ def launching():
     return _ONE_AT_A_TIME if SIMULATOR else contextlib.nullcontext()
 
 if SIMULATOR:
+    def mul_rn(a, b):
+        """a * b, rounded once (the simulator's arithmetic is the CPU's)."""
+        return a * b
+
+    def add_rn(a, b):
+        """a + b, rounded once."""
+        return a + b
+
     def own(a):
         """The numpy array inside the simulator's wrapper of a kernel argument
         (the CPU-compiled functions the kernel calls take only numpy arrays)."""
         inner = getattr(a, "_item", a)
         return getattr(inner, "_ary", inner)
 else:
+    from numba.cuda import libdevice
+
+    @cuda.jit(device=True, inline=True)
+    def mul_rn(a, b):
+        """a * b rounded on its own: NVVM would contract a product and a sum into one
+        FMA (one rounding), which the CPU's numbers do not have."""
+        return libdevice.dmul_rn(a, b)
+
+    @cuda.jit(device=True, inline=True)
+    def add_rn(a, b):
+        """a + b rounded on its own (``mul_rn``)."""
+        return libdevice.dadd_rn(a, b)
+
     @cuda.jit(device=True, inline=True)
     def own(a):
         """On a GPU a kernel's array argument is already what the device

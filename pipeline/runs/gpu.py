@@ -204,28 +204,43 @@ class GpuSweep:
                     metrics=cuda.pinned_array((self.batch, self.n_metrics)),
                     d_pars=cuda.device_array((self.batch, nv)),
                     d_status=cuda.device_array(self.batch, np.int8),
-                    d_metrics=cuda.device_array((self.batch, self.n_metrics)))
+                    d_metrics=cuda.device_array((self.batch, self.n_metrics)),
+                    flags=cuda.pinned_array(self.batch, np.int8),
+                    d_flags=cuda.device_array(self.batch, np.int8))
 
-    def evaluate_rows(self, pars):
+    def evaluate_rows(self, pars, keep=False):
         """(status int8 (n,), metrics (n, N_METRICS)) of the rows ``pars``: a host
-        array, or a device array (the device's own draws: ``gpu_draws``)."""
+        array, or a device array (the device's own draws: ``gpu_draws``).  With
+        ``keep`` (a store-feasible sweep): (status (n,), the feasible rows'
+        metrics (k, N_METRICS), their row indices (k,)), judged and gathered on
+        the device (``gpu_kept``): only those rows' metrics cross back."""
         if not hasattr(pars, "copy_to_host"):
             pars = np.ascontiguousarray(pars, dtype=np.float64)
+        if keep and self.__dict__.get("kept") is None:
+            from ..kernels import config as kc
+            from .gpu_kept import KeptRows
+            self.kept = KeptRows(self.problem.spec, self.problem.has_margin, kc.OK)
         n = pars.shape[0]
         status = np.empty(n, np.int8)
-        metrics = np.empty((n, self.n_metrics))
+        metrics = [] if keep else np.empty((n, self.n_metrics))    # keep: (lo, rows, metrics)
         pending = [None] * STREAMS      # (lo, hi) of the batch in flight on each stream
         for b, lo in enumerate(range(0, n, self.batch)):
             s = b % STREAMS
             self._collect(s, pending, status, metrics)
             hi = min(lo + self.batch, n)
-            self._launch(s, pars[lo:hi])
+            self._launch(s, pars[lo:hi], keep)
             pending[s] = (lo, hi)
         for s in range(STREAMS):
             self._collect(s, pending, status, metrics)
-        return status, metrics
+        if not keep:
+            return status, metrics
+        metrics.sort(key=lambda part: part[0])
+        rows = np.concatenate([r for _, r, _ in metrics]) if metrics else np.zeros(0, np.int64)
+        kept = (np.concatenate([m for _, _, m in metrics]) if metrics
+                else np.zeros((0, self.n_metrics)))
+        return status, kept, rows
 
-    def _launch(self, s, rows):
+    def _launch(self, s, rows, keep=False):
         k = rows.shape[0]
         st, stream = self.stage[s], self.streams[s]
         if hasattr(rows, "copy_to_host"):      # already on the device
@@ -241,15 +256,26 @@ class GpuSweep:
                 d_rows, phis, self.problem.phi_close, tols, settings, loads, trail,
                 st["d_status"][:k], st["d_metrics"][:k], *(a[:k] for a in self.work[s]))
         st["d_status"][:k].copy_to_host(st["status"][:k], stream=stream)
-        st["d_metrics"][:k].copy_to_host(st["metrics"][:k], stream=stream)
+        if keep:
+            self.kept.judge(st["d_status"][:k], st["d_metrics"][:k], st["d_flags"][:k], stream)
+            st["d_flags"][:k].copy_to_host(st["flags"][:k], stream=stream)
+        else:
+            st["d_metrics"][:k].copy_to_host(st["metrics"][:k], stream=stream)
 
     def _collect(self, s, pending, status, metrics):
         if pending[s] is None:
             return
         lo, hi = pending[s]
-        self.streams[s].synchronize()
-        status[lo:hi] = self.stage[s]["status"][:hi - lo]
-        metrics[lo:hi] = self.stage[s]["metrics"][:hi - lo]
+        st, stream = self.stage[s], self.streams[s]
+        stream.synchronize()
+        status[lo:hi] = st["status"][:hi - lo]
+        if isinstance(metrics, list):      # keep: the feasible rows' metrics only
+            rows = np.flatnonzero(st["flags"][:hi - lo])
+            if len(rows):
+                metrics.append((lo, lo + rows,
+                                self.kept.gather(st["d_metrics"][:hi - lo], rows, stream)))
+        else:
+            metrics[lo:hi] = st["metrics"][:hi - lo]
         pending[s] = None
 
     def kernel_only(self, pars, repeats=1):

@@ -13,7 +13,7 @@ variables come back for the results file; the parameter rows stay on the
 device for the kernel.  The same bits as ``SweepProblem.draw_chunk`` (tested
 under numba's CUDA simulator): the integers are exact, the scale a power of
 two, and the two roundings of low + u (high - low) are kept apart on a GPU
-(``dmul_rn``, ``dadd_rn``: NVVM would contract them into one FMA).
+(``cuda_device.mul_rn``, ``add_rn``: NVVM would contract them into one FMA).
 """
 
 from __future__ import annotations
@@ -21,29 +21,11 @@ from __future__ import annotations
 import numpy as np
 
 # first: cuda_device's numpy fix precedes numba.cuda's import
-from ..compiler.cuda_device import SIMULATOR, launching
+from ..compiler.cuda_device import add_rn, launching, mul_rn
 from numba import cuda
 from ..study.sampling import bounds, redrawn
 
 THREADS = 256
-
-if SIMULATOR:
-    def _mul(a, b):
-        return a * b
-
-    def _add(a, b):
-        return a + b
-else:
-    from numba.cuda import libdevice
-
-    @cuda.jit(device=True, inline=True)
-    def _mul(a, b):
-        return libdevice.dmul_rn(a, b)
-
-    @cuda.jit(device=True, inline=True)
-    def _add(a, b):
-        return libdevice.dadd_rn(a, b)
-
 
 @cuda.jit
 def _points(first, sv, shift, scale, low, span, x):
@@ -57,7 +39,7 @@ def _points(first, sv, shift, scale, low, span, x):
             for b in range(sv.shape[1]):
                 if (gray >> b) & 1:
                     q ^= sv[j, b]
-            x[i, j] = _add(low[j], _mul(q * scale, span[j]))
+            x[i, j] = add_rn(low[j], mul_rn(q * scale, span[j]))
 
 
 @cuda.jit

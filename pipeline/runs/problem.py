@@ -147,11 +147,28 @@ class SweepProblem:
         return draws
 
     def evaluate_chunk(self, chunk, parallel=True, n_jobs=None, watch=None, drawn=None):
-        """(chunk, x, status, metrics, rejected draws per triangle); ``drawn``:
-        the chunk's ``draw_chunk``, where the caller drew it ahead."""
+        """(chunk, x, status, metrics, rejected draws per triangle, kept); ``drawn``:
+        the chunk's ``draw_chunk``, where the caller drew it ahead.  ``kept``:
+        None, or where the GPU kept the feasible rows only (``_keeps_on_device``)
+        their indices, ``metrics`` their rows alone."""
         x, rejected, pars = self.draw_chunk(chunk) if drawn is None else drawn
+        if self._keeps_on_device():
+            share = None if watch is None else watch.share(len(pars))
+            if share is not None:
+                share.check()
+            status, metrics, kept = self.gpu().evaluate_rows(pars, keep=True)
+            if share is not None:
+                share.reached(1.0)
+            return chunk, x, status, metrics, rejected, kept
         status, metrics = self.evaluate_rows(pars, parallel, n_jobs, watch)
-        return chunk, x, status, metrics, rejected
+        return chunk, x, status, metrics, rejected, None
+
+    def _keeps_on_device(self):
+        """Whether a chunk's feasible rows are judged and gathered on the GPU
+        (``gpu_kept``): a store-feasible sweep there, without robust metrics or
+        friction (whose stages read every row's metrics on the host)."""
+        return (self.device == "gpu" and self.spec.store == "feasible"
+                and self.robust is None and self.friction is None)
 
 
 def plain_problem(study, spec: SweepSpec, tols=None, device="cpu") -> SweepProblem:

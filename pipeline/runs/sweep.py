@@ -187,11 +187,12 @@ def _run_chunks(spec, out, journal, problem, sf, client, n_jobs, progress, stop_
             hdf5_writing(sf.path, expendable=False) as f:
         d = sf.datasets(f)
         record.open(f, lambda chunks: _write(sf, d, chunks, out))
-        for c, x, status, metrics, rejected in _chunks(problem, todo, client, n_jobs, watch):
+        for c, x, status, metrics, rejected, kept in _chunks(problem, todo, client, n_jobs,
+                                                             watch):
             computed += len(status)
             if watch is None:
                 bar.update(len(status))
-            record.add(_stored(sf, c, x, status, metrics, rejected))
+            record.add(_stored(sf, c, x, status, metrics, rejected, kept))
             if stop_after_chunks is not None and computed >= stop_after_chunks * spec.chunk_size:
                 raise KeyboardInterrupt  # test hook: an interruption at a chunk boundary
     with hdf5_writing(sf.path, expendable=False) as f:
@@ -200,16 +201,29 @@ def _run_chunks(spec, out, journal, problem, sf, client, n_jobs, progress, stop_
                       summarize, "candidates", device=problem.device_name)
 
 
-def _stored(sf: SweepFile, c, x, status, metrics, rejected):
+def _stored(sf: SweepFile, c, x, status, metrics, rejected, kept=None):
     """What chunk ``c`` stores, (c, x, status, metrics, judged, rejected, index,
     counts): every row (index and counts None), or with store = feasible its
     feasible rows, ``index`` their candidate indices and ``counts`` the chunk's
-    candidates per status and feasible."""
+    candidates per status and feasible.  ``kept``: the rows the GPU judged
+    feasible, ``metrics`` theirs alone (``SweepProblem.evaluate_chunk``): judged
+    here again, where a row judged otherwise stops the run."""
+    lo, _ = sf.spec.chunk_bounds(c)
+    if kept is not None:
+        judged = feasibility(sf.spec, status[kept], metrics, sf.problem.has_margin)
+        if not judged.feasible.all():
+            bad = lo + kept[~judged.feasible]
+            raise RuntimeError(f"chunk {c}: the GPU kept candidates {bad[:5].tolist()} as "
+                               "feasible and the host judges them otherwise (a defect: "
+                               "report it)")
+        feasible = np.zeros(len(status), bool)
+        feasible[kept] = True
+        return (c, x[kept], status[kept], metrics, judged, rejected, lo + kept,
+                counted(status, feasible))
     judged = feasibility(sf.spec, status, metrics, sf.problem.has_margin)
     if not sf.feasible_only:
         return c, x, status, metrics, judged, rejected, None, None
     keep = np.flatnonzero(judged.feasible)
-    lo, _ = sf.spec.chunk_bounds(c)
     return (c, x[keep], status[keep], metrics[keep], judged.rows(keep), rejected, lo + keep,
             counted(status, judged.feasible))
 

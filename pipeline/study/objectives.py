@@ -115,3 +115,25 @@ def bounded_finite(spec: SweepSpec, metrics):
     for m, _, _ in spec.bounds:
         ok &= np.isfinite(metric_values(metrics, m))
     return ok
+
+
+def feasibility_rules(spec: SweepSpec, has_margin: bool):
+    """``feasibility`` as two tables, for a kernel that judges rows where they
+    were computed (the GPU's, ``runs.gpu_kept``): ``limits``, a row per
+    constraint (column, factor, offset, sign, limit: g = sign (value - limit),
+    value = row[column] factor (+ offset), violated where g > 0), and
+    ``finite``, a row per objective and bounded metric (column, factor, offset:
+    its value must be finite).  A row is feasible when its status is OK, no g
+    is above 0 (NaN is not: as cv's nansum) and every value of ``finite`` is
+    finite; the same as ``feasibility`` (tested)."""
+    def metric(name):
+        m = BY_NAME[name]
+        return [float(m.column), float(m.factor), float(m.offset)]
+    limits = [metric("stroke") + [-1.0, spec.stroke_bounds[0]],
+              metric("stroke") + [1.0, spec.stroke_bounds[1]]]
+    if has_margin:
+        limits.append(metric("singularity_margin") + [-1.0, spec.margin_min])
+    limits += [metric(m) + [sign, limit] for _, m, sign, limit in _bound_columns(spec)]
+    finite = [metric(o) for o in spec.objectives] + [metric(m) for m, _, _ in spec.bounds]
+    return (np.array(limits, np.float64).reshape(-1, 5),
+            np.array(finite, np.float64).reshape(-1, 3))

@@ -201,6 +201,58 @@ print(json.dumps({"chunks": res, "gpu": gpu._device_draws() is not None,
     assert res["gpu"] and res["uniform"] and res["cpu"]
 
 
+def test_device_keeps_exactly_the_feasible_rows(tmp_path):
+    """Issue 54: with store = feasible the device judges each row
+    (``runs.gpu_kept``, from ``objectives.feasibility_rules``) and only the
+    feasible rows' metrics come back: their indices are those ``feasibility``
+    finds in every row's metrics, with bounds on metrics that cut (a derived
+    metric's factor among them) and rows that fail, and their metrics the
+    same bits; a store-feasible sweep on the device keeps the CPU's rows and
+    every chunk's counts."""
+    out = _run("""
+import json
+import numpy as np
+from dataclasses import replace
+from pathlib import Path
+from pipeline.study.reader import load_study
+from pipeline.study.objectives import feasibility
+from pipeline.runs.sweep import build_problem
+study = load_study(Path("studies/ov7_synthesis.toml"))
+spec = replace(study.sweep.with_candidates(600), chunk_size=600, store="feasible",
+               bounds=(("peak_reaction", -np.inf, 1200.0), ("dwell_start", -225.0, np.inf)))
+problem = build_problem(study, spec, device="gpu")
+x, rejected, pars = problem.draw_chunk(0)
+status, metrics = problem.gpu().evaluate_rows(pars)
+st2, kept_metrics, kept = problem.gpu().evaluate_rows(pars, keep=True)
+judged = feasibility(spec, status, metrics, problem.has_margin)
+print(json.dumps({"same_status": bool((status == st2).all()),
+                  "kept": kept.tolist(), "host": np.flatnonzero(judged.feasible).tolist(),
+                  "rows": kept_metrics.tobytes() == metrics[kept].tobytes(),
+                  "ok": int((status == 0).sum()), "n": len(status)}))
+""")
+    res = json.loads(out.strip().splitlines()[-1])
+    assert res["same_status"] and res["rows"]
+    assert res["kept"] == res["host"]
+    assert 0 < len(res["kept"]) < res["ok"] < res["n"]     # the bounds cut OK rows
+    cpu, gpu = tmp_path / "cpu.h5", tmp_path / "gpu.h5"
+    args = ["run", "studies/ov7_synthesis.toml", "--candidates", "150", "--chunk-size", "50",
+            "--store", "feasible", "-q"]
+    for path, extra, env in ((cpu, [], os.environ), (gpu, ["--device", "gpu"], SIM)):
+        r = subprocess.run([sys.executable, "-m", "pipeline.cli", *args, "-o", str(path),
+                            *extra], env=env, cwd=HERE.parent, capture_output=True, text=True,
+                           timeout=600)
+        assert r.returncode == 0, r.stderr[-2000:]
+    with h5py.File(cpu) as a, h5py.File(gpu) as b:
+        assert len(a["candidate"]) > 0
+        for name in ("candidate", "candidates/status", "candidates/feasible",
+                     "candidates/params", "progress/status_counts"):
+            np.testing.assert_array_equal(a[name][()], b[name][()], err_msg=name)
+        for m in variables(a["metrics"]):
+            if m != "newton_iterations":
+                np.testing.assert_allclose(b["metrics"][m][()], a["metrics"][m][()], rtol=REL,
+                                           atol=0, err_msg=m)
+
+
 def test_gpu_asked_for_without_one_names_what_is_missing(tmp_path):
     study = load_study(STUDIES / "ov7_synthesis.toml")
     out = tmp_path / "x.h5"

@@ -105,7 +105,7 @@ def test_the_sweep_file_writes_the_constraints_it_is_handed(studies, tmp_path):
     problem = build_problem(study, spec)
     sf = SweepFile(tmp_path / "s.h5", study, problem)
     sf.create()
-    c, x, status, metrics, rejected = problem.evaluate_chunk(0, parallel=False)
+    c, x, status, metrics, rejected, _ = problem.evaluate_chunk(0, parallel=False)
     n, k = len(status), len(constraint_names(problem.has_margin, spec))
     made_up = Feasibility(np.arange(n * k, dtype=float).reshape(n, k) - 7.5,
                           np.full(n, 123.25), np.arange(n) % 3 == 0)
