@@ -26,17 +26,24 @@ def scaled_mass_data(m0, J0, lS0, ratio):
 
 
 @njit(**JIT)
+def parameter_row(base, x, var_cols, factors, mass_cols, out):
+    """One candidate's row ``out``: the reference row ``base`` with design
+    variable j (x[j] times factors[j]) in column var_cols[j], then each body of
+    the mass model in turn (mass_cols[b]: the columns of its characteristic
+    length, mass, J_S and centre-of-mass arm) scaled by its length's ratio to
+    the reference.  (The GPU's draws call it too: ``runs.gpu_draws``.)"""
+    for p in range(base.shape[0]):
+        out[p] = base[p]
+    for j in range(var_cols.shape[0]):
+        out[var_cols[j]] = x[j] * factors[j]
+    for b in range(mass_cols.shape[0]):
+        k, m, inertia, arm = mass_cols[b, 0], mass_cols[b, 1], mass_cols[b, 2], mass_cols[b, 3]
+        out[m], out[inertia], out[arm] = scaled_mass_data(base[m], base[inertia], base[arm],
+                                                          out[k] / base[k])
+
+
+@njit(**JIT)
 def parameter_rows_into(base, x, var_cols, factors, mass_cols, out):
-    """out[i] = the reference row ``base`` with design variable j of row i of
-    ``x`` (times factors[j]) in column var_cols[j], then each body of the mass
-    model in turn (mass_cols[b]: the columns of its characteristic length, mass,
-    J_S and centre-of-mass arm) scaled by its length's ratio to the reference."""
+    """``parameter_row`` of every row of ``x`` into the rows of ``out``."""
     for i in range(x.shape[0]):
-        for p in range(base.shape[0]):
-            out[i, p] = base[p]
-        for j in range(var_cols.shape[0]):
-            out[i, var_cols[j]] = x[i, j] * factors[j]
-        for b in range(mass_cols.shape[0]):
-            k, m, inertia, arm = mass_cols[b, 0], mass_cols[b, 1], mass_cols[b, 2], mass_cols[b, 3]
-            out[i, m], out[i, inertia], out[i, arm] = scaled_mass_data(
-                base[m], base[inertia], base[arm], out[i, k] / base[k])
+        parameter_row(base, x[i], var_cols, factors, mass_cols, out[i])

@@ -21,8 +21,9 @@ from __future__ import annotations
 import numpy as np
 
 # first: cuda_device's numpy fix precedes numba.cuda's import
-from ..compiler.cuda_device import add_rn, launching, mul_rn
+from ..compiler.cuda_device import add_rn, launching, mul_rn, own
 from numba import cuda
+from ..kernels.candidates import parameter_row
 from ..study.sampling import bounds, redrawn
 
 THREADS = 256
@@ -69,21 +70,13 @@ def _put_rows(rows, values, x):
 
 @cuda.jit
 def _parameter_rows(base, x, var_cols, factors, mass_cols, out):
-    """``kernels.candidates.parameter_rows_into``, a thread a row: the same
-    multiplications and division in the same order."""
+    """``kernels.candidates.parameter_row`` (the CPU's own function, compiled for
+    the GPU), a thread a row."""
     i = cuda.threadIdx.x + cuda.blockIdx.x * cuda.blockDim.x
     if i < x.shape[0]:
-        for p in range(base.shape[0]):
-            out[i, p] = base[p]
-        for j in range(var_cols.shape[0]):
-            out[i, var_cols[j]] = x[i, j] * factors[j]
-        for b in range(mass_cols.shape[0]):
-            k, m, inertia, arm = mass_cols[b, 0], mass_cols[b, 1], mass_cols[b, 2], mass_cols[b, 3]
-            ratio = out[i, k] / base[k]
-            cube = ratio * ratio * ratio
-            out[i, m] = base[m] * ratio
-            out[i, inertia] = base[inertia] * cube
-            out[i, arm] = base[arm] * ratio
+        # own(): the array itself on a GPU; the numpy array inside the simulator's wrapper
+        parameter_row(own(base), own(x)[i], own(var_cols), own(factors), own(mass_cols),
+                      own(out)[i])
 
 
 def applies(spec) -> bool:
