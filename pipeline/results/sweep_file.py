@@ -16,7 +16,7 @@ from ..study.objectives import Feasibility, constraint_names, constraint_units, 
 from ..model.metric_catalogue import METRICS, metric_values
 from .storage import (COMPRESSION, STATUS_ENUM, attach, attr_text, coordinate, hdf5_image,
                       link_coordinates, put, room_for, status_table, units_attr, write_root_attrs,
-                      write_rows)
+                      direct_chunk_rows, write_rows)
 from ..base.errors import ResultsError
 
 # rows of an HDF5 chunk of a sweep that stores its feasible candidates only: the rows
@@ -59,6 +59,7 @@ class SweepFile:
         self.study = study
         self.problem = problem
         self.spec = problem.spec
+        self._direct = {}
 
     @property
     def feasible_only(self):
@@ -251,7 +252,9 @@ class SweepFile:
         columns.update({"candidates/constraints": judged.g, "candidates/cv": judged.cv,
                         "candidates/feasible": judged.feasible})
         for name, values in columns.items():
-            write_rows(d[name], lo, values)
+            if name not in self._direct:        # (datasets() forgets them with the file)
+                self._direct[name] = direct_chunk_rows(d[name])
+            write_rows(d[name], lo, values, self._direct[name])
 
     def row_names(self):
         """The datasets with a row per stored candidate."""
@@ -278,6 +281,7 @@ class SweepFile:
         more than writing a chunk's column)."""
         names = self.row_names() + ["progress/chunk_done", "progress/rejected",
                                     "progress/status_counts"]
+        self._direct = {}       # each dataset's rows per chunk written here (write_rows)
         return {n: f[n] for n in names}
 
 
