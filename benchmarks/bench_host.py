@@ -8,7 +8,9 @@ journal and the HDF5 rows.  Its candidates/s is the ceiling of any device's end
 to end rate on this host: 10^8 candidates a minute (issue 54) needs 1,666,667/s,
 and the table gives the host's rate against it.  The drawing of one chunk is
 timed apart (the thread that draws the next chunk while the device evaluates
-one).  The first, compiling, evaluation is outside the timed runs.
+one).  The first, compiling, evaluation is outside the timed runs.  The
+process's peak memory (its largest resident size so far, the evaluation of
+the rows it answers with included) is reported with each size.
 
     python benchmarks/bench_host.py [--sizes 10000000] [--chunk-size 1000000]
                                     [--store feasible] [-o DIR]
@@ -19,6 +21,7 @@ Writes DIR/host.md (default results/bench/).
 from __future__ import annotations
 
 import argparse
+import resource
 import sys
 import tempfile
 import time
@@ -75,9 +78,11 @@ def measure(sizes, chunk_size, store, echo=print):
                 run_sweep(study, path, candidates=n, chunk_size=min(chunk_size, n),
                           progress=False, store=store)
                 wall, main = time.perf_counter() - t, time.thread_time() - cpu
-                out.append(dict(n=n, wall=wall, main=main, rate=n / wall))
+                peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024   # MiB
+                out.append(dict(n=n, wall=wall, main=main, rate=n / wall, peak=peak))
                 echo(f"host alone, {n:,} candidates, store {store}: {wall:.2f} s, "
-                     f"{n / wall:,.0f}/s, main thread {main:.2f} s of CPU")
+                     f"{n / wall:,.0f}/s, main thread {main:.2f} s of CPU, the process's "
+                     f"peak memory {peak:,.0f} MiB")
                 path.unlink()
     finally:
         problem_module.SweepProblem.evaluate_rows = real
@@ -90,10 +95,10 @@ def table(rows, draw_s, chunk_size, store):
              "answered at once (real rows, copied as a device's arrive). Drawing one chunk: "
              f"{draw_s:.3f} s.", "",
              "| candidates | host alone s | candidates/s | main thread CPU s | "
-             "against 10^8 a minute |", "|---|---|---|---|---|"]
+             "against 10^8 a minute | peak memory MiB |", "|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['n']:,} | {r['wall']:.2f} | {r['rate']:,.0f} | {r['main']:.2f} | "
-                     f"{r['rate'] / A_MINUTE_OF_1E8:.2f}x |")
+                     f"{r['rate'] / A_MINUTE_OF_1E8:.2f}x | {r['peak']:,.0f} |")
     return "\n".join(lines) + "\n"
 
 
