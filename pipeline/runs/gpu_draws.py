@@ -28,6 +28,7 @@ from ..study.sampling import bounds, redrawn
 
 THREADS = 256
 
+
 @cuda.jit
 def _points(first, sv, shift, scale, low, span, x):
     """x[i] = low + u (high - low), u = point first + i of the sequence."""
