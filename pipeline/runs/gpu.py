@@ -177,6 +177,7 @@ class GpuSweep:
         self.streams = [cuda.stream() for _ in range(STREAMS)]
         self.work = [self._work_arrays() for _ in range(STREAMS)]
         self.stage = [self._staging() for _ in range(STREAMS)]
+        self.kept = None        # gpu_kept.KeptRows, made by the first evaluate_kept
 
     def _work_arrays(self):
         """One set of per-thread work arrays (rows: threads of a batch), each
@@ -208,18 +209,26 @@ class GpuSweep:
                     flags=cuda.pinned_array(self.batch, np.int8),
                     d_flags=cuda.device_array(self.batch, np.int8))
 
-    def evaluate_rows(self, pars, keep=False):
+    def evaluate_rows(self, pars):
         """(status int8 (n,), metrics (n, N_METRICS)) of the rows ``pars``: a host
-        array, or a device array (the device's own draws: ``gpu_draws``).  With
-        ``keep`` (a store-feasible sweep): (status (n,), the feasible rows'
-        metrics (k, N_METRICS), their row indices (k,)), judged and gathered on
-        the device (``gpu_kept``): only those rows' metrics cross back."""
-        if not hasattr(pars, "copy_to_host"):
-            pars = np.ascontiguousarray(pars, dtype=np.float64)
-        if keep and self.__dict__.get("kept") is None:
+        array, or a device array (the device's own draws: ``gpu_draws``)."""
+        return self._evaluate(pars, False)
+
+    def evaluate_kept(self, pars):
+        """(status int8 (n,), the feasible rows' metrics (k, N_METRICS), their row
+        indices (k,)) of the rows ``pars`` (a store-feasible sweep): judged and
+        gathered on the device (``gpu_kept``), only those rows' metrics cross back."""
+        if self.kept is None:
             from ..kernels import config as kc
             from .gpu_kept import KeptRows
             self.kept = KeptRows(self.problem.spec, self.problem.has_margin, kc.OK)
+        return self._evaluate(pars, True)
+
+    def _evaluate(self, pars, keep):
+        """The batches of ``pars`` on the streams in turn (``evaluate_rows``,
+        ``evaluate_kept``)."""
+        if not hasattr(pars, "copy_to_host"):
+            pars = np.ascontiguousarray(pars, dtype=np.float64)
         n = pars.shape[0]
         status = np.empty(n, np.int8)
         metrics = [] if keep else np.empty((n, self.n_metrics))    # keep: (lo, rows, metrics)

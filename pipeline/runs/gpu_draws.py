@@ -4,7 +4,7 @@ Point k of a scrambled Sobol sequence is its digital shift XOR the direction
 numbers of the bits set in k's Gray code, k ^ (k >> 1): what scipy's engine
 reaches by stepping through the points, here computed by each thread from its
 candidate's index alone, from the engine's own direction numbers and shift
-(``scipy.stats.qmc.Sobol``, seeded as ``study.sampling.draw_unit`` seeds it).
+(``study.sampling.sobol_engine``, the host's draws' own).
 The points are mapped into the bounds, the triangle inequalities checked and
 the parameter rows written on the device.  The rows that break a triangle
 (their indices) come to the host, which redraws them exactly as the CPU's
@@ -24,7 +24,7 @@ import numpy as np
 from ..compiler.cuda_device import add_rn, launching, mul_rn, own
 from numba import cuda
 from ..kernels.candidates import parameter_row
-from ..study.sampling import bounds, redrawn
+from ..study.sampling import bounds, redrawn, sobol_engine
 
 THREADS = 256
 
@@ -89,15 +89,10 @@ class DeviceDraws:
     """The draws of a sweep problem's chunks on the GPU (``draw``)."""
 
     def __init__(self, problem):
-        import warnings
-        from scipy.stats import qmc
         from ..study.sweep_spec import parameter_columns
         spec, plan = problem.spec, problem.plan
         self.spec = spec
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)
-            engine = qmc.Sobol(len(spec.variables), scramble=True,
-                               seed=np.random.default_rng(spec.seed))
+        engine = sobol_engine(spec)
         low, span = bounds(spec)
         cols = np.array([t.columns for t in spec.triangles], np.int64).reshape(-1, 3)
         fixed = np.array([t.fixed for t in spec.triangles], np.float64).reshape(-1, 3)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import threading
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,6 +19,19 @@ from ..study.sweep_spec import SweepSpec, parameter_rows
 
 
 _DRAWS_LOCK = threading.Lock()
+
+
+@contextmanager
+def _told(watch, n):
+    """Around the evaluation of ``n`` rows: the share of ``watch``
+    (``builds.Watch``) that is told of them (None without a watch), asked first
+    whether to stop, and told at the end that they are done."""
+    share = None if watch is None else watch.share(n)
+    if share is not None:
+        share.check()
+    yield share
+    if share is not None:
+        share.reached(1.0)
 
 
 @dataclass
@@ -92,33 +106,30 @@ class SweepProblem:
         task).  ``watch`` (``builds.Watch``): told of the rows done as the
         work goes (the robust metrics' builds, slice by slice), and asked
         between two slices whether to stop."""
-        share = None if watch is None else watch.share(len(pars))
-        if share is not None:
-            share.check()
-        if self.device == "gpu":
-            status, metrics = self.gpu().evaluate_rows(pars)
-        else:
-            from ..compiler.parallel import run_rows
-            n = pars.shape[0]
-            status = np.zeros(n, np.int8)
-            metrics = np.full((n, ks.N_METRICS), np.nan)
-            run_rows(self.kernels.evaluate, np.ascontiguousarray(pars), self.phis,
-                     self.phi_close, self.tols, self.settings(), self.loads, status, metrics,
-                     n_jobs=n_jobs if parallel else 1)
-        if self.robust is not None or self.friction is not None:
-            # the robust metrics' columns after the kernels', then the friction's
-            from ..model.metric_catalogue import N_ROBUST_ROW, N_ROW
-            width = N_ROW if self.friction is not None else N_ROBUST_ROW
-            metrics = np.concatenate([metrics, np.full((len(status), width - ks.N_METRICS),
-                                                       np.nan)], axis=1)
-        if self.friction is not None:   # before the robust builds: their bounds read its peaks
-            self.friction.fill(self, pars, status, metrics, N_ROBUST_ROW, n_jobs, parallel,
-                               share if self.robust is None else None)
-        if self.robust is not None:
-            self.robust.fill(np.ascontiguousarray(pars, float), status, metrics, n_jobs,
-                             parallel, share)
-        if share is not None:
-            share.reached(1.0)
+        with _told(watch, len(pars)) as share:
+            if self.device == "gpu":
+                status, metrics = self.gpu().evaluate_rows(pars)
+            else:
+                from ..compiler.parallel import run_rows
+                n = pars.shape[0]
+                status = np.zeros(n, np.int8)
+                metrics = np.full((n, ks.N_METRICS), np.nan)
+                run_rows(self.kernels.evaluate, np.ascontiguousarray(pars), self.phis,
+                         self.phi_close, self.tols, self.settings(), self.loads, status,
+                         metrics, n_jobs=n_jobs if parallel else 1)
+            if self.robust is not None or self.friction is not None:
+                # the robust metrics' columns after the kernels', then the friction's
+                from ..model.metric_catalogue import N_ROBUST_ROW, N_ROW
+                width = N_ROW if self.friction is not None else N_ROBUST_ROW
+                metrics = np.concatenate([metrics, np.full((len(status),
+                                                            width - ks.N_METRICS), np.nan)],
+                                         axis=1)
+            if self.friction is not None:   # before the robust builds: they read its peaks
+                self.friction.fill(self, pars, status, metrics, N_ROBUST_ROW, n_jobs, parallel,
+                                   share if self.robust is None else None)
+            if self.robust is not None:
+                self.robust.fill(np.ascontiguousarray(pars, float), status, metrics, n_jobs,
+                                 parallel, share)
         return status, metrics
 
     def draw_chunk(self, chunk):
@@ -153,12 +164,8 @@ class SweepProblem:
         their indices, ``metrics`` their rows alone."""
         x, rejected, pars = self.draw_chunk(chunk) if drawn is None else drawn
         if self._keeps_on_device():
-            share = None if watch is None else watch.share(len(pars))
-            if share is not None:
-                share.check()
-            status, metrics, kept = self.gpu().evaluate_rows(pars, keep=True)
-            if share is not None:
-                share.reached(1.0)
+            with _told(watch, len(pars)):
+                status, metrics, kept = self.gpu().evaluate_kept(pars)
             return chunk, x, status, metrics, rejected, kept
         status, metrics = self.evaluate_rows(pars, parallel, n_jobs, watch)
         return chunk, x, status, metrics, rejected, None

@@ -210,7 +210,8 @@ def _stored(sf: SweepFile, c, x, status, metrics, rejected, kept=None):
     here again, where a row judged otherwise stops the run."""
     lo, _ = sf.spec.chunk_bounds(c)
     if kept is not None:
-        judged = feasibility(sf.spec, status[kept], metrics, sf.problem.has_margin)
+        status_kept = status[kept]
+        judged = feasibility(sf.spec, status_kept, metrics, sf.problem.has_margin)
         if not judged.feasible.all():
             bad = lo + kept[~judged.feasible]
             raise RuntimeError(f"chunk {c}: the GPU kept candidates {bad[:5].tolist()} as "
@@ -218,7 +219,7 @@ def _stored(sf: SweepFile, c, x, status, metrics, rejected, kept=None):
                                "report it)")
         feasible = np.zeros(len(status), bool)
         feasible[kept] = True
-        return (c, x[kept], status[kept], metrics, judged, rejected, lo + kept,
+        return (c, x[kept], status_kept, metrics, judged, rejected, lo + kept,
                 counted(status, feasible))
     judged = feasibility(sf.spec, status, metrics, sf.problem.has_margin)
     if not sf.feasible_only:

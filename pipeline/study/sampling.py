@@ -30,7 +30,7 @@ def draw_unit(spec, chunk: int) -> np.ndarray:
             key = (spec.seed, d)
             s, at = _SOBOL.get(key, (None, -1))
             if at != lo:      # not the continuation of the last chunk: a fresh engine
-                s = qmc.Sobol(d, scramble=True, seed=np.random.default_rng(spec.seed))
+                s = sobol_engine(spec)
                 if lo:
                     s.fast_forward(lo)
             with warnings.catch_warnings():  # chunks of one sequence need not be powers of 2
@@ -43,6 +43,14 @@ def draw_unit(spec, chunk: int) -> np.ndarray:
     if spec.sampler == "lhs":
         return qmc.LatinHypercube(d, seed=rng).random(hi - lo)
     return rng.random((hi - lo, d))
+
+
+def sobol_engine(spec):
+    """The scrambled Sobol sequence of a sweep with seed ``spec.seed``, at its
+    first point: the host's draws step through it (``draw_unit``), the GPU's take
+    its direction numbers and shift (``runs.gpu_draws``)."""
+    from scipy.stats import qmc
+    return qmc.Sobol(len(spec.variables), scramble=True, seed=np.random.default_rng(spec.seed))
 
 
 # rejection rounds per chunk: with the acceptance >= 1 % that parse_sweep checks, a draw

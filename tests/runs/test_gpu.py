@@ -223,7 +223,7 @@ spec = replace(study.sweep.with_candidates(600), chunk_size=600, store="feasible
 problem = build_problem(study, spec, device="gpu")
 x, rejected, pars = problem.draw_chunk(0)
 status, metrics = problem.gpu().evaluate_rows(pars)
-st2, kept_metrics, kept = problem.gpu().evaluate_rows(pars, keep=True)
+st2, kept_metrics, kept = problem.gpu().evaluate_kept(pars)
 judged = feasibility(spec, status, metrics, problem.has_margin)
 print(json.dumps({"same_status": bool((status == st2).all()),
                   "kept": kept.tolist(), "host": np.flatnonzero(judged.feasible).tolist(),
