@@ -375,6 +375,12 @@ def emitters_for(plan, names):
     return out
 
 
+def watched_groups(plan, ems, watch=True):
+    """The groups whose margin the walks watch between positions (none without
+    ``watch``: the benchmark's baseline of the watch's cost)."""
+    return [e.g for e in ems[:plan.n_kinematic] if e.watched and watch]
+
+
 def constants_of(plan, n, ems):
     """(local name, expression) of every per-candidate constant: the fixed
     pivots, each group's parameters and what its emitter derives from them."""

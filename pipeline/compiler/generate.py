@@ -29,7 +29,7 @@ import re
 import numpy as np
 
 from .. import group_types
-from .emit import constants_of, emitters_for
+from .emit import constants_of, emitters_for, watched_groups
 from .force_equations import force_kernel
 from .lane_forces import lane_force_kernel
 from .lanes import lane_kernel, no_rocker_kernel
@@ -133,7 +133,7 @@ def _plan_constants(plan, n, n_triads):
 def _force_constants(plan, ems, watch):
     """The force analysis' tables (bodies, joints, slides, loads), the watched
     groups and the crank's body, as the module's constants."""
-    watched = [e.g for e in ems[:plan.n_kinematic] if e.watched and watch]
+    watched = watched_groups(plan, ems, watch)
     return [
         "# force analysis: bodies, joints, slides, loads",
         _array("BODY_COM", plan.body_com, "int64"),

@@ -46,7 +46,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..kernels import config as kc
-from ..compiler import kernels_for
+from ..compiler import kernels_for, plan_path
 from ..kernels.continuation import MARGIN_SLOTS
 from ..kernels.dynamics import OMEGA_STOP, TOO_FAST
 from ..base import limits as lim
@@ -73,9 +73,17 @@ INACCURATE = 17             # the estimated error exceeds ACCEPTED_ERROR_RAD: re
 STATUS_NAMES = {**kc.STATUS_NAMES, TOO_FAST: "TOO_FAST", INACCURATE: "INACCURATE"}
 
 
-def _plan_args(plan, tols):
-    """(par, K, tols) of the dynamics kernels: K the constants as an array."""
-    return (plan.par, kernels_for(plan).constants_array(plan.par), tols)
+def _kernels(plan):
+    """The dynamics kernels of ``plan``: the plan path's (compiled once for every
+    mechanism, the same bits) where the plan is on it, else its generated module's."""
+    return plan_path.dynamics_of(plan) or kernels_for(plan)
+
+
+def _plan_args(plan, tols, kern=None):
+    """(par, K, tols) of the dynamics kernels ``kern`` (``_kernels``' by
+    default): K the constants as an array."""
+    kern = _kernels(plan) if kern is None else kern
+    return (plan.par, kern.constants_array(plan.par), tols)
 
 
 # ----------------------------------------------------------------- helpers for tests
@@ -103,7 +111,8 @@ def _curve(plan, phi, t=0.0, mechanism=None, loads=True, tols=None):
         drive = _zero_drive(n_loads)
     out = [np.full(phis.shape, np.nan) for _ in range(5)]
     status = np.zeros(phis.shape, np.int8)
-    kernels_for(plan).terms_curve(*_plan_args(plan, tols), *drive.args(), phis, ts, *out, status)
+    kern = _kernels(plan)
+    kern.terms_curve(*_plan_args(plan, tols, kern), *drive.args(), phis, ts, *out, status)
     return out, status
 
 
@@ -315,8 +324,9 @@ def _run_once(plan, mechanism, case, method, tols, file, dt, tol) -> CaseResult:
                                          out, tail)
         t_cross = crossing * dt if crossing >= 0 else math.nan
     elif method == "rk4":
-        status, crossing = kernels_for(plan).rk4(
-            *_plan_args(plan, tols), *drive.args(), float(case.damping), float(case.phi_start),
+        kern = _kernels(plan)
+        status, crossing = kern.rk4(
+            *_plan_args(plan, tols, kern), *drive.args(), float(case.damping), float(case.phi_start),
             float(case.omega_start), float(dt), n_sub, float(lim.MAX_OMEGA), *out, *tail)
         t_cross = crossing * dt if crossing >= 0 else math.nan
     else:
@@ -330,8 +340,8 @@ def _rk4_friction(plan, mechanism, tols, drive_args, case, dt, n_sub, out, tail)
     """RK4 with the mechanism's friction (``kernels.dynamics_friction``): on the
     generated module's continuation, as its ``rk4``."""
     from ..kernels import dynamics_friction as df
-    mod = kernels_for(plan)
-    par, K, tols = _plan_args(plan, tols)
+    mod = _kernels(plan)
+    par, K, tols = _plan_args(plan, tols, mod)
     df.compile_friction_integrator()
     return df.rk4_friction(mod.advance_first_class, mod.start_first_class, K, mod.SIZES,
                            mod.MASSES, par, tols, *drive_args, float(case.damping),
@@ -456,7 +466,7 @@ def _dop853(plan, drive, case, tols, out, tail, tol=DOP853_TOL):
     work = dict(state=np.zeros((kern.N_TRIADS, kc.N_STATE)), last=np.zeros(1),
                 pos=np.zeros((n, 2)), d1=np.zeros((n, 2)), d2=np.zeros((n, 2)),
                 margins=np.zeros(plan.n_groups + MARGIN_SLOTS), loads_k=np.zeros((len(plan.load_body), 3)))
-    pa, da = _plan_args(plan, tols), drive.args()
+    pa, da = _plan_args(plan, tols, kern), drive.args()
     b = float(case.damping)
 
     def restart():

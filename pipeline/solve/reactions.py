@@ -151,18 +151,22 @@ def scene_forces(mechanism, plan, curves, omega1=None, eps1=None, t=None) -> Rea
     R = np.zeros((n, nj, 2))
     S = np.zeros((n, ns + plan.n_inputs, 2))
     M = np.zeros(n)
-    from ..compiler import await_beside, kernels_for
-    kern = kernels_for(plan)
-    await_beside(kern, "forces_curve")    # where a process beside compiles it: loaded, not compiled
+    from ..compiler import await_beside, kernels_for, plan_path
+    # the plan path (its tape of the generated forces_at: the same bits) where it has
+    # the plan's; else the generated module's, compiled in a process beside meanwhile
+    forces_curve = plan_path.forces_curve_of(plan)
+    if forces_curve is None:
+        kern = kernels_for(plan)
+        await_beside(kern, "forces_curve")    # compiled beside: loaded, not compiled
+        forces_curve = kern.forces_curve
     if not along:
-        kern.forces_curve(plan.par, curves.pos, curves.d1, curves.d2, crank.omega1, crank.eps1,
-                          loads, body_loads, R, S, M)
+        forces_curve(plan.par, curves.pos, curves.d1, curves.d2, crank.omega1, crank.eps1,
+                     loads, body_loads, R, S, M)
     else:
         for k in range(n):  # the same kernel, one position at a time with its own speed
             s = slice(k, k + 1)
-            kern.forces_curve(plan.par, curves.pos[s], curves.d1[s], curves.d2[s],
-                              float(omega[k]), float(eps[k]), loads[s], body_loads[s], R[s],
-                              S[s], M[s])
+            forces_curve(plan.par, curves.pos[s], curves.d1[s], curves.d2[s], float(omega[k]),
+                         float(eps[k]), loads[s], body_loads[s], R[s], S[s], M[s])
     residual = np.empty(n)
     shake = np.empty((n, 3))
     for k in range(n):      # the sweep's force stage calls the same two kernels

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..kernels import config as kc
-from ..compiler import kernels_for, scene_kernels_for
+from ..compiler import kernels_for, plan_path, scene_kernels_for
 from ..compiler.notice import compile_notice
 from ..kernels.geometry import link_angles
 from ..model.mechanism import Plan
@@ -57,9 +57,14 @@ def solve_curves(plan: Plan, phis, order, tols=None, par=None, close_at=math.nan
     margin = np.zeros((n, ng))
     iters = np.zeros(n)
     fail = np.empty(2)
-    overall = kernels_for(plan).revolution(
-        np.ascontiguousarray(par, dtype=np.float64), np.ascontiguousarray(phis, dtype=np.float64),
-        float(close_at), int(order), tols, pos, d1, d2, status, margin, iters, fail)
+    args = (np.ascontiguousarray(par, dtype=np.float64),
+            np.ascontiguousarray(phis, dtype=np.float64), float(close_at), int(order), tols, pos,
+            d1, d2, status, margin, iters, fail)
+    # the plan path (kernels compiled once per installation, the same bits) where the
+    # mechanism's groups are on it: a new mechanism's scene waits for no compile
+    overall = plan_path.revolution(plan, *args)
+    if overall is None:
+        overall = kernels_for(plan).revolution(*args)
     links = np.full((n, len(plan.link_a), 3), np.nan)
     link_angles(pos, d1, d2, plan.link_a, plan.link_b, int(order), links)
     return Curves(np.asarray(phis, float), pos, d1, d2, status, margin, iters, links, int(overall),
@@ -157,7 +162,8 @@ def run_scene(study, tols=None) -> SceneResult:
     # the first solve (the table's few positions) compiles a new mechanism's kernels:
     # said as a compile, with its seconds, where it takes more than a second
     with compile_notice():
-        scene_kernels_for(plan, forces=forces)   # (forces compile beside)
+        if not plan_path.covers(plan, forces):   # (else the generated module's forces
+            scene_kernels_for(plan, forces=forces)   # compile beside meanwhile)
         table = solve_curves(plan, revolution_angles(crank, out.table_positions, True), order,
                              tols)
         if forces:

@@ -1,0 +1,439 @@
+"""The plan path: a mechanism's positions by kernels compiled once per
+installation, that read the mechanism's plan as data, so that a scene of a new
+mechanism starts at once instead of waiting for its generated module to compile.
+
+How it stays the generated module's bits: its kernels are written from the same
+emitters (``pipeline.compiler.emit``), in the same order.  Each group's lines
+(its careful path, its derived constants, its start) are the emitter's own,
+written once for a prototype of the group whose points and constants are
+variables instead of the module's constants: point j of the group is ``P{j}``,
+read from the plan; constant ``key`` is ``c_{key}``, read from the constants
+array.  A group type, a guide of fixed direction or not, a kind of input and
+law: each way an emitter writes its lines is a *form*, with its own small
+kernel (``group_{f}``, ``derive_{f}``, ``start_{f}``); ``position`` calls them
+in plan order.  The same operations on the same values in the same order give
+the same bits (strict IEEE: no contraction, no reassociation); a test compares
+every shipped study's scene on both paths.
+
+The forms are those of the library's warm-up mechanism (``pipeline.compiler.
+warmup``: every group type and input law); a group of a form it does not have
+(a table law's spline is a constant of its module) keeps the plan off this path:
+``plan_constants`` returns None, and the scene compiles the generated module.
+
+The constants array K of a plan (``plan_constants``): a header, then the
+constants in the order of the generated ``constants(par)`` (``K[H_CONSTS]`` on).
+
+    K[0] groups, K[1] groups before the centres of mass, K[2] fixed points,
+    K[3] class III groups, K[4] gidx columns (W), K[5] where the constants start;
+    then per fixed point (point, slot of x), per group (form, slot of its
+    first constant, its W point indices, its row of the continuation state).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+from functools import cache
+
+import numpy as np
+
+from .. import group_types
+from .emit import emitter_classes, emitters_for, watched_groups
+from .names import NO_POINT, Names
+from .skeleton import part
+
+H_SIZE = 6              # the header's fixed part
+_ROW_EXTRA = 3          # a group's row: form, first slot, W points, triad row
+_PROTO = 10_000         # a prototype's point j is point _PROTO + j (P{j} in its lines)
+W = 8                   # a group's points (the plan's gidx columns)
+
+
+class _FormNames(Names):
+    """Names of a prototype group's lines: point ``_PROTO + j`` is ``P{j}``, the
+    group's constant ``key`` is ``c_{key}``."""
+
+    def I(self, point: int) -> str:     # noqa: E743 (Names' own name)
+        point = int(point)
+        if point < _PROTO:
+            raise ValueError("a form's lines name a point of the plan")
+        return f"P{point - _PROTO}"
+
+    def K(self, g: int, key: str) -> str:
+        super().K(g, key)           # (the same check of the key)
+        return f"c_{key}"
+
+
+def _strip(lines):
+    """The lines without their comment lines (a comment names the study's points)."""
+    out = []
+    for text in lines:
+        for sub in text.split("\n"):
+            if not sub.lstrip().startswith("#"):
+                out.append(sub)
+    return tuple(out)
+
+
+def group_form(plan, g, triad_row):
+    """(key, slots, careful, derived, start) of group ``g`` of ``plan`` as a form:
+    ``key`` identifies the lines; ``slots`` the names of its constants in the
+    generated order; None where its lines are not a form's (module constants)."""
+    names = _FormNames(plan)
+    cls = emitter_classes()[int(plan.codes[g])]
+    e = cls(plan, names, g, triad_row)
+    if e.module_constants():
+        return None
+    e.ix = [_PROTO + j if x >= 0 else x for j, x in enumerate(e.ix)]
+    e.pname = lambda j: "''"
+    e.title = lambda: "group"
+    if e.continued:
+        e.triad_row = "trow"
+    params = e.params()
+    derived = tuple(e.derived())
+    slots = tuple(params) + tuple(d[0] for d in derived)
+    careful = _strip(e.careful())
+    start = (e.k("a0"), e.k("b0"), e.k("phi_start")) if e.continued else None
+    key = (int(plan.codes[g]), slots, careful, derived, start)
+    return key, slots, careful, derived, start
+
+
+def _triad_rows(plan):
+    rows, r = [], 0
+    for code in plan.codes:
+        if int(code) in group_types.continued_codes():
+            rows.append(r)
+            r += 1
+        else:
+            rows.append(-1)
+    return rows
+
+
+@cache
+def forms() -> tuple:
+    """Every form of the warm-up mechanism's groups, in a fixed order."""
+    from .warmup import mechanism
+    plan = mechanism().compile()
+    out = {}
+    for g, row in enumerate(_triad_rows(plan)):
+        f = group_form(plan, g, row)
+        if f is not None and f[0] not in out:
+            out[f[0]] = f
+    return tuple(out.values())
+
+
+def plan_constants(plan, par=None):
+    """The constants array of ``plan`` (header, then every constant of the
+    row ``par``, the plan's own by default), derived constants included; None
+    where a group is of no form of this path."""
+    lay = _layout(plan)
+    if lay is None:
+        return None
+    head, cols = lay[0], lay[1]
+    par = plan.par if par is None else np.asarray(par, dtype=np.float64)
+    K = np.concatenate([head, np.where(cols >= 0, par[cols], 0.0)])
+    plan_kernels().derive(K)
+    return K
+
+
+_LAYOUTS: dict = {}
+
+
+def _layout(plan):
+    """(header, the parameter column of each constant (-1: derived), the watched
+    groups) of ``plan``, kept per plan structure; None off the path."""
+    from . import structure_key
+    key = structure_key(plan)
+    if key not in _LAYOUTS:
+        _LAYOUTS[key] = _new_layout(plan)
+    return _LAYOUTS[key]
+
+
+def _new_layout(plan):
+    index = {f[0]: i for i, f in enumerate(forms())}
+    rows = _triad_rows(plan)
+    found = [group_form(plan, g, rows[g]) for g in range(len(plan.codes))]
+    if plan.gidx.shape[1] != W or any(f is None or f[0] not in index for f in found):
+        return None
+    n_g, n_f = len(plan.codes), len(plan.fixed_idx)
+    h_consts = H_SIZE + 2 * n_f + n_g * (W + _ROW_EXTRA)
+    head = [n_g, plan.n_kinematic, n_f, sum(r >= 0 for r in rows), W, h_consts]
+    cols, slot = [], h_consts
+    for i, off in zip(plan.fixed_idx, plan.fixed_off):
+        head += [int(i), slot]
+        cols += [int(off), int(off) + 1]
+        slot += 2
+    names = Names(plan)
+    col_of = {name: j for j, name in enumerate(names.par_local)}
+    for g, f in enumerate(found):
+        head += [index[f[0]], slot] + [int(x) for x in plan.gidx[g]] + [rows[g]]
+        cols += [col_of[names.K(g, key)] for key in names.group_keys[g]]
+        cols += [-1] * len(f[3])            # the derived ones: ``derive``
+        slot += len(f[1])
+    watch = np.array(watched_groups(plan, emitters_for(plan, names)), dtype=np.int64)
+    return np.array(head, dtype=np.float64), np.array(cols, dtype=np.int64), watch
+
+
+# -- the module's source --------------------------------------------------------------
+
+def _form_functions(i, form):
+    key, slots, careful, derived, start = form
+    n_params = len(slots) - len(derived)
+    pts = ", ".join(f"P{j}" for j in range(W))
+    load = [f"    {s} = K[kb + {j}]" for j, s in enumerate(slots)]
+    out = ["@njit(**JIT_INNER)",
+           f"def group_{i}(K, kb, {pts}, trow, phi, order, tols, state, pos, d1, d2, sing, "
+           "slack):",
+           *load,
+           *("    " + x for x in careful),
+           "    return st, m", "", ""]
+    out += ["@njit(**JIT_INNER)", f"def derive_{i}(K, kb):", *load[:n_params]]
+    for j, (name, expr) in enumerate(derived):
+        out += [f"    {name} = {expr}", f"    K[kb + {n_params + j}] = {name}"]
+    out += ["    return 0", "", ""]
+    if start is not None:
+        a0, b0, ps = start
+        out += ["@njit(**JIT_INNER)", f"def start_{i}(K, kb, trow, state):",
+                *load,
+                f"    start_triad(state, np.int64(trow), {a0}, {b0})",
+                f"    return {ps}", "", ""]
+    return out
+
+
+def _dispatch(call, nforms, result, pick=None):
+    """A chain of ``if f == i: <call of form i>`` lines."""
+    out = []
+    first = True
+    for i in range(nforms):
+        if pick is not None and not pick(i):
+            continue
+        out.append(f"{'if' if first else 'elif'} f == {i}:")
+        out.append(f"    {result}{call.format(i=i)}")
+        first = False
+    return out
+
+
+def source() -> str:
+    """The plan path's module (its name: the hash of this text)."""
+    from .generate import group_type_imports
+    fs = forms()
+    pts = ", ".join(f"P{j}" for j in range(W))
+    out = [part("header").format(n_groups="any number of", digest=_digest()),
+           *group_type_imports(),
+           "# the plan path (pipeline.compiler.plan_path): one kernel per form of a group",
+           f"N_FORMS = {len(fs)}",
+           f"{NO_POINT} = np.int64(-1)   # none: a guide, line or link of fixed direction",
+           ""]
+    for i, f in enumerate(fs):
+        out += _form_functions(i, f)
+    grp = ["        r = np.int64(6) + 2 * np.int64(K[2]) + g * (np.int64(K[4]) + 3)",
+           "        f = np.int64(K[r])",
+           "        kb = np.int64(K[r + 1])"]
+    pt_load = ["        " + ", ".join(f"P{j}" for j in range(W)) + " = "
+               + ", ".join(f"np.int64(K[r + {2 + j}])" for j in range(W)),
+               f"        trow = np.int64(K[r + {2 + W}])"]
+    # position
+    body = ["@njit(**JIT_INNER)",
+            "def position(K, phi, order, tols, state, pos, d1, d2, margins, with_com):",
+            '    """Every group at crank angle ``phi`` in plan order: the generated',
+            "    ``position``'s lines, read from the plan (``pipeline.compiler.plan_path``).\"\"\"",
+            "    n_groups = np.int64(K[0])",
+            "    n_kinematic = np.int64(K[1])",
+            "    sing = tols[T_SINGULAR]",
+            "    slack = tols[T_ASSEMBLY_SLACK]",
+            "    status = OK",
+            "    margins[n_groups] = -1.0",
+            "    for q in range(np.int64(K[2])):",
+            "        i = np.int64(K[6 + 2 * q])",
+            "        s = np.int64(K[7 + 2 * q])",
+            "        pos[i, 0] = K[s]",
+            "        pos[i, 1] = K[s + 1]",
+            "        d1[i, 0] = 0.0",
+            "        d1[i, 1] = 0.0",
+            "        d2[i, 0] = 0.0",
+            "        d2[i, 1] = 0.0",
+            "    for g in range(n_groups):",
+            "        if g == n_kinematic and not with_com:",
+            "            return status",
+            *grp, *pt_load,
+            "        st, m = OK, 0.0"]
+    call = (f"group_{{i}}(K, kb, {pts}, trow, phi, order, tols, state, pos, d1, d2, sing, "
+            "slack)")
+    body += ["        " + x for x in _dispatch(call, len(fs), "st, m = ")]
+    body += ["        margins[g] = m",
+             "        if status == OK and st != OK:",
+             "            status = st",
+             "            margins[n_groups] = g",
+             "    return status", "", ""]
+    out += body
+    # derive
+    out += ["@njit(**JIT)", "def derive(K):",
+            '    """Every derived constant of the plan, into its slot of K."""',
+            "    for g in range(np.int64(K[0])):", *grp]
+    out += ["        " + x for x in _dispatch("derive_{i}(K, kb)", len(fs), "")]
+    out += ["    return 0", "", ""]
+    # start
+    cont = [i for i, f in enumerate(fs) if f[4] is not None]
+    out += ["@njit(**JIT_INNER)", "def start(K, state):",
+            '    """Every class III group from its declared guess; the crank angle of the',
+            '    first one\'s guesses (NaN: none, closed form)."""',
+            "    phi = math.nan",
+            "    first = True",
+            "    for g in range(np.int64(K[0])):", *grp,
+            f"        trow = np.int64(K[r + {2 + W}])",
+            "        p = math.nan"]
+    out += ["        " + x for x in _dispatch("start_{i}(K, kb, trow, state)", len(fs),
+                                              "p = ", pick=lambda i: i in cont)]
+    out += ["        if trow >= 0 and first:", "            phi = p", "            first = False",
+            "    return phi", "", ""]
+    # the two advances: the skeleton's, N_GROUPS read from the plan
+    for name in ("advance_newton", "advance_closed"):
+        text = part(name).replace("def advance(", f"def {name}(")
+        text = re.sub(r"\bN_GROUPS\b", "np.int64(K[0])", text)
+        out.append(text)
+    out += ["@njit(**JIT_INNER)",
+            "def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, "
+            "with_com):",
+            '    """``advance_newton`` with class III groups, else ``advance_closed``."""',
+            "    if K[3] > 0.0:",
+            "        return advance_newton(K, phi_from, phi_to, order, tols, state, pos, d1, "
+            "d2, margins, with_com)",
+            "    return advance_closed(K, phi_from, phi_to, order, tols, state, pos, d1, d2, "
+            "margins, with_com)", "", "",
+            "advance_first_class = njit(**JIT_FIRST_CLASS)(getattr(advance, 'py_func', "
+            "advance))",
+            "start_first_class = njit(**JIT_FIRST_CLASS)(getattr(start, 'py_func', start))",
+            ""]
+    return "\n".join(out)
+
+
+def _digest() -> str:
+    from . import library_digest
+    return library_digest(False)
+
+
+@cache
+def _module_for(digest):
+    from . import _imported
+    src = source()
+    return _imported(src, "pipeline_plan_" + hashlib.sha256(src.encode()).hexdigest()[:20])
+
+
+def plan_kernels():
+    """The plan path's module, imported (written first if new)."""
+    return _module_for(_digest())
+
+
+def on_plan_path() -> bool:
+    """Whether scenes take the plan path (``PIPELINE_PLAN_PATH=0``: never, the
+    generated module's kernels instead; a benchmark's baseline)."""
+    import os
+    return (os.environ.get("PIPELINE_PLAN_PATH", "1") != "0"
+            and os.environ.get("NUMBA_DISABLE_JIT", "0") in ("", "0"))
+
+
+def covers(plan, forces=False) -> bool:
+    """Whether a scene of ``plan`` (with ``forces``) runs on the plan path alone."""
+    return (on_plan_path() and plan_constants(plan) is not None
+            and (not forces or force_tape_of(plan) is not None))
+
+
+def revolution(plan, par, phis, phi_close, order, tols, *outputs):
+    """The generated module's ``revolution`` (``pipeline.kernels.walk``'s walk, its
+    outputs and status) on the plan path; None where ``plan`` is not on it (the
+    caller then takes the generated module's)."""
+    if not on_plan_path():
+        return None
+    K = plan_constants(plan, par)
+    if K is None:
+        return None
+    from ..kernels.walk import revolution as walk
+    mod = plan_kernels()
+    watch = _layout(plan)[2]
+    return walk(mod.advance_first_class, mod.start_first_class, K, watch, np.int64(K[3]), phis,
+                phi_close, order, tols, *outputs)
+
+
+_TAPES: dict = {}
+
+
+def force_tape_of(plan):
+    """``force_tape.force_tape(plan)``, kept per plan structure (a scene's
+    forces along a motion ask for it at every position)."""
+    from . import structure_key
+    from .force_tape import force_tape
+    key = structure_key(plan)
+    if key not in _TAPES:
+        _TAPES[key] = force_tape(plan)
+    return _TAPES[key]
+
+
+def forces_curve_of(plan):
+    """The generated module's ``forces_curve`` (par, pos, d1, d2, omega1, eps1, loads,
+    loads_out, r_out, slide_out, m_out) on the plan path, ``plan``'s tape run by
+    ``pipeline.kernels.tape``; None where ``plan`` is not on it (the caller then
+    takes the generated module's)."""
+    if not on_plan_path():
+        return None
+    tape = force_tape_of(plan)
+    if tape is None:
+        return None
+    from ..kernels.tape import tape_forces_curve
+    masses = (float(plan.gravity), plan.body_com, plan.body_turn, plan.body_mass_off,
+              plan.load_body, plan.load_point)
+
+    def forces_curve(par, *args):
+        tape_forces_curve(*tape, *masses, par, *args)
+    return forces_curve
+
+
+class PlanDynamics:
+    """What crank dynamics asks of a generated module (``skeleton/crank_dynamics``:
+    its constants, sizes, mass model, first-class ``advance`` and ``start``,
+    ``begin``, ``rk4``, ``terms_curve``) on the plan path: the integrators of
+    ``pipeline.kernels.dynamics``, compiled once, on the plan path's ``advance``
+    and ``start``.  (Not ``acceleration``, which scipy's DOP853 calls from Python:
+    the reference method keeps the generated module's.)"""
+
+    def __init__(self, plan, n_triads):
+        mod = plan_kernels()
+        self.plan = plan
+        self.advance_first_class = mod.advance_first_class
+        self.start_first_class = mod.start_first_class
+        self.N_TRIADS = np.int64(n_triads)
+        self.SIZES = (np.int64(plan.n_points), np.int64(plan.n_groups), self.N_TRIADS)
+
+        def table(a, shape=None):
+            a = np.asarray(a, dtype=np.int64)
+            return np.ascontiguousarray(a.reshape(shape if shape else a.shape))
+        self.MASSES = (float(plan.gravity), table(plan.body_com),
+                       table(plan.body_turn, (-1, 2)), table(plan.body_mass_off),
+                       table(plan.load_body), table(plan.load_point))
+
+    def constants_array(self, par):
+        return plan_constants(self.plan, par)
+
+    def begin(self, K, phi, state, last):
+        from ..kernels import dynamics
+        dynamics.compile_integrator()
+        dynamics.begin(self.start_first_class, K, phi, state, last)
+
+    def rk4(self, par, K, tols, *args):
+        from ..kernels import dynamics
+        dynamics.compile_integrator()
+        return dynamics.rk4(self.advance_first_class, self.start_first_class, K, self.SIZES,
+                            self.MASSES, par, tols, *args)
+
+    def terms_curve(self, par, K, tols, *args):
+        from ..kernels import dynamics
+        dynamics.compile_integrator()
+        return dynamics.terms_curve(self.advance_first_class, self.start_first_class, K,
+                                    self.SIZES, self.MASSES, par, tols, *args)
+
+
+def dynamics_of(plan):
+    """``PlanDynamics`` of ``plan``; None where ``plan`` is not on the plan path."""
+    if not on_plan_path():
+        return None
+    lay = _layout(plan)
+    if lay is None:
+        return None
+    return PlanDynamics(plan, int(lay[0][3]))

@@ -1,0 +1,141 @@
+"""The plan path (``pipeline.compiler.plan_path``): a scene's positions and forces
+by kernels compiled once per installation that read the plan as data give the
+generated module's bits, on every shipped study's mechanism, at its own row and
+at rows that fail part-way (failure angle, group, margins and all)."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+from conftest import STUDIES
+
+from pipeline.compiler import kernels_for, plan_path
+from pipeline.kernels import config as kc
+from pipeline.kernels.walk import revolution as walk_revolution
+from pipeline.solve.reactions import sample_loads
+from pipeline.solve.scene import revolution_angles
+from pipeline.study.reader import load_study
+
+
+def _plans():
+    out = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for path in sorted(STUDIES.glob("*.toml")):
+            plan = load_study(path).mechanism.compile()
+            from pipeline.compiler import structure_key
+            out.setdefault(structure_key(plan), (path.stem, plan))
+    return list(out.values())
+
+
+PLANS = _plans()
+
+
+def _outputs(plan, n):
+    return ([np.full((n, plan.n_points, 2), np.nan) for _ in range(3)]
+            + [np.zeros(n, np.int8), np.zeros((n, plan.n_groups)), np.zeros(n), np.empty(2)])
+
+
+def _same(a, b):
+    return all(np.array_equal(np.asarray(x).view(np.uint8), np.asarray(y).view(np.uint8))
+               for x, y in zip(a, b))
+
+
+def _rows(plan):
+    """The plan's own row and rows moved from it (each parameter by up to 12 %,
+    differently per row): some fail part-way round."""
+    j = np.arange(plan.par.shape[0])
+    return [plan.par] + [plan.par * (1.0 + 0.12 * np.sin(7.0 * r + 1.3 * j)) for r in range(6)]
+
+
+def test_every_shipped_mechanism_is_on_the_plan_path_but_a_table_law():
+    off = [name for name, plan in PLANS if plan_path.plan_constants(plan) is None]
+    assert off == ["actuator_slider_input"]     # its spline is a constant of its module
+
+
+@pytest.mark.parametrize("name,plan", PLANS, ids=[p[0] for p in PLANS])
+def test_scene_positions_are_the_generated_modules_bits(name, plan):
+    if plan_path.plan_constants(plan) is None:
+        pytest.skip("a table law: off the plan path")
+    gen = kernels_for(plan)
+    phis = 0.3 + 2.0 * math.pi * np.arange(240) / 240
+    tols = kc.default_tolerances()
+    statuses = []
+    for par in _rows(plan):
+        K = plan_path.plan_constants(plan, par)
+        h = int(K[5])
+        assert _same([K[h:]], [gen.constants_array(par)])
+        for order in (0, 2):
+            a, b = _outputs(plan, len(phis)), _outputs(plan, len(phis))
+            args = (phis, 0.3 + 2.0 * math.pi, order, tols)
+            sa = plan_path.revolution(plan, par, *args, *a)
+            sb = gen.revolution(par, *args, *b)
+            assert sa == sb and _same(a, b), (name, order)
+            statuses.append(sa)
+    assert statuses[0] == kc.OK
+
+
+def test_failures_part_way_are_compared_too():
+    """The moved rows above do fail, part-way and at the start, on several
+    mechanisms: the comparison covers the failure paths (the watch's refine,
+    the located angle and group)."""
+    failed = 0
+    tols = kc.default_tolerances()
+    phis = 0.3 + 2.0 * math.pi * np.arange(240) / 240
+    for name, plan in PLANS:
+        if plan_path.plan_constants(plan) is None:
+            continue
+        for par in _rows(plan)[1:]:
+            out = _outputs(plan, len(phis))
+            st = plan_path.revolution(plan, par, phis, 0.3 + 2.0 * math.pi, 2, tols, *out)
+            failed += st != kc.OK and 0 < int(np.argmax(out[3] != kc.OK)) < len(phis)
+    assert failed >= 3
+
+
+@pytest.mark.parametrize("name,plan", [p for p in PLANS if len(p[1].body_names)],
+                         ids=[p[0] for p in PLANS if len(p[1].body_names)])
+def test_scene_forces_are_the_generated_modules_bits(name, plan):
+    """The tape of the generated forces_at (``pipeline.kernels.tape``) gives its
+    bits: reactions, slides and drives, loads at the centres of mass, M_bal."""
+    forces = plan_path.forces_curve_of(plan)
+    assert forces is not None
+    study = load_study(STUDIES / f"{name}.toml")
+    mech = study.mechanism
+    phis = revolution_angles(mech.crank, 180)
+    n = len(phis)
+    gen = kernels_for(plan)
+    pos, d1, d2, *_ = out = _outputs(plan, n)
+    gen.revolution(plan.par, phis, math.nan, 2, kc.default_tolerances(), *out)
+    loads = sample_loads(mech, phis)
+    shapes = ((n, len(plan.body_names), 3), (n, len(plan.joint_names), 2),
+              (n, len(plan.slide_names) + plan.n_inputs, 2), (n,))
+    a = [np.zeros(s) for s in shapes]
+    b = [np.zeros(s) for s in shapes]
+    forces(plan.par, pos, d1, d2, mech.crank.omega1, mech.crank.eps1, loads, *a)
+    gen.forces_curve(plan.par, pos, d1, d2, mech.crank.omega1, mech.crank.eps1, loads, *b)
+    assert np.isfinite(a[3]).all()
+    assert _same(a, b)
+
+
+def test_a_new_mechanism_compiles_nothing_of_its_own():
+    """Every mechanism runs on the same compiled kernels (one signature each)."""
+    mod = plan_path.plan_kernels()
+    tols = kc.default_tolerances()
+    phis = np.linspace(0.0, 6.0, 12)
+    for name, plan in PLANS:
+        if plan_path.plan_constants(plan) is not None:
+            plan_path.revolution(plan, plan.par, phis, math.nan, 2, tols,
+                                 *_outputs(plan, len(phis)))
+    assert len(mod.advance_first_class.signatures) == 1
+    assert len(mod.start_first_class.signatures) == 1
+    assert len(mod.derive.signatures) == 1
+
+
+def test_the_plan_path_can_be_turned_off(monkeypatch):
+    name, plan = PLANS[0]
+    monkeypatch.setenv("PIPELINE_PLAN_PATH", "0")
+    assert plan_path.revolution(plan, plan.par, np.zeros(1), math.nan, 0,
+                                kc.default_tolerances(), *_outputs(plan, 1)) is None
+    assert plan_path.forces_curve_of(plan) is None
+    assert not plan_path.covers(plan)
