@@ -31,8 +31,10 @@ constants in the order of the generated ``constants(par)`` (``K[H_CONSTS]`` on).
 
 from __future__ import annotations
 
+import ast
 import hashlib
 import re
+from dataclasses import dataclass
 from functools import cache
 
 import numpy as np
@@ -43,7 +45,7 @@ from .names import NO_POINT, Names
 from .skeleton import part
 
 H_SIZE = 6              # the header's fixed part
-_ROW_EXTRA = 3          # a group's row: form, first slot, W points, triad row
+_ROW_EXTRA = 4          # a group's row: form, first slot, W points, triad row, arrays
 _PROTO = 10_000         # a prototype's point j is point _PROTO + j (P{j} in its lines)
 W = 8                   # a group's points (the plan's gidx columns)
 
@@ -73,27 +75,60 @@ def _strip(lines):
     return tuple(out)
 
 
+@dataclass(frozen=True)
+class Form:
+    """One way an emitter writes a group's lines, with its points and constants
+    as variables: ``slots`` its constants in the generated order (parameters,
+    then ``derived`` (name, expression)), ``careful`` its lines of ``position``,
+    ``start`` (a0, b0, phi_start) of a group solved by continuation, ``arrays``
+    (name, dimensions) of the module constants its lines read (a table law's
+    spline: on this path, arrays in K's tail)."""
+    code: int
+    slots: tuple
+    careful: tuple
+    derived: tuple
+    start: tuple | None
+    arrays: tuple
+
+
+def _module_arrays(lines):
+    """[(name, array)] of an emitter's module constants: ``NAME = np.array(literal)``
+    each (read as a literal, never run); None where a line is another thing."""
+    out = []
+    for st in ast.parse("\n".join(lines)).body:
+        ok = (isinstance(st, ast.Assign) and len(st.targets) == 1
+              and isinstance(st.targets[0], ast.Name) and isinstance(st.value, ast.Call)
+              and ast.unparse(st.value.func) == "np.array" and len(st.value.args) == 1
+              and not st.value.keywords)
+        if not ok:
+            return None
+        a = np.array(ast.literal_eval(st.value.args[0]), dtype=np.float64)
+        if a.ndim not in (1, 2):
+            return None
+        out.append((st.targets[0].id, a))
+    return out
+
+
 def group_form(plan, g, triad_row):
-    """(key, slots, careful, derived, start) of group ``g`` of ``plan`` as a form:
-    ``key`` identifies the lines; ``slots`` the names of its constants in the
-    generated order; None where its lines are not a form's (module constants)."""
+    """(form, arrays) of group ``g`` of ``plan``: its ``Form`` and the values of
+    its module arrays; None where its lines are not a form's."""
     names = _FormNames(plan)
     cls = emitter_classes()[int(plan.codes[g])]
     e = cls(plan, names, g, triad_row)
-    if e.module_constants():
+    arrays = _module_arrays(e.module_constants())
+    if arrays is None:
         return None
     e.ix = [_PROTO + j if x >= 0 else x for j, x in enumerate(e.ix)]
     e.pname = lambda j: "''"
     e.title = lambda: "group"
     if e.continued:
         e.triad_row = "trow"
-    params = e.params()
     derived = tuple(e.derived())
-    slots = tuple(params) + tuple(d[0] for d in derived)
-    careful = _strip(e.careful())
-    start = (e.k("a0"), e.k("b0"), e.k("phi_start")) if e.continued else None
-    key = (int(plan.codes[g]), slots, careful, derived, start)
-    return key, slots, careful, derived, start
+    form = Form(int(plan.codes[g]), tuple(e.params()) + tuple(d[0] for d in derived),
+                _strip(e.careful()), derived,
+                (e.k("a0"), e.k("b0"), e.k("phi_start")) if e.continued else None,
+                tuple((name, a.ndim) for name, a in arrays))
+    return form, [a for _, a in arrays]
 
 
 def _triad_rows(plan):
@@ -115,21 +150,21 @@ def forms() -> tuple:
     out = {}
     for g, row in enumerate(_triad_rows(plan)):
         f = group_form(plan, g, row)
-        if f is not None and f[0] not in out:
-            out[f[0]] = f
-    return tuple(out.values())
+        if f is not None:
+            out.setdefault(f[0], None)
+    return tuple(out)
 
 
 def plan_constants(plan, par=None):
     """The constants array of ``plan`` (header, then every constant of the
-    row ``par``, the plan's own by default), derived constants included; None
-    where a group is of no form of this path."""
+    row ``par``, the plan's own by default, derived constants included, then
+    its module arrays); None where a group is of no form of this path."""
     lay = _layout(plan)
     if lay is None:
         return None
-    head, cols = lay[0], lay[1]
+    head, cols, tail = lay[0], lay[1], lay[3]
     par = plan.par if par is None else np.asarray(par, dtype=np.float64)
-    K = np.concatenate([head, np.where(cols >= 0, par[cols], 0.0)])
+    K = np.concatenate([head, np.where(cols >= 0, par[cols], 0.0), tail])
     plan_kernels().derive(K)
     return K
 
@@ -139,7 +174,8 @@ _LAYOUTS: dict = {}
 
 def _layout(plan):
     """(header, the parameter column of each constant (-1: derived), the watched
-    groups) of ``plan``, kept per plan structure; None off the path."""
+    groups, the tail of module arrays) of ``plan``, kept per plan structure;
+    None off the path."""
     from . import structure_key
     key = structure_key(plan)
     if key not in _LAYOUTS:
@@ -148,7 +184,7 @@ def _layout(plan):
 
 
 def _new_layout(plan):
-    index = {f[0]: i for i, f in enumerate(forms())}
+    index = {f: i for i, f in enumerate(forms())}
     rows = _triad_rows(plan)
     found = [group_form(plan, g, rows[g]) for g in range(len(plan.codes))]
     if plan.gidx.shape[1] != W or any(f is None or f[0] not in index for f in found):
@@ -163,36 +199,59 @@ def _new_layout(plan):
         slot += 2
     names = Names(plan)
     col_of = {name: j for j, name in enumerate(names.par_local)}
-    for g, f in enumerate(found):
-        head += [index[f[0]], slot] + [int(x) for x in plan.gidx[g]] + [rows[g]]
+    groups, tail, starts = [], [], []
+    for g, (form, arrays) in enumerate(found):
+        groups.append([index[form], slot] + [int(x) for x in plan.gidx[g]] + [rows[g], -1])
         cols += [col_of[names.K(g, key)] for key in names.group_keys[g]]
-        cols += [-1] * len(f[3])            # the derived ones: ``derive``
-        slot += len(f[1])
+        cols += [-1] * len(form.derived)            # the derived ones: ``derive``
+        slot += len(form.slots)
+        if arrays:      # each: (where its values start, rows, columns), then the values
+            groups[-1][-1] = len(tail)
+            at = len(tail) + 3 * len(arrays)
+            for a in arrays:
+                starts.append(len(tail))
+                tail += [at, a.shape[0] if a.ndim == 2 else 1, a.shape[-1]]
+                at += a.size
+            for a in arrays:
+                tail += a.ravel().tolist()
+    for i in starts:            # indices into K: the tail starts after the constants
+        tail[i] += slot
+    for row in groups:
+        row[-1] += slot if row[-1] >= 0 else 0
+        head += row
+    tail = np.array(tail, dtype=np.float64)
     watch = np.array(watched_groups(plan, emitters_for(plan, names)), dtype=np.int64)
-    return np.array(head, dtype=np.float64), np.array(cols, dtype=np.int64), watch
+    return np.array(head, dtype=np.float64), np.array(cols, dtype=np.int64), watch, tail
 
 
 # -- the module's source --------------------------------------------------------------
 
 def _form_functions(i, form):
-    key, slots, careful, derived, start = form
-    n_params = len(slots) - len(derived)
+    """The kernels of form ``i``: ``group_i`` (its lines of ``position``),
+    ``derive_i`` (its derived constants into K) and ``start_i`` (a group solved by
+    continuation); each reads its constants (and module arrays) from K first."""
+    n_params = len(form.slots) - len(form.derived)
     pts = ", ".join(f"P{j}" for j in range(W))
-    load = [f"    {s} = K[kb + {j}]" for j, s in enumerate(slots)]
+    load = [f"    {s} = K[kb + {j}]" for j, s in enumerate(form.slots)]
+    for j, (name, ndim) in enumerate(form.arrays):      # (where, rows, columns) at ext
+        at, rows, cols = (f"np.int64(K[ext + {3 * j + q}])" for q in range(3))
+        view = f"K[{at}:{at} + {rows} * {cols}]"
+        load.append(f"    {name} = " + (f"{view}.reshape(({rows}, {cols}))" if ndim == 2
+                                        else view))
     out = ["@njit(**JIT_INNER)",
-           f"def group_{i}(K, kb, {pts}, trow, phi, order, tols, state, pos, d1, d2, sing, "
-           "slack):",
+           f"def group_{i}(K, kb, ext, {pts}, trow, phi, order, tols, state, pos, d1, d2, "
+           "sing, slack):",
            *load,
-           *("    " + x for x in careful),
+           *("    " + x for x in form.careful),
            "    return st, m", "", ""]
     out += ["@njit(**JIT_INNER)", f"def derive_{i}(K, kb):", *load[:n_params]]
-    for j, (name, expr) in enumerate(derived):
+    for j, (name, expr) in enumerate(form.derived):
         out += [f"    {name} = {expr}", f"    K[kb + {n_params + j}] = {name}"]
     out += ["    return 0", "", ""]
-    if start is not None:
-        a0, b0, ps = start
+    if form.start is not None:
+        a0, b0, ps = form.start
         out += ["@njit(**JIT_INNER)", f"def start_{i}(K, kb, trow, state):",
-                *load,
+                *load[:len(form.slots)],
                 f"    start_triad(state, np.int64(trow), {a0}, {b0})",
                 f"    return {ps}", "", ""]
     return out
@@ -224,12 +283,14 @@ def source() -> str:
            ""]
     for i, f in enumerate(fs):
         out += _form_functions(i, f)
-    grp = ["        r = np.int64(6) + 2 * np.int64(K[2]) + g * (np.int64(K[4]) + 3)",
+    grp = [f"        r = np.int64({H_SIZE}) + 2 * np.int64(K[2]) + g * (np.int64(K[4]) + "
+           f"{_ROW_EXTRA})",
            "        f = np.int64(K[r])",
            "        kb = np.int64(K[r + 1])"]
     pt_load = ["        " + ", ".join(f"P{j}" for j in range(W)) + " = "
                + ", ".join(f"np.int64(K[r + {2 + j}])" for j in range(W)),
-               f"        trow = np.int64(K[r + {2 + W}])"]
+               f"        trow = np.int64(K[r + {2 + W}])",
+               f"        ext = np.int64(K[r + {3 + W}])"]
     # position
     body = ["@njit(**JIT_INNER)",
             "def position(K, phi, order, tols, state, pos, d1, d2, margins, with_com):",
@@ -242,8 +303,8 @@ def source() -> str:
             "    status = OK",
             "    margins[n_groups] = -1.0",
             "    for q in range(np.int64(K[2])):",
-            "        i = np.int64(K[6 + 2 * q])",
-            "        s = np.int64(K[7 + 2 * q])",
+            f"        i = np.int64(K[{H_SIZE} + 2 * q])",
+            f"        s = np.int64(K[{H_SIZE + 1} + 2 * q])",
             "        pos[i, 0] = K[s]",
             "        pos[i, 1] = K[s + 1]",
             "        d1[i, 0] = 0.0",
@@ -255,7 +316,7 @@ def source() -> str:
             "            return status",
             *grp, *pt_load,
             "        st, m = OK, 0.0"]
-    call = (f"group_{{i}}(K, kb, {pts}, trow, phi, order, tols, state, pos, d1, d2, sing, "
+    call = (f"group_{{i}}(K, kb, ext, {pts}, trow, phi, order, tols, state, pos, d1, d2, sing, "
             "slack)")
     body += ["        " + x for x in _dispatch(call, len(fs), "st, m = ")]
     body += ["        margins[g] = m",
@@ -271,7 +332,7 @@ def source() -> str:
     out += ["        " + x for x in _dispatch("derive_{i}(K, kb)", len(fs), "")]
     out += ["    return 0", "", ""]
     # start
-    cont = [i for i, f in enumerate(fs) if f[4] is not None]
+    cont = [i for i, f in enumerate(fs) if f.start is not None]
     out += ["@njit(**JIT_INNER)", "def start(K, state):",
             '    """Every class III group from its declared guess; the crank angle of the',
             '    first one\'s guesses (NaN: none, closed form)."""',

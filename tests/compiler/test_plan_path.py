@@ -49,15 +49,14 @@ def _rows(plan):
     return [plan.par] + [plan.par * (1.0 + 0.12 * np.sin(7.0 * r + 1.3 * j)) for r in range(6)]
 
 
-def test_every_shipped_mechanism_is_on_the_plan_path_but_a_table_law():
-    off = [name for name, plan in PLANS if plan_path.plan_constants(plan) is None]
-    assert off == ["actuator_slider_input"]     # its spline is a constant of its module
+def test_every_shipped_mechanism_is_on_the_plan_path():
+    """(a table law's spline too: its module arrays in K's tail)"""
+    assert [name for name, plan in PLANS if plan_path.plan_constants(plan) is None] == []
+    assert any(f.arrays for f in plan_path.forms())
 
 
 @pytest.mark.parametrize("name,plan", PLANS, ids=[p[0] for p in PLANS])
 def test_scene_positions_are_the_generated_modules_bits(name, plan):
-    if plan_path.plan_constants(plan) is None:
-        pytest.skip("a table law: off the plan path")
     gen = kernels_for(plan)
     phis = 0.3 + 2.0 * math.pi * np.arange(240) / 240
     tols = kc.default_tolerances()
@@ -65,7 +64,8 @@ def test_scene_positions_are_the_generated_modules_bits(name, plan):
     for par in _rows(plan):
         K = plan_path.plan_constants(plan, par)
         h = int(K[5])
-        assert _same([K[h:]], [gen.constants_array(par)])
+        KG = gen.constants_array(par)
+        assert _same([K[h:h + len(KG)]], [KG])
         for order in (0, 2):
             a, b = _outputs(plan, len(phis)), _outputs(plan, len(phis))
             args = (phis, 0.3 + 2.0 * math.pi, order, tols)
@@ -84,8 +84,6 @@ def test_failures_part_way_are_compared_too():
     tols = kc.default_tolerances()
     phis = 0.3 + 2.0 * math.pi * np.arange(240) / 240
     for name, plan in PLANS:
-        if plan_path.plan_constants(plan) is None:
-            continue
         for par in _rows(plan)[1:]:
             out = _outputs(plan, len(phis))
             st = plan_path.revolution(plan, par, phis, 0.3 + 2.0 * math.pi, 2, tols, *out)
@@ -124,9 +122,7 @@ def test_a_new_mechanism_compiles_nothing_of_its_own():
     tols = kc.default_tolerances()
     phis = np.linspace(0.0, 6.0, 12)
     for name, plan in PLANS:
-        if plan_path.plan_constants(plan) is not None:
-            plan_path.revolution(plan, plan.par, phis, math.nan, 2, tols,
-                                 *_outputs(plan, len(phis)))
+        plan_path.revolution(plan, plan.par, phis, math.nan, 2, tols, *_outputs(plan, len(phis)))
     assert len(mod.advance_first_class.signatures) == 1
     assert len(mod.start_first_class.signatures) == 1
     assert len(mod.derive.signatures) == 1
@@ -139,3 +135,34 @@ def test_the_plan_path_can_be_turned_off(monkeypatch):
                                 kc.default_tolerances(), *_outputs(plan, 1)) is None
     assert plan_path.forces_curve_of(plan) is None
     assert not plan_path.covers(plan)
+
+
+def _arrays(obj):
+    """Every array field of a dataclass result, by name."""
+    return {k: v for k, v in vars(obj).items() if isinstance(v, np.ndarray)}
+
+
+@pytest.mark.parametrize("friction", [False, True], ids=["frictionless", "friction"])
+def test_crank_dynamics_are_the_generated_modules_bits(friction, tmp_path, monkeypatch):
+    """RK4 (with the bearings' friction too) and the reduced terms on the plan
+    path's advance and start give the generated module's bits."""
+    from support.friction_sections import TAKEUP_FRICTION
+
+    from pipeline.solve.crank_motion import reduced_dynamics, run_dynamics
+    path = STUDIES / "takeup_dynamics.toml"
+    if friction:
+        path = tmp_path / "takeup_friction.toml"
+        path.write_text((STUDIES / "takeup_dynamics.toml").read_text() + TAKEUP_FRICTION)
+    study = load_study(path)
+    plan = study.mechanism.compile()
+    assert plan_path.dynamics_of(plan) is not None
+    runs = {}
+    for on in ("1", "0"):
+        monkeypatch.setenv("PIPELINE_PLAN_PATH", on)
+        runs[on] = (run_dynamics(study, plan), reduced_dynamics(study, plan))
+    (cases_a, red_a), (cases_b, red_b) = runs["1"], runs["0"]
+    assert len(cases_a) == len(cases_b) > 0
+    for a, b in zip(cases_a + [red_a], cases_b + [red_b]):
+        fa, fb = _arrays(a), _arrays(b)
+        assert fa.keys() == fb.keys() and fa
+        assert all(_same([fa[k]], [fb[k]]) for k in fa), type(a).__name__
