@@ -34,6 +34,7 @@ SMOKE = {
     "agreement.py": (["--smoke", "--out", "{tmp}"], "agreement.md"),
     "bench_yardstick.py": (["--smoke", "-o", "{tmp}"], "yardstick.md"),
     "bench_host.py": (["--smoke", "-o", "{tmp}"], "host.md"),
+    "bench_new_mechanism.py": (["--smoke", "-o", "{tmp}"], "new_mechanism.md"),
 }
 
 

@@ -11,11 +11,12 @@ there instead of compiling them (``pipeline.compiler.kernels_for`` starts
 this where a new module has force lanes and their cache is empty).  The
 numbers are the same either way: the same source, the same flags.
 
-A scene's forces likewise: its ``forces_curve`` compiles in the process beside
-while the run compiles the mechanism's positions (``compile_scene_forces``).
-After a sweep's kernels, the process beside compiles, at the lowest priority,
-the scene's kernels of the sweep's mechanism (``compile_scene_of``) and the
-library once per installation (``compile_library``).
+A scene off the plan path (``pipeline.compiler.plan_path``: a mechanism whose
+force system the tape cannot say) likewise: its ``forces_curve`` compiles in
+the process beside while the run compiles the mechanism's positions
+(``compile_scene_forces``).  After a sweep's kernels, the process beside
+compiles, at the lowest priority, the library once per installation, the plan
+path included (``compile_library``): every later scene compiles nothing.
 
     python -m pipeline.compiler.beside MODULE FOLDER [scene]
 """
@@ -99,27 +100,15 @@ def compile_metrics(mod) -> None:
 def compile_library() -> None:
     """Compile (or load) what no mechanism's code is in, once per installation:
     the scene's walk (``pipeline.kernels.walk``), the crank dynamics'
-    integrator (``pipeline.kernels.dynamics``) and the kernels of every group
-    type (``pipeline.compiler.warmup``).  A first scene after the first sweep
-    then compiles its own mechanism's code only."""
+    integrator (``pipeline.kernels.dynamics``) and the plan path with the
+    kernels of every group type (``pipeline.compiler.warmup``).  A scene, of a
+    design of the sweep or of a new mechanism, then compiles nothing."""
     from pipeline.compiler.warmup import compile_group_kernels
     from pipeline.kernels.dynamics import compile_integrator
     from pipeline.kernels.walk import compile_revolution
     compile_revolution()
     compile_integrator()
     compile_group_kernels()
-
-
-def compile_scene_of(mod) -> None:
-    """Compile (or load) the scene's kernels of the sweep module ``mod``'s
-    mechanism (its module without a rocker, which ``mod`` imports from): the
-    first-class ``advance`` and ``start`` the scene's walk calls, and
-    ``forces_curve``.  A design of the sweep re-run as a scene (``pipeline
-    show``, the report: ``pipeline.analysis.candidate``) then compiles nothing."""
-    from pipeline.compiler.warmup import compile_first_class
-    base = sys.modules[mod.position.py_func.__module__]
-    if compile_first_class(base):
-        compile_scene_forces(base)
 
 
 def compile_scene_forces(mod) -> None:
@@ -146,10 +135,9 @@ def main(argv=None) -> int:
         return 0
     compile_standalone(mod)
     # then, at the lowest priority (the run's sweep, on every core, goes first),
-    # the scene of the sweep's own mechanism, and the library
+    # the library: the plan path that every scene runs on
     if hasattr(os, "nice"):
         os.nice(19)
-    compile_scene_of(mod)
     compile_library()
     return 0
 

@@ -498,3 +498,28 @@ def dynamics_of(plan):
     if lay is None:
         return None
     return PlanDynamics(plan, int(lay[0][3]))
+
+
+def compile_plan_path() -> bool:
+    """Compile (or load from numba's cache) the plan path's kernels for the types
+    a scene passes them: once per installation (``pipeline.compiler.beside``
+    after the first sweep, ``python -m pipeline.compiler.warmup``), so that no
+    scene compiles.  False where numba's JIT is disabled."""
+    from ..kernels.tape import tape_forces_curve
+    from ..kernels.walk import ADVANCE, START, compile_revolution
+    from .warmup import mechanism
+    mod = plan_kernels()
+    if not getattr(mod.advance_first_class, "compile", None):
+        return False
+    compile_revolution()
+    mod.advance_first_class.compile(ADVANCE.signature)
+    mod.start_first_class.compile(START.signature)
+    plan = mechanism().compile()
+    plan_constants(plan)            # (derive)
+    empty = np.zeros((0, plan.n_points, 2))
+    tape_forces_curve(np.zeros((1, 5), np.int64), np.zeros(1), 0.0, plan.body_com,
+                      plan.body_turn, plan.body_mass_off, plan.load_body, plan.load_point,
+                      plan.par, empty, empty, empty, 0.0, 0.0, np.zeros((0, 0, 3)),
+                      np.zeros((0, 0, 3)), np.zeros((0, 0, 2)), np.zeros((0, 0, 2)),
+                      np.zeros(0))
+    return True

@@ -1,17 +1,17 @@
 """The kernel library compiled once per installation, for every group type.
 
-A generated module's ``position`` calls a library kernel per group type and
-input law (``pipeline.kernels.groups``, ``inputs``, each group type's
-``pipeline.group_types.*.kernels``), and numba
-compiles each for the types the call passes the first time a mechanism with
-that group is compiled: about half a second a type, added to the first scene
-that has it.  The call's types do not depend on the mechanism (points and
-constants are int64 and float64 values, pipeline.compiler.generate), so one
-mechanism that has every group type and every input law compiles them all,
-into numba's cache, for every later mechanism: ``mechanism()``.  It is a
-structure, not a design (it is compiled, never solved), and the process beside
-the first sweep compiles it (``pipeline.compiler.beside.compile_library``), at
-the lowest priority.  By hand:
+The plan path's kernels (``pipeline.compiler.plan_path``: a scene's positions,
+forces and crank dynamics for any mechanism, the plan read as data) have one
+kernel per form of a group, each calling its group type's library kernel
+(``pipeline.kernels.groups``, ``inputs``, each group type's
+``pipeline.group_types.*.kernels``) with the types a generated module's
+``position`` passes it too (points and constants are int64 and float64 values,
+pipeline.compiler.generate).  The forms are those of one mechanism that has
+every group type and every input law: ``mechanism()``.  It is a structure, not
+a design (it is compiled, never solved); compiling the plan path compiles every
+group kernel into numba's cache, for every later mechanism, scene or sweep.
+The process beside the first sweep does it
+(``pipeline.compiler.beside.compile_library``), at the lowest priority.  By hand:
 
     python -m pipeline.compiler.warmup
 """
@@ -57,19 +57,17 @@ def mechanism():
 
 
 def compile_group_kernels() -> None:
-    """Compile (or load from numba's cache) the library kernels of every group
-    type and input law, for the types a scene's generated ``position`` passes
-    them: by compiling the warm-up mechanism's first-class ``advance`` and
-    ``start`` (which call ``position``) for the scene's types.  And the library
-    kernels a scene calls from Python (pipeline.solve.scene, .reactions), by
-    calling them as it does, on zeros."""
+    """Compile (or load from numba's cache) the plan path's kernels, and with
+    them the library kernels of every group type and input law, for the types a
+    scene passes them; and the library kernels a scene calls from Python
+    (pipeline.solve.scene, .reactions), by calling them as it does, on zeros."""
     import numpy as np
 
     from ..kernels.forces import equilibrium_residual, shaking
     from ..kernels.geometry import link_angles
-    from . import kernels_for
+    from .plan_path import compile_plan_path
     plan = mechanism().compile()
-    if not compile_first_class(kernels_for(plan)):
+    if not compile_plan_path():
         return          # numba's JIT disabled (NUMBA_DISABLE_JIT)
     curve = np.zeros((1, plan.n_points, 2))
     link_angles(curve, curve, curve, plan.link_a, plan.link_b, 2,
@@ -79,20 +77,6 @@ def compile_group_kernels() -> None:
                          plan.body_turn)
     shaking(pos, pos, pos, 0.0, 0.0, plan.par, plan.body_com, plan.body_turn,
             plan.body_mass_off, plan.crank_pivot)
-
-
-def compile_first_class(mod) -> bool:
-    """Compile (or load) the generated module ``mod``'s first-class ``advance``
-    and ``start`` for the types the scene's walk and the crank dynamics call
-    them with (``pipeline.kernels.walk``: ADVANCE, START), and with them its
-    ``position`` and the library kernels it calls.  False where numba's JIT is
-    disabled (NUMBA_DISABLE_JIT: nothing to compile)."""
-    from ..kernels.walk import ADVANCE, START
-    if not getattr(mod.advance_first_class, "compile", None):
-        return False
-    mod.advance_first_class.compile(ADVANCE.signature)
-    mod.start_first_class.compile(START.signature)
-    return True
 
 
 if __name__ == "__main__":

@@ -141,21 +141,29 @@ def test_the_scene_s_walk_is_compiled_once_for_every_mechanism():
     functions and the constants as an array, whatever the mechanism: scenes of
     a closed-form mechanism and of a class III one leave one version of each
     (in this process and in numba's cache), and each mechanism's module gives
-    the walk its own advance and start compiled for an array of constants; the
-    pasted copies the sweeps call are not the scene's."""
+    the walk its advance and start compiled for an array of constants (the plan
+    path's, ``pipeline.compiler.plan_path``, or, with PIPELINE_PLAN_PATH=0, each
+    mechanism's own module's); the pasted copies the sweeps call are not the
+    scene's."""
     from numba import types
+    from pipeline.compiler import plan_path
     from pipeline.kernels import walk
     plans = [load_study(STUDIES / f"{s}.toml").mechanism for s in ("warp_feed_fourbar",
                                                                   "ov7_class3")]
-    for mech in plans:
-        plan = mech.compile()
-        phis = revolution_angles(mech.crank, 72)
-        c = solve_curves(plan, phis, kc.ACCELERATIONS,
-                         close_at=mech.crank.phi0 + mech.crank.rot * 2 * math.pi)
-        assert c.overall == kc.OK and np.all(c.status == kc.OK)
-        mod = kernels_for(plan)
-        for f in (mod.advance_first_class, mod.start_first_class):
-            assert [s[0] for s in f.signatures] == [types.float64[::1]], f
+    for on in ("1", "0"):
+        os.environ["PIPELINE_PLAN_PATH"] = on
+        try:
+            for mech in plans:
+                plan = mech.compile()
+                phis = revolution_angles(mech.crank, 72)
+                c = solve_curves(plan, phis, kc.ACCELERATIONS,
+                                 close_at=mech.crank.phi0 + mech.crank.rot * 2 * math.pi)
+                assert c.overall == kc.OK and np.all(c.status == kc.OK)
+                mod = plan_path.plan_kernels() if on == "1" else kernels_for(plan)
+                for f in (mod.advance_first_class, mod.start_first_class):
+                    assert [s[0] for s in f.signatures] == [types.float64[::1]], f
+        finally:
+            os.environ.pop("PIPELINE_PLAN_PATH")
 
     def versions(d):        # (an explicit signature is a key of its own: its arguments)
         cached = d._cache._cache_file._load_index()
@@ -271,29 +279,24 @@ def test_a_scene_s_forces_wait_for_the_process_beside_that_compiles_them():
     assert len(waited) == 1
 
 
-def test_the_process_beside_compiles_the_scene_of_the_sweep_s_own_mechanism(problem, synthesis):
-    """After a sweep's kernels the process beside compiles the scene's kernels of
-    the sweep's mechanism (``beside.compile_scene_of``: its first-class advance
-    and start, forces_curve) for the types a scene passes them, so a design of
-    the sweep re-run as a scene (pipeline.analysis.candidate) compiles none of
-    them: after such a scene, with forces, each has one compiled version."""
-    import sys as _sys
+def test_after_the_library_a_design_of_the_sweep_rerun_as_a_scene_compiles_nothing(problem,
+                                                                                 synthesis):
+    """After a sweep's kernels the process beside compiles the library
+    (``beside.compile_library``: the plan path among it), so that a design of
+    the sweep re-run as a scene with forces (pipeline.analysis.candidate)
+    compiles nothing at all: no kernel of its mechanism's, none of the
+    library's."""
     from numba.core import event
-    from pipeline.compiler.beside import compile_scene_of
+    from pipeline.compiler.beside import compile_library
     from pipeline.solve.reactions import scene_forces
-    mod = problem.kernels
-    compile_scene_of(mod)
-    base = _sys.modules[mod.position.py_func.__module__]
+    compile_library()
     mech = synthesis.mechanism
     with event.install_recorder("numba:compile") as rec:
         c = solve_curves(problem.plan, revolution_angles(mech.crank, 36), kc.ACCELERATIONS,
                          close_at=mech.crank.phi0 + mech.crank.rot * 2 * math.pi)
         r = scene_forces(mech, problem.plan, c)
     assert c.overall == kc.OK and np.isfinite(r.M_bal).all()
-    compiled = {e.data["dispatcher"].py_func.__name__ for _, e in rec.buffer}
-    assert not compiled & {"advance", "start", "position", "forces_curve"}, compiled
-    for f in (base.advance_first_class, base.start_first_class, base.forces_curve):
-        assert len(f.signatures) == 1, f
+    assert [e.data["dispatcher"].py_func.__name__ for _, e in rec.buffer] == []
 
 
 def test_no_exec_or_eval_in_the_compiler():
@@ -708,7 +711,11 @@ def test_a_scene_s_forces_compile_beside_for_the_types_the_scene_passes(tmp_path
     from pipeline.solve.scene import run_scene
     study = load_study(STUDIES / "feed_fivebar.toml")
     assert study.output.analysis == "forces"
-    res = run_scene(study)
+    os.environ["PIPELINE_PLAN_PATH"] = "0"      # (the scene on its generated module)
+    try:
+        res = run_scene(study)
+    finally:
+        os.environ.pop("PIPELINE_PLAN_PATH")
     assert res.dense.forces is not None
     k = kernels_for(study.mechanism.compile())
     with event.install_recorder("numba:compile") as rec:

@@ -1,0 +1,136 @@
+"""A new mechanism's scene, end to end: the plan path against the generated module.
+
+    python benchmarks/bench_new_mechanism.py [--rounds 2] [--smoke] [-o DIR]
+
+Each shipped scene study runs as a user runs it (``pipeline run STUDY
+--no-pictures``, a fresh process, the wall time of the whole process), as a
+mechanism new to the cache: every generated module (``pipeline_mech_*``) and its
+compiled code removed first, the library kept compiled (the state after the
+first sweep, or ``python -m pipeline.compiler.warmup``).  Two ways, alternated
+round by round on the same machine:
+
+* plan path: the scene on kernels compiled once per installation that read the
+  mechanism's plan as data (``pipeline.compiler.plan_path``), the default;
+* generated: ``PIPELINE_PLAN_PATH=0``, the scene on the mechanism's own generated
+  module, compiled for it (its forces in a process beside, as a user's run).
+
+Both write the same numbers (tests/compiler/test_plan_path.py holds the bits).
+Issue 53's line: a new mechanism's scene in at most 2 s end to end.
+--smoke (the test suite): one study, one round.  Writes DIR/new_mechanism.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from benchmarks.common import ROOT, STUDIES, hardware  # noqa: E402
+from pipeline.base.files import write_text  # noqa: E402
+
+SCENES = ("ov7_base", "warp_feed_fourbar", "feed_fivebar", "ov7_class3", "ov7_class3_slider",
+          "ov7_friction", "scotch_yoke_rpp", "slotted_rocker_prp", "ppr_cross_slide",
+          "cam_rocker_input", "actuator_slider_input", "takeup_dynamics")
+WAYS = {"plan path": "1", "generated": "0"}
+
+
+def _forget_mechanisms(cache: Path) -> None:
+    """Every generated module and its compiled code gone (numba's cache beside
+    the module, or under NUMBA_CACHE_DIR by the module's folder); the plan
+    path's stay."""
+    places = [cache, cache / "__pycache__"]
+    if os.environ.get("NUMBA_CACHE_DIR"):       # (numba: a folder per source folder)
+        places += Path(os.environ["NUMBA_CACHE_DIR"]).glob(f"{cache.name}_*")
+    for place in places:
+        for f in place.glob("pipeline_mech_*"):
+            f.unlink()
+
+
+def _beside_done(limit=60.0):
+    """Wait for any process compiling beside a run (it may outlive the run)."""
+    end = time.perf_counter() + limit
+    while time.perf_counter() < end:
+        busy = False
+        for cmd in Path("/proc").glob("[0-9]*/cmdline"):
+            try:
+                busy = busy or b"pipeline.compiler.beside" in cmd.read_bytes()
+            except OSError:
+                pass
+        if not busy:
+            return
+        time.sleep(0.2)
+
+
+def scene_seconds(study, cache, out, plan_path):
+    """Wall seconds of ``pipeline run study`` as a new mechanism."""
+    _forget_mechanisms(cache)
+    env = dict(os.environ, PIPELINE_CACHE_DIR=str(cache), PIPELINE_PLAN_PATH=plan_path)
+    t = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "pipeline.cli", "run", str(STUDIES / f"{study}.toml"),
+                    "-o", str(out / f"{study}.h5"), "--overwrite", "--no-pictures", "-q"],
+                   env=env, check=True, cwd=ROOT, stdout=subprocess.DEVNULL)
+    wall = time.perf_counter() - t
+    _beside_done()
+    return wall
+
+
+def measure(studies, rounds, echo=print):
+    """{study: {way: [seconds per round]}}, the ways alternated."""
+    times = {s: {w: [] for w in WAYS} for s in studies}
+    with tempfile.TemporaryDirectory() as d:
+        # (a folder name of its own: numba's cache names its folder after it)
+        cache, out = Path(d) / f"modules_{Path(d).name}", Path(d) / "out"
+        out.mkdir()
+        env = dict(os.environ, PIPELINE_CACHE_DIR=str(cache))
+        t = time.perf_counter()     # the library, once per installation (not timed below)
+        subprocess.run([sys.executable, "-m", "pipeline.compiler.warmup"], env=env, check=True,
+                       cwd=ROOT)
+        echo(f"library (plan path included) compiled or loaded in {time.perf_counter() - t:.1f} s")
+        for r in range(rounds):
+            order = list(WAYS.items()) if r % 2 == 0 else list(WAYS.items())[::-1]
+            for s in studies:
+                for way, flag in order:
+                    times[s][way].append(scene_seconds(s, cache, out, flag))
+                echo(f"round {r + 1} {s}: " + ", ".join(
+                    f"{w} {times[s][w][-1]:.2f} s" for w in WAYS))
+    return times
+
+
+def table(times, rounds):
+    def span(v):
+        return f"{min(v):.2f}-{max(v):.2f} s" if len(v) > 1 else f"{v[0]:.2f} s"
+    lines = ["# A new mechanism's scene, end to end", "", f"hardware: {hardware()}", "",
+             f"`pipeline run STUDY --no-pictures`, each a fresh process, every generated module "
+             f"removed first (the library compiled); {rounds} round(s), the two ways alternated.",
+             "", "| study | plan path | generated (`PIPELINE_PLAN_PATH=0`) | at most 2 s |",
+             "|---|---|---|---|"]
+    for s, v in times.items():
+        ok = "yes" if max(v["plan path"]) <= 2.0 else "no"
+        lines.append(f"| {s} | {span(v['plan path'])} | {span(v['generated'])} | {ok} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--smoke", action="store_true", help="one study, one round")
+    ap.add_argument("-o", "--out", default=str(ROOT / "results" / "bench"))
+    a = ap.parse_args(argv)
+    studies = SCENES[:1] if a.smoke else SCENES
+    rounds = 1 if a.smoke else a.rounds
+    text = table(measure(studies, rounds), rounds)
+    print(text)
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    write_text(out / "new_mechanism.md", text)
+    return text
+
+
+if __name__ == "__main__":
+    main()
