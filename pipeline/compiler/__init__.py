@@ -187,9 +187,11 @@ def gpu_kernels_for(plan, rocker=None):
     return _imported(src, "pipeline_gpu_" + module_name(src)[len("pipeline_mech_"):])
 
 
-def _imported(src: str, mod_name: str):
+def _imported(src, mod_name: str):
     """The module of source ``src``, written to the cache folder as
-    ``mod_name``.py (unless there already) and imported."""
+    ``mod_name``.py (unless there already) and imported.  ``src`` a function
+    that writes the source: called only where the file is not there (its name
+    says everything the source depends on: ``plan_path``)."""
     with _LOCK:
         mod = _MODULES.get(mod_name)
         if mod is not None:
@@ -197,7 +199,10 @@ def _imported(src: str, mod_name: str):
         folder = cache_dir()
         folder.mkdir(parents=True, exist_ok=True)
         path = folder / f"{mod_name}.py"
-        if not path.exists() or path.read_text() != src:
+        if callable(src):
+            if not path.exists():
+                write_text(path, src())
+        elif not path.exists() or path.read_text() != src:
             write_text(path, src)       # a new temporary file, renamed when complete
         if str(folder) not in sys.path:
             sys.path.insert(0, str(folder))

@@ -33,9 +33,11 @@ from __future__ import annotations
 
 import ast
 import hashlib
+import pprint
 import re
-from dataclasses import dataclass
+from dataclasses import astuple, dataclass
 from functools import cache
+from pathlib import Path
 
 import numpy as np
 
@@ -184,7 +186,7 @@ def _layout(plan):
 
 
 def _new_layout(plan):
-    index = {f: i for i, f in enumerate(forms())}
+    index = {Form(*f): i for i, f in enumerate(plan_kernels().FORMS)}
     rows = _triad_rows(plan)
     found = [group_form(plan, g, rows[g]) for g in range(len(plan.codes))]
     if plan.gidx.shape[1] != W or any(f is None or f[0] not in index for f in found):
@@ -271,7 +273,7 @@ def _dispatch(call, nforms, result, pick=None):
 
 
 def source() -> str:
-    """The plan path's module (its name: the hash of this text)."""
+    """The plan path's module (its name: ``_module_name``)."""
     from .generate import group_type_imports
     fs = forms()
     pts = ", ".join(f"P{j}" for j in range(W))
@@ -279,6 +281,8 @@ def source() -> str:
            *group_type_imports(),
            "# the plan path (pipeline.compiler.plan_path): one kernel per form of a group",
            f"N_FORMS = {len(fs)}",
+           "# the forms, in the order of their kernels (plan_path.Form's fields)",
+           "FORMS = " + pprint.pformat(tuple(astuple(f) for f in fs), width=90),
            f"{NO_POINT} = np.int64(-1)   # none: a guide, line or link of fixed direction",
            ""]
     for i, f in enumerate(fs):
@@ -372,10 +376,24 @@ def _digest() -> str:
 
 
 @cache
+def _module_name(digest) -> str:
+    """The plan path module's name: from everything its source is written from
+    (the library digest: the compiler, kernels and group types; and the model,
+    which compiles the warm-up mechanism), so that a process imports it without
+    writing its source (which compiles the warm-up mechanism, scipy's spline
+    of its table law among it) where it is there."""
+    h = hashlib.sha256(digest.encode())
+    model = Path(__file__).resolve().parent.parent / "model"
+    for f in sorted(model.glob("**/*.py")):
+        h.update(str(f.relative_to(model)).encode())
+        h.update(f.read_bytes())
+    return "pipeline_plan_" + h.hexdigest()[:20]
+
+
+@cache
 def _module_for(digest):
     from . import _imported
-    src = source()
-    return _imported(src, "pipeline_plan_" + hashlib.sha256(src.encode()).hexdigest()[:20])
+    return _imported(source, _module_name(digest))
 
 
 def plan_kernels():
