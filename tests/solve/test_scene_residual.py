@@ -8,7 +8,6 @@ oracle of tests/support/power.py; with the balancing moment made 1 % wrong in
 the force kernel, large, and again equal to the oracle's."""
 
 import dataclasses
-from types import SimpleNamespace
 
 import h5py
 import numpy as np
@@ -16,7 +15,7 @@ import pandas as pd
 import pytest
 
 import pipeline
-import pipeline.compiler
+import pipeline.compiler.plan_path
 from pipeline.cli import main
 from pipeline.solve.reactions import scene_forces
 from pipeline.solve.scene import run_scene
@@ -57,17 +56,17 @@ def test_a_wrong_balancing_moment_makes_it_large(studies, name, monkeypatch):
     """The force kernel's M_bal scaled by 1.01 (every other number as it was):
     the residual the scene reports grows by orders of magnitude, as the oracle's."""
     res = run_scene(load_study(studies / f"{name}.toml"))
-    real = pipeline.compiler.kernels_for
+    real = pipeline.compiler.plan_path.forces_curve_of   # (the scene's force kernel)
 
     def spoiled(plan):
-        k = real(plan)
+        kernel = real(plan)
 
         def forces_curve(*args):
-            k.forces_curve(*args)
+            kernel(*args)
             args[-1][:] *= WRONG          # m_out: the balancing moment
-        return SimpleNamespace(forces_curve=forces_curve)
+        return forces_curve
 
-    monkeypatch.setattr(pipeline.compiler, "kernels_for", spoiled)
+    monkeypatch.setattr(pipeline.compiler.plan_path, "forces_curve_of", spoiled)
     bad = scene_forces(res.study.mechanism, res.plan, res.dense)
     np.testing.assert_array_equal(bad.M_bal, res.dense.forces.M_bal * WRONG)
     assert bad.residual.max() > 1e6 * EQUILIBRIUM_REL, bad.residual.max()
