@@ -6,7 +6,7 @@ Each shipped scene study runs as a user runs it (``pipeline run STUDY
 --no-pictures``, a fresh process, the wall time of the whole process), as a
 mechanism new to the cache: every generated module (``pipeline_mech_*``) and its
 compiled code removed first, the library kept compiled (the state after the
-first sweep, or ``python -m pipeline.compiler.warmup``).  Two ways, alternated
+first sweep, or ``python -m pipeline.compiler.plan_path``).  Two ways, alternated
 round by round on the same machine:
 
 * plan path: the scene on kernels compiled once per installation that read the
@@ -89,7 +89,7 @@ def measure(studies, rounds, echo=print):
         out.mkdir()
         env = dict(os.environ, PIPELINE_CACHE_DIR=str(cache))
         t = time.perf_counter()     # the library, once per installation (not timed below)
-        subprocess.run([sys.executable, "-m", "pipeline.compiler.warmup"], env=env, check=True,
+        subprocess.run([sys.executable, "-m", "pipeline.compiler.plan_path"], env=env, check=True,
                        cwd=ROOT)
         echo(f"library (plan path included) compiled or loaded in {time.perf_counter() - t:.1f} s")
         for r in range(rounds):

@@ -101,14 +101,14 @@ def compile_library() -> None:
     """Compile (or load) what no mechanism's code is in, once per installation:
     the scene's walk (``pipeline.kernels.walk``), the crank dynamics'
     integrator (``pipeline.kernels.dynamics``) and the plan path with the
-    kernels of every group type (``pipeline.compiler.warmup``).  A scene, of a
+    kernels of every group type (``pipeline.compiler.plan_path``).  A scene, of a
     design of the sweep or of a new mechanism, then compiles nothing."""
-    from pipeline.compiler.warmup import compile_group_kernels
+    from pipeline.compiler.plan_path import compile_plan_path
     from pipeline.kernels.dynamics import compile_integrator
     from pipeline.kernels.walk import compile_revolution
     compile_revolution()
     compile_integrator()
-    compile_group_kernels()
+    compile_plan_path()
 
 
 def compile_scene_forces(mod) -> None:

@@ -276,7 +276,6 @@ def source() -> str:
     """The plan path's module (its name: ``_module_name``)."""
     from .generate import group_type_imports
     fs = forms()
-    pts = ", ".join(f"P{j}" for j in range(W))
     out = [part("header").format(n_groups="any number of", digest=_digest()),
            *group_type_imports(),
            "# the plan path (pipeline.compiler.plan_path): one kernel per form of a group",
@@ -287,15 +286,24 @@ def source() -> str:
            ""]
     for i, f in enumerate(fs):
         out += _form_functions(i, f)
-    grp = [f"        r = np.int64({H_SIZE}) + 2 * np.int64(K[2]) + g * (np.int64(K[4]) + "
-           f"{_ROW_EXTRA})",
-           "        f = np.int64(K[r])",
-           "        kb = np.int64(K[r + 1])"]
-    pt_load = ["        " + ", ".join(f"P{j}" for j in range(W)) + " = "
-               + ", ".join(f"np.int64(K[r + {2 + j}])" for j in range(W)),
-               f"        trow = np.int64(K[r + {2 + W}])",
-               f"        ext = np.int64(K[r + {3 + W}])"]
-    # position
+    out += _position_source(fs) + _derive_source(fs) + _start_source(fs) + _advance_source()
+    return "\n".join(out)
+
+
+# a group's row of the plan (its form, first constant, points, triad row, arrays), in a
+# loop over the groups g
+_GROUP_ROW = [f"        r = np.int64({H_SIZE}) + 2 * np.int64(K[2]) + g * (np.int64(K[4]) + "
+              f"{_ROW_EXTRA})",
+              "        f = np.int64(K[r])",
+              "        kb = np.int64(K[r + 1])"]
+_GROUP_POINTS = ["        " + ", ".join(f"P{j}" for j in range(W)) + " = "
+                 + ", ".join(f"np.int64(K[r + {2 + j}])" for j in range(W)),
+                 f"        trow = np.int64(K[r + {2 + W}])",
+                 f"        ext = np.int64(K[r + {3 + W}])"]
+
+
+def _position_source(fs):
+    pts = ", ".join(f"P{j}" for j in range(W))
     body = ["@njit(**JIT_INNER)",
             "def position(K, phi, order, tols, state, pos, d1, d2, margins, with_com):",
             '    """Every group at crank angle ``phi`` in plan order: the generated',
@@ -318,56 +326,61 @@ def source() -> str:
             "    for g in range(n_groups):",
             "        if g == n_kinematic and not with_com:",
             "            return status",
-            *grp, *pt_load,
+            *_GROUP_ROW, *_GROUP_POINTS,
             "        st, m = OK, 0.0"]
     call = (f"group_{{i}}(K, kb, ext, {pts}, trow, phi, order, tols, state, pos, d1, d2, sing, "
             "slack)")
     body += ["        " + x for x in _dispatch(call, len(fs), "st, m = ")]
-    body += ["        margins[g] = m",
-             "        if status == OK and st != OK:",
-             "            status = st",
-             "            margins[n_groups] = g",
-             "    return status", "", ""]
-    out += body
-    # derive
-    out += ["@njit(**JIT)", "def derive(K):",
-            '    """Every derived constant of the plan, into its slot of K."""',
-            "    for g in range(np.int64(K[0])):", *grp]
-    out += ["        " + x for x in _dispatch("derive_{i}(K, kb)", len(fs), "")]
-    out += ["    return 0", "", ""]
-    # start
+    return body + ["        margins[g] = m",
+                   "        if status == OK and st != OK:",
+                   "            status = st",
+                   "            margins[n_groups] = g",
+                   "    return status", "", ""]
+
+
+def _derive_source(fs):
+    return (["@njit(**JIT)", "def derive(K):",
+             '    """Every derived constant of the plan, into its slot of K."""',
+             "    for g in range(np.int64(K[0])):", *_GROUP_ROW]
+            + ["        " + x for x in _dispatch("derive_{i}(K, kb)", len(fs), "")]
+            + ["    return 0", "", ""])
+
+
+def _start_source(fs):
     cont = [i for i, f in enumerate(fs) if f.start is not None]
-    out += ["@njit(**JIT_INNER)", "def start(K, state):",
-            '    """Every class III group from its declared guess; the crank angle of the',
-            '    first one\'s guesses (NaN: none, closed form)."""',
-            "    phi = math.nan",
-            "    first = True",
-            "    for g in range(np.int64(K[0])):", *grp,
-            f"        trow = np.int64(K[r + {2 + W}])",
-            "        p = math.nan"]
+    out = ["@njit(**JIT_INNER)", "def start(K, state):",
+           '    """Every class III group from its declared guess; the crank angle of the',
+           '    first one\'s guesses (NaN: none, closed form)."""',
+           "    phi = math.nan",
+           "    first = True",
+           "    for g in range(np.int64(K[0])):", *_GROUP_ROW,
+           f"        trow = np.int64(K[r + {2 + W}])",
+           "        p = math.nan"]
     out += ["        " + x for x in _dispatch("start_{i}(K, kb, trow, state)", len(fs),
-                                              "p = ", pick=lambda i: i in cont)]
-    out += ["        if trow >= 0 and first:", "            phi = p", "            first = False",
-            "    return phi", "", ""]
-    # the two advances: the skeleton's, N_GROUPS read from the plan
+                                             "p = ", pick=lambda i: i in cont)]
+    return out + ["        if trow >= 0 and first:", "            phi = p",
+                  "            first = False", "    return phi", "", ""]
+
+
+def _advance_source():
+    """The skeleton's two advances (N_GROUPS read from the plan) and the one that
+    picks, with its first-class forms and ``start``'s."""
+    out = []
     for name in ("advance_newton", "advance_closed"):
         text = part(name).replace("def advance(", f"def {name}(")
-        text = re.sub(r"\bN_GROUPS\b", "np.int64(K[0])", text)
-        out.append(text)
-    out += ["@njit(**JIT_INNER)",
-            "def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, "
-            "with_com):",
-            '    """``advance_newton`` with class III groups, else ``advance_closed``."""',
-            "    if K[3] > 0.0:",
-            "        return advance_newton(K, phi_from, phi_to, order, tols, state, pos, d1, "
-            "d2, margins, with_com)",
-            "    return advance_closed(K, phi_from, phi_to, order, tols, state, pos, d1, d2, "
-            "margins, with_com)", "", "",
-            "advance_first_class = njit(**JIT_FIRST_CLASS)(getattr(advance, 'py_func', "
-            "advance))",
-            "start_first_class = njit(**JIT_FIRST_CLASS)(getattr(start, 'py_func', start))",
-            ""]
-    return "\n".join(out)
+        out.append(re.sub(r"\bN_GROUPS\b", "np.int64(K[0])", text))
+    return out + [
+        "@njit(**JIT_INNER)",
+        "def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, with_com):",
+        '    """``advance_newton`` with class III groups, else ``advance_closed``."""',
+        "    if K[3] > 0.0:",
+        "        return advance_newton(K, phi_from, phi_to, order, tols, state, pos, d1, "
+        "d2, margins, with_com)",
+        "    return advance_closed(K, phi_from, phi_to, order, tols, state, pos, d1, d2, "
+        "margins, with_com)", "", "",
+        "advance_first_class = njit(**JIT_FIRST_CLASS)(getattr(advance, 'py_func', advance))",
+        "start_first_class = njit(**JIT_FIRST_CLASS)(getattr(start, 'py_func', start))",
+        ""]
 
 
 def _digest() -> str:
@@ -520,12 +533,14 @@ def dynamics_of(plan):
 
 def compile_plan_path() -> bool:
     """Compile (or load from numba's cache) the plan path's kernels for the types
-    a scene passes them: once per installation (``pipeline.compiler.beside``
-    after the first sweep, ``python -m pipeline.compiler.warmup``), so that no
-    scene compiles.  False where numba's JIT is disabled."""
+    a scene passes them, and the library kernels a scene calls from Python
+    (``warmup.compile_group_kernels``): once per installation
+    (``pipeline.compiler.beside`` after the first sweep, ``python -m
+    pipeline.compiler.plan_path``), so that no scene compiles.  False where
+    numba's JIT is disabled."""
     from ..kernels.tape import tape_forces_curve
     from ..kernels.walk import ADVANCE, START, compile_revolution
-    from .warmup import mechanism
+    from .warmup import compile_group_kernels, mechanism
     mod = plan_kernels()
     if not getattr(mod.advance_first_class, "compile", None):
         return False
@@ -540,4 +555,9 @@ def compile_plan_path() -> bool:
                       plan.par, empty, empty, empty, 0.0, 0.0, np.zeros((0, 0, 3)),
                       np.zeros((0, 0, 3)), np.zeros((0, 0, 2)), np.zeros((0, 0, 2)),
                       np.zeros(0))
+    compile_group_kernels()         # (those a scene calls from Python)
     return True
+
+
+if __name__ == "__main__":
+    compile_plan_path()

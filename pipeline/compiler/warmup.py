@@ -13,7 +13,7 @@ group kernel into numba's cache, for every later mechanism, scene or sweep.
 The process beside the first sweep does it
 (``pipeline.compiler.beside.compile_library``), at the lowest priority.  By hand:
 
-    python -m pipeline.compiler.warmup
+    python -m pipeline.compiler.plan_path
 """
 
 from __future__ import annotations
@@ -57,18 +57,15 @@ def mechanism():
 
 
 def compile_group_kernels() -> None:
-    """Compile (or load from numba's cache) the plan path's kernels, and with
-    them the library kernels of every group type and input law, for the types a
-    scene passes them; and the library kernels a scene calls from Python
-    (pipeline.solve.scene, .reactions), by calling them as it does, on zeros."""
+    """Compile (or load from numba's cache) the library kernels a scene calls
+    from Python (pipeline.solve.scene, .reactions), by calling them as it does,
+    on zeros (``plan_path.compile_plan_path`` calls this after the plan path's
+    own, which compile the kernels of every group type and input law)."""
     import numpy as np
 
     from ..kernels.forces import equilibrium_residual, shaking
     from ..kernels.geometry import link_angles
-    from .plan_path import compile_plan_path
     plan = mechanism().compile()
-    if not compile_plan_path():
-        return          # numba's JIT disabled (NUMBA_DISABLE_JIT)
     curve = np.zeros((1, plan.n_points, 2))
     link_angles(curve, curve, curve, plan.link_a, plan.link_b, 2,
                 np.zeros((1, len(plan.link_a), 3)))
@@ -77,7 +74,3 @@ def compile_group_kernels() -> None:
                          plan.body_turn)
     shaking(pos, pos, pos, 0.0, 0.0, plan.par, plan.body_com, plan.body_turn,
             plan.body_mass_off, plan.crank_pivot)
-
-
-if __name__ == "__main__":
-    compile_group_kernels()

@@ -237,13 +237,19 @@ def test_a_payload_in_legal_names_never_runs(tmp_path, monkeypatch):
     work.mkdir()
     monkeypatch.chdir(work)
     monkeypatch.setenv("PIPELINE_CACHE_DIR", str(tmp_path / "cache"))
-    assert main(["run", str(study), "-o", str(work / "r.h5"), "-q", "--no-pictures"]) == 0
-    assert not list(tmp_path.rglob("PWNED*"))     # the payloads' folders, relative to work
-    assert [p.name for p in work.iterdir() if not p.name.startswith(".")] == ["r.h5"]
+    # on the plan path (the names in no source at all), then on the generated module
+    # (the names in its comments, as ascii() writes them)
+    for plan_path in ("1", "0"):
+        monkeypatch.setenv("PIPELINE_PLAN_PATH", plan_path)
+        assert main(["run", str(study), "-o", str(work / "r.h5"), "-q", "--no-pictures",
+                     "--overwrite"]) == 0
+        assert not list(tmp_path.rglob("PWNED*"))     # the payloads' folders, relative to work
+        assert [p.name for p in work.iterdir() if not p.name.startswith(".")] == ["r.h5"]
     from pipeline.compiler.notice import COMPILE_RECORD      # the last compile's seconds
     names = [p.name for p in (tmp_path / "cache").rglob("*") if p.is_file()
              and p.name != COMPILE_RECORD]
-    assert names and all(re.match(r"pipeline_mech_[0-9a-f]{20}[.]", n) for n in names), names
+    assert any(n.startswith("pipeline_mech_") for n in names), names
+    assert all(re.match(r"pipeline_(mech|plan)_[0-9a-f]{20}[.]", n) for n in names), names
 
 
 @pytest.fixture(scope="module")
