@@ -326,7 +326,8 @@ def _run_once(plan, mechanism, case, method, tols, file, dt, tol) -> CaseResult:
     elif method == "rk4":
         kern = _kernels(plan)
         status, crossing = kern.rk4(
-            *_plan_args(plan, tols, kern), *drive.args(), float(case.damping), float(case.phi_start),
+            *_plan_args(plan, tols, kern), *drive.args(), float(case.damping),
+            float(case.phi_start),
             float(case.omega_start), float(dt), n_sub, float(lim.MAX_OMEGA), *out, *tail)
         t_cross = crossing * dt if crossing >= 0 else math.nan
     else:
