@@ -55,7 +55,7 @@ from pipeline.base.files import write_text
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from common import ROOT, STUDIES, best_of, hardware  # noqa: E402
+from common import ROOT, STUDIES, beside_done, best_of, hardware  # noqa: E402
 
 YARDSTICK = ROOT.parent / "shared" / "yardstick" / "run.sh"
 
@@ -145,7 +145,7 @@ class Stage:
 
 def _rate(fn, n_cand, positions, repeat):
     fn()                                       # warm-up: compile, caches
-    _beside_done()      # (a new module's process beside would share the cores)
+    beside_done()      # (a new module's process beside would share the cores)
     return n_cand * positions / best_of(fn, repeat) / 1e6
 
 
@@ -186,7 +186,7 @@ def measure(quick=False, n=None, interpreter=True, with_stage_a=True):
     stage_b = Stage(syn_file, tuple(syn.output.rocker), problem=pb)
     status, _ = stage_b.run(pars_b, 1)
     status_raw, _ = stage_b.run(pars_raw, 1)
-    _beside_done()
+    beside_done()
     ok_b = np.ascontiguousarray(pars_b[status == 0])
     for label, pars, note in (
             ("B positions stage, the default study's raw draws (as issue 11 measured)",
@@ -321,24 +321,6 @@ def whole_process(candidates):
     return candidates / inner, wall
 
 
-def _beside_done(limit=120.0):
-    """Wait until no process compiles beside a run (pipeline.compiler.beside,
-    which a first sweep starts and which may outlive it by a moment): the next
-    study's compile then has the machine to itself, as it has after a run.
-    (Linux: /proc; elsewhere no wait.)"""
-    end = time.perf_counter() + limit
-    while time.perf_counter() < end:
-        busy = False
-        for cmd in Path("/proc").glob("[0-9]*/cmdline"):
-            try:
-                busy = busy or b"pipeline.compiler.beside" in cmd.read_bytes()
-            except OSError:
-                pass
-        if not busy:
-            return
-        time.sleep(0.2)
-
-
 def compile_times(studies):
     """Seconds per study, each in a fresh process (`pipeline compile STUDY`), with
     both caches empty at the start: numba's (the library kernels' as well) and
@@ -353,7 +335,7 @@ def compile_times(studies):
             p = subprocess.run([sys.executable, "-m", "pipeline.cli", "compile", str(s),
                                 "--format", "json"], env=env, capture_output=True,
                                text=True, check=True, cwd=ROOT)
-            _beside_done()
+            beside_done()
             return float(re.search(r"(\d+\.\d+) s", p.stdout).group(1))
         new = {s.stem: once(s) for s in studies}
         return {s.stem: (new[s.stem], once(s)) for s in studies}

@@ -31,7 +31,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks.common import ROOT, STUDIES, hardware  # noqa: E402
+from benchmarks.common import ROOT, STUDIES, beside_done, hardware  # noqa: E402
 from pipeline.base.files import write_text  # noqa: E402
 
 SCENES = ("ov7_base", "warp_feed_fourbar", "feed_fivebar", "ov7_class3", "ov7_class3_slider",
@@ -52,21 +52,6 @@ def _forget_mechanisms(cache: Path) -> None:
             f.unlink()
 
 
-def _beside_done(limit=60.0):
-    """Wait for any process compiling beside a run (it may outlive the run)."""
-    end = time.perf_counter() + limit
-    while time.perf_counter() < end:
-        busy = False
-        for cmd in Path("/proc").glob("[0-9]*/cmdline"):
-            try:
-                busy = busy or b"pipeline.compiler.beside" in cmd.read_bytes()
-            except OSError:
-                pass
-        if not busy:
-            return
-        time.sleep(0.2)
-
-
 def scene_seconds(study, cache, out, plan_path):
     """Wall seconds of ``pipeline run study`` as a new mechanism."""
     _forget_mechanisms(cache)
@@ -76,7 +61,7 @@ def scene_seconds(study, cache, out, plan_path):
                     "-o", str(out / f"{study}.h5"), "--overwrite", "--no-pictures", "-q"],
                    env=env, check=True, cwd=ROOT, stdout=subprocess.DEVNULL)
     wall = time.perf_counter() - t
-    _beside_done()
+    beside_done()
     return wall
 
 

@@ -74,3 +74,21 @@ def smoke_main(run, doc, written):
     ap.add_argument("-o", "--output", help=f"folder for {written} (default results/bench/)")
     a = ap.parse_args()
     run(a.smoke, a.output)
+
+
+def beside_done(limit=120.0):
+    """Wait until no process compiles beside a run (pipeline.compiler.beside,
+    which a first sweep starts and which may outlive it by a moment): the next
+    study's compile then has the machine to itself, as it has after a run.
+    (Linux: /proc; elsewhere no wait.)"""
+    end = time.perf_counter() + limit
+    while time.perf_counter() < end:
+        busy = False
+        for cmd in Path("/proc").glob("[0-9]*/cmdline"):
+            try:
+                busy = busy or b"pipeline.compiler.beside" in cmd.read_bytes()
+            except OSError:
+                pass
+        if not busy:
+            return
+        time.sleep(0.2)

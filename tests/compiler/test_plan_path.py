@@ -12,7 +12,6 @@ from conftest import STUDIES
 
 from pipeline.compiler import kernels_for, plan_path
 from pipeline.kernels import config as kc
-from pipeline.kernels.walk import revolution as walk_revolution
 from pipeline.solve.reactions import sample_loads
 from pipeline.solve.scene import revolution_angles
 from pipeline.study.reader import load_study
