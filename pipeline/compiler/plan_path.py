@@ -1,6 +1,7 @@
-"""The plan path: a mechanism's positions by kernels compiled once per
-installation, that read the mechanism's plan as data, so that a scene of a new
-mechanism starts at once instead of waiting for its generated module to compile.
+"""The plan path: a scene's positions, forces and crank dynamics by kernels
+compiled once per installation that read the mechanism's plan as data, so that
+a scene of a new mechanism compiles nothing of its own (``PIPELINE_PLAN_PATH=0``:
+the generated module's kernels instead).
 
 How it stays the generated module's bits: its kernels are written from the same
 emitters (``pipeline.compiler.emit``), in the same order.  Each group's lines
@@ -10,23 +11,28 @@ variables instead of the module's constants: point j of the group is ``P{j}``,
 read from the plan; constant ``key`` is ``c_{key}``, read from the constants
 array.  A group type, a guide of fixed direction or not, a kind of input and
 law: each way an emitter writes its lines is a *form*, with its own small
-kernel (``group_{f}``, ``derive_{f}``, ``start_{f}``); ``position`` calls them
-in plan order.  The same operations on the same values in the same order give
-the same bits (strict IEEE: no contraction, no reassociation); a test compares
-every shipped study's scene on both paths.
+kernels (``group_{f}``, ``derive_{f}``, ``start_{f}``); ``position`` calls them
+in plan order, ``advance`` is the skeleton's.  The forces are the generated
+``forces_at`` as a tape (``force_tape``, run by ``pipeline.kernels.tape``).  The
+same operations on the same values in the same order give the same bits
+(strict IEEE: no contraction, no reassociation); tests/compiler/test_plan_path.py
+compares every shipped mechanism on both paths.
 
 The forms are those of the library's warm-up mechanism (``pipeline.compiler.
 warmup``: every group type and input law); a group of a form it does not have
-(a table law's spline is a constant of its module) keeps the plan off this path:
-``plan_constants`` returns None, and the scene compiles the generated module.
+keeps the plan off this path (``plan_constants`` returns None, and the scene
+compiles the generated module), as does a force system the tape cannot say.
 
-The constants array K of a plan (``plan_constants``): a header, then the
-constants in the order of the generated ``constants(par)`` (``K[H_CONSTS]`` on).
+The constants array K of a plan (``plan_constants``): a header, the constants
+in the order of the generated ``constants(par)`` (from K[5]), then the module
+arrays of its groups (a table law's spline: (start, rows, columns) of each,
+then their values).
 
     K[0] groups, K[1] groups before the centres of mass, K[2] fixed points,
     K[3] class III groups, K[4] gidx columns (W), K[5] where the constants start;
     then per fixed point (point, slot of x), per group (form, slot of its
-    first constant, its W point indices, its row of the continuation state).
+    first constant, its W point indices, its row of the continuation state,
+    where its arrays' descriptions start or -1).
 """
 
 from __future__ import annotations
