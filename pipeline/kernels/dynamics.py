@@ -352,6 +352,33 @@ SIGNATURES = {
 }
 
 
+@njit(**JIT)
+def energy_orbit(J, drive, h, b, K):
+    """The crank's kinetic energy K at the nodes of one revolution from K[0]
+    (the flywheel's orbit, ``pipeline.solve.flywheel``): RK4 in the crank angle
+    of dK/dphi = drive - b |omega|, |omega| = sqrt(2 K / J), with J and the drive
+    at the nodes and half steps (2n + 1 samples for K's n + 1).  False where
+    the crank stops (K not > 0): K is then written up to there."""
+    k = K[0]
+    for j in range(K.shape[0] - 1):
+        i = 2 * j
+        k1 = drive[i] - b * math.sqrt(_not_below_zero(2.0 * k / J[i]))
+        k2 = drive[i + 1] - b * math.sqrt(_not_below_zero(2.0 * (k + 0.5 * h * k1) / J[i + 1]))
+        k3 = drive[i + 1] - b * math.sqrt(_not_below_zero(2.0 * (k + 0.5 * h * k2) / J[i + 1]))
+        k4 = drive[i + 2] - b * math.sqrt(_not_below_zero(2.0 * (k + h * k3) / J[i + 2]))
+        k = k + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        if not k > 0.0:
+            return False            # the crank stops: no rotation from this K[0]
+        K[j + 1] = k
+    return True
+
+
+@njit(inline="always", **JIT)
+def _not_below_zero(x):
+    """Python's max(x, 0.0): x unless 0.0 is greater (NaN and -0.0 kept)."""
+    return 0.0 if 0.0 > x else x
+
+
 def compile_integrator() -> None:
     """begin, acceleration, rk4 and terms_curve compiled (or loaded from
     numba's cache) for their SIGNATURES and no other: once per installation,

@@ -41,6 +41,7 @@ import numpy as np
 
 from ..base import limits as lim
 from ..kernels import config as kc
+from ..kernels.dynamics import energy_orbit
 from .crank_motion import STATUS_NAMES, reduced_terms
 
 ORBIT_STEPS = 1440          # RK4 steps over the revolution (0.25 deg)
@@ -174,26 +175,13 @@ class _Orbit:
         return w, lost(w)
 
     def run(self, K0, J_add):
-        """K at the nodes over one revolution from K0."""
-        J = self.J + J_add
+        """K at the nodes over one revolution from K0 (``kernels.dynamics.
+        energy_orbit``); None where the crank stops on the way."""
         K = np.empty(self.n + 1)
-        K[0] = k = K0
-        h, b, d = self.h, self.b, self.drive
-
-        def f(i, k):
-            return d[i] - b * math.sqrt(max(2.0 * k / J[i], 0.0))
-
-        for j in range(self.n):
-            i = 2 * j
-            k1 = f(i, k)
-            k2 = f(i + 1, k + 0.5 * h * k1)
-            k3 = f(i + 1, k + 0.5 * h * k2)
-            k4 = f(i + 2, k + h * k3)
-            k = k + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-            if not k > 0.0:
-                return None            # the crank stops: no rotation from this K0
-            K[j + 1] = k
-        return K
+        K[0] = K0
+        ok = energy_orbit(self.J + J_add, np.ascontiguousarray(self.drive, dtype=np.float64),
+                          float(self.h), float(self.b), K)
+        return K if ok else None
 
     def periodic(self, J_add):
         """|omega| at the nodes of the periodic rotation (J_add on the shaft)."""

@@ -195,3 +195,51 @@ def test_the_extremes_are_refined_between_the_nodes():
     d, lo, hi, _ = orbit.delta(got.J_add)
     g, glo, ghi, _ = orbit.delta(got.J_add, refined=False)
     assert hi >= ghi and lo <= glo and d >= g                 # refined: never inside the nodes'
+
+
+def _orbit_in_python(orbit, K0, J_add):
+    """The orbit's RK4 in plain Python floats, step by step (the slow reference
+    of kernels.dynamics.energy_orbit): K at the nodes, or None where it stops."""
+    import math
+    J = [float(x) for x in orbit.J + J_add]
+    d = [float(x) for x in orbit.drive]
+    h, b, k = float(orbit.h), float(orbit.b), float(K0)
+    out = [k]
+
+    def f(i, k):
+        return d[i] - b * math.sqrt(max(2.0 * k / J[i], 0.0))
+    for j in range(orbit.n):
+        i = 2 * j
+        k1 = f(i, k)
+        k2 = f(i + 1, k + 0.5 * h * k1)
+        k3 = f(i + 1, k + 0.5 * h * k2)
+        k4 = f(i + 2, k + h * k3)
+        k = k + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        if not k > 0.0:
+            return None
+        out.append(k)
+    return out
+
+
+def test_the_compiled_orbit_is_the_python_steps_to_the_bit():
+    """The orbit's compiled RK4 (kernels.dynamics.energy_orbit) gives the plain
+    Python steps' numbers bit for bit, from slow starts where the crank stops
+    on the way (None, both) to fast ones, with inertia added or not."""
+    import numpy as np
+    from support.friction_sections import TAKEUP_FRICTION
+    # (with the bearings' friction: the slow starts stop within the revolution)
+    st = parse_study((STUDIES / "takeup_dynamics.toml").read_text() + TAKEUP_FRICTION,
+                     "takeup_friction.toml")
+    plan = st.mechanism.compile()
+    orbit = _Orbit(plan, st.mechanism, st.dynamics.cases[0])
+    stopped = ran = 0
+    for K0 in np.geomspace(1e-6, 1e3, 15):
+        for J_add in (0.0, 3e-3):
+            a, b = _orbit_in_python(orbit, K0, J_add), orbit.run(K0, J_add)
+            assert (a is None) == (b is None), (K0, J_add)
+            if a is None:
+                stopped += 1
+            else:
+                ran += 1
+                assert np.array_equal(np.array(a).view(np.int64), b.view(np.int64))
+    assert ran > 0 and stopped > 0, (ran, stopped)
