@@ -105,10 +105,8 @@ def compile_library() -> None:
     design of the sweep or of a new mechanism, then compiles nothing."""
     from pipeline.compiler.plan_path import compile_plan_path
     from pipeline.kernels.dynamics import compile_integrator
-    from pipeline.kernels.walk import compile_revolution
-    compile_revolution()
     compile_integrator()
-    compile_plan_path()
+    compile_plan_path()             # (the walk too)
 
 
 def compile_scene_forces(mod) -> None:

@@ -47,7 +47,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import group_types
 from .emit import emitter_classes, emitters_for, watched_groups
 from .names import NO_POINT, Names
 from .skeleton import part
@@ -139,15 +138,10 @@ def group_form(plan, g, triad_row):
     return form, [a for _, a in arrays]
 
 
-def _triad_rows(plan):
-    rows, r = [], 0
-    for code in plan.codes:
-        if int(code) in group_types.continued_codes():
-            rows.append(r)
-            r += 1
-        else:
-            rows.append(-1)
-    return rows
+def _triad_rows(ems):
+    """Each group's row of the continuation state (-1: none), as ``emitters_for``
+    gives them to the generated module's emitters ``ems``."""
+    return [e.triad_row for e in ems]
 
 
 @cache
@@ -156,7 +150,7 @@ def forms() -> tuple:
     from .warmup import mechanism
     plan = mechanism().compile()
     out = {}
-    for g, row in enumerate(_triad_rows(plan)):
+    for g, row in enumerate(_triad_rows(emitters_for(plan, Names(plan)))):
         f = group_form(plan, g, row)
         if f is not None:
             out.setdefault(f[0], None)
@@ -168,10 +162,13 @@ def plan_constants(plan, par=None):
     row ``par``, the plan's own by default, derived constants included, then
     its module arrays); None where a group is of no form of this path."""
     lay = _layout(plan)
-    if lay is None:
-        return None
+    return None if lay is None else _constants(lay, plan.par if par is None else par)
+
+
+def _constants(lay, par):
+    """The constants array of the plan of layout ``lay`` at the row ``par``."""
     head, cols, tail = lay[0], lay[1], lay[3]
-    par = plan.par if par is None else np.asarray(par, dtype=np.float64)
+    par = np.asarray(par, dtype=np.float64)
     K = np.concatenate([head, np.where(cols >= 0, par[cols], 0.0), tail])
     plan_kernels().derive(K)
     return K
@@ -193,7 +190,9 @@ def _layout(plan):
 
 def _new_layout(plan):
     index = {Form(*f): i for i, f in enumerate(plan_kernels().FORMS)}
-    rows = _triad_rows(plan)
+    names = Names(plan)
+    ems = emitters_for(plan, names)
+    rows = _triad_rows(ems)
     found = [group_form(plan, g, rows[g]) for g in range(len(plan.codes))]
     if plan.gidx.shape[1] != W or any(f is None or f[0] not in index for f in found):
         return None
@@ -205,7 +204,6 @@ def _new_layout(plan):
         head += [int(i), slot]
         cols += [int(off), int(off) + 1]
         slot += 2
-    names = Names(plan)
     col_of = {name: j for j, name in enumerate(names.par_local)}
     groups, tail, starts = [], [], []
     for g, (form, arrays) in enumerate(found):
@@ -228,7 +226,7 @@ def _new_layout(plan):
         row[-1] += slot if row[-1] >= 0 else 0
         head += row
     tail = np.array(tail, dtype=np.float64)
-    watch = np.array(watched_groups(plan, emitters_for(plan, names)), dtype=np.int64)
+    watch = np.array(watched_groups(plan, ems), dtype=np.int64)
     return np.array(head, dtype=np.float64), np.array(cols, dtype=np.int64), watch, tail
 
 
@@ -430,7 +428,7 @@ def on_plan_path() -> bool:
 
 def covers(plan, forces=False) -> bool:
     """Whether a scene of ``plan`` (with ``forces``) runs on the plan path alone."""
-    return (on_plan_path() and plan_constants(plan) is not None
+    return (on_plan_path() and _layout(plan) is not None
             and (not forces or force_tape_of(plan) is not None))
 
 
@@ -438,16 +436,21 @@ def revolution(plan, par, phis, phi_close, order, tols, *outputs):
     """The generated module's ``revolution`` (``pipeline.kernels.walk``'s walk, its
     outputs and status) on the plan path; None where ``plan`` is not on it (the
     caller then takes the generated module's)."""
-    if not on_plan_path():
-        return None
-    K = plan_constants(plan, par)
-    if K is None:
+    lay = _layout(plan) if on_plan_path() else None
+    if lay is None:
         return None
     from ..kernels.walk import revolution as walk
     mod = plan_kernels()
-    watch = _layout(plan)[2]
-    return walk(mod.advance_first_class, mod.start_first_class, K, watch, np.int64(K[3]), phis,
+    K = _constants(lay, par)
+    return walk(mod.advance_first_class, mod.start_first_class, K, lay[2], np.int64(K[3]), phis,
                 phi_close, order, tols, *outputs)
+
+
+def _masses(plan):
+    """The mass model as the generated module's MASSES: gravity, then the plan's
+    index tables (int64, C order, as the plan holds them)."""
+    return (float(plan.gravity), plan.body_com, plan.body_turn, plan.body_mass_off,
+            plan.load_body, plan.load_point)
 
 
 _TAPES: dict = {}
@@ -475,8 +478,7 @@ def forces_curve_of(plan):
     if tape is None:
         return None
     from ..kernels.tape import tape_forces_curve
-    masses = (float(plan.gravity), plan.body_com, plan.body_turn, plan.body_mass_off,
-              plan.load_body, plan.load_point)
+    masses = _masses(plan)
 
     def forces_curve(par, *args):
         tape_forces_curve(*tape, *masses, par, *args)
@@ -498,13 +500,7 @@ class PlanDynamics:
         self.start_first_class = mod.start_first_class
         self.N_TRIADS = np.int64(n_triads)
         self.SIZES = (np.int64(plan.n_points), np.int64(plan.n_groups), self.N_TRIADS)
-
-        def table(a, shape=None):
-            a = np.asarray(a, dtype=np.int64)
-            return np.ascontiguousarray(a.reshape(shape if shape else a.shape))
-        self.MASSES = (float(plan.gravity), table(plan.body_com),
-                       table(plan.body_turn, (-1, 2)), table(plan.body_mass_off),
-                       table(plan.load_body), table(plan.load_point))
+        self.MASSES = _masses(plan)
 
     def constants_array(self, par):
         return plan_constants(self.plan, par)

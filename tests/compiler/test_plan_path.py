@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from conftest import STUDIES
 
-from pipeline.compiler import kernels_for, plan_path
+from pipeline.compiler import kernels_for, plan_path, structure_key
 from pipeline.kernels import config as kc
 from pipeline.solve.reactions import sample_loads
 from pipeline.solve.scene import revolution_angles
@@ -23,7 +23,6 @@ def _plans():
         warnings.simplefilter("ignore")
         for path in sorted(STUDIES.glob("*.toml")):
             plan = load_study(path).mechanism.compile()
-            from pipeline.compiler import structure_key
             out.setdefault(structure_key(plan), (path.stem, plan))
     return list(out.values())
 
