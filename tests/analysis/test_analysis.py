@@ -15,8 +15,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from support.browser import (FRONT_TRACE, CLICK_PACE_S, ISOLATED, PLOT_AREA, POINT, WEBGL,
-                             Page, chromium, click_each_front_1_design, devtools, open_page)
+from support.browser import (FRONT_TRACE, CLICK_PACE_S, EMPTY_SPOT, ISOLATED, PLOT_AREA, POINT,
+                             WEBGL, Page, chromium, click_each_front_1_design, devtools, open_page)
 from support.html_page import explorer_data, markup_only
 from support.naive_pareto import brute_force_rank, dominates_ref
 from pipeline.analysis.fronts import analyze
@@ -532,11 +532,13 @@ def test_report_explorer_hover_click_zoom_select_filter(cli_run, tmp_path):
                          deltaX=0, deltaY=-240)
         c = await page.moved(b, "the wheel's zoom", n)
         n = await page.relayouts()
-        await page.click(a["l"] + 0.5 * a["w"], a["t"] + 0.5 * a["h"], count=2)
+        e = await page.js(EMPTY_SPOT)
+        await page.double_click(e["x"], e["y"])
         d = await page.moved(c, "the double-click's first view", n)
         await asyncio.sleep(CLICK_PACE_S)      # a double click of its own, not a third click
         n = await page.relayouts()
-        await page.click(a["l"] + 0.5 * a["w"], a["t"] + 0.5 * a["h"], count=2)
+        e = await page.js(EMPTY_SPOT)
+        await page.double_click(e["x"], e["y"])
         seen["ranges"] = (a, b, c, d, await page.moved(d, "the double-click's whole range", n))
         # there, with front 1 squeezed among the rest, a click on a front-1 point still
         # opens a front-1 design (the nearest of the best front; plotly.js alone gives
