@@ -165,7 +165,7 @@ def _motion_forces(g, rec):
 
 
 def _reduced(group, red):
-    """The crank's reduced dynamics (``solve.crank_motion.Reduced``) in ``group``."""
+    """The crank's reduced dynamics (``solve.reduced_dynamics.Reduced``) in ``group``."""
     group.attrs["long_name"] = ("reduced dynamics of the crank: J(phi) phi'' + (1/2) "
                                 "J'(phi) phi'^2 = Q(phi) + M1, loads at t = 0")
     group.attrs["equilibria_deg"] = [p for p, _ in red.equilibria] or [np.nan]

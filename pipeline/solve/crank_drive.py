@@ -34,7 +34,6 @@ class Drive:
 
 def build_drive(mechanism, M1, t_end=1.0, dt=1e-3, file="<study>") -> Drive:
     """Sample M1 and the mechanism's loads into drive channels."""
-    from scipy.interpolate import CubicSpline
     exprs = [M1] + [e for ld in mechanism.loads for e in (ld.fx, ld.fy, ld.moment)]
     kinds = [classify_drive(e, t_end, file) for e in exprs]
     n = len(exprs)
@@ -51,8 +50,15 @@ def build_drive(mechanism, M1, t_end=1.0, dt=1e-3, file="<study>") -> Drive:
             x = np.arange(PHI_INTERVALS + 1) * h_phi
             y = e.evaluate(x, 0.0)
             y[-1] = y[0]
-            tab_phi[c] = CubicSpline(x, y, bc_type="periodic").c.T
+            tab_phi[c] = _spline()(x, y, bc_type="periodic").c.T
         else:
             x = np.arange(n_t + 1) * h_t
-            tab_t[c] = CubicSpline(x, e.evaluate(0.0, x)).c.T
+            tab_t[c] = _spline()(x, e.evaluate(0.0, x)).c.T
     return Drive(const, tab_phi, h_phi, tab_t, h_t)
+
+
+def _spline():
+    """scipy's CubicSpline, imported only for a channel that is not a constant
+    (scipy.interpolate takes a tenth of a second to import)."""
+    from scipy.interpolate import CubicSpline
+    return CubicSpline

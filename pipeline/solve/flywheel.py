@@ -11,7 +11,7 @@ direction of rotation s (theta = s (phi - phi0)),
     dK/dtheta = s (M1 + Q) - b |omega|,     |omega| = sqrt(2 K / (J + J_f)),
 
 integrated by RK4 over one revolution from the exact J(phi) and Q(phi) of the
-mechanism (``crank_motion.reduced_terms``), and made periodic, K(2 pi) = K(0),
+mechanism (``reduced_dynamics.reduced_terms``), and made periodic, K(2 pi) = K(0),
 by Brent's method on K(0).  omega_mean is the time mean (2 pi over the period,
 as ``CaseResult.steady`` measures it); omega_min and omega_max are refined
 between the nodes (``_Orbit.extreme``: the largest of |omega| along an RK4
@@ -42,7 +42,8 @@ import numpy as np
 from ..base import limits as lim
 from ..kernels import config as kc
 from ..kernels.dynamics import energy_orbit
-from .crank_motion import STATUS_NAMES, reduced_terms
+from .crank_motion import STATUS_NAMES
+from .reduced_dynamics import reduced_terms
 
 ORBIT_STEPS = 1440          # RK4 steps over the revolution (0.25 deg)
 XTOL = 1e-12                # Brent's method, relative to the bracket

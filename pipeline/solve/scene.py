@@ -81,7 +81,7 @@ class SceneResult:
     dynamics: list | None = None     # solve.crank_motion.CaseResult per case, if the study asks
     peaks: list | None = None        # pipeline.solve.peaks.Peak, refined between grid positions
     motion: dict | None = None       # dwell error and stroke of the output rocker
-    reduced: object = None           # solve.crank_motion.Reduced for a study with dynamics
+    reduced: object = None           # solve.reduced_dynamics.Reduced for a study with dynamics
     counterweight: object = None     # solve.shaking.Counterweight, with forces
     flywheel: object = None          # solve.flywheel.Flywheel: [dynamics.flywheel]
     # per dynamics case: {"samples"[, "steady"]: solve.motion_forces.MotionForces}

@@ -15,26 +15,52 @@ from __future__ import annotations
 def solve_scene(study):
     """The scene study ``study`` solved: a ``solve.scene.SceneResult`` with its
     peaks, counterweight, motion and (if the study asks) dynamics."""
-    from .peaks import scene_motion, scene_peaks, split_bearing_peaks
     from .scene import run_scene
+    if study.dynamics is None:
+        res = run_scene(study)
+        _kinematics(res)
+        return res
+    from concurrent.futures import ThreadPoolExecutor
+    from .crank_motion import ready
+    # the dynamics (compiled integrations that release the GIL) run on a thread of
+    # their own meanwhile: the same numbers, the cores shared with the scene; their
+    # kernels loaded first, so that they start at once
+    plan = study.mechanism.compile()
+    ready(plan, study.mechanism, study.dynamics.method)
+    with ThreadPoolExecutor(1) as pool:
+        dynamics = pool.submit(_dynamics, study, plan)
+        res = run_scene(study)
+        _kinematics(res)
+        res.dynamics, res.reduced, res.motion_forces, res.flywheel = dynamics.result()
+    return res
+
+
+def _dynamics(study, plan):
+    """The study's dynamics cases, the reduced dynamics, the kinetostatics along
+    each case's motion (with mass data) and the flywheel (where asked)."""
+    from .crank_motion import run_dynamics
+    from .reduced_dynamics import reduced_dynamics
+    cases = run_dynamics(study, plan)
+    reduced = reduced_dynamics(study, plan)
+    along = None
+    if study.mechanism.bodies:   # the kinetostatics along each case's motion
+        from .motion_forces import case_forces
+        along = {c.name: case_forces(study.mechanism, plan, c) for c in cases}
+    flywheel = None
+    if study.dynamics.flywheel is not None:   # not on a refused case (its reason)
+        from .flywheel import flywheel_of
+        flywheel = flywheel_of(study, plan, cases)
+    return cases, reduced, along, flywheel
+
+
+def _kinematics(res):
+    """The scene ``res``'s refined peaks, counterweight, output motion and cyclogram."""
+    from .cyclogram import scene_cyclogram
+    from .peaks import scene_motion, scene_peaks, split_bearing_peaks
     from .shaking import scene_counterweight
-    res = run_scene(study)
     res.peaks, bearings = split_bearing_peaks(scene_peaks(res))
     if bearings:        # [mechanism.friction]: the plain bearings' refined p, v and p*v
         res.dense.forces.friction.peaks = bearings
     res.counterweight = scene_counterweight(res)
     res.motion = scene_motion(res)
-    from .cyclogram import scene_cyclogram
     res.cyclogram = scene_cyclogram(res)
-    if study.dynamics is not None:
-        from .crank_motion import reduced_dynamics, run_dynamics
-        res.dynamics = run_dynamics(study, res.plan)
-        res.reduced = reduced_dynamics(study, res.plan)
-        if study.mechanism.bodies:   # the kinetostatics along each case's motion
-            from .motion_forces import case_forces
-            res.motion_forces = {c.name: case_forces(study.mechanism, res.plan, c)
-                                 for c in res.dynamics}
-        if study.dynamics.flywheel is not None:   # not on a refused case (its reason)
-            from .flywheel import flywheel_of
-            res.flywheel = flywheel_of(study, res.plan, res.dynamics)
-    return res

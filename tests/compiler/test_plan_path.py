@@ -147,7 +147,8 @@ def test_crank_dynamics_are_the_generated_modules_bits(friction, tmp_path, monke
     (each case's first 20 ms, its error estimate's companion run included)."""
     from support.friction_sections import TAKEUP_FRICTION
 
-    from pipeline.solve.crank_motion import integrate, reduced_terms, with_changes
+    from pipeline.solve.crank_motion import integrate, with_changes
+    from pipeline.solve.reduced_dynamics import reduced_terms
     path = STUDIES / "takeup_dynamics.toml"
     if friction:
         path = tmp_path / "takeup_friction.toml"

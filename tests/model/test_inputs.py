@@ -317,13 +317,13 @@ def test_m_bal_is_the_lagrange_moment_of_the_whole_machine(studies, name):
     on phi1, J eps1 + (1/2) J' omega1^2 - Q: the inputs' inertia enters the
     reduced moment of inertia through their analogs, and their drives reach
     the shaft through q' (two independent routes to the same number)."""
-    from pipeline.solve import crank_motion as dy
+    from pipeline.solve.reduced_dynamics import reduced_terms
     study = _with_eps(load_study(studies / f"{name}.toml"), 75.0)
     crank = study.mechanism.crank
     res = run_scene(study)
     fr = res.table.forces
     phi = res.table.phi
-    J, half, Q = dy.reduced_terms(res.plan, phi, mechanism=study.mechanism)
+    J, half, Q = reduced_terms(res.plan, phi, mechanism=study.mechanism)
     want = J * crank.eps1 + half * crank.omega1 ** 2 - Q
     scale = np.abs(want).max()
     assert np.abs(fr.M_bal - want).max() <= 1e-9 * scale, np.abs(fr.M_bal - want).max() / scale

@@ -12,6 +12,7 @@ from scipy.optimize import brentq
 
 from support.naive import naive_c_lagrange_terms
 from pipeline.solve import crank_motion as dy
+from pipeline.solve import reduced_dynamics as rd
 from pipeline.cli import main
 from pipeline.kernels import config as kc
 from pipeline.kernels.dynamics import TOO_FAST
@@ -67,7 +68,7 @@ def test_study_declares_section_7(cases):
 @pytest.mark.parametrize("deg", ANGLES_DEG)
 def test_terms_match_naive_oracle(plan, deg):
     phi = math.radians(deg)
-    J, half, Q = dy.reduced_terms(plan, phi)
+    J, half, Q = rd.reduced_terms(plan, phi)
     Jn, halfn, Qn = naive_c_lagrange_terms(phi, M1=0.0)
     # each term relative to its own scale over the revolution (J'/2 and Q cross zero)
     assert J == pytest.approx(Jn, rel=TERMS_REL)
@@ -78,18 +79,18 @@ def test_terms_match_naive_oracle(plan, deg):
 def test_half_dJ_is_half_the_derivative_of_J(plan):
     phis = np.radians(np.arange(0.0, 360.0, 7.5))
     h = 1e-3
-    Jm2, Jm1, Jp1, Jp2 = (dy.reduced_terms(plan, phis + k * h)[0] for k in (-2, -1, 1, 2))
+    Jm2, Jm1, Jp1, Jp2 = (rd.reduced_terms(plan, phis + k * h)[0] for k in (-2, -1, 1, 2))
     fd = (Jm2 - 8.0 * Jm1 + 8.0 * Jp1 - Jp2) / (12.0 * h)
-    half = dy.reduced_terms(plan, phis)[1]
+    half = rd.reduced_terms(plan, phis)[1]
     assert np.max(np.abs(half - 0.5 * fd)) <= HALF_DJ_FD_REL * np.max(np.abs(half))
 
 
 def test_Q_is_minus_the_derivative_of_V(plan):
     phis = np.radians(np.arange(0.0, 360.0, 15.0))
     h = 1e-4
-    _, Vp = dy.energy(plan, phis + h, 0.0)
-    _, Vm = dy.energy(plan, phis - h, 0.0)
-    Q = dy.reduced_terms(plan, phis)[2]
+    _, Vp = rd.energy(plan, phis + h, 0.0)
+    _, Vm = rd.energy(plan, phis - h, 0.0)
+    Q = rd.reduced_terms(plan, phis)[2]
     assert np.max(np.abs(Q + (Vp - Vm) / (2 * h))) <= 1e-7 * np.max(np.abs(Q))
 
 
@@ -103,19 +104,19 @@ def test_energy_is_conserved_without_damping_and_drive(study, plan, cases, start
     assert res.status == kc.OK and np.isfinite(res.phi1).all()
     if omega0:
         assert res.steady() is not None          # it turns round: every position is visited
-    T, V = dy.energy(plan, res.phi1, res.omega1)
+    T, V = rd.energy(plan, res.phi1, res.omega1)
     E = T + V
     assert np.ptp(E) <= ENERGY_DRIFT_REL * T.max(), np.ptp(E) / T.max()
 
 
 # ----------------------------------------------------------------- (d) small oscillations
 def test_small_oscillation_period(study, plan, cases):
-    Q = lambda p: dy.reduced_terms(plan, p)[2]
+    Q = lambda p: rd.reduced_terms(plan, p)[2]
     eq = brentq(Q, math.radians(260.0), math.radians(275.0), xtol=1e-15)
     h = 1e-5
     dQ = (Q(eq + h) - Q(eq - h)) / (2 * h)
     assert dQ < 0.0                                  # a stable equilibrium
-    J = dy.reduced_terms(plan, eq)[0]
+    J = rd.reduced_terms(plan, eq)[0]
     period = 2.0 * math.pi * math.sqrt(J / -dQ)
     case = dy.with_changes(cases["free"], damping=0.0, M1=0.0, phi_start=eq + 1e-4)
     res = dy.integrate(plan, study.mechanism, case)
@@ -201,8 +202,8 @@ fy = "-3*(1 + 0.5*sin(2*phi))"
     p = st.mechanism.compile()
     l1 = 16.3e-3
     for phi in np.radians([0.0, 50.0, 190.0, 300.0]):
-        Q0 = dy.reduced_terms(plan, phi)[2]
-        Q1 = dy.reduced_terms(p, phi, mechanism=st.mechanism)[2]
+        Q0 = rd.reduced_terms(plan, phi)[2]
+        Q1 = rd.reduced_terms(p, phi, mechanism=st.mechanism)[2]
         fy = -3.0 * (1.0 + 0.5 * math.sin(2 * phi))
         assert Q1 - Q0 == pytest.approx(0.01 + fy * l1 * math.cos(phi), rel=1e-9, abs=1e-12)
 
@@ -236,7 +237,7 @@ def test_class3_plan_keeps_its_continuation(studies):
                         sample_dt=0.01)
     res = dy.integrate(p, st.mechanism, case)
     assert res.status == kc.OK and np.isfinite(res.phi1).all()
-    T, V = dy.energy(p, res.phi1, res.omega1)
+    T, V = rd.energy(p, res.phi1, res.omega1)
     assert np.ptp(T + V) <= ENERGY_DRIFT_REL * T.max()
     ref = dy.integrate(p, st.mechanism, case, "dop853")
     assert np.max(np.abs(ref.phi1 - res.phi1)) <= RK4_VS_DOP853_RAD
@@ -398,3 +399,20 @@ def test_the_estimate_is_stored_beside_the_case(tmp_path, study, plan, cases, ru
         assert g.attrs["error_phi1_rad"] == runup_rk4.error_phi1 > 0.0
         assert g.attrs["accepted_error_phi1_rad"] == dy.ACCEPTED_ERROR_RAD
         assert g.attrs["dt_used"] == RK4_DT_S and g.attrs["summary_error_phi1"] > 0.0
+
+
+def test_cases_run_side_by_side_give_each_runs_own_numbers(study, plan):
+    """run_dynamics integrates the cases, and each case's step and its half, on
+    threads at once: every recorded number is the one that run gives alone, one
+    after the other on this thread (nothing shared between runs, nothing that
+    depends on what runs beside)."""
+    tols = kc.default_tolerances()
+    together = dy.run_dynamics(study, plan)
+    fields = ("t", "phi1", "omega1", "eps1", "tail_t", "tail_phi1", "tail_omega1", "tail_eps1")
+    for case, res in zip(study.dynamics.cases, together):
+        alone = [dy._run_once(plan, study.mechanism, case, "rk4", tols, study.path, dt,
+                              dy.DOP853_TOL) for dt in (case.dt, case.dt / 2.0)]
+        assert res.status == alone[0].status == kc.OK and res.dt == case.dt
+        for f in fields:
+            np.testing.assert_array_equal(getattr(res, f), getattr(alone[0], f), err_msg=f)
+        assert res.error_phi1 == dy._check(alone[0], alone[1], 16.0 / 15.0).error_phi1

@@ -10,7 +10,7 @@ import pytest
 
 import pipeline
 from pipeline.cli import main
-from pipeline.solve.crank_motion import reduced_dynamics, reduced_terms
+from pipeline.solve.reduced_dynamics import reduced_dynamics, reduced_terms
 from support import naive
 
 
