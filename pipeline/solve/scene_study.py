@@ -21,15 +21,22 @@ def solve_scene(study):
         _kinematics(res)
         return res
     from concurrent.futures import ThreadPoolExecutor
+    from ..compiler import plan_path
     from .crank_motion import ready
     # the dynamics (compiled integrations that release the GIL) run on a thread of
-    # their own meanwhile: the same numbers, the cores shared with the scene; their
-    # kernels loaded first, so that they start at once
+    # their own meanwhile: the same numbers, the cores shared with the scene.  On
+    # the plan path their kernels are the installation's: loaded here, they start
+    # at once; otherwise after the scene, which compiles the mechanism's module
+    # (and says so)
     plan = study.mechanism.compile()
-    ready(plan, study.mechanism, study.dynamics.method)
+    early = plan_path.dynamics_of(plan) is not None
+    if early:
+        ready(plan, study.mechanism, study.dynamics.method)
     with ThreadPoolExecutor(1) as pool:
-        dynamics = pool.submit(_dynamics, study, plan)
+        dynamics = pool.submit(_dynamics, study, plan) if early else None
         res = run_scene(study)
+        if dynamics is None:
+            dynamics = pool.submit(_dynamics, study, res.plan)
         _kinematics(res)
         res.dynamics, res.reduced, res.motion_forces, res.flywheel = dynamics.result()
     return res
