@@ -242,7 +242,7 @@ def integrate(plan, mechanism, case, method="rk4", tols=None, file="<study>",
         a = run(case.dt)
         res = _judged(a, _check(a, run(case.dt, DOP853_CHECK_TOL), 10.0 / 9.0), "", False)
     else:                        # fourth order: error(dt) = 16/15 |y(dt) - y(dt/2)|
-        ready(plan, mechanism)
+        load_integrators(plan, mechanism)
         a, b = _at_once(run, (case.dt, case.dt / 2.0))
         halvings, first = 0, None
         while True:
@@ -260,7 +260,7 @@ def integrate(plan, mechanism, case, method="rk4", tols=None, file="<study>",
     return res
 
 
-def ready(plan, mechanism, method="rk4"):
+def load_integrators(plan, mechanism, method="rk4"):
     """The RK4 kernels of ``plan`` compiled (or loaded from numba's cache) on this
     thread, before threads run them: their compile functions are not for two
     threads at once."""
@@ -507,7 +507,7 @@ def run_dynamics(study, plan, method=None) -> list[CaseResult]:
     spec = study.dynamics
     method = method or spec.method
     if method == "rk4":
-        ready(plan, study.mechanism)
+        load_integrators(plan, study.mechanism)
         each = _at_once
     else:                   # DOP853 steps in Python: threads would only take turns
         def each(fn, args):

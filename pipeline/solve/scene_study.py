@@ -22,7 +22,7 @@ def solve_scene(study):
         return res
     from concurrent.futures import ThreadPoolExecutor
     from ..compiler import plan_path
-    from .crank_motion import ready
+    from .crank_motion import load_integrators
     # the dynamics (compiled integrations that release the GIL) run on a thread of
     # their own meanwhile: the same numbers, the cores shared with the scene.  On
     # the plan path their kernels are the installation's: loaded here, they start
@@ -31,7 +31,7 @@ def solve_scene(study):
     plan = study.mechanism.compile()
     early = plan_path.dynamics_of(plan) is not None
     if early:
-        ready(plan, study.mechanism, study.dynamics.method)
+        load_integrators(plan, study.mechanism, study.dynamics.method)
     with ThreadPoolExecutor(1) as pool:
         dynamics = pool.submit(_dynamics, study, plan) if early else None
         res = run_scene(study)
