@@ -436,10 +436,6 @@ def _unknown_command(parser, argv):
 
 
 def main(argv=None) -> int:
-    # one BLAS thread: the kernels run on threads of their own, and the little linear
-    # algebra a command does is on small matrices; OpenBLAS's own threads (one a core,
-    # spinning after each call) took 0.3 s of CPU from a 2 s scene on two cores
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     parser = build_parser()
     _unknown_command(parser, sys.argv[1:] if argv is None else list(argv))
     args = parser.parse_args(argv)
