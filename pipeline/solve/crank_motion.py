@@ -274,11 +274,12 @@ def load_integrators(plan, mechanism, method="rk4"):
         compile_friction_integrator()
 
 
-def _at_once(fn, args):
-    """[fn(a) for a in args], each on a thread of its own: the compiled integrators
-    release the GIL, so independent runs (a case's step and its half, the cases)
-    share the cores; each run's numbers are its own, whatever runs beside it."""
-    if len(args) < 2:
+def _at_once(fn, args, threads=True):
+    """[fn(a) for a in args], each on a thread of its own (``threads``): the
+    compiled integrators release the GIL, so independent runs (a case's step and
+    its half, the cases) share the cores; each run's numbers are its own,
+    whatever runs beside it."""
+    if not threads or len(args) < 2:
         return [fn(a) for a in args]
     with ThreadPoolExecutor(len(args) - 1) as pool:
         ahead = [pool.submit(fn, a) for a in args[1:]]
@@ -506,14 +507,11 @@ def run_dynamics(study, plan, method=None) -> list[CaseResult]:
     """Every case of the study's [dynamics] section, with its method (or ``method``)."""
     spec = study.dynamics
     method = method or spec.method
-    if method == "rk4":
-        load_integrators(plan, study.mechanism)
-        each = _at_once
-    else:                   # DOP853 steps in Python: threads would only take turns
-        def each(fn, args):
-            return [fn(a) for a in args]
-    results = each(lambda case: integrate(plan, study.mechanism, case, method,
-                                          file=study.path), spec.cases)
+    load_integrators(plan, study.mechanism, method)
+    # (DOP853 steps in Python: on threads the cases would only take turns)
+    results = _at_once(lambda case: integrate(plan, study.mechanism, case, method,
+                                              file=study.path), spec.cases,
+                       threads=method == "rk4")
     for case, res in zip(spec.cases, results):
         log.info("dynamics %s (%s): %s, %.2f s, estimated error %.2g rad%s", case.name, method,
                  STATUS_NAMES[res.status], res.seconds, res.error_phi1,

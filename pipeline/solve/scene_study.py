@@ -29,7 +29,7 @@ def solve_scene(study):
     # at once; otherwise after the scene, which compiles the mechanism's module
     # (and says so)
     plan = study.mechanism.compile()
-    early = plan_path.dynamics_of(plan) is not None
+    early = plan_path.covers(plan)
     if early:
         load_integrators(plan, study.mechanism, study.dynamics.method)
     with ThreadPoolExecutor(1) as pool:

@@ -66,14 +66,26 @@ class Page:
         self.ws, self.seq, self.events = ws, 0, []
 
     async def call(self, method, **params):
-        self.seq += 1
-        self.ws.write_message(json.dumps({"id": self.seq, "method": method, "params": params}))
-        while True:
+        return (await self.calls([(method, params)]))[0]
+
+    async def calls(self, requests):
+        """Every (method, params) of ``requests`` sent at once, then their results
+        read, in order (each answered once the page has handled it)."""
+        sent = {}
+        for method, params in requests:
+            self.seq += 1
+            sent[self.seq] = method
+            self.ws.write_message(json.dumps({"id": self.seq, "method": method,
+                                              "params": params}))
+        results = {}
+        while len(results) < len(sent):
             msg = json.loads(await self.ws.read_message())
-            if msg.get("id") == self.seq:
-                assert "error" not in msg, (method, msg["error"])
-                return msg.get("result", {})
-            self.events.append(msg)
+            if msg.get("id") in sent:
+                assert "error" not in msg, (sent[msg["id"]], msg["error"])
+                results[msg["id"]] = msg.get("result", {})
+            else:
+                self.events.append(msg)
+        return [results[i] for i in sent]
 
     async def js(self, expr):
         r = await self.call("Runtime.evaluate", expression=expr, returnByValue=True,
@@ -133,22 +145,11 @@ class Page:
             }})()""")
         for _ in range(tries):
             seen = await self.js("window.__doubleclicks")
-            first = self.seq + 1
-            for k in (1, 2):
-                for kind, buttons in (("mousePressed", 1), ("mouseReleased", 0)):
-                    self.seq += 1
-                    self.ws.write_message(json.dumps({
-                        "id": self.seq, "method": "Input.dispatchMouseEvent",
-                        "params": {"type": kind, "x": x, "y": y, "button": "left",
-                                   "buttons": buttons, "clickCount": k}}))
-            waiting = set(range(first, self.seq + 1))
-            while waiting:        # (each answered once the page has handled it)
-                msg = json.loads(await self.ws.read_message())
-                if msg.get("id") in waiting:
-                    assert "error" not in msg, msg["error"]
-                    waiting.discard(msg["id"])
-                else:
-                    self.events.append(msg)
+            await self.calls([("Input.dispatchMouseEvent",
+                               dict(type=kind, x=x, y=y, button="left", buttons=buttons,
+                                    clickCount=k))
+                              for k in (1, 2)
+                              for kind, buttons in (("mousePressed", 1), ("mouseReleased", 0))])
             if await self.js(f"window.__doubleclicks > {seen}"):
                 return
             await asyncio.sleep(CLICK_PACE_S)
