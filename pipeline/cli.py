@@ -9,6 +9,12 @@ import logging
 import os
 import sys
 
+# OpenBLAS's idle threads (numpy's and scipy's BLAS, one a core) spin for 2^28 cycles
+# after each call before they sleep: 0.3 s of CPU in a scene with crank dynamics,
+# taken from the integrations beside them.  2^4 cycles: asleep at once, the same threads
+# and the same numbers (read when numpy loads BLAS; a user's own setting stays)
+os.environ.setdefault("OPENBLAS_THREAD_TIMEOUT", "4")
+
 EXIT_OK = 0
 EXIT_USER_ERROR = 2
 

@@ -23,6 +23,7 @@ import importlib
 import os
 import sys
 import threading
+import weakref
 from pathlib import Path
 
 from ..base.files import write_text
@@ -84,6 +85,20 @@ def module_name(source: str) -> str:
 def structure_key(plan, rocker=None, watch=True) -> tuple:
     """What the generated source depends on: the plan's structure (not its
     parameter values) and the rocker; a cheap key for the modules in memory."""
+    return (*_structure(plan), tuple(rocker) if rocker is not None else None, bool(watch),
+            str(cache_dir()))
+
+
+# id(plan) -> (a weak reference to the plan, its structure): a Plan is frozen, and a
+# scene's refined peaks and flywheel ask for its structure at every evaluation (27 us)
+_STRUCTURES: dict[int, tuple] = {}
+
+
+def _structure(plan) -> tuple:
+    """The plan's own part of ``structure_key``, kept per plan object."""
+    hit = _STRUCTURES.get(id(plan))
+    if hit is not None and hit[0]() is plan:
+        return hit[1]
     arrays = (plan.codes, plan.gidx, plan.goff, plan.fixed_idx, plan.fixed_off, plan.link_a,
               plan.link_b, plan.body_com, plan.body_turn, plan.body_mass_off, plan.joint_point,
               plan.joint_bodies, plan.slide_bodies, plan.slide_dir, plan.slide_angle,
@@ -92,10 +107,11 @@ def structure_key(plan, rocker=None, watch=True) -> tuple:
               plan.input_law, plan.input_points, plan.input_body)
     tables = tuple(None if t is None else (t[0].tobytes(), t[1].tobytes())
                    for t in plan.input_tables)
-    return (tuple(a.tobytes() for a in arrays), tables, plan.point_names, plan.par_names,
-            plan.group_names, plan.n_visible, plan.n_kinematic, plan.crank_body, plan.gravity,
-            tuple(rocker) if rocker is not None else None, bool(watch),
-            str(cache_dir()))
+    made = (tuple(a.tobytes() for a in arrays), tables, plan.point_names, plan.par_names,
+            plan.group_names, plan.n_visible, plan.n_kinematic, plan.crank_body, plan.gravity)
+    key = id(plan)
+    _STRUCTURES[key] = (weakref.ref(plan, lambda _, key=key: _STRUCTURES.pop(key, None)), made)
+    return made
 
 
 _BY_STRUCTURE: dict[tuple, object] = {}

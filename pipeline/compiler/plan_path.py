@@ -440,10 +440,25 @@ def revolution(plan, par, phis, phi_close, order, tols, *outputs):
     if lay is None:
         return None
     from ..kernels.walk import revolution as walk
-    mod = plan_kernels()
+    advance, start = first_class()
     K = _constants(lay, par)
-    return walk(mod.advance_first_class, mod.start_first_class, K, lay[2], np.int64(K[3]), phis,
-                phi_close, order, tols, *outputs)
+    return walk(advance, start, K, lay[2], np.int64(K[3]), phis, phi_close, order, tols,
+                *outputs)
+
+
+_FIRST_CLASS: list = []
+
+
+def first_class() -> tuple:
+    """The plan path's ``advance`` and ``start`` as first-class functions looked up
+    once (``kernels.walk.FixedFunction``), for the kernels that Python calls often
+    (a long run, ``rk4``, takes the Dispatchers' direct calls)."""
+    if not _FIRST_CLASS:
+        from ..kernels.walk import ADVANCE, START, FixedFunction
+        mod = plan_kernels()
+        _FIRST_CLASS[:] = [FixedFunction(mod.advance_first_class, ADVANCE),
+                           FixedFunction(mod.start_first_class, START)]
+    return tuple(_FIRST_CLASS)
 
 
 def _masses(plan):
@@ -508,7 +523,7 @@ class PlanDynamics:
     def begin(self, K, phi, state, last):
         from ..kernels import dynamics
         dynamics.compile_integrator()
-        dynamics.begin(self.start_first_class, K, phi, state, last)
+        dynamics.begin(first_class()[1], K, phi, state, last)
 
     def rk4(self, par, K, tols, *args):
         from ..kernels import dynamics
@@ -519,8 +534,8 @@ class PlanDynamics:
     def terms_curve(self, par, K, tols, *args):
         from ..kernels import dynamics
         dynamics.compile_integrator()
-        return dynamics.terms_curve(self.advance_first_class, self.start_first_class, K,
-                                    self.SIZES, self.MASSES, par, tols, *args)
+        return dynamics.terms_curve(*first_class(), K, self.SIZES, self.MASSES, par, tols,
+                                    *args)
 
 
 def dynamics_of(plan):

@@ -12,6 +12,7 @@ from conftest import STUDIES
 
 from pipeline.compiler import kernels_for, plan_path, structure_key
 from pipeline.kernels import config as kc
+from pipeline.kernels.walk import walk_revolution
 from pipeline.solve.reactions import sample_loads
 from pipeline.solve.scene import revolution_angles
 from pipeline.study.reader import load_study
@@ -124,6 +125,26 @@ def test_a_new_mechanism_compiles_nothing_of_its_own():
     assert len(mod.advance_first_class.signatures) == 1
     assert len(mod.start_first_class.signatures) == 1
     assert len(mod.derive.signatures) == 1
+    # advance and start passed looked up once (kernels.walk.FixedFunction): the
+    # walk's own signature, not one more
+    assert len(walk_revolution.signatures) == 1
+
+
+def test_a_plans_structure_is_kept_per_plan_object():
+    """structure_key reads a plan's arrays once per plan object (a frozen Plan),
+    gives each plan its own structure, and forgets a plan that is gone."""
+    import gc
+
+    from pipeline.compiler import _STRUCTURES
+    (name_a, a), (name_b, b) = PLANS[:2]
+    assert structure_key(a) == structure_key(a) and structure_key(a) != structure_key(b)
+    again = load_study(STUDIES / f"{name_a}.toml").mechanism.compile()
+    assert again is not a and structure_key(again) == structure_key(a)
+    key = id(again)
+    assert key in _STRUCTURES
+    del again
+    gc.collect()
+    assert key not in _STRUCTURES
 
 
 def test_the_plan_path_can_be_turned_off(monkeypatch):
