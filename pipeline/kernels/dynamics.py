@@ -37,7 +37,7 @@ import math
 import numpy as np
 from numba import njit, types
 
-from .config import JIT, JIT_ALLOC, OK, SINGULAR
+from .config import JIT, JIT_ALLOC, OK, SINGULAR, compile_for
 from .continuation import work
 from .geometry import angle_analogs
 from .walk import ADVANCE, START, walk_start
@@ -388,11 +388,7 @@ def compile_integrator() -> None:
     if _COMPILED:
         return
     for kernel, sig in SIGNATURES.items():
-        if not getattr(kernel, "compile", None):
-            return      # numba's JIT disabled (NUMBA_DISABLE_JIT): Python calls Python
-        if not kernel.signatures:
-            kernel.compile(sig)
-            kernel.disable_compile()
+        compile_for(kernel, sig)
     _COMPILED.append(True)
 
 

@@ -33,7 +33,7 @@ import math
 import numpy as np
 from numba import njit, types
 
-from .config import FRICTION_LOCK, JIT, JIT_ALLOC, OK, SINGULAR
+from .config import FRICTION_LOCK, JIT, JIT_ALLOC, OK, SINGULAR, compile_for
 from .continuation import work
 from .dynamics import (_DRIVE, _F1, _I1, _I2, MASSES, OMEGA_STOP, SIZES, TOO_FAST, acceleration,
                        begin, channel, lagrange_terms, record, step_counts)
@@ -377,8 +377,4 @@ def friction_args(plan, friction):
 def compile_friction_integrator() -> None:
     """``rk4_friction`` compiled (or loaded from numba's cache) for SIGNATURE and
     no other: once per installation, not per mechanism."""
-    if not getattr(rk4_friction, "compile", None):
-        return      # numba's JIT disabled (NUMBA_DISABLE_JIT): Python calls Python
-    if not rk4_friction.signatures:
-        rk4_friction.compile(SIGNATURE)
-        rk4_friction.disable_compile()
+    compile_for(rk4_friction, SIGNATURE)

@@ -27,7 +27,7 @@ from numba.core.types.function_type import CompileResultWAP
 from numba.extending import typeof_impl
 
 from .config import (JIT_ALLOC, JIT_INNER, OK, BRANCH_JUMP, SINGULAR, S_ITERS, N_STATE,
-                     N_TOLS, T_MIN_STEP, T_NEWTON_TOL, T_WATCH, T_TOUCH, T_LOCATE)
+                     N_TOLS, T_MIN_STEP, T_NEWTON_TOL, T_WATCH, T_TOUCH, T_LOCATE, compile_for)
 from .continuation import MARGIN_SLOTS, closes, copy2, restore, work
 from .watch import (FOLD_BACK, LOCATE_MIN_STEP, LOCATE_NEWTON_TOL, RESOLVED, SUB, cubic_bound,
                     fold_distance, third_difference, uniform_hit, window_score, window_vertex)
@@ -432,12 +432,9 @@ def compile_revolution() -> None:
     """``walk_revolution`` compiled (or loaded from numba's cache) for the types
     of REVOLUTION, and for no other: once per installation, not per mechanism
     (``pipeline.compiler.beside`` does it while the first sweep compiles)."""
-    if _READY or not getattr(walk_revolution, "compile", None):
-        return          # (numba's JIT disabled, NUMBA_DISABLE_JIT: Python calls Python)
-    if not walk_revolution.signatures:
-        walk_revolution.compile(REVOLUTION)
-        walk_revolution.disable_compile()
-    _READY.append(True)
+    if not _READY:
+        compile_for(walk_revolution, REVOLUTION)
+        _READY.append(True)
 
 
 _READY: list = []       # walk_revolution compiled (its signatures: a new list at every ask)

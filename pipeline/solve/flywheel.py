@@ -333,11 +333,13 @@ def size_flywheel(plan, mech, case, target, steps=ORBIT_STEPS) -> Flywheel:
     return Flywheel(case.name, target, float(J_add), d[0], d0[0], *d[1:], body)
 
 
-def flywheel_of(study, plan, cases) -> Flywheel:
+def flywheel_of(study, plan, cases, sizing=None) -> Flywheel:
     """The flywheel [dynamics.flywheel] of ``study`` asks for, on its case's
     integrated motion (``cases``: crank_motion.CaseResult); not sized (its
     ``refused`` saying why, naming the file and the field) on a motion that
-    is not a result or where no steady rotation exists."""
+    is not a result or where no steady rotation exists.  ``sizing``: the
+    sizing already under way (``size_study_flywheel`` in a Future), else done
+    here."""
     name, target = study.dynamics.flywheel
     run = next(c for c in cases if c.name == name)
     where = f"{study.path}: dynamics.flywheel"
@@ -346,6 +348,17 @@ def flywheel_of(study, plan, cases) -> Flywheel:
             f"{where}: case {name!r} ended {STATUS_NAMES[run.status]} (its note says why): "
             "no flywheel is sized on a motion that is not a result"))
     try:
-        return size_flywheel(plan, study.mechanism, run.case, target)
+        return sizing.result() if sizing is not None else size_study_flywheel(study, plan)
     except NoSteadyRotation as e:
         return Flywheel.not_sized(name, target, f"{where}: case {name!r}: {e}")
+
+
+def size_study_flywheel(study, plan) -> Flywheel:
+    """``size_flywheel`` on the flywheel's case as the study declares it: its
+    drive, damping and start, which are all the sizing reads of a case (not its
+    step, nor the integrated motion, which only says whether the flywheel is
+    sized at all: ``flywheel_of``).  So a scene sizes it while the motion is
+    integrated, with the same numbers."""
+    name, target = study.dynamics.flywheel
+    case = next(c for c in study.dynamics.cases if c.name == name)
+    return size_flywheel(plan, study.mechanism, case, target)

@@ -11,6 +11,8 @@ solved by the same function.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
+
 
 def solve_scene(study):
     """The scene study ``study`` solved: a ``solve.scene.SceneResult`` with its
@@ -20,7 +22,6 @@ def solve_scene(study):
         res = run_scene(study)
         _kinematics(res)
         return res
-    from concurrent.futures import ThreadPoolExecutor
     from ..compiler import plan_path
     from .crank_motion import load_integrators
     # the dynamics (compiled integrations that release the GIL) run on a thread of
@@ -47,16 +48,22 @@ def _dynamics(study, plan):
     each case's motion (with mass data) and the flywheel (where asked)."""
     from .crank_motion import run_dynamics
     from .reduced_dynamics import reduced_dynamics
-    cases = run_dynamics(study, plan)
-    reduced = reduced_dynamics(study, plan)
-    along = None
-    if study.mechanism.bodies:   # the kinetostatics along each case's motion
-        from .motion_forces import case_forces
-        along = {c.name: case_forces(study.mechanism, plan, c) for c in cases}
-    flywheel = None
-    if study.dynamics.flywheel is not None:   # not on a refused case (its reason)
-        from .flywheel import flywheel_of
-        flywheel = flywheel_of(study, plan, cases)
+    with ThreadPoolExecutor(1) as beside:
+        # the flywheel's sizing reads its case's definition, not the motion (which says
+        # only whether it is sized): beside the integrations, not after them
+        sizing = None
+        if study.dynamics.flywheel is not None:
+            from .flywheel import flywheel_of, size_study_flywheel
+            sizing = beside.submit(size_study_flywheel, study, plan)
+        cases = run_dynamics(study, plan)
+        reduced = reduced_dynamics(study, plan)
+        along = None
+        if study.mechanism.bodies:   # the kinetostatics along each case's motion
+            from .motion_forces import case_forces
+            along = {c.name: case_forces(study.mechanism, plan, c) for c in cases}
+        flywheel = None
+        if sizing is not None:      # not on a refused case (its reason)
+            flywheel = flywheel_of(study, plan, cases, sizing)
     return cases, reduced, along, flywheel
 
 

@@ -172,6 +172,29 @@ def test_a_refused_case_gets_no_flywheel(tmp_path, capsys, line_new):
         assert f["dynamics/runup"].attrs["status"] in ("INACCURATE", "TOO_FAST")
 
 
+def test_the_flywheel_sized_beside_the_integration_is_the_one_sized_after_it():
+    """A scene sizes the flywheel while its case is integrated, on the case as the study
+    declares it (size_study_flywheel); before, after the integration, on the case the
+    run returned, whose step a refinement may have halved: the same numbers, since the
+    sizing reads the case's drive, damping and start, never its step."""
+    from pipeline.solve.flywheel import flywheel_of, size_study_flywheel
+    from pipeline.solve.crank_motion import run_dynamics
+    study = takeup()
+    plan, mech = study.mechanism.compile(), study.mechanism
+    name, target = study.dynamics.flywheel
+    case = next(c for c in study.dynamics.cases if c.name == name)
+    beside = size_study_flywheel(study, plan)
+    assert beside == size_flywheel(plan, mech, replace(case, dt=case.dt / 4.0), target)
+    assert beside.refused == "" and beside.J_add > 0.0
+
+    class Done:         # a sizing already under way, as solve_scene hands it over
+        def result(self):
+            return beside
+    cases = run_dynamics(study, plan)
+    assert flywheel_of(study, plan, cases, Done()) is beside
+    assert flywheel_of(study, plan, cases) == beside
+
+
 def test_the_extremes_are_refined_between_the_nodes():
     """The take-up's flywheel with the speed extremes refined between the orbit's
     RK4 nodes: J_add at 1440 steps within 1e-7 of the refined reference at 4x the
