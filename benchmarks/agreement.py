@@ -80,9 +80,14 @@ if INTERPRETED:
 
     import numba
 
+    import pipeline.group_types  # noqa: E402
     import pipeline.kernels  # noqa: E402
     for _m in pkgutil.iter_modules(pipeline.kernels.__path__):
         importlib.import_module(f"pipeline.kernels.{_m.name}")
+    # the group types' kernels too: a generated module compiled later (a cold cache)
+    # calls them, and one the interpreter imported first would be plain Python
+    for _m in pkgutil.walk_packages(pipeline.group_types.__path__, "pipeline.group_types."):
+        importlib.import_module(_m.name)
     numba.config.DISABLE_JIT = True
 from interpreter.assembly import solve_revolution  # noqa: E402
 

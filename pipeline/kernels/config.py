@@ -6,7 +6,6 @@ on-disk cache freezes global values into the compiled code.
 """
 
 import os
-import threading
 
 import numpy as np
 
@@ -50,17 +49,16 @@ JIT_ALLOC_INNER = dict(JIT_ALLOC, no_cpython_wrapper=True, no_cfunc_wrapper=True
 # their address, numba's first-class functions, which is the C wrapper's).
 JIT_FIRST_CLASS = dict(JIT, no_cpython_wrapper=True)
 
-_ONE_SIGNATURE = threading.Lock()
-
-
 def compile_for(kernel, signature) -> None:
     """``kernel`` compiled (or loaded from numba's cache) for ``signature`` and
     for no other, its compiling disabled after: once per process, whichever
-    thread asks first (numba compiles under a lock of its own, but refuses a
-    second thread that asked before the first one disabled compiling)."""
+    thread asks first.  The question and the compile under numba's own compile
+    lock (re-entrant): numba refuses a second thread that asked before the first
+    one disabled compiling."""
+    from numba.core.compiler_lock import global_compiler_lock
     if not getattr(kernel, "compile", None):
         return          # numba's JIT disabled (NUMBA_DISABLE_JIT): Python calls Python
-    with _ONE_SIGNATURE:
+    with global_compiler_lock:
         if not kernel.signatures:
             kernel.compile(signature)
             kernel.disable_compile()
