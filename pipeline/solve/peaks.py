@@ -48,19 +48,33 @@ class Peak:
     grid_value: float   # the largest sample of the dense revolution
 
 
-def _magnitudes(study, plan, curves, forces=None):
-    """{(quantity, item, unit): array over the rows of ``curves``}."""
-    crank = study.mechanism.crank
-    v, a, om, ep = real_motion(curves, crank.omega1, crank.eps1)
-    nv = plan.n_visible
+# the plain bearings' peaks (with [mechanism.friction]): the scene keeps them with its
+# friction (``solve.friction.FrictionForces.peaks``, the results file's /friction), not
+# among the peaks of /peaks
+BEARING_PEAKS = ("bearing_pressure", "sliding_speed", "bearing_pv")
+# the quantities of the kinematics alone, and those of the forces
+MOTION_PEAKS = ("velocity", "acceleration", "omega", "eps")
+FORCE_PEAKS = ("reaction", "slide_normal", "slide_couple", "M_bal", "shaking_force",
+               "shaking_moment") + BEARING_PEAKS
+
+
+def _magnitudes(study, plan, curves, forces=None, quantity=None):
+    """{(quantity, item, unit): array over the rows of ``curves``}: of every
+    quantity, or of ``quantity`` alone (a refined peak's trial angle asks for its
+    own: the same arrays, the others not computed)."""
     out = {}
-    for i, name in enumerate(plan.point_names[:nv]):
-        out[("velocity", name, "m/s")] = np.hypot(v[:, i, 0], v[:, i, 1])
-        out[("acceleration", name, "m/s²")] = np.hypot(a[:, i, 0], a[:, i, 1])
-    for j, lab in enumerate(study.output.link_labels):
-        out[("omega", lab, "1/s")] = np.abs(om[:, j])
-        out[("eps", lab, "1/s²")] = np.abs(ep[:, j])
-    for label, kind, names in transmission_items(study.mechanism):
+    if quantity is None or quantity in MOTION_PEAKS:
+        crank = study.mechanism.crank
+        v, a, om, ep = real_motion(curves, crank.omega1, crank.eps1)
+        nv = plan.n_visible
+        for i, name in enumerate(plan.point_names[:nv]):
+            out[("velocity", name, "m/s")] = np.hypot(v[:, i, 0], v[:, i, 1])
+            out[("acceleration", name, "m/s²")] = np.hypot(a[:, i, 0], a[:, i, 1])
+        for j, lab in enumerate(study.output.link_labels):
+            out[("omega", lab, "1/s")] = np.abs(om[:, j])
+            out[("eps", lab, "1/s²")] = np.abs(ep[:, j])
+    for label, kind, names in (transmission_items(study.mechanism) if quantity in (
+            None, "transmission_deviation") else ()):
         # transmission angle, as its deviation from 90 deg
         if kind == "lines":     # a group with a sliding pair: two lines (see below)
             u, w = (_line(curves.pos, plan, *line) for line in names)
@@ -94,12 +108,6 @@ def _magnitudes(study, plan, curves, forces=None):
                 out[("sliding_speed", name, "m/s")] = fr.sliding_speed[:, j]
                 out[("bearing_pv", name, "MPa·m/s")] = pv[:, j]
     return out
-
-
-# the plain bearings' peaks (with [mechanism.friction]): the scene keeps them with its
-# friction (``solve.friction.FrictionForces.peaks``, the results file's /friction), not
-# among the peaks of /peaks
-BEARING_PEAKS = ("bearing_pressure", "sliding_speed", "bearing_pv")
 
 
 def split_bearing_peaks(peaks):
@@ -162,18 +170,24 @@ def scene_peaks(res, keep=None) -> list[Peak]:
         samples = {k: np.where(bad, np.nan, v) for k, v in samples.items()}
     n = len(nodes)
     phi_end = crank.phi0 + crank.rot * 2.0 * math.pi
-    cache = {}
+    walks, forced = {}, {}
 
-    def at(m, phi):
-        """The magnitudes at ``phi``, walked from phis[0] through phis[:m]."""
+    def at(m, phi, quantity):
+        """The magnitudes of ``quantity`` at ``phi``, walked from phis[0] through
+        phis[:m] (the walk, and the forces where the quantity is one, kept for the
+        other peaks that try the same angle)."""
         key = (m, float(phi))
-        if key not in cache:
+        if key not in walks:
             path = np.concatenate([phis[:m], [phi]])
             c = solve_curves(plan, path, order, res.tolerances)
-            row = _row(c, -1)
-            f = forces_of(row) if with_forces else None
-            cache[key] = (c.status[-1], _magnitudes(study, plan, row, f))
-        return cache[key]
+            walks[key] = (c.status[-1], _row(c, -1))
+        status, row = walks[key]
+        f = None
+        if with_forces and quantity in FORCE_PEAKS:
+            if key not in forced:
+                forced[key] = forces_of(row)
+            f = forced[key]
+        return status, _magnitudes(study, plan, row, f, quantity)
 
     out = []
     for key, values in samples.items():
@@ -185,7 +199,7 @@ def scene_peaks(res, keep=None) -> list[Peak]:
             lo, hi = nodes[lo], nodes[hi] if hi < n else phi_end
 
             def neg(phi, key=key, m=m):
-                st, mags = at(m, phi)
+                st, mags = at(m, phi, key[0])
                 v = mags[key][0]
                 return -v if st == 0 and math.isfinite(v) else math.inf
 
