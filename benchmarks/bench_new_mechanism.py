@@ -1,6 +1,6 @@
 """A new mechanism's scene, end to end: the plan path against the generated module.
 
-    python benchmarks/bench_new_mechanism.py [--rounds 2] [--smoke] [-o DIR]
+    python benchmarks/bench_new_mechanism.py [--rounds 2] [--study NAME] [--smoke] [-o DIR]
 
 Each shipped scene study runs as a user runs it (``pipeline run STUDY
 --no-pictures``, a fresh process, the wall time of the whole process), as a
@@ -117,9 +117,11 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--smoke", action="store_true", help="one study, one round")
+    ap.add_argument("--study", action="append", choices=SCENES,
+                    help="only this scene (repeat for more); default every one")
     ap.add_argument("-o", "--out", default=str(ROOT / "results" / "bench"))
     a = ap.parse_args(argv)
-    studies = SCENES[:1] if a.smoke else SCENES
+    studies = SCENES[:1] if a.smoke else tuple(a.study or SCENES)
     rounds = 1 if a.smoke else a.rounds
     text = table(measure(studies, rounds), rounds)
     print(text)
