@@ -49,6 +49,7 @@ JIT_ALLOC_INNER = dict(JIT_ALLOC, no_cpython_wrapper=True, no_cfunc_wrapper=True
 # their address, numba's first-class functions, which is the C wrapper's).
 JIT_FIRST_CLASS = dict(JIT, no_cpython_wrapper=True)
 
+
 def compile_for(kernel, signature) -> None:
     """``kernel`` compiled (or loaded from numba's cache) for ``signature`` and
     for no other, its compiling disabled after: once per process, whichever
@@ -62,6 +63,7 @@ def compile_for(kernel, signature) -> None:
         if not kernel.signatures:
             kernel.compile(signature)
             kernel.disable_compile()
+
 
 # Candidates per block of the sweep's lock-step lane path: two AVX-512 vectors (four
 # AVX2 ones).  The walk's lane loop is one long chain of dependent operations per
