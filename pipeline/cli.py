@@ -235,7 +235,8 @@ def build_parser():
 
     r = sub.add_parser("run", parents=[common], help="run a study (scene or sweep)")
     r.add_argument("study", help="study TOML file")
-    r.add_argument("-o", "--output", help="results HDF5 file (default results/<study file name>.h5)")
+    r.add_argument("-o", "--output",
+                   help="results HDF5 file (default results/<study file name>.h5)")
     r.add_argument("--candidates", type=int, help="sweep: number of candidates (overrides study)")
     r.add_argument("--resume", action="store_true", help=(
         "sweep: continue an interrupted run (its candidate count and chunk size come from "

@@ -60,8 +60,9 @@ FORCE_PEAKS = ("reaction", "slide_normal", "slide_couple", "M_bal", "shaking_for
 
 def _magnitudes(study, plan, curves, forces=None, quantity=None):
     """{(quantity, item, unit): array over the rows of ``curves``}: of every
-    quantity, or of ``quantity`` alone (a refined peak's trial angle asks for its
-    own: the same arrays, the others not computed)."""
+    quantity, or those of ``quantity`` (a refined peak's trial angle asks for its
+    own): the motion's and the transmission angles' only where asked, the forces'
+    all from the ``forces`` given.  The same arrays either way."""
     out = {}
     if quantity is None or quantity in MOTION_PEAKS:
         crank = study.mechanism.crank

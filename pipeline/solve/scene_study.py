@@ -1,7 +1,8 @@
 """Everything a scene study asks for, in memory: the scene's curves (and
 forces), refined peaks, the crank's counterweight, the output rocker's dwell
-and stroke, the machine's cyclogram (phases and phase errors), and the dynamics cases with the forces along their motion, the reduced dynamics
-and the flywheel.
+and stroke, the machine's cyclogram (phases and phase errors), and the
+dynamics cases with the forces along their motion, the reduced dynamics and
+the flywheel.
 
 One place for it: ``pipeline run`` (``runner``) writes it to a results file,
 and a sweep's design re-run as a scene (``analysis.candidate.candidate_scene``,

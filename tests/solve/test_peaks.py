@@ -145,3 +145,29 @@ def test_a_positions_only_scene_has_the_peaks_positions_give(studies, tmp_path):
     kinds = {p.quantity for p in res.peaks}
     assert kinds == {"min_transmission_angle"}, kinds
     assert all(np.isfinite(p.value) for p in res.peaks)
+
+
+@pytest.mark.parametrize("name", ["ov7_friction", "takeup_dynamics", "ppr_cross_slide"])
+def test_one_quantitys_magnitudes_are_those_among_all(studies, name):
+    """A refined peak's trial angle computes its own quantity
+    (``_magnitudes(..., quantity)``): the same arrays to the bit as among every
+    quantity's, and no force or transmission angle for a quantity of the motion,
+    for each quantity of a scene with friction, slides and dynamics."""
+    from pipeline.solve.peaks import FORCE_PEAKS, MOTION_PEAKS
+    from pipeline.study.reader import load_study
+    study = load_study(studies / f"{name}.toml")
+    res = pipeline.solve_scene(studies / f"{name}.toml")
+    dense = res.dense
+    every = _magnitudes(study, res.plan, dense, dense.forces)
+    quantities = {k[0] for k in every}
+    assert {"velocity", "transmission_deviation", "reaction"} <= quantities
+    for q in quantities:
+        assert q in MOTION_PEAKS + FORCE_PEAKS + ("transmission_deviation",), q
+        # (as scene_peaks asks: the forces for a quantity of theirs only)
+        own = _magnitudes(study, res.plan, dense, dense.forces if q in FORCE_PEAKS else None, q)
+        assert {k for k in every if k[0] == q} <= set(own), q
+        if q not in FORCE_PEAKS:        # nothing but the motion's, or the angle asked for
+            assert {k[0] for k in own} <= set(MOTION_PEAKS + (q,)), q
+        for k, v in own.items():
+            assert np.array_equal(*(np.ascontiguousarray(x).view(np.uint8)
+                                    for x in (v, every[k]))), k
