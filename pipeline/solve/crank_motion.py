@@ -242,7 +242,6 @@ def integrate(plan, mechanism, case, method="rk4", tols=None, file="<study>",
         a = run(case.dt)
         res = _judged(a, _check(a, run(case.dt, DOP853_CHECK_TOL), 10.0 / 9.0), "", False)
     else:                        # fourth order: error(dt) = 16/15 |y(dt) - y(dt/2)|
-        load_integrators(plan, mechanism)
         a, b = _at_once(run, (case.dt, case.dt / 2.0))
         halvings, first = 0, None
         while True:
@@ -261,9 +260,9 @@ def integrate(plan, mechanism, case, method="rk4", tols=None, file="<study>",
 
 
 def load_integrators(plan, mechanism, method="rk4"):
-    """The RK4 kernels of ``plan`` compiled (or loaded from numba's cache) on this
-    thread, before threads run them: their compile functions are not for two
-    threads at once."""
+    """The RK4 kernels of ``plan`` compiled (or loaded from numba's cache) now, on
+    this thread: a scene loads them before it starts the thread that runs them
+    (each kernel's caller loads it too, under numba's lock: ``compile_for``)."""
     if method != "rk4":
         return
     from ..kernels.dynamics import compile_integrator
@@ -507,7 +506,6 @@ def run_dynamics(study, plan, method=None) -> list[CaseResult]:
     """Every case of the study's [dynamics] section, with its method (or ``method``)."""
     spec = study.dynamics
     method = method or spec.method
-    load_integrators(plan, study.mechanism, method)
     # (DOP853 steps in Python: on threads the cases would only take turns)
     results = _at_once(lambda case: integrate(plan, study.mechanism, case, method,
                                               file=study.path), spec.cases,
