@@ -29,10 +29,14 @@ from ...kernels.walk import (walk_angle, walk_start, walk_steps, locate, watch, 
 # ---- the skeleton: from here on, pasted into the generated module ----
 # settle's ``vouched`` beyond the lane's 1 (and the careful path's <= 0): a lane's
 # metrics up to the force stage (then NEEDS_FORCES: the force lanes run it), and a
-# lane's force stage alone (the force lanes could not vouch for it)
+# lane's force stage alone (the force lanes could not vouch for it); the careful
+# path's two stages apart (a GPU's split kernels: ``pipeline.compiler.cuda_source``),
+# each what settle(-1) runs of it, in the same order
 LANE_METRICS = 2
 LANE_FORCES = 3
 NEEDS_FORCES = -2
+CAREFUL_METRICS = -3
+CAREFUL_FORCES = -4
 
 @njit(inline='always', **JIT)
 def no_metrics(out):
@@ -203,12 +207,13 @@ def settle(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qma
     work arrays of the caller, so nothing is allocated per candidate.
     ``vouched`` LANE_METRICS: a lane's, returning NEEDS_FORCES instead of
     running the force stage (the force lanes run it); LANE_FORCES: a lane's
-    force stage alone, its other metrics already in ``out``."""
+    force stage alone, its other metrics already in ``out``.  CAREFUL_METRICS
+    and CAREFUL_FORCES: the same two halves of the careful path (-1)."""
     K = constants(par)
-    if vouched != LANE_FORCES:
+    if vouched != LANE_FORCES and vouched != CAREFUL_FORCES:
         st = lane_or_careful_metrics(K, vouched, phis, phi_close, tols, settings, col, qmax,
                                      qmin, err, start_k, full, margin, wk, ww, corr, out)
-        if st != NEEDS_FORCES or vouched == LANE_METRICS:
+        if st != NEEDS_FORCES or vouched == LANE_METRICS or vouched == CAREFUL_METRICS:
             return st
     st = OK
     for attempt in range(2):
