@@ -3,13 +3,16 @@ cores of the same machine, same process, same drawn candidates.
 
 * kernel only: candidates/s of the evaluation alone (GPU: one batch already on
   the device, results left there; CPU: ``SweepProblem.evaluate_rows`` on all
-  cores), best of ``--repeat``;
+  cores), best of ``--repeat``; on the GPU for each of its stages
+  (``pipeline.runs.gpu.STAGES``: the careful path in one kernel, or split in two,
+  the force stage only for the candidates that reach it), with each kernel's
+  registers and local memory per thread;
 * end to end: ``run_sweep`` into an HDF5 file (drawing, transfers, journal,
   HDF5; ``--store feasible`` by default, as the README's 10^7 command), with
   --device gpu and --device cpu, for each ``--sizes`` (default 10^6 and 10^7
   candidates; the CPU end to end only up to --cpu-max, its throughput is flat
   in the size; a size that the last rate says would take over --max-seconds
-  is left out, saying so).
+  is left out, saying so), the GPU on the stages that were faster kernel only.
 
 Compile time is reported apart (the first evaluation of each path).  Where the
 host's time goes end to end: the GPU run at ``--profile-size`` (10^6) again under
@@ -34,6 +37,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks.common import STUDIES, hardware  # noqa: E402
+from pipeline.kernels import sweep as ks  # noqa: E402
 from pipeline.study.reader import load_study  # noqa: E402
 from pipeline.runs.sweep import build_problem, run_sweep  # noqa: E402
 from pipeline.study.sampling import draw_checked  # noqa: E402
@@ -77,16 +81,28 @@ def main(argv=None):
     t = time.perf_counter()
     cpu.evaluate_rows(pars[:64])
     print(f"compile, CPU kernels: {time.perf_counter() - t:.1f} s")
-    t = time.perf_counter()
-    g = gpu.GpuSweep(dev, batch=max(a.kernel_rows, 1))
-    g.evaluate_rows(pars[:64])
-    print(f"compile, CUDA kernel: {time.perf_counter() - t:.1f} s")
-    print(_occupancy(g.mod.sweep_kernel))
+    kernels = {"whole": ("sweep_kernel",), "split": ("metrics_kernel", "forces_kernel")}
+    on = {}
+    for stages in gpu.STAGES:
+        t = time.perf_counter()
+        on[stages] = gpu.GpuSweep(dev, batch=max(a.kernel_rows, 1), stages=stages)
+        status, _ = on[stages].evaluate_rows(pars[:64])
+        print(f"compile, CUDA kernels ({stages}): {time.perf_counter() - t:.1f} s")
+        for name in kernels[stages]:
+            print(_occupancy(name, getattr(on[stages].mod, name)))
 
     best_c = min(_timed(lambda: cpu.evaluate_rows(pars)) for _ in range(a.repeat))
-    best_g = g.kernel_only(pars, repeats=a.repeat)
-    print(f"kernel only, {len(pars):,} candidates: CPU {len(pars) / best_c:,.0f}/s, "
-          f"GPU {len(pars) / best_g:,.0f}/s, ratio {best_c / best_g:.1f}x", flush=True)
+    status, metrics = cpu.evaluate_rows(pars)
+    print(f"force stage: {int((metrics[:, ks.M_FORCES_DONE] == 1).sum()):,} of "
+          f"{len(pars):,} candidates reach it, {int((status != 0).sum()):,} fail")
+    best_g = {}
+    for stages, g in on.items():
+        best_g[stages] = g.kernel_only(pars, repeats=a.repeat)
+        print(f"kernel only ({stages}), {len(pars):,} candidates: CPU "
+              f"{len(pars) / best_c:,.0f}/s, GPU {len(pars) / best_g[stages]:,.0f}/s, ratio "
+              f"{best_c / best_g[stages]:.1f}x", flush=True)
+    gpu.DEFAULT_STAGES = min(best_g, key=best_g.get)
+    print(f"stages end to end: {gpu.DEFAULT_STAGES} (the faster kernel only)")
 
     rate = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -134,17 +150,17 @@ def _profiled(study, out, n, chunk_size, store):
         print(f"  own {own:7.2f} s  total {total:7.2f} s  calls {calls:8d}  {name} ({where})")
 
 
-def _occupancy(kernel):
+def _occupancy(name, kernel):
     """Registers and local memory per thread of the compiled kernel (what limits
     how many threads a multiprocessor holds), where numba.cuda says."""
     try:
         regs, local = kernel.get_regs_per_thread(), kernel.get_local_mem_per_thread()
         if isinstance(regs, dict):     # one entry per compiled signature
             regs, local = max(regs.values()), max(local.values())
-        return (f"CUDA kernel: {regs} registers per thread, "
+        return (f"CUDA kernel {name}: {regs} registers per thread, "
                 f"{local} bytes of local memory per thread")
     except Exception as e:      # the simulator, or an older numba.cuda
-        return f"CUDA kernel: registers per thread not known here ({type(e).__name__})"
+        return f"CUDA kernel {name}: registers per thread not known here ({type(e).__name__})"
 
 
 def _draws(spec, n):

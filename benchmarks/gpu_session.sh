@@ -109,8 +109,8 @@ rows = [("machine", line.split(": ", 1)[0], line.split(": ", 1)[-1]) for line in
 tests = [line for line in log("tests") if " passed" in line or " skipped" in line
          or " failed" in line or " error" in line or line.startswith("SKIPPED")]
 rows += [("pytest -m gpu", status("tests"), "; ".join(tests[-3:]) or "no summary line")]
-keep = ("device:", "compile,", "CUDA kernel:", "kernel only,", "end to end,",
-        "profiled end to end,")
+keep = ("device:", "compile,", "CUDA kernel", "force stage:", "kernel only",
+        "stages end to end:", "end to end,", "profiled end to end,")
 rows += [("bench_gpu.py", status("bench"), "")]
 rows += [("bench_gpu.py", line.split(":", 1)[0], line.split(":", 1)[1].strip())
          for line in log("bench") if line.startswith(keep)]

@@ -36,7 +36,7 @@ import numpy as np
 from numba import cuda     # a module-level name: the CUDA simulator needs it here
 
 from pipeline.compiler.cuda_device import own
-from {cpu} import settle
+from {cpu} import settle, CAREFUL_METRICS, CAREFUL_FORCES, NEEDS_FORCES
 
 CPU_MODULE = "{cpu}"
 # the per-thread work arrays, in the kernel's argument order after ``metrics``
@@ -46,37 +46,68 @@ WORK_NAMES = {names}
 KERNEL = '''
 
 @cuda.jit(cache=True)
-def sweep_kernel({args}):
-    """Candidate i = this thread's index: status[i] and metrics[i] (N_METRICS)
-    of parameter row pars[i], through every stage ``settle`` runs (positions
-    watched between samples, dwell, stroke, margin, law error, forces)."""
-    i = cuda.threadIdx.x + cuda.blockIdx.x * cuda.blockDim.x   # no cuda.grid: the simulator
-    if i < pars.shape[0]:
+def {name}({args}):
+    """{doc}"""
+    {index} = cuda.threadIdx.x + cuda.blockIdx.x * cuda.blockDim.x   # no cuda.grid: the simulator
 {body}
 '''
 
+# the kernels: (name, docstring, the test that a thread has a candidate, the lines
+# before its work arrays (i: the candidate), how it calls settle, the lines after)
+WHOLE = ("sweep_kernel",
+         """Candidate i = this thread's index: status[i] and metrics[i] (N_METRICS)
+    of parameter row pars[i], through every stage ``settle`` runs (positions
+    watched between samples, dwell, stroke, margin, law error, forces).""",
+         "i", "if i < pars.shape[0]:", [], "status[i] = settle", "np.int64(-1)", [])
+# the same stages in two kernels (issue 54, item 4): every candidate's positions and
+# metrics, then the force stage of those that reach it alone, gathered (a warp whose
+# few threads reach it no longer carries the rest through it, nor the first kernel
+# the force stage's registers)
+METRICS = ("metrics_kernel",
+           """Candidate i = this thread's index: the careful path up to the force
+    stage (``settle`` with CAREFUL_METRICS) into status[i] and metrics[i]; a
+    candidate that reaches the force stage (NEEDS_FORCES) is added to
+    forced[:n_forced[0]], in any order, for ``forces_kernel``.""",
+           "i", "if i < pars.shape[0]:", [], "st = settle", "np.int64(CAREFUL_METRICS)",
+           ["status[i] = st", "if st == NEEDS_FORCES:",
+            "    forced[cuda.atomic.add(n_forced, 0, 1)] = i"])
+FORCES = ("forces_kernel",
+          """Thread j < n_forced[0]: the force stage of candidate i = forced[j]
+    (``settle`` with CAREFUL_FORCES, its other metrics already in metrics[i]),
+    with the work arrays of row j; status[i] its final status.""",
+          "j", "if j < n_forced[0]:", ["i = forced[j]"], "status[i] = settle",
+          "np.int64(CAREFUL_FORCES)", [])
+
 
 def gpu_source(cpu_module: str) -> str:
-    """Python source of the CUDA kernel calling ``settle`` of ``cpu_module``."""
+    """Python source of the CUDA kernels calling ``settle`` of ``cpu_module``: the
+    whole careful path in one (``sweep_kernel``), or in two (``metrics_kernel``,
+    then ``forces_kernel``)."""
     groups = [("wk", WALK), ("fw", FORCE), ("ww", WATCH)]
     work_names = list(WORK) + [n for _, items in groups for n in items]
-    args = ["pars", "phis", "phi_close", "tols", "settings", "loads", "trail", "status",
-            "metrics"] + work_names
-    arg_text = _wrap(", ".join(args), len("def sweep_kernel("))
-    body = ["# own(): the array itself on a GPU; under the simulator, the numpy array",
-            "# inside its wrapper (the CPU-compiled functions it calls take only those)"]
-    for name in work_names:
-        body.append(f"{name}_i = own({name})[i]")
-    for var, items in groups:
-        body.append(_wrap(f"{var} = (" + ", ".join(f"{n}_i" for n in items) + ")",
-                          8 + len(var) + 4))
-    body += ["status[i] = settle(own(pars)[i], np.int64(-1), own(phis), phi_close, own(tols),",
-             "                   own(settings), own(loads), col_i, own(trail), qmax_i, qmin_i,",
-             "                   0.0, np.int64(-1), 0.0, 0.0, wk, fw, ww, corr_i,",
-             "                   own(metrics)[i])"]
     names = "(" + _wrap(", ".join(repr(n) for n in work_names), len("WORK_NAMES = (")) + ")"
     text = HEADER.format(cpu=cpu_module, names=names)
-    text += KERNEL.format(args=arg_text, body="\n".join("        " + b for b in body))
+    for name, doc, row, guard, before, call, how, after in (WHOLE, METRICS, FORCES):
+        args = ["pars", "phis", "phi_close", "tols", "settings", "loads", "trail", "status",
+                "metrics"] + (["forced", "n_forced"] if name != WHOLE[0] else []) + work_names
+        body = [guard] + ["    " + b for b in before]
+        body += ["    # own(): the array itself on a GPU; under the simulator, the numpy array",
+                 "    # inside its wrapper (the CPU-compiled functions it calls take only "
+                 "those)"]
+        body += [f"    {n}_{row} = own({n})[{row}]" for n in work_names]
+        for var, items in groups:
+            body.append("    " + _wrap(f"{var} = (" + ", ".join(f"{n}_{row}" for n in items)
+                                       + ")", 8 + len(var) + 4))
+        lead = " " * (len(call) + 1)
+        body += [f"    {call}(own(pars)[i], {how}, own(phis), phi_close,",
+                 f"    {lead}own(tols), own(settings), own(loads), col_{row}, own(trail),",
+                 f"    {lead}qmax_{row}, qmin_{row}, 0.0, np.int64(-1), 0.0, 0.0, wk, fw, ww, "
+                 f"corr_{row},",
+                 f"    {lead}own(metrics)[i])"]
+        body += ["    " + a for a in after]
+        text += KERNEL.format(name=name, doc=doc, index=row,
+                              args=_wrap(", ".join(args), len(f"def {name}(")),
+                              body="\n".join("    " + b for b in body))
     return text
 
 

@@ -12,7 +12,10 @@ numba.cuda (``pipeline.compiler.cuda_source``), fed in batches from the host.
   sweep's chunk.
 
 The numbers: every thread runs the careful path (``settle``) of the CPU
-module.  On the CPU most candidates take the lock-step lanes, which vouch for
+module, in one kernel or (``stages="split"``) in two: every candidate's
+positions and metrics, then the force stage of the candidates that reach it,
+listed by the first kernel, one thread each (the same functions on the same
+inputs: the same numbers, tested).  On the CPU most candidates take the lock-step lanes, which vouch for
 a candidate only where they agree with the careful path; statuses are the
 same, and metrics agree to rounding except two, by construction:
 ``newton_mean`` (the lanes take a fixed number of Newton steps per position,
@@ -43,6 +46,12 @@ from numba import cuda                  # noqa: E402
 THREADS = 128            # threads per CUDA block
 BATCH = 1 << 16          # threads per launch (device memory: two sets of work arrays)
 STREAMS = 2
+# the careful path in one kernel ("whole"), or in two ("split": every candidate's
+# positions and metrics, then the force stage of those that reach it alone,
+# gathered); the same numbers (tested).  "whole" is the one measured on a GPU so
+# far (benchmarks/bench_gpu.py measures both and says which is faster)
+STAGES = ("whole", "split")
+DEFAULT_STAGES = "whole"
 
 
 class GpuUnavailable(ValueError):
@@ -161,9 +170,12 @@ def choose(device: str) -> str:
 class GpuSweep:
     """The stages of a sweep problem (``pipeline.runs.sweep.SweepProblem``) on the GPU."""
 
-    def __init__(self, problem, batch=BATCH):
+    def __init__(self, problem, batch=BATCH, stages=None):
         from ..compiler import gpu_kernels_for
         from ..kernels import sweep as ks
+        self.stages = DEFAULT_STAGES if stages is None else stages
+        if self.stages not in STAGES:
+            raise ValueError(f"stages must be one of {', '.join(STAGES)}, got {stages!r}")
         self.problem = problem
         self.cpu = problem.kernels
         self.mod = gpu_kernels_for(problem.plan, problem.rocker)
@@ -207,7 +219,10 @@ class GpuSweep:
                     d_status=cuda.device_array(self.batch, np.int8),
                     d_metrics=cuda.device_array((self.batch, self.n_metrics)),
                     flags=cuda.pinned_array(self.batch, np.int8),
-                    d_flags=cuda.device_array(self.batch, np.int8))
+                    d_flags=cuda.device_array(self.batch, np.int8),
+                    # the split stages' list of the candidates that reach the force stage
+                    d_forced=cuda.device_array(self.batch, np.int64),
+                    d_n_forced=cuda.device_array(1, np.int32))
 
     def evaluate_rows(self, pars):
         """(status int8 (n,), metrics (n, N_METRICS)) of the rows ``pars``: a host
@@ -258,18 +273,33 @@ class GpuSweep:
             st["pars"][:k] = rows
             d_rows = st["d_pars"][:k]
             d_rows.copy_to_device(st["pars"][:k], stream=stream)
-        phis, tols, settings, loads, trail = self.d_in
-        blocks = (k + THREADS - 1) // THREADS
-        with launching():
-            self.mod.sweep_kernel[blocks, THREADS, stream](
-                d_rows, phis, self.problem.phi_close, tols, settings, loads, trail,
-                st["d_status"][:k], st["d_metrics"][:k], *(a[:k] for a in self.work[s]))
+        self._kernels(s, d_rows, k, stream)
         st["d_status"][:k].copy_to_host(st["status"][:k], stream=stream)
         if keep:
             self.kept.judge(st["d_status"][:k], st["d_metrics"][:k], st["d_flags"][:k], stream)
             st["d_flags"][:k].copy_to_host(st["flags"][:k], stream=stream)
         else:
             st["d_metrics"][:k].copy_to_host(st["metrics"][:k], stream=stream)
+
+    def _kernels(self, s, d_rows, k, stream=0):
+        """Launch the stages of the ``k`` rows ``d_rows`` (on the device) with the
+        arrays of stream ``s``: status and metrics into its d_status, d_metrics."""
+        st = self.stage[s]
+        phis, tols, settings, loads, trail = self.d_in
+        args = (d_rows, phis, self.problem.phi_close, tols, settings, loads, trail,
+                st["d_status"][:k], st["d_metrics"][:k])
+        work = [a[:k] for a in self.work[s]]
+        blocks = (k + THREADS - 1) // THREADS
+        with launching():
+            if self.stages == "whole":
+                self.mod.sweep_kernel[blocks, THREADS, stream](*args, *work)
+                return
+            # the force stage's candidates, listed by the first kernel (a count on
+            # the device: the second kernel's threads past it return at once)
+            forced, n_forced = st["d_forced"][:k], st["d_n_forced"]
+            _zero[1, 1, stream](n_forced)
+            self.mod.metrics_kernel[blocks, THREADS, stream](*args, forced, n_forced, *work)
+            self.mod.forces_kernel[blocks, THREADS, stream](*args, forced, n_forced, *work)
 
     def _collect(self, s, pending, status, metrics):
         if pending[s] is None:
@@ -296,18 +326,21 @@ class GpuSweep:
             raise ValueError(f"kernel_only takes at most one batch ({self.batch} rows)")
         st = self.stage[0]
         st["d_pars"][:n].copy_to_device(np.ascontiguousarray(pars))
-        phis, tols, settings, loads, trail = self.d_in
-        blocks = (n + THREADS - 1) // THREADS
         best = math.inf
         for _ in range(repeats):
             cuda.synchronize()
             t = time.perf_counter()
-            self.mod.sweep_kernel[blocks, THREADS](
-                st["d_pars"][:n], phis, self.problem.phi_close, tols, settings, loads, trail,
-                st["d_status"][:n], st["d_metrics"][:n], *(a[:n] for a in self.work[0]))
+            self._kernels(0, st["d_pars"][:n], n)
             cuda.synchronize()
             best = min(best, time.perf_counter() - t)
         return best
+
+
+@cuda.jit
+def _zero(count):
+    """count[0] = 0 (on the device, in its stream's order)."""
+    if cuda.threadIdx.x == 0 and cuda.blockIdx.x == 0:
+        count[0] = 0
 
 
 def doctor() -> str:

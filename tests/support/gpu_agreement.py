@@ -101,10 +101,28 @@ def one_ulp(pb, pars, st, m):
     return out
 
 
-def compare(pb, pars, conditioning=False):
+def compare(pb, pars, conditioning=False, split=True):
+    """The GPU's whole kernel against the CPU (``against``), and where ``split``
+    its split kernels (``split``: the same comparisons, and how many statuses and
+    metric values differ from the whole kernel's, bit for bit)."""
     cpu_st, cpu_m = pb.evaluate_rows(pars)
     car_st, car_m = careful(pb, pars)
     gpu_st, gpu_m = GpuSweep(pb, batch=BATCH).evaluate_rows(pars)
+    out = against(pb, pars, cpu_st, cpu_m, car_st, car_m, gpu_st, gpu_m, conditioning)
+    if not split:
+        return out
+    spl_st, spl_m = GpuSweep(pb, batch=BATCH, stages="split").evaluate_rows(pars)
+    out["split"] = against(pb, pars, cpu_st, cpu_m, car_st, car_m, spl_st, spl_m, False)
+    out["split"]["status_vs_whole"] = int((spl_st != gpu_st).sum())
+    out["split"]["bits_vs_whole"] = int((spl_m.view(np.uint64) != gpu_m.view(np.uint64)).sum())
+    if conditioning:
+        out["split"]["ulp"] = out["ulp"]
+    return out
+
+
+def against(pb, pars, cpu_st, cpu_m, car_st, car_m, gpu_st, gpu_m, conditioning):
+    """One GPU path's statuses and metrics against the CPU's default path and
+    its careful path (and, with ``conditioning``, the CPU's one-ulp spread)."""
     out = {"n": len(pars), "statuses": np.bincount(cpu_st, minlength=7).tolist(),
            "status_vs_cpu": int((gpu_st != cpu_st).sum()),
            "status_vs_careful": int((gpu_st != car_st).sum()),
@@ -136,7 +154,10 @@ def main(path, n, names=STUDIES):
                                    margin_min=-np.inf)
         pb = build_problem(study, spec)
         x, _ = draw_checked(spec, 0)
-        res[name] = compare(pb, np.ascontiguousarray(parameter_rows(pb.plan, spec, x)[:n]))
+        # the split kernels: every study under the simulator; on a GPU, where each
+        # compile takes its time, the main job's (and its near-singular triads')
+        res[name] = compare(pb, np.ascontiguousarray(parameter_rows(pb.plan, spec, x)[:n]),
+                            split=SIMULATOR or name == "ov7_synthesis.toml")
     if "ov7_synthesis.toml" in names:       # with the main job: its near-singular triads
         study = load_study(studies / "ov7_synthesis.toml")
         spec = dataclasses.replace(study.sweep, stroke_bounds=(-np.inf, np.inf),
