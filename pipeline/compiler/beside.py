@@ -100,13 +100,22 @@ def compile_metrics(mod) -> None:
 def compile_library() -> None:
     """Compile (or load) what no mechanism's code is in, once per installation:
     the scene's walk (``pipeline.kernels.walk``), the crank dynamics'
-    integrator (``pipeline.kernels.dynamics``) and the plan path with the
-    kernels of every group type (``pipeline.compiler.plan_path``).  A scene, of a
+    integrators (``pipeline.kernels.dynamics``, ``.dynamics_friction``) and the
+    plan path with the kernels of every group type and those a scene calls from
+    Python (``pipeline.compiler.plan_path``).  A scene, of a
     design of the sweep or of a new mechanism, then compiles nothing."""
+    import warnings
+
+    from numba.core.errors import NumbaExperimentalFeatureWarning
+
     from pipeline.compiler.plan_path import compile_plan_path
     from pipeline.kernels.dynamics import compile_integrator
-    compile_integrator()
-    compile_plan_path()             # (the walk too)
+    from pipeline.kernels.dynamics_friction import compile_friction_integrator
+    with warnings.catch_warnings():     # (numba's note on first-class functions, which the
+        warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)   # walk passes)
+        compile_integrator()
+        compile_friction_integrator()   # (30 s from an empty cache: its own, once)
+        compile_plan_path()             # (the walk too)
 
 
 def compile_scene_forces(mod) -> None:

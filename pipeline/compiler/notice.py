@@ -31,10 +31,17 @@ def last_compile_s():
     return s if math.isfinite(s) and s > 0 else None
 
 
+# what compiles: a new mechanism's generated module, or (a scene on the plan path,
+# ``pipeline.compiler.plan_path``) the kernels every mechanism's scenes share, once
+MECHANISM = "the kernels of this mechanism (first run only"
+INSTALLATION = "this installation's kernels (once for all mechanisms"
+
+
 @contextlib.contextmanager
-def compile_notice():
+def compile_notice(what=MECHANISM):
     """Around the first evaluation of a run (the reference design), which compiles
-    a new mechanism's kernels: a notice if it takes more than a second, and how
+    a new mechanism's kernels (``what``: MECHANISM, or INSTALLATION for a scene on
+    the plan path): a notice if it takes more than a second, and how
     long it took (the list it yields holds the seconds afterwards).  The notice's
     estimate is the last compile measured on this machine (a constant would be
     wrong on every machine but one); the time it took is kept for the next, only
@@ -50,8 +57,7 @@ def compile_notice():
     took = [0.0]
     # after a second: what it does and for how long (live on a terminal)
     with event.install_recorder("numba:compile") as compiled, \
-            ticking(f"compiling the kernels of this mechanism (first run only{guess})",
-                    after=1.0, say_done=False):
+            ticking(f"compiling {what}{guess})", after=1.0, say_done=False):
         yield took
     took[0] = time.perf_counter() - t
     if took[0] > 1.0:

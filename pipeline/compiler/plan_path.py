@@ -576,5 +576,6 @@ def compile_plan_path() -> bool:
     return True
 
 
-if __name__ == "__main__":
-    compile_plan_path()
+if __name__ == "__main__":     # the whole library, ahead (beside.compile_library)
+    from .beside import compile_library
+    compile_library()

@@ -58,14 +58,24 @@ def mechanism():
 
 def compile_group_kernels() -> None:
     """Compile (or load from numba's cache) the library kernels a scene calls
-    from Python (pipeline.solve.scene, .reactions), by calling them as it does,
-    on zeros (``plan_path.compile_plan_path`` calls this after the plan path's
-    own, which compile the kernels of every group type and input law)."""
+    from Python (pipeline.solve.scene, .reactions, .peaks, .cyclogram, .flywheel,
+    .friction), by calling them as it does, on zeros (``plan_path.compile_plan_path``
+    calls this after the plan path's own, which compile the kernels of every group
+    type and input law)."""
     import numpy as np
 
+    from ..kernels.dynamics import energy_orbit
     from ..kernels.forces import equilibrium_residual, shaking
     from ..kernels.geometry import link_angles
+    from ..kernels.metrics import dwell_error, relative_angle
+    # the output rocker's angle and the dwell (solve.peaks, .cyclogram), the
+    # flywheel's orbit (solve.flywheel)
+    relative_angle(1.0, 0.0, 0.0, 1.0)
+    q = np.zeros(6, np.int64)
+    dwell_error(np.zeros(4), 1, q, q.copy())
+    energy_orbit(np.ones(5), np.zeros(5), 0.1, 0.0, np.ones(3))
     plan = mechanism().compile()
+    _compile_friction_forces(plan)
     curve = np.zeros((1, plan.n_points, 2))
     link_angles(curve, curve, curve, plan.link_a, plan.link_b, 2,
                 np.zeros((1, len(plan.link_a), 3)))
@@ -74,3 +84,23 @@ def compile_group_kernels() -> None:
                          plan.body_turn)
     shaking(pos, pos, pos, 0.0, 0.0, plan.par, plan.body_com, plan.body_turn,
             plan.body_mass_off, plan.crank_pivot)
+
+
+def _compile_friction_forces(plan) -> None:
+    """``kernels.friction.friction_forces`` compiled (not run) for the types of
+    the arguments ``solve.friction.solve_positions`` passes it (the plan's arrays
+    as they are, every other array and number as that function makes it): 6 s,
+    which a scene with friction waited otherwise."""
+    import numpy as np
+    from numba import typeof
+
+    from ..kernels.friction import friction_forces
+    if not getattr(friction_forces, "compile", None):
+        return          # numba's JIT disabled
+    xy, v, m = np.zeros((plan.n_points, 2)), np.zeros(1), np.zeros((1, 1))
+    args = (xy, xy, xy, 0.0, 0.0, plan.gravity, plan.par, plan.body_com, plan.body_turn,
+            plan.body_mass_off, plan.joint_point, plan.joint_bodies, plan.slide_bodies,
+            plan.slide_dir, plan.slide_angle, int(plan.crank_body), plan.load_body,
+            plan.load_point, np.zeros((1, 3)), 0.0, v, 0.0, v, 1e-12, 50, m, v, m, v, v, v,
+            np.zeros((1, 3)), np.zeros((1, 2)), np.zeros((1, 2)), v, v, np.zeros(4), False)
+    friction_forces.compile(tuple(typeof(a) for a in args))

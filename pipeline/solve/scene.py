@@ -12,7 +12,7 @@ import numpy as np
 
 from ..kernels import config as kc
 from ..compiler import kernels_for, plan_path, scene_kernels_for
-from ..compiler.notice import compile_notice
+from ..compiler.notice import INSTALLATION, MECHANISM, compile_notice
 from ..kernels.geometry import link_angles
 from ..model.mechanism import Plan
 
@@ -159,10 +159,12 @@ def run_scene(study, tols=None) -> SceneResult:
 
         def kinematics(phis):
             return solve_curves(plan, phis, kc.ACCELERATIONS, tols)
-    # the first solve (the table's few positions) compiles a new mechanism's kernels:
-    # said as a compile, with its seconds, where it takes more than a second
-    with compile_notice():
-        if not plan_path.covers(plan, forces):   # (else the generated module's forces
+    # the first solve (the table's few positions) compiles a new mechanism's kernels, or
+    # on the plan path those of the installation (once): said as a compile, with its
+    # seconds, where it takes more than a second
+    covered = plan_path.covers(plan, forces)
+    with compile_notice(INSTALLATION if covered else MECHANISM):
+        if not covered:                              # (else the generated module's forces
             scene_kernels_for(plan, forces=forces)   # compile beside meanwhile)
         table = solve_curves(plan, revolution_angles(crank, out.table_positions, True), order,
                              tols)

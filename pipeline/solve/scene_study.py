@@ -24,6 +24,7 @@ def solve_scene(study):
         _kinematics(res)
         return res
     from ..compiler import plan_path
+    from ..compiler.notice import INSTALLATION, compile_notice
     from .crank_motion import load_integrators
     # the dynamics (compiled integrations that release the GIL) run on a thread of
     # their own meanwhile: the same numbers, the cores shared with the scene.  On
@@ -32,8 +33,9 @@ def solve_scene(study):
     # (and says so)
     plan = study.mechanism.compile()
     early = plan_path.covers(plan)
-    if early:
-        load_integrators(plan, study.mechanism, study.dynamics.method)
+    if early:   # (on a new installation, before the library is: a compile, said as one)
+        with compile_notice(INSTALLATION):
+            load_integrators(plan, study.mechanism, study.dynamics.method)
     with ThreadPoolExecutor(1) as pool:
         dynamics = pool.submit(_dynamics, study, plan) if early else None
         res = run_scene(study)
