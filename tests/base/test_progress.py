@@ -20,7 +20,7 @@ from pipeline.cli import main
 from pipeline.compiler import notice
 from support.checkout import child_env
 from support.sweep_helpers import copy_of
-from support.terminal import longest_silence, run_on_terminal
+from support.terminal import LIVE, live_lines, longest_silence, run_on_terminal, said_live
 
 SILENCE_S = 2.0
 HANG_GUARD_S = 120.0
@@ -227,29 +227,9 @@ def test_no_carriage_returns_off_a_terminal(case, synthesis_sweep, scenes, studi
 
 # -- the waits of issue 55: each says what it waits for, counts its seconds, fits 80 columns
 
-_ESCAPE = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
-_LIVE = re.compile(r": (\d+) s$")
-
-
-def live_lines(text):
-    """The live lines the terminal showed ('WHAT: N s', each drawn between two
-    carriage returns or line ends), their padding dropped: a line cut before its
-    seconds is none."""
-    parts = (p.rstrip() for p in re.split(r"[\r\n]", _ESCAPE.sub("", text)))
-    return [p for p in parts if _LIVE.search(p)]
-
-
 def counted(lines, start):
     """The seconds shown by the live lines that begin with ``start``."""
-    return sorted({int(_LIVE.search(p).group(1)) for p in lines if p.startswith(start)})
-
-
-def said_live(text, start):
-    """The live lines that begin with ``start`` fit 80 columns, and there are some."""
-    lines = [p for p in live_lines(text) if p.startswith(start)]
-    assert lines, (start, text)
-    assert all(len(p) < 80 for p in lines), lines
-    return lines
+    return sorted({int(LIVE.search(p).group(1)) for p in lines if p.startswith(start)})
 
 
 WAIT_S = 3       # PIPELINE_CONNECT_TIMEOUT: the test's own timeout, not a measurement
@@ -328,24 +308,3 @@ def test_a_search_s_compile_is_said_before_its_bar(studies, tmp_path):
     past_first = [t for t, p in bar for m in _COUNT.finditer(p)
                   if float(m.group(1)) * (1000 if m.group(2) else 1) > population]
     assert past_first and past_first[0] - shown <= SILENCE_S, (shown, past_first[:3], text)
-
-
-@on_linux
-@pytest.mark.slow
-def test_a_new_scene_s_compile_is_called_a_compile(studies, tmp_path):
-    """A scene on a new installation (every compile cache empty): its first solve
-    (and its forces) compiles the plan path's kernels, said as a compile of the
-    installation's kernels, once for all mechanisms, with its seconds, not only as
-    the run's time; a scene of another mechanism then compiles nothing."""
-    code, times, end, text = run_on_terminal(
-        CLI + ["run", str(studies / "warp_feed_fourbar.toml"), "-o", str(tmp_path / "w.h5"),
-               "--no-pictures"], env=cold_cache(tmp_path))
-    assert code == 0, text
-    assert longest_silence(times, end) <= SILENCE_S, (times, end, text)
-    said_live(text, "compiling this installation's kernels (once for all mechanisms")
-    assert "kernels ready after" in text
-    code, _, _, text = run_on_terminal(
-        CLI + ["run", str(studies / "ov7_base.toml"), "-o", str(tmp_path / "b.h5"),
-               "--no-pictures"], env=cold_cache(tmp_path))
-    assert code == 0, text
-    assert "compiling" not in text and "kernels ready after" not in text, text

@@ -13,6 +13,7 @@ counts, the pace is the wall clock's."""
 
 import fcntl
 import os
+import re
 import select
 import struct
 import subprocess
@@ -125,3 +126,23 @@ class Pace:
         wait before it saw what it notes), never before ``after``."""
         wall = time.perf_counter() - self.t0
         return max(wall - min(self.waited + max(late, 0.0), wall), after)
+
+
+_ESCAPE = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
+LIVE = re.compile(r": (\d+) s$")
+
+
+def live_lines(text):
+    """The live lines the terminal showed ('WHAT: N s', each drawn between two
+    carriage returns or line ends), their padding dropped: a line cut before its
+    seconds is none."""
+    parts = (p.rstrip() for p in re.split(r"[\r\n]", _ESCAPE.sub("", text)))
+    return [p for p in parts if LIVE.search(p)]
+
+
+def said_live(text, start):
+    """The live lines that begin with ``start`` fit 80 columns, and there are some."""
+    lines = [p for p in live_lines(text) if p.startswith(start)]
+    assert lines, (start, text)
+    assert all(len(p) < 80 for p in lines), lines
+    return lines
