@@ -6,7 +6,7 @@ Each shipped scene study runs as a user runs it (``pipeline run STUDY
 --no-pictures``, a fresh process, the wall time of the whole process), as a
 mechanism new to the cache: every generated module (``pipeline_mech_*``) and its
 compiled code removed first, the library kept compiled (the state after the
-first sweep, or ``python -m pipeline.compiler.plan_path``).  Two ways, alternated
+first sweep, or ``pipeline compile --library``).  Two ways, alternated
 round by round on the same machine:
 
 * plan path: the scene on kernels compiled once per installation that read the
@@ -85,8 +85,8 @@ def measure(studies, rounds, echo=print):
         out.mkdir()
         env = _env(PIPELINE_CACHE_DIR=str(cache))
         t = time.perf_counter()     # the library, once per installation (not timed below)
-        subprocess.run([sys.executable, "-m", "pipeline.compiler.plan_path"], env=env, check=True,
-                       cwd=ROOT)
+        subprocess.run([sys.executable, "-m", "pipeline.cli", "compile", "--library", "-q"],
+                       env=env, check=True, cwd=ROOT)
         echo(f"library (plan path included) compiled or loaded in {time.perf_counter() - t:.1f} s")
         scene_seconds(studies[0], cache, out, WAYS["plan path"])    # (its bytecode: untimed)
         for r in range(rounds):

@@ -100,6 +100,20 @@ def cmd_export(a):
 
 def cmd_compile(a):
     from .compile import compile_all, source, study_files
+    if a.library:
+        if a.studies or a.show:
+            raise ValueError("--library compiles the installation's kernels, no study's: "
+                             "give it no study and no --show")
+        import time
+
+        from .base.progress import ticking
+        from .compiler.beside import compile_library
+        t = time.perf_counter()
+        with ticking("compiling this installation's kernels (once for all mechanisms)"):
+            compile_library()
+        if not a.quiet:
+            _say(f"library: {time.perf_counter() - t:.1f} s (compiled, or loaded from the cache)")
+        return EXIT_OK
     if a.show:
         from .study.reader import load_study
         for p in study_files(a.studies):
@@ -293,6 +307,10 @@ def build_parser():
                    help="study files (default: every studies/*.toml of the current folder)")
     c.add_argument("--show", action="store_true",
                    help="print the generated source of each study's kernels instead")
+    c.add_argument("--library", action="store_true",
+                   help="compile the kernels every mechanism's scenes share instead, once per "
+                        "installation (about a minute from an empty cache; the process beside "
+                        "the first sweep does it too): no scene compiles after it")
     c.add_argument("-j", "--jobs", type=int,
                    help="processes compiling side by side (default: all cores)")
     c.set_defaults(func=cmd_compile)

@@ -552,8 +552,8 @@ def compile_plan_path() -> bool:
     """Compile (or load from numba's cache) the plan path's kernels for the types
     a scene passes them, and the library kernels a scene calls from Python
     (``warmup.compile_group_kernels``): once per installation
-    (``pipeline.compiler.beside`` after the first sweep, ``python -m
-    pipeline.compiler.plan_path``), so that no scene compiles.  False where
+    (``pipeline.compiler.beside.compile_library``: after the first sweep, or
+    ``pipeline compile --library``), so that no scene compiles.  False where
     numba's JIT is disabled."""
     from ..kernels.tape import tape_forces_curve
     from ..kernels.walk import ADVANCE, START, compile_revolution
@@ -576,6 +576,5 @@ def compile_plan_path() -> bool:
     return True
 
 
-if __name__ == "__main__":     # the whole library, ahead (beside.compile_library)
-    from .beside import compile_library
-    compile_library()
+if __name__ == "__main__":     # (the whole library: pipeline compile --library)
+    compile_plan_path()

@@ -13,7 +13,7 @@ group kernel into numba's cache, for every later mechanism, scene or sweep.
 The process beside the first sweep does it
 (``pipeline.compiler.beside.compile_library``), at the lowest priority.  By hand:
 
-    python -m pipeline.compiler.plan_path
+    pipeline compile --library
 """
 
 from __future__ import annotations

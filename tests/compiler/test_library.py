@@ -1,8 +1,8 @@
 """The library compiled once per installation (``pipeline.compiler.beside.
-compile_library``, ``python -m pipeline.compiler.plan_path`` by hand): a scene
-that comes before it says that it compiles the installation's kernels, and after
-it a scene of any mechanism compiles nothing (issue 53: a new mechanism's scene
-never waits for a compile)."""
+compile_library``; by hand ``pipeline compile --library``): a scene that comes
+before it says that it compiles the installation's kernels, and after it a
+scene of any mechanism compiles nothing (issue 53: a new mechanism's scene never
+waits for a compile)."""
 
 import json
 import subprocess
@@ -42,7 +42,7 @@ def test_a_new_installation_compiles_its_library_once(tmp_path):
     """A new installation (every compile cache empty).  Its first scene compiles
     the kernels it needs, said live as the installation's kernels, once for all
     mechanisms, with its seconds (not only as the run's time).  Then the library
-    compiled by hand, and every shipped scene study run as `pipeline run` runs it
+    compiled by hand (`pipeline compile --library`), and every shipped scene study run as `pipeline run` runs it
     (crank dynamics, the flywheel, friction, the output rocker's dwell and the
     cyclogram among them) compiles nothing, neither of its mechanism's nor of the
     library's.  Before, a scene with friction compiled its kernel for 6 s after
@@ -56,9 +56,10 @@ def test_a_new_installation_compiles_its_library_once(tmp_path):
     assert longest_silence(times, end) <= SILENCE_S, (times, end, text)
     said_live(text, "compiling this installation's kernels (once for all mechanisms")
     assert "kernels ready after" in text
-    r = subprocess.run([sys.executable, "-m", "pipeline.compiler.plan_path"], env=env,
-                       capture_output=True, text=True, timeout=900)
-    assert r.returncode == 0 and not r.stderr.strip(), r.stderr[-3000:]
+    r = subprocess.run(CLI + ["compile", "--library"], env=env, capture_output=True,
+                       text=True, timeout=900)
+    assert r.returncode == 0 and r.stdout.startswith("library: "), r.stdout + r.stderr[-3000:]
+    assert "Warning" not in r.stderr, r.stderr[-3000:]
     out = tmp_path / "out"
     out.mkdir()
     r = subprocess.run([sys.executable, "-c", _SCENES, str(STUDIES), str(out)], env=env,
@@ -67,3 +68,13 @@ def test_a_new_installation_compiles_its_library_once(tmp_path):
     compiled = json.loads(r.stdout.strip().splitlines()[-1])
     assert len(compiled) >= 12 and "takeup_dynamics" in compiled and "ov7_friction" in compiled
     assert {name: c for name, c in compiled.items() if c} == {}
+
+
+def test_compile_library_takes_no_study(capsys):
+    """`pipeline compile --library` compiles the installation's kernels, no
+    study's: a study or --show with it is refused in one line."""
+    from pipeline.cli import main
+    for extra in ([str(STUDIES / "ov7_base.toml")], ["--show"]):
+        assert main(["compile", "--library", *extra]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and "--library compiles the installation's kernels" in err
