@@ -15,9 +15,10 @@ The numbers: every thread runs the careful path (``settle``) of the CPU
 module, in one kernel or (``stages="split"``) in two: every candidate's
 positions and metrics, then the force stage of the candidates that reach it,
 listed by the first kernel, one thread each (the same functions on the same
-inputs: the same numbers, tested).  On the CPU most candidates take the lock-step lanes, which vouch for
-a candidate only where they agree with the careful path; statuses are the
-same, and metrics agree to rounding except two, by construction:
+inputs: the same numbers, tested).  On the CPU most candidates take the
+lock-step lanes, which vouch for a candidate only where they agree with the
+careful path; statuses are the same, and metrics agree to rounding except two,
+by construction:
 ``newton_mean`` (the lanes take a fixed number of Newton steps per position,
 the careful path counts the steps it took) and the class III ``margin``,
 which is det J at each path's own Newton iterate (the careful path stops at
