@@ -113,9 +113,10 @@ def compile_library() -> None:
     from pipeline.kernels.dynamics_friction import compile_friction_integrator
     with warnings.catch_warnings():     # (numba's note on first-class functions, which the
         warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)   # walk passes)
+        # what most scenes need first: a scene that comes meanwhile compiles the rest itself
         compile_integrator()
-        compile_friction_integrator()   # (30 s from an empty cache: its own, once)
         compile_plan_path()             # (the walk too)
+        compile_friction_integrator()   # (30 s from an empty cache, for friction with dynamics)
 
 
 def compile_scene_forces(mod) -> None:
