@@ -222,10 +222,18 @@ def _rocker_step_lines(piv, pt):
         "theta[k, l] = th",
         "S[R_margin, l] = margin",
         "flagged = bad | low | big",
-        "S[R_flag, l] = max(S[R_flag, l], 1.0 if flagged else 0.0)",
-        "S[R_first_flag, l] = k if (flagged & (S[R_first_flag, l] < 0.0)) else "
-        "S[R_first_flag, l]",
-        "S[R_last_flag, l] = k if flagged else S[R_last_flag, l]",
+        # the flags as arithmetic on 0/1 and whole numbers (exact: the values of the
+        # max and the selects, bit for bit), not as a select of the row's own value,
+        # which LLVM stores as a masked store: microcoded on AMD's AVX2 cores
+        "flag_now = 1.0 if flagged else 0.0",
+        "flag_was = S[R_flag, l]",
+        "S[R_flag, l] = flag_was + flag_now - flag_was * flag_now   # their max",
+        "first_was = S[R_first_flag, l]",
+        "last_was = S[R_last_flag, l]",
+        "k_at = float(k)",
+        "S[R_first_flag, l] = first_was + (k_at - first_was) * (flag_now if first_was < 0.0 "
+        "else 0.0)",
+        "S[R_last_flag, l] = last_was + (k_at - last_was) * flag_now",
     ]
 
 
