@@ -45,10 +45,18 @@ def keep_object_code() -> bool:
     if original is None:
         return False
 
-    def keep(self, value):
+    def keep(self, value):          # (loaded from numba's cache)
         _OBJECTS[id(self)] = value
         return original(self, value)
     cls._set_compiled_object = keep
+    compiled = cls._object_compiled_hook.__func__
+
+    def keep_compiled(klass, ll_module, buf):  # (compiled here: numba's engine says so)
+        compiled(klass, ll_module, buf)
+        lib = getattr(ll_module, "_CPUCodeLibrary__library", None)
+        if lib is not None:
+            _OBJECTS[id(lib.__repr__.__self__)] = buf
+    cls._object_compiled_hook = classmethod(keep_compiled)
     return True
 
 
