@@ -108,8 +108,9 @@ def cmd_compile(a):
 
         from .base.progress import ticking
         from .compiler.beside import compile_library
+        from .compiler.notice import INSTALLATION
         t = time.perf_counter()
-        with ticking("compiling this installation's kernels (once for all mechanisms)"):
+        with ticking(f"compiling {INSTALLATION})"):
             compile_library()
         if not a.quiet:
             _say(f"library: {time.perf_counter() - t:.1f} s (compiled, or loaded from the cache)")

@@ -20,9 +20,9 @@ from pipeline.cli import main
 from pipeline.compiler import notice
 from support.checkout import child_env
 from support.sweep_helpers import copy_of
-from support.terminal import LIVE, live_lines, longest_silence, run_on_terminal, said_live
+from support.terminal import (LIVE, SILENCE_S, live_lines, longest_silence,
+                              run_on_terminal, said_live)
 
-SILENCE_S = 2.0
 HANG_GUARD_S = 120.0
 on_linux = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a pseudo-terminal")
 

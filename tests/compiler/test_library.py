@@ -11,9 +11,8 @@ import sys
 import pytest
 from conftest import STUDIES
 from support.checkout import child_env
-from support.terminal import longest_silence, run_on_terminal, said_live
+from support.terminal import SILENCE_S, longest_silence, run_on_terminal, said_live
 
-SILENCE_S = 2.0         # tests/base/test_progress.py
 CLI = [sys.executable, "-m", "pipeline.cli"]
 
 # after the library, every shipped scene as `pipeline run` runs it; printed: every

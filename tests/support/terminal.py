@@ -21,6 +21,9 @@ import termios
 import time
 
 POLL_S = 0.05       # the reader's look at the command and at its waits
+# the longest a command on a terminal may stay silent (a live line redrawn each second
+# counts as output), on its own pace
+SILENCE_S = 2.0
 
 
 def run_on_terminal(argv, env=None, cwd=None, timeout=300.0, pieces=None):
