@@ -417,6 +417,46 @@ def walk_revolution(advance, start, K, watch_g, n_triads, phis, phi_close, order
     return overall
 
 
+@njit(**JIT_ALLOC)
+def walk_states(advance, start, K, n_points, n_groups, phis, order, tols, states_out):
+    """states_out[k] (n_phi, n_triads, N_STATE): the continuation's state after
+    position k of ``walk_revolution``'s walk over ``phis`` (no closing position),
+    which its next step starts from.  The watch and a failure's location put back
+    the state they look behind, so the state is the advances' alone."""
+    pos, d1, d2, margins, state, _ = work(n_points, n_groups, states_out.shape[1])
+    phi_prev = walk_start(start, K, phis[0], state)
+    for k in range(phis.shape[0]):
+        advance(K, phi_prev, phis[k], order, tols, state, pos, d1, d2, margins, True)
+        copy2(state, states_out[k])
+        phi_prev = phis[k]
+
+
+@njit(**JIT_ALLOC)
+def walk_on(advance, K, state_from, phi_from, phi, order, tols, pos_out, d1_out, d2_out,
+            status_out, margin_out, iters_out):
+    """Row 0 of ``walk_revolution``'s outputs for the position a walk reaches at
+    ``phi`` from ``phi_from`` where its state was ``state_from`` (``walk_states``):
+    the last row of the walk through the positions before and ``phi``, to the bit,
+    for one step.  Returns its status."""
+    n_groups = margin_out.shape[1]
+    pos, d1, d2, margins, state, _ = work(pos_out.shape[1], n_groups, state_from.shape[0])
+    copy2(state_from, state)
+    st = advance(K, phi_from, phi, order, tols, state, pos, d1, d2, margins, True)
+    status_out[0] = st
+    it = 0.0
+    for g in range(n_groups):
+        margin_out[0, g] = margins[g]
+    for j in range(state.shape[0]):
+        it += state[j, S_ITERS]
+    iters_out[0] = it
+    copy2(pos, pos_out[0])
+    if order >= 1:
+        copy2(d1, d1_out[0])
+    if order >= 2:
+        copy2(d2, d2_out[0])
+    return st
+
+
 # the signatures a generated module's advance and start have for the scene
 # (pipeline.compiler.skeleton.careful's revolution): the constants as an array
 _F1, _F2, _F3 = types.float64[::1], types.float64[:, ::1], types.float64[:, :, ::1]
@@ -426,14 +466,21 @@ START = types.FunctionType(types.float64(_F1, _F2))
 REVOLUTION = types.int64(ADVANCE, START, _F1, types.int64[::1], types.int64, _F1,
                          types.float64, types.int64, _F1, _F3, _F3, _F3, types.int8[::1], _F2,
                          _F1, _F1)
+STATES = types.none(ADVANCE, START, _F1, types.int64, types.int64, _F1, types.int64, _F1, _F3)
+WALK_ON = types.int64(ADVANCE, _F1, _F2, types.float64, types.float64, types.int64, _F1, _F3,
+                      _F3, _F3, types.int8[::1], _F2, _F1)
 
 
 def compile_revolution() -> None:
     """``walk_revolution`` compiled (or loaded from numba's cache) for the types
-    of REVOLUTION, and for no other: once per installation, not per mechanism
-    (``pipeline.compiler.beside`` does it while the first sweep compiles)."""
+    of REVOLUTION, and for no other, with the walk that goes on from a state
+    (``walk_states``, ``walk_on``: a refined peak's trial angles): once per
+    installation, not per mechanism (``pipeline.compiler.beside`` does it while
+    the first sweep compiles)."""
     if not _READY:
         compile_for(walk_revolution, REVOLUTION)
+        compile_for(walk_states, STATES)
+        compile_for(walk_on, WALK_ON)
         _READY.append(True)
 
 

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.mechanism import transmission_items
-from .scene import real_motion, solve_curves
+from .scene import Continuation, real_motion, solve_curves
 
 XATOL = 1e-9          # rad: where a peak is, to about 6e-8 deg
 
@@ -172,6 +172,9 @@ def scene_peaks(res, keep=None) -> list[Peak]:
     n = len(nodes)
     phi_end = crank.phi0 + crank.rot * 2.0 * math.pi
     walks, forced = {}, {}
+    # each trial angle's walk goes on from the dense position before it (the same bits as
+    # the walk from the first position, for one step)
+    resume = Continuation.of(plan, phis, order, res.tolerances)
 
     def at(m, phi, quantity):
         """The magnitudes of ``quantity`` at ``phi``, walked from phis[0] through
@@ -179,8 +182,11 @@ def scene_peaks(res, keep=None) -> list[Peak]:
         other peaks that try the same angle)."""
         key = (m, float(phi))
         if key not in walks:
-            path = np.concatenate([phis[:m], [phi]])
-            c = solve_curves(plan, path, order, res.tolerances)
+            if resume is not None and m >= 1:
+                c = resume.row(m, phi)
+            else:
+                c = solve_curves(plan, np.concatenate([phis[:m], [phi]]), order,
+                                 res.tolerances)
             walks[key] = (c.status[-1], _row(c, -1))
         status, row = walks[key]
         f = None

@@ -71,6 +71,42 @@ def solve_curves(plan: Plan, phis, order, tols=None, par=None, close_at=math.nan
                   fail_phi=float(fail[0]), fail_group=int(fail[1]))
 
 
+class Continuation:
+    """A walk over ``phis`` that goes on from any of its positions: ``row(m, phi)``
+    is the last row of ``solve_curves(plan, [*phis[:m], phi], order, tols)``, to the
+    bit, for one step of the walk instead of m + 1 (the continuation's state after
+    each position kept: ``kernels.walk.walk_states``).  A refined peak tries many
+    angles, each walked from the revolution's first position.  ``of`` gives None
+    off the plan path (the walk from the start then)."""
+
+    def __init__(self, plan, phis, order, tols, K):
+        from ..kernels.walk import compile_revolution, walk_states
+        compile_revolution()
+        self.plan, self.phis, self.order, self.tols, self.K = plan, phis, int(order), tols, K
+        self.advance, start = plan_path.first_class()
+        self.states = np.empty((len(phis), int(K[3]), kc.N_STATE))
+        walk_states(self.advance, start, K, plan.n_points, plan.n_groups, phis, self.order,
+                    tols, self.states)
+
+    @classmethod
+    def of(cls, plan, phis, order, tols):
+        K = plan_path.plan_constants(plan) if plan_path.covers(plan) else None
+        phis = np.ascontiguousarray(phis, dtype=np.float64)
+        return None if K is None or not len(phis) else cls(plan, phis, order, tols, K)
+
+    def row(self, m, phi) -> Curves:
+        """The walk through the first ``m`` (>= 1) positions on to ``phi``: its last row."""
+        from ..kernels.walk import walk_on
+        plan = self.plan
+        pos, d1, d2 = (np.full((1, plan.n_points, 2), np.nan) for _ in range(3))
+        status, margin, iters = np.zeros(1, np.int8), np.zeros((1, plan.n_groups)), np.zeros(1)
+        st = walk_on(self.advance, self.K, self.states[m - 1], float(self.phis[m - 1]),
+                     float(phi), self.order, self.tols, pos, d1, d2, status, margin, iters)
+        links = np.full((1, len(plan.link_a), 3), np.nan)
+        link_angles(pos, d1, d2, plan.link_a, plan.link_b, self.order, links)
+        return Curves(np.array([float(phi)]), pos, d1, d2, status, margin, iters, links, int(st))
+
+
 @dataclass
 class SceneResult:
     study: object

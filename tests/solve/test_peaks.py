@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 import pipeline
+from conftest import STUDIES
 from pipeline.solve.reactions import scene_forces
 from pipeline.solve.peaks import _magnitudes, scene_peaks
 from pipeline.solve.scene import revolution_angles, solve_curves
@@ -171,3 +172,35 @@ def test_one_quantitys_magnitudes_are_those_among_all(studies, name):
         for k, v in own.items():
             assert np.array_equal(*(np.ascontiguousarray(x).view(np.uint8)
                                     for x in (v, every[k]))), k
+
+
+SCENES = sorted(p.stem for p in STUDIES.glob("*.toml")
+                if 'kind = "scene"' in p.read_text(encoding="utf-8"))
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_a_trial_angles_walk_from_the_position_before_is_the_walk_from_the_start(studies,
+                                                                                  name):
+    """A refined peak's trial angle is walked on from the dense position before it
+    (``Continuation``: the state kept there) in one step: every number of the row
+    the same to the bit as the walk from the revolution's first position through
+    every position before, in every shipped scene (class III groups, slides, input
+    laws); trial angles inside a step, across two, and at the revolution's end."""
+    from pipeline.kernels import config as kc
+    from pipeline.solve.scene import Continuation
+    from pipeline.study.reader import load_study
+    study = load_study(studies / f"{name}.toml")
+    plan = study.mechanism.compile()
+    phis = revolution_angles(study.mechanism.crank, study.output.dense_positions)
+    tols = kc.default_tolerances()
+    resume = Continuation.of(plan, phis, 2, tols)
+    assert resume is not None, "the shipped scenes are on the plan path"
+    n, step = len(phis), phis[1] - phis[0]
+    for m, frac in ((1, 0.37), (n // 3, 1.61), (n - 1, 0.5), (n, 0.999)):
+        phi = phis[m - 1] + frac * step
+        row = resume.row(m, phi)
+        walked = solve_curves(plan, np.concatenate([phis[:m], [phi]]), 2, tols)
+        assert row.status[0] == walked.status[-1] == kc.OK
+        for f in ("phi", "pos", "d1", "d2", "status", "margin", "iterations", "links"):
+            a, b = getattr(row, f)[0], getattr(walked, f)[-1]
+            assert a.tobytes() == b.tobytes(), (m, f)
