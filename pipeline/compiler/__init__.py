@@ -18,6 +18,7 @@ passed to exec or eval: the module is imported like any other.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib
 import os
@@ -36,11 +37,18 @@ _DIGEST: dict[bool, str] = {}
 
 
 def cache_dir() -> Path:
-    d = os.environ.get("PIPELINE_CACHE_DIR")
-    if d:
-        return Path(d)
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "pipeline"
+    env = os.environ
+    return _cache_dir(env.get("PIPELINE_CACHE_DIR"), env.get("XDG_CACHE_HOME"), env.get("HOME"))
+
+
+@functools.lru_cache(maxsize=16)
+def _cache_dir(folder, xdg, home) -> Path:
+    """The folder of ``cache_dir`` for these settings: kept, since every
+    ``structure_key`` asks (a refined peak's trial angles: 40 us each, of
+    Path.home() mostly)."""
+    if folder:
+        return Path(folder)
+    return Path(xdg or Path.home() / ".cache") / "pipeline"
 
 
 def library_digest(lanes=True) -> str:
