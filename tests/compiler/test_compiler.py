@@ -1000,3 +1000,19 @@ def test_a_second_run_compiles_nothing(tmp_path):
     assert runs[1]["misses"] == 0 and runs[1]["hits"] > 0, runs[1]
     assert any(n.endswith(".nbi") for n in first) and any(n.endswith(".py") for n in first)
     assert _cache_files(cache) == first
+
+
+def test_the_cache_folder_follows_its_settings_though_it_is_kept(monkeypatch, tmp_path):
+    """``cache_dir`` is kept per setting (every structure_key asks), so a changed
+    PIPELINE_CACHE_DIR, XDG_CACHE_HOME or HOME still moves it at once."""
+    from pipeline.compiler import cache_dir
+    monkeypatch.setenv("PIPELINE_CACHE_DIR", str(tmp_path / "a"))
+    assert cache_dir() == tmp_path / "a"
+    monkeypatch.delenv("PIPELINE_CACHE_DIR")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "x"))
+    assert cache_dir() == tmp_path / "x" / "pipeline"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    monkeypatch.setenv("HOME", str(tmp_path / "h"))
+    assert cache_dir() == tmp_path / "h" / ".cache" / "pipeline"
+    monkeypatch.setenv("PIPELINE_CACHE_DIR", str(tmp_path / "a"))
+    assert cache_dir() == tmp_path / "a"
