@@ -280,7 +280,9 @@ def compute(data: SweepData, n_representatives=5, *, max_samples=MAX_MODEL_SAMPL
         study = stored_study(data.attrs, data.path)
     except ValueError:           # a study this version cannot read: no refinement
         study = None
-    F, refined = refine_fronts(data, study, stage)
+    # the refinement on every core this process may use (its designs are independent)
+    from ..compiler.parallel import default_jobs
+    F, refined = refine_fronts(data, study, stage, default_jobs())
     rank = nondominated_rank(F, feas)
     crowd = crowding_distance(F, rank)
     knee = knee_point(F, rank)

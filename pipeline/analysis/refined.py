@@ -104,11 +104,17 @@ def design_peaks(scene_study, metrics) -> RefinedPeaks:
     return out
 
 
-def refine_designs(study, params, metrics, progress=None) -> tuple[np.ndarray, np.ndarray]:
+def refine_designs(study, params, metrics, progress=None, jobs=1) -> tuple[np.ndarray,
+                                                                          np.ndarray]:
     """The refined peak metrics of the designs ``params`` (rows of design
     variables) of the sweep study ``study``: (values (n, len(metrics) + 2),
     the last two columns LOCATIONS; NaN where a design's scene fails), status
-    (n,) int8 of each design's scene.  ``progress(k)`` after each design."""
+    (n,) int8 of each design's scene.  ``progress(k)`` after each design (or
+    slice of them).  On ``jobs`` processes where there are enough designs to
+    pay for their start (``_in_processes``): the same numbers, each design's
+    its own."""
+    if jobs > 1 and len(params) >= PROCESSES_FROM:
+        return _in_processes(study, params, metrics, progress, jobs)
     from ..study.sweep_spec import apply_design
     cols = tuple(metrics) + LOCATIONS
     values = np.full((len(params), len(cols)), math.nan)
@@ -124,6 +130,125 @@ def refine_designs(study, params, metrics, progress=None) -> tuple[np.ndarray, n
     return values, status
 
 
+# designs from which a refinement runs on several processes: each process starts in
+# about a second (the interpreter, the imports, its kernels from numba's cache), a design
+# takes 20-40 ms (main job, 2-core AMD EPYC)
+PROCESSES_FROM = 128
+SLICE = 16              # designs per task (the progress moves by slices)
+
+
+def _in_processes(study, params, metrics, progress, jobs):
+    """``refine_designs`` on ``jobs`` worker processes (``python -m
+    pipeline.analysis.refined``: a fresh interpreter each, whatever script or
+    notebook runs this one), slices of the designs handed out in turn by a
+    thread per worker; the rows back in order."""
+    import queue
+    import threading
+    n = len(params)
+    values = np.full((n, len(metrics) + len(LOCATIONS)), math.nan)
+    status = np.zeros(n, np.int8)
+    tasks = queue.SimpleQueue()
+    for lo in range(0, n, SLICE):
+        tasks.put(lo)
+    lock, done, failures = threading.Lock(), [0], []
+
+    def serve(worker):
+        while not failures:
+            try:
+                lo = tasks.get_nowait()
+            except queue.Empty:
+                return
+            v, st = worker.refine(params[lo:lo + SLICE])
+            with lock:
+                values[lo:lo + len(st)], status[lo:lo + len(st)] = v, st
+                done[0] += len(st)
+                if progress is not None:
+                    progress(done[0])
+
+    workers, finished = [], False
+    try:
+        workers += [_Worker(study, metrics) for _ in range(min(jobs, -(-n // SLICE)))]
+        threads = [threading.Thread(target=_catching, args=(serve, w, failures), daemon=True)
+                   for w in workers]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        finished = not failures
+    finally:
+        for w in workers:
+            w.close(finished)
+    if failures:
+        raise failures[0]
+    return values, status
+
+
+def _catching(fn, arg, failures):
+    try:
+        fn(arg)
+    except BaseException as e:      # (the caller raises it)
+        failures.append(e)
+
+
+class _Worker:
+    """A process that refines slices of designs (``_serve``): the study and the
+    metrics once, then each slice's rows in, (values, status) out, pickled over
+    its pipes; its error output kept for the error it ends with."""
+
+    def __init__(self, study, metrics):
+        import pickle
+        import subprocess
+        import sys
+        import tempfile
+        self.err = tempfile.TemporaryFile()
+        self.proc = subprocess.Popen([sys.executable, "-m", "pipeline.analysis.refined"],
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                     stderr=self.err)
+        pickle.dump((study, tuple(metrics)), self.proc.stdin)
+
+    def refine(self, rows):
+        import pickle
+        try:
+            pickle.dump(np.ascontiguousarray(rows), self.proc.stdin)
+            self.proc.stdin.flush()
+            return pickle.load(self.proc.stdout)
+        except (EOFError, OSError, pickle.UnpicklingError):
+            self.err.seek(0)
+            text = self.err.read().decode(errors="replace").strip().splitlines()
+            raise RuntimeError("a process refining the fronts' peaks ended: "
+                               + (text[-1] if text else f"exit {self.proc.poll()}")) from None
+
+    def close(self, finished):
+        """Its input ended (it then exits), or where it has not ``finished``
+        (an error, an interruption) stopped at once."""
+        import subprocess
+        for f in (self.proc.stdin, self.proc.stdout):
+            try:
+                f.close()
+            except OSError:
+                pass
+        try:
+            self.proc.wait(timeout=10.0 if finished else 0.0)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+        self.err.close()
+
+
+def _serve(stdin, stdout) -> None:
+    """A worker's loop (``_Worker``): the study and metrics, then slices of
+    designs until its input ends."""
+    import pickle
+    study, metrics = pickle.load(stdin)
+    while True:
+        try:
+            rows = pickle.load(stdin)
+        except EOFError:
+            return
+        pickle.dump(refine_designs(study, rows, metrics), stdout)
+        stdout.flush()
+
+
 def design_scene(study, mech):
     """The sweep study ``study`` with the design's mechanism ``mech`` as a scene
     study, at the sweep's positions per revolution and operating speed (with
@@ -134,7 +259,7 @@ def design_scene(study, mech):
     return replace(study, kind="scene", mechanism=mech, output=output, sweep=None, search=None)
 
 
-def refine_fronts(data, study, stage=None) -> tuple[np.ndarray, dict]:
+def refine_fronts(data, study, stage=None, jobs=1) -> tuple[np.ndarray, dict]:
     """The objectives the fronts are ranked on, and the refined peaks
     (``analysis.refined``) of the candidates of fronts 1-3.
 
@@ -168,7 +293,7 @@ def refine_fronts(data, study, stage=None) -> tuple[np.ndarray, dict]:
             if stage is not None:
                 stage.set(f"refining the peaks of fronts 1-{REFINED_FRONTS}: "
                           f"{base + k}/{total} designs")
-        v, st = refine_designs(study, data.params[todo], metrics, progress)
+        v, st = refine_designs(study, data.params[todo], metrics, progress, jobs)
         done[todo] = True
         for j, k in cols:     # a design whose scene fails keeps the grid's value (its status)
             F[todo, j] = np.where(np.isfinite(v[:, k]), v[:, k], F[todo, j])
@@ -239,3 +364,11 @@ def write_refined(f, g, data, r: dict):
 
 def _refined_units(data, m) -> str:
     return {"peak_phi": "deg", "peak_joint": "1"}.get(m) or data.metric_units.get(m, "1")
+
+
+if __name__ == "__main__":      # a worker of ``_in_processes``
+    import sys
+    try:
+        _serve(sys.stdin.buffer, sys.stdout.buffer)
+    except KeyboardInterrupt:   # (the terminal's Ctrl-C reaches the workers too)
+        raise SystemExit(130) from None

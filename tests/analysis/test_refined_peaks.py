@@ -129,3 +129,30 @@ def test_show_and_the_exported_scene_print_the_stored_refined_peak(analyzed, tmp
         best = max(peaks, key=lambda q: q.value)
         assert best.value == pytest.approx(stored[i], rel=REFINED)
         assert max(q.grid_value for q in peaks) == pytest.approx(grid[i], rel=SWEEP_VS_SCENE_REL)
+
+
+def test_the_refinement_on_processes_gives_every_designs_own_numbers(analyzed, monkeypatch):
+    """Fronts of many designs are refined on worker processes (``python -m
+    pipeline.analysis.refined``), slices handed out in turn: the values and
+    statuses of the designs to the bit as one process gives them, in their
+    order, the progress told slice by slice; a worker that fails is an error
+    naming what it said, not a hang."""
+    from pipeline.analysis import refined as rf
+    from pipeline.analysis.fronts import read_sweep
+    from pipeline.study.reader import stored_study
+    p, _ = analyzed
+    data = read_sweep(p)
+    study = stored_study(data.attrs, p)
+    with h5py.File(p, "r") as f:
+        params = data.params[f["analysis/refined/index"][:20]]
+    metrics = ("peak_reaction", "peak_M_bal")
+    alone = rf.refine_designs(study, params, metrics)
+    monkeypatch.setattr(rf, "PROCESSES_FROM", 2)
+    monkeypatch.setattr(rf, "SLICE", 8)
+    told = []
+    shared = rf.refine_designs(study, params, metrics, told.append, jobs=2)
+    for a, b in zip(alone, shared):
+        assert a.tobytes() == b.tobytes()
+    assert told == sorted(told) and told[-1] == len(params) and len(told) == 3
+    with pytest.raises(RuntimeError, match="a process refining the fronts' peaks ended: KeyError"):
+        rf.refine_designs(study, params, ("no_such_metric",), jobs=2)    # (a KeyError there)
