@@ -324,7 +324,9 @@ def build_parser():
                     help="representative front-1 designs to pick (default 5)")
     an.add_argument("--max-samples", type=int, default=20000, metavar="N",
                     help="feasible candidates used per model, train + test (default 20000)")
-    an.add_argument("-j", "--jobs", type=int, default=1, help="threads for the models")
+    an.add_argument("-j", "--jobs", type=int, default=1, help=(
+        "processes for the refined peaks of fronts 1-3 (from 128 designs) and threads for the "
+        "models (default 1; the numbers do not depend on it)"))
     an.set_defaults(func=cmd_analyze)
 
     # browse also writes CSV: its own copy of the common options

@@ -274,15 +274,15 @@ def _study_spec(data: SweepData):
 
 def compute(data: SweepData, n_representatives=5, *, max_samples=MAX_MODEL_SAMPLES,
             n_jobs=1, stage=None) -> dict:
-    """Every number of the analysis (no file I/O but the refinement's scenes)."""
+    """Every number of the analysis (no file I/O but the refinement's scenes): the
+    refinement on ``n_jobs`` processes (``refine_fronts``), the models on as many
+    threads; the numbers do not depend on it."""
     feas = data.feasible
     try:
         study = stored_study(data.attrs, data.path)
     except ValueError:           # a study this version cannot read: no refinement
         study = None
-    # the refinement on every core this process may use (its designs are independent)
-    from ..compiler.parallel import default_jobs
-    F, refined = refine_fronts(data, study, stage, default_jobs())
+    F, refined = refine_fronts(data, study, stage, n_jobs)
     rank = nondominated_rank(F, feas)
     crowd = crowding_distance(F, rank)
     knee = knee_point(F, rank)

@@ -138,10 +138,11 @@ SLICE = 16              # designs per task (the progress moves by slices)
 
 
 def _in_processes(study, params, metrics, progress, jobs):
-    """``refine_designs`` on ``jobs`` worker processes (``python -m
-    pipeline.analysis.refined``: a fresh interpreter each, whatever script or
-    notebook runs this one), slices of the designs handed out in turn by a
-    thread per worker; the rows back in order."""
+    """``refine_designs`` on ``jobs`` worker processes (``_Worker``: a fresh
+    interpreter each, so nothing of the script or notebook that runs this one is
+    imported again there, as multiprocessing's spawn would), slices of the
+    designs handed out in turn by a thread per worker; the rows back in order.
+    An error or an interruption stops every worker at once."""
     import queue
     import threading
     n = len(params)
@@ -150,61 +151,79 @@ def _in_processes(study, params, metrics, progress, jobs):
     tasks = queue.SimpleQueue()
     for lo in range(0, n, SLICE):
         tasks.put(lo)
-    lock, done, failures = threading.Lock(), [0], []
+    lock, done, failures, stop = threading.Lock(), [0], [], threading.Event()
 
     def serve(worker):
-        while not failures:
-            try:
-                lo = tasks.get_nowait()
-            except queue.Empty:
-                return
-            v, st = worker.refine(params[lo:lo + SLICE])
-            with lock:
-                values[lo:lo + len(st)], status[lo:lo + len(st)] = v, st
-                done[0] += len(st)
-                if progress is not None:
-                    progress(done[0])
+        try:
+            while not stop.is_set():
+                try:
+                    lo = tasks.get_nowait()
+                except queue.Empty:
+                    return
+                v, st = worker.refine(params[lo:lo + SLICE])
+                with lock:
+                    values[lo:lo + len(st)], status[lo:lo + len(st)] = v, st
+                    done[0] += len(st)
+                    if progress is not None:
+                        progress(done[0])
+        except BaseException as e:      # (raised by the caller)
+            failures.append(e)
+            stop.set()
 
-    workers, finished = [], False
+    workers, threads = [], []
     try:
-        workers += [_Worker(study, metrics) for _ in range(min(jobs, -(-n // SLICE)))]
-        threads = [threading.Thread(target=_catching, args=(serve, w, failures), daemon=True)
-                   for w in workers]
+        for _ in range(min(jobs, -(-n // SLICE))):
+            workers.append(_Worker(study, metrics))
+        threads = [threading.Thread(target=serve, args=(w,), daemon=True) for w in workers]
         for t in threads:
             t.start()
         for t in threads:
             t.join()
-        finished = not failures
     finally:
+        stop.set()
+        if failures or any(t.is_alive() for t in threads):
+            for w in workers:       # (first: a thread may be waiting on its answer)
+                w.kill()
+            for t in threads:
+                t.join(timeout=10.0)
         for w in workers:
-            w.close(finished)
+            w.close()
     if failures:
         raise failures[0]
     return values, status
 
 
-def _catching(fn, arg, failures):
-    try:
-        fn(arg)
-    except BaseException as e:      # (the caller raises it)
-        failures.append(e)
-
-
 class _Worker:
     """A process that refines slices of designs (``_serve``): the study and the
     metrics once, then each slice's rows in, (values, status) out, pickled over
-    its pipes; its error output kept for the error it ends with."""
+    its pipes; its error output kept for the error it ends with.  It imports the
+    package this process runs (its folder first on its path; ``-P``: not the
+    working folder's)."""
 
     def __init__(self, study, metrics):
+        import os
         import pickle
         import subprocess
         import sys
         import tempfile
+        from pathlib import Path
+        here = str(Path(__file__).resolve().parents[2])
+        path = os.pathsep.join([here] + [p for p in [os.environ.get("PYTHONPATH")] if p])
         self.err = tempfile.TemporaryFile()
-        self.proc = subprocess.Popen([sys.executable, "-m", "pipeline.analysis.refined"],
-                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                     stderr=self.err)
-        pickle.dump((study, tuple(metrics)), self.proc.stdin)
+        try:
+            self.proc = subprocess.Popen(
+                [sys.executable, "-P", "-m", "pipeline.analysis.refined"],
+                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.err,
+                env=dict(os.environ, PYTHONPATH=path))
+        except BaseException:
+            self.err.close()
+            raise
+        try:
+            pickle.dump((study, tuple(metrics)), self.proc.stdin)
+        except BaseException:
+            self.kill()
+            self.close()
+            raise
 
     def refine(self, rows):
         import pickle
@@ -212,15 +231,18 @@ class _Worker:
             pickle.dump(np.ascontiguousarray(rows), self.proc.stdin)
             self.proc.stdin.flush()
             return pickle.load(self.proc.stdout)
-        except (EOFError, OSError, pickle.UnpicklingError):
+        except Exception:
             self.err.seek(0)
             text = self.err.read().decode(errors="replace").strip().splitlines()
-            raise RuntimeError("a process refining the fronts' peaks ended: "
-                               + (text[-1] if text else f"exit {self.proc.poll()}")) from None
+            raise RuntimeError("a process refining the fronts' peaks ended: " + (
+                text[-1] if text else "no answer, no error")) from None
 
-    def close(self, finished):
-        """Its input ended (it then exits), or where it has not ``finished``
-        (an error, an interruption) stopped at once."""
+    def kill(self):
+        if self.proc.poll() is None:
+            self.proc.kill()
+
+    def close(self):
+        """Its input ended: it exits (else, after 10 s, it is stopped)."""
         import subprocess
         for f in (self.proc.stdin, self.proc.stdout):
             try:
@@ -228,7 +250,7 @@ class _Worker:
             except OSError:
                 pass
         try:
-            self.proc.wait(timeout=10.0 if finished else 0.0)
+            self.proc.wait(timeout=10.0)
         except subprocess.TimeoutExpired:
             self.proc.kill()
             self.proc.wait()
@@ -270,7 +292,8 @@ def refine_fronts(data, study, stage=None, jobs=1) -> tuple[np.ndarray, dict]:
     front 3: the fronts are ranked again and its peaks refined, until every
     member of fronts 1-3 carries refined values.  Fronts 1-3 are then those a
     refinement of every candidate would give (a candidate outside them, once
-    refined, would only rise further).  ``stage.set(text)``: progress."""
+    refined, would only rise further).  ``stage.set(text)``: progress; ``jobs``:
+    processes for the designs (``refine_designs``)."""
     metrics = peak_metrics_of(data.metric_units)
     F = data.F.copy()
     cols = [(j, metrics.index(o)) for j, o in enumerate(data.objectives) if o in metrics]
@@ -367,8 +390,13 @@ def _refined_units(data, m) -> str:
 
 
 if __name__ == "__main__":      # a worker of ``_in_processes``
+    import os
     import sys
+    # the answers on a copy of the standard output; anything else written there (a
+    # print, a library's note) goes to the error output, which the parent keeps
+    answers = os.fdopen(os.dup(1), "wb")
+    os.dup2(2, 1)
     try:
-        _serve(sys.stdin.buffer, sys.stdout.buffer)
+        _serve(sys.stdin.buffer, answers)
     except KeyboardInterrupt:   # (the terminal's Ctrl-C reaches the workers too)
         raise SystemExit(130) from None

@@ -344,6 +344,25 @@ def walk_start(start, K, phi0, state):
 # ---- end of the skeleton ----
 
 
+@njit(**JIT_INNER)
+def record(k, st, order, state, pos, d1, d2, margins, pos_out, d1_out, d2_out, status_out,
+           margin_out, iters_out):
+    """Row ``k`` of a walk's outputs: the position just solved, its status ``st``,
+    the groups' margins and the class III groups' Newton iterations summed."""
+    status_out[k] = st
+    it = 0.0
+    for g in range(margin_out.shape[1]):
+        margin_out[k, g] = margins[g]
+    for j in range(state.shape[0]):
+        it += state[j, S_ITERS]
+    iters_out[k] = it
+    copy2(pos, pos_out[k])
+    if order >= 1:
+        copy2(d1, d1_out[k])
+    if order >= 2:
+        copy2(d2, d2_out[k])
+
+
 @njit(**JIT_ALLOC)
 def walk_revolution(advance, start, K, watch_g, n_triads, phis, phi_close, order, tols, pos_out,
                     d1_out, d2_out, status_out, margin_out, iters_out, fail_out):
@@ -378,18 +397,8 @@ def walk_revolution(advance, start, K, watch_g, n_triads, phis, phi_close, order
         if k == 0:
             copy2(state, start_state)
         if k < n:
-            status_out[k] = st
-            it = 0.0
-            for g in range(n_groups):
-                margin_out[k, g] = margins[g]
-            for j in range(n_triads):
-                it += state[j, S_ITERS]
-            iters_out[k] = it
-            copy2(pos, pos_out[k])
-            if order >= 1:
-                copy2(d1, d1_out[k])
-            if order >= 2:
-                copy2(d2, d2_out[k])
+            record(k, st, order, state, pos, d1, d2, margins, pos_out, d1_out, d2_out,
+                   status_out, margin_out, iters_out)
         if overall == OK:
             if st != OK:
                 overall = st
@@ -419,8 +428,9 @@ def walk_revolution(advance, start, K, watch_g, n_triads, phis, phi_close, order
 
 @njit(**JIT_ALLOC)
 def walk_states(advance, start, K, n_points, n_groups, phis, order, tols, states_out):
-    """states_out[k] (n_phi, n_triads, N_STATE): the continuation's state after
-    position k of ``walk_revolution``'s walk over ``phis`` (no closing position),
+    """states_out[k] (states_out: n_phi x n_triads x N_STATE): the continuation's
+    state after position k of ``walk_revolution``'s walk over ``phis`` (no closing
+    position),
     which its next step starts from.  The watch and a failure's location put back
     the state they look behind, so the state is the advances' alone."""
     pos, d1, d2, margins, state, _ = work(n_points, n_groups, states_out.shape[1])
@@ -438,22 +448,12 @@ def walk_on(advance, K, state_from, phi_from, phi, order, tols, pos_out, d1_out,
     ``phi`` from ``phi_from`` where its state was ``state_from`` (``walk_states``):
     the last row of the walk through the positions before and ``phi``, to the bit,
     for one step.  Returns its status."""
-    n_groups = margin_out.shape[1]
-    pos, d1, d2, margins, state, _ = work(pos_out.shape[1], n_groups, state_from.shape[0])
+    pos, d1, d2, margins, state, _ = work(pos_out.shape[1], margin_out.shape[1],
+                                          state_from.shape[0])
     copy2(state_from, state)
     st = advance(K, phi_from, phi, order, tols, state, pos, d1, d2, margins, True)
-    status_out[0] = st
-    it = 0.0
-    for g in range(n_groups):
-        margin_out[0, g] = margins[g]
-    for j in range(state.shape[0]):
-        it += state[j, S_ITERS]
-    iters_out[0] = it
-    copy2(pos, pos_out[0])
-    if order >= 1:
-        copy2(d1, d1_out[0])
-    if order >= 2:
-        copy2(d2, d2_out[0])
+    record(0, st, order, state, pos, d1, d2, margins, pos_out, d1_out, d2_out, status_out,
+           margin_out, iters_out)
     return st
 
 

@@ -173,8 +173,8 @@ def scene_peaks(res, keep=None) -> list[Peak]:
     phi_end = crank.phi0 + crank.rot * 2.0 * math.pi
     walks, forced = {}, {}
     # each trial angle's walk goes on from the dense position before it (the same bits as
-    # the walk from the first position, for one step)
-    resume = Continuation.of(plan, phis, order, res.tolerances)
+    # the walk from the first position, for one step): the states kept at the first trial
+    resume = []
 
     def at(m, phi, quantity):
         """The magnitudes of ``quantity`` at ``phi``, walked from phis[0] through
@@ -182,8 +182,10 @@ def scene_peaks(res, keep=None) -> list[Peak]:
         other peaks that try the same angle)."""
         key = (m, float(phi))
         if key not in walks:
-            if resume is not None and m >= 1:
-                c = resume.row(m, phi)
+            if not resume:
+                resume.append(Continuation.of(plan, phis, order, res.tolerances))
+            if resume[0] is not None and m >= 1:
+                c = resume[0].row(m, phi)
             else:
                 c = solve_curves(plan, np.concatenate([phis[:m], [phi]]), order,
                                  res.tolerances)

@@ -48,36 +48,44 @@ def solve_curves(plan: Plan, phis, order, tols=None, par=None, close_at=math.nan
     """Kinematics of ``plan`` at crank angles ``phis`` by continuation."""
     tols = kc.default_tolerances() if tols is None else tols
     par = plan.par if par is None else par
-    n = len(phis)
-    npnt, ng = plan.n_points, plan.n_groups
-    pos = np.full((n, npnt, 2), np.nan)
-    d1 = np.full((n, npnt, 2), np.nan)
-    d2 = np.full((n, npnt, 2), np.nan)
-    status = np.zeros(n, np.int8)
-    margin = np.zeros((n, ng))
-    iters = np.zeros(n)
+    out = _outputs(plan, len(phis))
     fail = np.empty(2)
     args = (np.ascontiguousarray(par, dtype=np.float64),
-            np.ascontiguousarray(phis, dtype=np.float64), float(close_at), int(order), tols, pos,
-            d1, d2, status, margin, iters, fail)
+            np.ascontiguousarray(phis, dtype=np.float64), float(close_at), int(order), tols,
+            *out, fail)
     # the plan path (kernels compiled once per installation, the same bits) where the
     # mechanism's groups are on it: a new mechanism's scene waits for no compile
     overall = plan_path.revolution(plan, *args)
     if overall is None:
         overall = kernels_for(plan).revolution(*args)
-    links = np.full((n, len(plan.link_a), 3), np.nan)
+    return _curves(plan, phis, order, out, overall, fail_phi=float(fail[0]),
+                   fail_group=int(fail[1]))
+
+
+def _outputs(plan, n):
+    """The walk's outputs for ``n`` positions: pos, d1, d2 (NaN where not
+    computed), status, margin, iterations."""
+    pos, d1, d2 = (np.full((n, plan.n_points, 2), np.nan) for _ in range(3))
+    return pos, d1, d2, np.zeros(n, np.int8), np.zeros((n, plan.n_groups)), np.zeros(n)
+
+
+def _curves(plan, phis, order, out, overall, **failure) -> Curves:
+    """Curves of the walk's outputs ``out`` (``_outputs``), its links' angles added."""
+    pos, d1, d2 = out[:3]
+    links = np.full((len(pos), len(plan.link_a), 3), np.nan)
     link_angles(pos, d1, d2, plan.link_a, plan.link_b, int(order), links)
-    return Curves(np.asarray(phis, float), pos, d1, d2, status, margin, iters, links, int(overall),
-                  fail_phi=float(fail[0]), fail_group=int(fail[1]))
+    return Curves(np.asarray(phis, float), *out, links, int(overall), **failure)
 
 
 class Continuation:
     """A walk over ``phis`` that goes on from any of its positions: ``row(m, phi)``
     is the last row of ``solve_curves(plan, [*phis[:m], phi], order, tols)``, to the
     bit, for one step of the walk instead of m + 1 (the continuation's state after
-    each position kept: ``kernels.walk.walk_states``).  A refined peak tries many
-    angles, each walked from the revolution's first position.  ``of`` gives None
-    off the plan path (the walk from the start then)."""
+    each position kept: ``kernels.walk.walk_states``): a refined peak's trial
+    angles.  The row's ``overall`` is its own status (the watch's verdict on the
+    windows before it, which ``solve_curves``' overall would also carry, is not
+    looked at).  ``of`` gives None off the plan path (the walk from the start
+    then)."""
 
     def __init__(self, plan, phis, order, tols, K):
         from ..kernels.walk import compile_revolution, walk_states
@@ -95,16 +103,16 @@ class Continuation:
         return None if K is None or not len(phis) else cls(plan, phis, order, tols, K)
 
     def row(self, m, phi) -> Curves:
-        """The walk through the first ``m`` (>= 1) positions on to ``phi``: its last row."""
+        """The walk through the first ``m`` positions (1 <= m <= len(phis)) on to
+        ``phi``: its last row."""
         from ..kernels.walk import walk_on
-        plan = self.plan
-        pos, d1, d2 = (np.full((1, plan.n_points, 2), np.nan) for _ in range(3))
-        status, margin, iters = np.zeros(1, np.int8), np.zeros((1, plan.n_groups)), np.zeros(1)
+        if not 1 <= m <= len(self.phis):
+            raise ValueError(f"a walk goes on from one of its {len(self.phis)} positions, "
+                             f"not after {m}")
+        out = _outputs(self.plan, 1)
         st = walk_on(self.advance, self.K, self.states[m - 1], float(self.phis[m - 1]),
-                     float(phi), self.order, self.tols, pos, d1, d2, status, margin, iters)
-        links = np.full((1, len(plan.link_a), 3), np.nan)
-        link_angles(pos, d1, d2, plan.link_a, plan.link_b, self.order, links)
-        return Curves(np.array([float(phi)]), pos, d1, d2, status, margin, iters, links, int(st))
+                     float(phi), self.order, self.tols, *out)
+        return _curves(self.plan, [float(phi)], self.order, out, st)
 
 
 @dataclass
