@@ -430,9 +430,9 @@ def walk_revolution(advance, start, K, watch_g, n_triads, phis, phi_close, order
 def walk_states(advance, start, K, n_points, n_groups, phis, order, tols, states_out):
     """states_out[k] (states_out: n_phi x n_triads x N_STATE): the continuation's
     state after position k of ``walk_revolution``'s walk over ``phis`` (no closing
-    position),
-    which its next step starts from.  The watch and a failure's location put back
-    the state they look behind, so the state is the advances' alone."""
+    position), which its next step starts from.  The watch and a failure's
+    location put back the state they look behind, so the state is the advances'
+    alone."""
     pos, d1, d2, margins, state, _ = work(n_points, n_groups, states_out.shape[1])
     phi_prev = walk_start(start, K, phis[0], state)
     for k in range(phis.shape[0]):
