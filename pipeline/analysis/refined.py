@@ -196,25 +196,20 @@ def _in_processes(study, params, metrics, progress, jobs):
 class _Worker:
     """A process that refines slices of designs (``_serve``): the study and the
     metrics once, then each slice's rows in, (values, status) out, pickled over
-    its pipes; its error output kept for the error it ends with.  It imports the
-    package this process runs (its folder first on its path; ``-P``: not the
-    working folder's)."""
+    its pipes; its error output kept for the error it ends with.  It runs the
+    package this process runs (``base.processes``)."""
 
     def __init__(self, study, metrics):
-        import os
         import pickle
         import subprocess
-        import sys
         import tempfile
-        from pathlib import Path
-        here = str(Path(__file__).resolve().parents[2])
-        path = os.pathsep.join([here] + [p for p in [os.environ.get("PYTHONPATH")] if p])
+
+        from ..base.processes import module_command
+        argv, env = module_command("pipeline.analysis.refined")
         self.err = tempfile.TemporaryFile()
         try:
-            self.proc = subprocess.Popen(
-                [sys.executable, "-P", "-m", "pipeline.analysis.refined"],
-                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.err,
-                env=dict(os.environ, PYTHONPATH=path))
+            self.proc = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                         stderr=self.err, env=env)
         except BaseException:
             self.err.close()
             raise

@@ -28,6 +28,7 @@ import weakref
 from pathlib import Path
 
 from ..base.files import write_text
+from ..base.processes import module_command
 from ..kernels.config import LANE_WIDTH as LANES   # candidates per block of the lane path
 from .generate import defined_functions, generate
 
@@ -165,10 +166,10 @@ def _compile_beside(mod, kernel="walk", *what) -> None:
     for key, proc in list(_BESIDE.items()):     # (those that ended: reaped, forgotten)
         if proc is None or proc.poll() is not None:
             del _BESIDE[key]
+    argv, env = module_command("pipeline.compiler.beside", mod.__name__, str(path.parent), *what)
     try:
         _BESIDE[(mod.__name__, kernel)] = subprocess.Popen(
-            [sys.executable, "-m", "pipeline.compiler.beside", mod.__name__, str(path.parent),
-             *what], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+            argv, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL)
     except OSError:         # no second process: the run compiles them itself
         pass

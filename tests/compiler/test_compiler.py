@@ -694,8 +694,8 @@ def test_the_stand_alone_kernels_compile_beside_for_evaluate_s_types(problem, ca
             pc._compile_beside(module(has, tmp_path / index))
             assert len(started) == n, (flag, has, index)
             if n:
-                assert started[0][1:] == ["-m", "pipeline.compiler.beside", "pipeline_mech_x",
-                                          str(tmp_path)]
+                assert started[0][1:] == ["-P", "-m", "pipeline.compiler.beside",
+                                          "pipeline_mech_x", str(tmp_path)]
     finally:
         sp.Popen = real
         os.environ["PIPELINE_COMPILE_BESIDE"] = "0"
@@ -746,8 +746,8 @@ def test_a_scene_s_forces_compile_beside_for_the_types_the_scene_passes(tmp_path
             pc._compile_beside(module(tmp_path / index), "forces_curve", "scene")
             assert len(started) == n, index
             if n:
-                assert started[0][1:] == ["-m", "pipeline.compiler.beside", "pipeline_mech_x",
-                                          str(tmp_path), "scene"]
+                assert started[0][1:] == ["-P", "-m", "pipeline.compiler.beside",
+                                          "pipeline_mech_x", str(tmp_path), "scene"]
     finally:
         sp.Popen = real
         os.environ["PIPELINE_COMPILE_BESIDE"] = "0"
@@ -1016,3 +1016,21 @@ def test_the_cache_folder_follows_its_settings_though_it_is_kept(monkeypatch, tm
     assert cache_dir() == tmp_path / "h" / ".cache" / "pipeline"
     monkeypatch.setenv("PIPELINE_CACHE_DIR", str(tmp_path / "a"))
     assert cache_dir() == tmp_path / "a"
+
+
+def test_a_process_beside_runs_this_package_whatever_the_working_folder_holds(tmp_path):
+    """``base.processes.module_command``: the working folder off the new
+    interpreter's path (-P), this package's folder first on it, so a
+    ``pipeline`` folder where the user works shadows nothing."""
+    import subprocess
+    import pipeline
+    from pipeline.base.processes import module_command
+    decoy = tmp_path / "pipeline"
+    decoy.mkdir()
+    (decoy / "__init__.py").write_text("raise SystemExit('the decoy was imported')\n")
+    (decoy / "probe.py").write_text("")
+    argv, env = module_command("pipeline.base.version")
+    code = "import pipeline; print(pipeline.__file__)"
+    out = subprocess.run(argv[:2] + ["-c", code], env=env, cwd=tmp_path, capture_output=True,
+                         text=True, check=True).stdout.strip()
+    assert out == pipeline.__file__
