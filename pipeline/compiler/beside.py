@@ -72,7 +72,7 @@ def compile_standalone(mod) -> None:
     # (by now the run has usually compiled position and advance: numba's cache)
     compile_("force_stage", par, K, a1, a1, a1, loads, a1, a2, b, wk, fw)
     compile_("block_walk", a2, a2, a1, a1, a1, a1, a1)
-    compile_("careful_tail", K, a1, i64, i64, a2, a1, a1, wk, ww)
+    compile_("careful_tail", K, a1, i64, i64, a2, a1, a1, a1, wk, ww)
     if getattr(mod, "HAS_LANE_FORCES", False):
         compile_("force_flush", ix, i64, a1, a2, a2, a1, a1, a1, loads, status, a2)
         compile_("force_lane_in", par, i64, a2, a1, a2, a1, a2)

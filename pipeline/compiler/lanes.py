@@ -31,6 +31,7 @@ increments, atan of a small argument by its series.
 
 from __future__ import annotations
 
+import math
 import re
 
 from ..kernels.continuation import FOLD_SHARE
@@ -69,9 +70,14 @@ def _lane_constants(plan, names, rocker, width, fast, rows, n_triads, n_inputs):
            f"LANES = {width}",
            f"HAS_LANES = {fast}   # every kinematic group has a lane form",
            f"NEWTON_STEPS = {NEWTON_STEPS}   # Newton steps per position in the lanes",
-           f"THETA_COLS = {1 + 4 * n_triads + 4 * n_inputs}   # rocker angle, e(a), e(b) of "
-           "each class III group, e(q) (or q), q', q'' of each input",
+           f"LANE_STEP_MAX = {math.atan(ATAN_ARG)!r}   # the largest rocker step the lanes' "
+           "atan series takes exactly",
+           f"THETA_COLS = {2 + 4 * n_triads + 4 * n_inputs}   # rocker angle, e(a), e(b) of "
+           "each class III group, e(q) (or q), q', q'' of each input, the position's margin",
            f"THETA_IN = {1 + 4 * n_triads}   # the first column of the inputs' laws",
+           f"TRAIL_COLS = {4 * n_triads + 4 * n_inputs}   # the columns handed over (the trail)",
+           f"MARGIN_COL = {1 + 4 * n_triads + 4 * n_inputs}   # the lane's margin at each position "
+           "(a spliced lane's: evaluate)",
            f"N_LANE_ROWS = {len(rows)}",
            "# rows of the lane array S[row, lane]"]
     return src + [f"R_{r} = {i}" for i, r in enumerate(rows)] + [""]
@@ -149,6 +155,7 @@ def _setup_rocker_lines(triads):
                    + ("" if len(triads) > 1 else ", math.inf") + ")")
     else:
         out.append("S[R_margin, l] = math.inf")
+    out.append("theta[0, MARGIN_COL * LANES + l] = S[R_margin, l]")
     return out + [
         "if not ok or not math.isfinite(S[R_rock_x, l]):",
         "    ok = False",
@@ -187,7 +194,8 @@ def _walk(plan, names, kin, triads, watched, rocker_xy):
             "        # a trip count known only at run time: LLVM vectorizes this loop (a",
             "        # constant count is unrolled instead, and stays scalar)",
             "        for l in range(n_lanes):"]
-    inner = ["bad = False", "low = False", "big = False", "margin = S[R_margin, l]"]
+    # margin: this position's (its class III groups' smallest), into the running one after
+    inner = ["bad = False", "low = False", "big = False", "margin = math.inf"]
     for fi, off in zip(plan.fixed_idx, plan.fixed_off):
         pn = names.xy(fi)
         inner += [f"{pn}x = S[R_{names.par(off)}, l]",
@@ -220,7 +228,8 @@ def _rocker_step_lines(piv, pt):
         "big = big | (abs(th) > 3.0)",
         "S[R_rock_x, l] = ux", "S[R_rock_y, l] = uy", "S[R_theta, l] = th",
         "theta[k, l] = th",
-        "S[R_margin, l] = margin",
+        "theta[k, MARGIN_COL * LANES + l] = margin",
+        "S[R_margin, l] = min(S[R_margin, l], margin)",
         "flagged = bad | low | big",
         # the flags as arithmetic on 0/1 and whole numbers (exact: the values of the
         # max and the selects, bit for bit), not as a select of the row's own value,
@@ -320,9 +329,10 @@ def _split(line, width=90):
 
 # the lane path's constants where there is no output rocker (not a sweep)
 NO_ROCKER = ("ROCKER_PIVOT = 0", "ROCKER_POINT = 0", "LANES = 1", "HAS_LANES = False",
-             "N_LANE_ROWS = 4", "THETA_COLS = 1", "THETA_IN = 1", "R_margin = 0", "R_flag = 1",
+             "N_LANE_ROWS = 4", "THETA_COLS = 2", "THETA_IN = 1", "TRAIL_COLS = 0",
+             "MARGIN_COL = 1", "R_margin = 0", "R_flag = 1",
              "R_first_flag = 2", "R_last_flag = 3",
-             "NEWTON_STEPS = 0")
+             "NEWTON_STEPS = 0", "LANE_STEP_MAX = 0.0")
 
 
 def no_lane_path(why):

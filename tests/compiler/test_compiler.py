@@ -32,8 +32,8 @@ from pipeline.study.sweep_spec import parameter_rows
 from pipeline.study.sampling import draw_candidates
 from support.checkout import child_env
 from support.lanes import (assert_lanes_agree, evaluate_with, packed_force_lane_ops,
-                           scalar_forces)
-from support.tolerances import FAIL_ANGLE_TRIAD_RAD, RK4_VS_DOP853_RAD
+                           scalar_forces, spliced_rows)
+from support.tolerances import FAIL_ANGLE_TRIAD_RAD, LANE_AGREEMENT_REL, RK4_VS_DOP853_RAD
 
 STUDIES = Path(__file__).resolve().parents[2] / "studies"
 
@@ -376,7 +376,7 @@ calls = {"careful_tail": [], "careful_positions": 0}
 tail, whole = m.careful_tail, m.careful_positions
 def counted_tail(*a):
     st = tail(*a)
-    calls["careful_tail"].append(int(st))
+    calls["careful_tail"].append([int(st[0]), bool(st[1])])    # (status, spliced)
     return st
 def counted_whole(*a):
     calls["careful_positions"] += 1
@@ -386,7 +386,7 @@ n = pars.shape[0]
 status = np.zeros(n, np.int8); met = np.full((n, ks.N_METRICS), np.nan)
 m.evaluate(pars, 0, n, pb.phis, pb.phi_close, pb.tols, pb.settings(), pb.loads, status, met)
 print(json.dumps({"calls": calls, "status": status.tolist(),
-                  "fail_phi": met[:, ks.M_FAIL_PHI].tolist()}))
+                  "fail_phi": met[:, ks.M_FAIL_PHI].tolist(), "metrics": met.tolist()}))
 """
 
 
@@ -414,11 +414,42 @@ def test_a_failing_lane_is_walked_from_just_before_its_flag(synthesis, candidate
     assert r.returncode == 0, r.stderr[-2000:]
     out = json.loads(r.stdout.strip().splitlines()[-1])
     assert len(out["calls"]["careful_tail"]) == len(rows)
-    assert all(st != kc.OK for st in out["calls"]["careful_tail"])    # each found its failure
+    assert all(st != kc.OK for st, _ in out["calls"]["careful_tail"])    # each found its failure
     assert out["calls"]["careful_positions"] == 0
     np.testing.assert_array_equal(out["status"], status[rows])
     np.testing.assert_allclose(out["fail_phi"], metrics[rows, ks.M_FAIL_PHI], rtol=0,
                                atol=2 * FAIL_ANGLE_TRIAD_RAD)
+
+
+def test_a_flagged_lane_that_meets_no_failure_is_spliced(synthesis, candidates, tmp_path):
+    """A lane that flags itself and passes is walked on the careful path from two
+    positions before its flag to three past its last (careful_tail), which finds
+    no failure and splices the careful window into the lane's numbers, and never
+    from the start (careful_positions): one block of such lanes in numba's Python
+    mode, each call counted; the statuses and metrics are the compiled run's
+    (their exactness: assert_lanes_agree)."""
+    positions = 180
+    pb = build_problem(synthesis, dataclasses.replace(synthesis.sweep, positions=positions))
+    status, metrics = pb.evaluate_rows(candidates)
+    spliced = spliced_rows(pb, candidates, status, metrics)
+    lanes = min(pb.kernels.LANES, 8)
+    rows = np.flatnonzero(spliced)[:lanes]
+    assert len(rows) == lanes
+    np.save(tmp_path / "pars.npy", candidates[rows])
+    r = subprocess.run([sys.executable, "-c", TAIL_COUNT, str(STUDIES / "ov7_synthesis.toml"),
+                        str(tmp_path / "pars.npy"), str(positions)],
+                       env=child_env(NUMBA_DISABLE_JIT="1"), capture_output=True, text=True,
+                       timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    out = json.loads(r.stdout.strip().splitlines()[-1])
+    assert out["calls"]["careful_tail"] == [[kc.OK, True]] * lanes
+    assert out["calls"]["careful_positions"] == 0
+    np.testing.assert_array_equal(out["status"], status[rows])
+    got = np.array(out["metrics"], dtype=float)
+    for col in (ks.M_STROKE, ks.M_DWELL, ks.M_MARGIN, ks.M_PEAK_R, ks.M_PEAK_MBAL):
+        np.testing.assert_allclose(got[:, col], metrics[rows, col], rtol=LANE_AGREEMENT_REL,
+                                   atol=0, err_msg=f"metric column {col}")
+    np.testing.assert_array_equal(got[:, ks.M_NEWTON_MEAN], metrics[rows, ks.M_NEWTON_MEAN])
 
 
 def test_a_candidate_gets_the_same_numbers_wherever_it_runs(problem, candidates):

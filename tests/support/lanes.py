@@ -12,7 +12,8 @@ from numba import njit
 from pipeline.compiler.parallel import run_rows
 from pipeline.kernels import config as kc
 from pipeline.kernels import sweep as ks
-from support.tolerances import FAIL_ANGLE_TRIAD_RAD, LANE_AGREEMENT_REL, LANE_MARGIN_REL
+from support.tolerances import (FAIL_ANGLE_TRIAD_RAD, LANE_AGREEMENT_REL, LANE_MARGIN_REL,
+                                SPLICED_REFERENCE_TOL)
 
 
 def widened_draws(studies, stem, widen, candidates):
@@ -35,8 +36,9 @@ def widened_draws(studies, stem, widen, candidates):
     return pb, parameter_rows(pb.plan, spec, draw_candidates(spec, 0))
 
 
-def careful_rows(problem, pars):
-    """Statuses and metrics of ``pars`` on the careful path alone (``evaluate_careful``)."""
+def careful_rows(problem, pars, tols=None):
+    """Statuses and metrics of ``pars`` on the careful path alone (``evaluate_careful``),
+    with the problem's tolerances or ``tols``."""
     k = problem.kernels
     n = pars.shape[0]
     status = np.zeros(n, np.int8)
@@ -45,16 +47,20 @@ def careful_rows(problem, pars):
     trail = np.empty((len(problem.phis) + 1, 4))
     q1, q2 = (np.empty(len(problem.phis) + problem.dwell_w + 1, np.int64) for _ in range(2))
     for i in range(n):
-        status[i] = k.evaluate_careful(pars[i], problem.phis, problem.phi_close, problem.tols,
+        status[i] = k.evaluate_careful(pars[i], problem.phis, problem.phi_close,
+                                       problem.tols if tols is None else tols,
                                        problem.settings(), problem.loads, col, trail, q1, q2,
                                        metrics[i])
     return status, metrics
 
 
-def lanes_vouched(problem, pars):
-    """(lanes the walk vouched for, lanes walked) over the blocks of ``pars`` whose
-    every candidate starts in a lane: the generated setup_lane and block_walk
-    called as the sweep's evaluate calls them."""
+def lane_flags(problem, pars):
+    """Per row of ``pars``: 1 where its lane flagged itself (the careful path redoes
+    it), 0 where the lane vouched, -1 where it did not start in a lane; the
+    generated setup_lane and block_walk called as the sweep's evaluate calls them
+    (a lane's numbers do not depend on its neighbours).  Also (lanes the walk
+    vouched for, lanes walked) over the blocks of ``pars`` whose every candidate
+    starts in a lane."""
     from pipeline.kernels.continuation import work
     k = problem.kernels
     L, npos = k.LANES, len(problem.phis)
@@ -62,18 +68,43 @@ def lanes_vouched(problem, pars):
     phis = np.asarray(problem.phis)
     close = problem.phi_close if math.isfinite(problem.phi_close) else phis[0]
     ext = np.concatenate([phis, close + (phis[:3] - phis[0])])    # the walk's angles
+    flags = np.full(len(pars), -1)
     vouched = walked = 0
-    for b in range(len(pars) // L):
-        S = np.empty((k.N_LANE_ROWS, L))
-        theta = np.empty((npos + 3, L * k.THETA_COLS))
-        if any(k.setup_lane(pars, b * L + lane, lane, problem.phis, close, problem.tols, S,
-                            theta, pos, d1, d2, m, state) != kc.OK for lane in range(L)):
-            continue
-        k.block_walk(S, theta, np.cos(ext), np.sin(ext), problem.phis, problem.tols,
-                     problem.settings())
-        walked += L
-        vouched += int((S[k.R_flag] == 0.0).sum())
-    return vouched, walked
+    S = np.empty((k.N_LANE_ROWS, L))
+    theta = np.empty((npos + 3, L * k.THETA_COLS))
+    rows = []
+    for i in range(len(pars) + 1):
+        if i < len(pars) and k.setup_lane(pars, i, len(rows), problem.phis, close,
+                                          problem.tols, S, theta, pos, d1, d2, m,
+                                          state) == kc.OK:
+            rows.append(i)
+        if len(rows) == L or (i == len(pars) and rows):
+            for lane in range(len(rows), L):     # (a partial block: copies of lane 0)
+                S[:, lane] = S[:, 0]
+                theta[:, lane::L] = theta[:, 0::L]
+            k.block_walk(S, theta, np.cos(ext), np.sin(ext), problem.phis, problem.tols,
+                         problem.settings())
+            flags[rows] = S[k.R_flag, :len(rows)] != 0.0
+            if rows[-1] - rows[0] == L - 1:
+                walked += L
+                vouched += int((S[k.R_flag] == 0.0).sum())
+            rows = []
+    return flags, (vouched, walked)
+
+
+def lanes_vouched(problem, pars):
+    """(lanes the walk vouched for, lanes walked) over the blocks of ``pars`` whose
+    every candidate starts in a lane."""
+    return lane_flags(problem, pars)[1]
+
+
+def spliced_rows(problem, pars, status, metrics):
+    """The rows of ``pars`` whose lane flagged itself and was spliced: OK, with the
+    lanes' Newton count (a flagged lane walked whole has the careful path's)."""
+    k = problem.kernels
+    flags, _ = lane_flags(problem, pars)
+    lanes_count = float(k.NEWTON_STEPS * k.N_TRIADS)
+    return (flags == 1) & (status == kc.OK) & (metrics[:, ks.M_NEWTON_MEAN] == lanes_count)
 
 
 def assert_lanes_agree(problem, candidates, class3=True):
@@ -82,7 +113,11 @@ def assert_lanes_agree(problem, candidates, class3=True):
     the location figures (a lane that flagged itself is walked from two positions
     before its flag: ``careful_tail``), the metrics to rounding; and the lanes
     vouch for most candidates (a lane path that handed every lane over would
-    agree trivially)."""
+    agree trivially).  A lane that flagged itself and met no failure is
+    spliced (its careful window solved to near rounding, the lane's numbers
+    elsewhere): its metrics are held against the careful walk at Newton's
+    closure 1e-14 (``SPLICED_REFERENCE_TOL``) and must be no further from it than
+    the careful path's own at the product's closure, up to the lanes' rounding."""
     assert problem.kernels.HAS_LANES
     vouched, walked = lanes_vouched(problem, candidates[:400])
     assert walked >= 200 and vouched >= 0.6 * walked, (vouched, walked)
@@ -91,6 +126,7 @@ def assert_lanes_agree(problem, candidates, class3=True):
     np.testing.assert_array_equal(s_fast, s_ref)
     ok = s_ref == kc.OK
     assert ok.sum() > 100
+    spliced = spliced_rows(problem, candidates, s_fast, m_fast)
     # the README's figures: 1e-12 relative, the singularity margin 7.2e-12 (a small
     # difference of large products); what is counted or located is identical
     cols = ((ks.M_STROKE, LANE_AGREEMENT_REL), (ks.M_DWELL, LANE_AGREEMENT_REL),
@@ -98,12 +134,17 @@ def assert_lanes_agree(problem, candidates, class3=True):
     if problem.spec.wants_forces:
         cols += ((ks.M_PEAK_R, LANE_AGREEMENT_REL), (ks.M_PEAK_MBAL, LANE_AGREEMENT_REL),
                  (ks.M_PEAK_PHI, 0.0), (ks.M_FORCES_DONE, 0.0))
-    for col, rel in cols + (((ks.M_MARGIN, LANE_MARGIN_REL),) if class3 else ()):
-        a, b = m_fast[ok, col], m_ref[ok, col]
+    cols += ((ks.M_MARGIN, LANE_MARGIN_REL),) if class3 else ()
+    regular = ok & ~spliced
+    for col, rel in cols:
+        a, b = m_fast[regular, col], m_ref[regular, col]
         np.testing.assert_array_equal(np.isnan(a), np.isnan(b))
         f = np.isfinite(b)
         assert f.sum() > 100, col
         np.testing.assert_allclose(a[f], b[f], rtol=rel, atol=0, err_msg=f"metric column {col}")
+    if spliced.any():
+        assert_spliced_exact(problem, candidates[spliced], m_fast[spliced], m_ref[spliced],
+                             cols)
     # a failure the lane's careful walk located from two positions before the lane's
     # flag, against the walk from the start: the same group, the same boundary
     # located twice (each within FAIL_ANGLE_TRIAD_RAD of the exact one)
@@ -111,6 +152,29 @@ def assert_lanes_agree(problem, candidates, class3=True):
     np.testing.assert_allclose(m_fast[~ok, ks.M_FAIL_PHI], m_ref[~ok, ks.M_FAIL_PHI], rtol=0,
                                atol=2 * FAIL_ANGLE_TRIAD_RAD)
     return s_ref
+
+
+def assert_spliced_exact(problem, pars, m_spliced, m_careful, cols):
+    """Spliced lanes' metrics against the careful walk solved to Newton's closure
+    SPLICED_REFERENCE_TOL (exact to rounding): over the rows, the largest
+    relative distance no greater than the careful path's own at the product's
+    closure plus the lanes' rounding figure; what is located or counted
+    identical."""
+    tight = problem.tols.copy()
+    tight[kc.T_NEWTON_TOL] = SPLICED_REFERENCE_TOL
+    s_exact, m_exact = careful_rows(problem, pars, tight)
+    assert (s_exact == kc.OK).all()
+    for col, rel in cols:
+        a, b, e = m_spliced[:, col], m_careful[:, col], m_exact[:, col]
+        np.testing.assert_array_equal(np.isnan(a), np.isnan(e))
+        f = np.isfinite(e)
+        if rel == 0.0:
+            np.testing.assert_array_equal(a[f], e[f], err_msg=f"metric column {col}")
+            continue
+        scale = np.abs(e[f])
+        ours, theirs = np.abs(a[f] - e[f]) / scale, np.abs(b[f] - e[f]) / scale
+        assert ours.max(initial=0.0) <= theirs.max(initial=0.0) + rel, (col, ours.max(),
+                                                                       theirs.max())
 
 
 def scalar_forces(settings):

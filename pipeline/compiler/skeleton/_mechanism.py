@@ -14,7 +14,8 @@ N_WATCH = 0
 
 # the lane path's constants (lanes: a sweep's output rocker and lane rows)
 ROCKER_PIVOT = ROCKER_POINT = LANES = NEWTON_STEPS = N_LANE_ROWS = THETA_COLS = 0
-THETA_IN = 0
+THETA_IN = TRAIL_COLS = MARGIN_COL = 0
+LANE_STEP_MAX = 0.0
 R_margin = R_flag = R_first_flag = R_last_flag = 0
 
 # kernels written from the plan

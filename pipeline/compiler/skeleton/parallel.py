@@ -12,11 +12,12 @@ The text below the marker line is pasted into the generated module
 (``pipeline.compiler.generate``); the imports above it declare, for linters and
 readers, the names the generated module gives it."""
 
-from .header import (math, np, njit, JIT_ALLOC, JIT_ALLOC_INNER, JIT_INNER, OK, work,
-                     force_work, dwell_lanes, M_FAIL_PHI, M_FAIL_GROUP, SET_DWELL_W,
+from .header import (math, np, njit, JIT, JIT_ALLOC, JIT_ALLOC_INNER, JIT_INNER, OK, work,
+                     force_work, dwell_lanes, dwell_error, M_FAIL_PHI, M_FAIL_GROUP, SET_DWELL_W,
                      SET_WANT_LAW)
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
-                         N_INPUTS, LANES, N_LANE_ROWS, THETA_COLS, THETA_IN,
+                         N_INPUTS, LANES, N_LANE_ROWS, THETA_COLS, THETA_IN, TRAIL_COLS,
+                         MARGIN_COL,
                          R_margin, R_flag, R_first_flag, R_last_flag, setup_lane,
                          block_walk, lanes_apply, constants, N_WATCH)
 from ._mechanism import (HAS_LANE_FORCES, N_FROWS, FT_COLS, N_RCOLS, force_lane_in)
@@ -46,7 +47,7 @@ def lane_work(npos, w):
     lanes' S and theta, a rocker column, the handed-over trail, the dwell
     windows, the sorting queues, the force lanes' block of candidates)."""
     return (np.empty((N_LANE_ROWS, LANES)), np.empty((npos + 3, LANES * THETA_COLS)),
-            np.empty(npos), np.empty((npos + 1, max(THETA_COLS - 1, 1))),
+            np.empty(npos), np.empty((npos + 1, max(TRAIL_COLS, 1))),
             np.empty((5, npos + w + 1, LANES)), np.empty(LANES), np.empty(LANES, np.int64),
             np.empty(LANES), np.empty(npos + w + 1, np.int64), np.empty(npos + w + 1, np.int64),
             np.empty(LANES, np.int64), np.empty(npos), np.empty(LANES, np.int64))
@@ -78,6 +79,18 @@ def force_lane_work(nf):
     crank_tab[0, 0] = math.nan
     return (np.empty(N_FROWS * LANES), np.empty((nf, FT_COLS * LANES)),
             np.empty((nf, N_RCOLS * LANES)), crank_tab)
+
+
+@njit(inline='always', **JIT)
+def lane_margin(theta, l, k0, k1, npos, margin):
+    """A spliced lane's singularity margin: the smallest of its careful window's
+    (``margin``: positions k0 .. k1) and of the lane's own at every other
+    position of its walk (theta's MARGIN_COL: to the close and two past it, as
+    the lane's running margin)."""
+    for k in range(npos + 3):
+        if k < k0 or k > k1:
+            margin = min(margin, theta[k, MARGIN_COL * LANES + l])
+    return margin
 
 
 @njit(**JIT_INNER)
@@ -150,27 +163,39 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                 # the lane vouches for its candidate unless it flagged itself
                 vouched = np.int64(1) if S[R_flag, l] == 0.0 else np.int64(0)
                 for k in range(npos):
-                    for q in range(THETA_COLS - 1):
+                    for q in range(TRAIL_COLS):
                         trail[k, q] = theta[k, (1 + q) * LANES + l]
+                err_l, start_l, full_l, margin_l = err[l], start_k[l], full[l], S[R_margin, l]
+                spliced = False
                 if vouched == 0:     # flagged: the careful walk from two positions before
                     # its first flag to two past its last, to the failure it most likely meets
                     k0 = np.int64(S[R_first_flag, l]) - 2
                     k1 = min(np.int64(S[R_last_flag, l]) + 3, npos)
                     if k0 > 3 and k0 < npos:
                         no_metrics(metrics[idx[l]])
-                        st = careful_tail(constants(pars[idx[l]]), phis, k0, k1, trail, tols,
-                                          metrics[idx[l]], wk, ww)
+                        for k in range(npos):     # (the lane's angles: the window splices)
+                            col[k] = theta[k, l]
+                        st, spliced, margin_w = careful_tail(
+                            constants(pars[idx[l]]), phis, k0, k1, trail, col, tols,
+                            metrics[idx[l]], wk, ww)
                         if st != OK:
                             status[idx[l]] = st
                             continue
-                if want_law:     # the lane's rocker angles, for the law error
+                        if spliced:     # the lane's numbers outside the window, its own inside
+                            vouched = np.int64(1)
+                            margin_l = lane_margin(theta, l, k0, k1, npos, margin_w)
+                            err_l, start_l, full_l = dwell_error(col, w, qmax, qmin)
+                if want_law and S[R_flag, l] == 0.0:     # the lane's rocker angles
                     for k in range(npos):
                         col[k] = theta[k, l]
-                # (where it vouched, the force stage in the force lanes)
-                how = np.int64(LANE_METRICS) if in_force_lanes and vouched > 0 else vouched
+                # (where it vouched, the force stage in the force lanes; a spliced lane's
+                # by the scalar stage from its solutions: its window is where the lane's
+                # own forms were ill-conditioned)
+                how = (np.int64(LANE_METRICS) if in_force_lanes and vouched > 0 and not spliced
+                       else vouched)
                 st = settle(pars[idx[l]], how, phis, phi_close, tols, settings, loads, col,
-                            trail, qmax, qmin, err[l], start_k[l], full[l], S[R_margin, l],
-                            wk, fw, ww, corr, metrics[idx[l]])
+                            trail, qmax, qmin, err_l, start_l, full_l, margin_l, wk, fw, ww,
+                            corr, metrics[idx[l]])
                 if st != NEEDS_FORCES:
                     status[idx[l]] = st
                     continue

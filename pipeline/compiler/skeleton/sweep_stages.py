@@ -18,11 +18,13 @@ from .header import (math, np, njit, JIT, JIT_ALLOC, JIT_INNER, OK, BRANCH_JUMP,
                      SET_EPS1, SET_WANT_PEAKS, SET_WORK_POINT, SET_WANT_TRANSMISSION, SET_WANT_LAW,
                      SET_LAW0, LAW_BEST, SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING)
 from .header import M_EQUILIBRIUM, equilibrium_residual
-from .header import S_HANDED, S_CA, S_SA, S_CB, S_SB, start_triad
+from .header import S_HANDED, S_CA, S_SA, S_CB, S_SB, S_A, S_B, T_CLOSE, start_triad
+from .header import N_TOLS, T_NEWTON_TOL, LOCATE_NEWTON_TOL
 from .header import M_SHAKING_F, M_SHAKING_M, shaking, may_reach
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, constants, position, advance, forces_at, transmission,
-                         ROCKER_PIVOT, ROCKER_POINT, NEWTON_STEPS, N_WATCH, WATCH_G)
+                         ROCKER_PIVOT, ROCKER_POINT, NEWTON_STEPS, N_WATCH, WATCH_G,
+                         LANE_STEP_MAX)
 from ._mechanism import BODY_COM, BODY_TURN, BODY_MASS_OFF, CRANK_PIVOT
 from ...kernels.walk import (walk_angle, walk_start, walk_steps, locate, watch, watch_work)
 
@@ -140,7 +142,7 @@ def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww):
 # its own function, compiled from the start in the process beside the run
 # (pipeline.compiler.beside), which then loads it from numba's cache
 @njit(**JIT_INNER)
-def careful_tail(K, phis, k0, k1, trail, tols, out, wk, ww):
+def careful_tail(K, phis, k0, k1, trail, col, tols, out, wk, ww):
     """The careful walk of a lane that flagged itself, where the lane could not
     vouch: the first window, then positions ``k0`` .. k1 - 1 (3 < k0 < n, k1 <= n):
     from where the lane still vouched for its revolution to past the last
@@ -151,17 +153,34 @@ def careful_tail(K, phis, k0, k1, trail, tols, out, wk, ww):
     III groups start from the lane's solutions there (trail[k0]: e(a), e(b) per
     group) as a walk starts from its guesses, and positions k0 + 1 .. k1 - 1 are
     walked as careful_positions walks them, the watch between them included.
-    Returns the first failure met (status; its angle and group in
-    out[M_FAIL_PHI], out[M_FAIL_GROUP]), or OK where it meets none or cannot
-    start: the caller then walks the whole revolution (careful_positions, which
-    also checks that it closes).  A failing lane so costs a few positions of the
-    careful walk, not every position before its failure."""
+    Returns (status, spliced, the window's margin): the first failure met (its
+    angle and group in out[M_FAIL_PHI], out[M_FAIL_GROUP]), or OK where it meets
+    none or cannot start.  A failing lane so costs a few positions of the
+    careful walk, not every position before its failure.
+
+    A lane that meets no failure there is *spliced* (``spliced`` True) where
+    the careful walk also passes position k1 < n (its watch then certifies the
+    last window the lane had certified with a flagged position's margin) and
+    finds there the lane's own solution (every class III group's e(a), e(b) and
+    the rocker's angle within tols[T_CLOSE], the closing check's measure): the
+    lane's numbers hold outside k0 .. k1, and the careful walk's replace them
+    inside, the rocker's angles in ``col`` (the lane's on entry) and the class
+    III solutions in ``trail``; the window's margin is its positions' smallest.
+    Otherwise (False) the caller walks the whole revolution (careful_positions,
+    which also checks that it closes)."""
     pos, d1, d2, margins, state, _ = wk
+    found = ww[7]
+    n = phis.shape[0]
     phi_prev = walk_start(K, phis[0], state)
+    x0 = 0.0
+    y0 = 0.0
     for k in range(4):     # the careful walk's own first steps: the same numbers
         st = careful_step(K, k, phi_prev, phis[k], tols, out, wk, ww)
         if st != OK:
-            return st
+            return st, False, math.nan
+        if k == 0:      # (the watch looks at nothing before position 3: pos is k's)
+            x0 = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]
+            y0 = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]
         phi_prev = phis[k]
     for j in range(N_TRIADS):
         start_triad(state, j, math.atan2(trail[k0, 4 * j + 1], trail[k0, 4 * j]),
@@ -169,14 +188,93 @@ def careful_tail(K, phis, k0, k1, trail, tols, out, wk, ww):
     # the lane's solutions at k0 confirmed by a solve there (a step of zero)
     if advance(K, phis[k0], phis[k0], np.int64(0), tols, state, pos, d1, d2, margins,
                np.bool_(False)) != OK:
-        return OK
+        return OK, False, math.nan
+    spliced = k1 < n
     # (its history)
     watch(K, WATCH_G, np.int64(0), phis[k0], tols, state, pos, d1, d2, margins, ww)
-    for k in range(k0 + 1, k1):
-        st = careful_step(K, k - k0, phis[k - 1], phis[k], tols, out, wk, ww)
-        if st != OK:
-            return st
-    return OK
+    for k in range(k0 + 1, k1 + 1 if spliced else k1):
+        st = advance(K, phis[k - 1], phis[k], np.int64(0), tols, state, pos, d1, d2, margins,
+                     np.bool_(False))
+        if st == OK:
+            st = watch(K, WATCH_G, k - k0, phis[k], tols, state, pos, d1, d2, margins, ww)
+            if st != OK:
+                if k == k1:     # (past the window: the whole walk decides)
+                    return OK, False, math.nan
+                out[M_FAIL_PHI] = found[1]
+                out[M_FAIL_GROUP] = found[2]
+                return st, False, math.nan
+        elif k == k1:
+            return OK, False, math.nan
+        else:
+            return failed(K, k - k0, phis[k - 1], phis[k], st, tols, out, wk, ww), False, \
+                math.nan
+    if not spliced:
+        return OK, False, math.nan
+    margin = splice_window(K, phis, k0, k1, x0, y0, trail, col, tols, wk, ww)
+    return OK, margin >= 0.0, margin
+
+
+@njit(inline='always', **JIT)
+def splice_window(K, phis, k0, k1, x0, y0, trail, col, tols, wk, ww):
+    """The numbers of a spliced lane's window (``careful_tail``, which found no
+    failure there): positions k0 .. k1 walked again from the lane's solutions
+    at k0, each solved to near rounding (Newton's closure LOCATE_NEWTON_TOL, as
+    a located boundary's: the walk's own tolerance leaves the solution of a
+    short step within it, not at it), into col and trail (``window_row``).
+    Returns the window's margin, or NaN where a step fails, k1 is not the lane's
+    own solution or a step of the lane's rocker angle was beyond its series."""
+    pos, d1, d2, margins, state, _ = wk
+    ltols = ww[8]
+    for q in range(N_TOLS):
+        ltols[q] = tols[q]
+    ltols[T_NEWTON_TOL] = min(tols[T_NEWTON_TOL], LOCATE_NEWTON_TOL)
+    for k in range(k0 + 1, k1 + 1):
+        # the lane's rocker angles past the window are the sums of its increments, each
+        # the atan series of a step's tan: exact where every step is within its range
+        if not abs(col[k] - col[k - 1]) <= LANE_STEP_MAX:
+            return math.nan
+    for j in range(N_TRIADS):
+        start_triad(state, j, math.atan2(trail[k0, 4 * j + 1], trail[k0, 4 * j]),
+                    math.atan2(trail[k0, 4 * j + 3], trail[k0, 4 * j + 2]))
+    margin = math.inf
+    for k in range(k0, k1 + 1):
+        if advance(K, phis[max(k - 1, k0)], phis[k], np.int64(0), ltols, state, pos, d1, d2,
+                   margins, np.bool_(False)) != OK:
+            return math.nan
+        margin = window_row(k, k1, x0, y0, trail, col, tols, pos, state, margin)
+        if not margin >= 0.0:
+            return math.nan
+    return margin
+
+
+@njit(inline='always', **JIT)
+def window_row(k, k1, x0, y0, trail, col, tols, pos, state, margin):
+    """Position ``k`` of a spliced lane's careful window walked (``careful_tail``):
+    its rocker angle into col[k] and its class III solutions into trail[k]; at
+    k1, past the window, first checked to be the lane's own (within
+    tols[T_CLOSE]: else NaN is returned).  Returns the window's margin so far."""
+    th = relative_angle(x0, y0, pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0],
+                        pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1])
+    close = tols[T_CLOSE]
+    if k == k1 and not abs(th - col[k]) <= close:
+        return math.nan
+    col[k] = th
+    for j in range(N_TRIADS):
+        ca = math.cos(state[j, S_A])
+        sa = math.sin(state[j, S_A])
+        cb = math.cos(state[j, S_B])
+        sb = math.sin(state[j, S_B])
+        if k == k1 and not (abs(ca * trail[k, 4 * j + 1] - sa * trail[k, 4 * j]) <= close
+                            and abs(cb * trail[k, 4 * j + 3] - sb * trail[k, 4 * j + 2])
+                            <= close and ca * trail[k, 4 * j] + sa * trail[k, 4 * j + 1] > 0.0
+                            and cb * trail[k, 4 * j + 2] + sb * trail[k, 4 * j + 3] > 0.0):
+            return math.nan
+        trail[k, 4 * j] = ca
+        trail[k, 4 * j + 1] = sa
+        trail[k, 4 * j + 2] = cb
+        trail[k, 4 * j + 3] = sb
+        margin = min(margin, state[j, S_MARGIN])
+    return margin
 
 
 @njit(**JIT_ALLOC)
