@@ -17,8 +17,11 @@ vouch for a lane (S[R_flag, lane] set): an assembly failure or a margin below
 ``settings[SET_MARGIN_SAFE]``, a Newton that did not reach the tolerance in
 its fixed count, a correction or a step larger than the careful walk allows,
 a change of sign of det J, a revolution that does not close, a rocker step
-too large for the series.  Such a lane is redone on the careful path, which
-gives every status and failure angle exactly as before.
+too large for the series.  Such a lane is redone on the careful path from two
+positions before its first flag (``careful_tail``), which finds its failure as
+the walk from the start finds it; where it meets none, the careful window is
+spliced into the lane's numbers (solved to near rounding: the lane's own hold
+outside it), and only a lane that cannot be spliced is walked whole.
 
 Class III groups (and their sliding variant, P5 on a guide's line instead of
 a lead): the unknown angles a, b live as unit vectors e(a), e(b);

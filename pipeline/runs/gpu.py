@@ -23,7 +23,10 @@ by construction:
 the careful path counts the steps it took) and the class III ``margin``,
 which is det J at each path's own Newton iterate (the careful path stops at
 a residual of tols[T_NEWTON_TOL] = 1e-12, the lanes after two steps), a
-difference bounded by the closure tolerance over the margin.  On a real GPU,
+difference bounded by the closure tolerance over the margin.  A lane that
+flagged itself and met no failure is spliced: its careful window solved to
+near rounding, so its metrics differ from the careful path's by that path's
+own closure error (no further from the exact numbers).  On a real GPU,
 NVVM contracts a*b + c into FMA and uses its own libm (sin, cos, atan2 to
 1-2 ulp): last-digit differences, magnified near singular positions as on
 any two CPUs.  ``tests/runs/test_gpu.py`` checks all of this under numba's CUDA

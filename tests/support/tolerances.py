@@ -88,7 +88,8 @@ README_FIGURES = {
     "positions per revolution": ("PEAK_12_REL", "DWELL_360_ABS", "DWELL_720_ABS"),
     "RK4, mechanism C": ("RK4_VS_DOP853_RAD", "RK4_DT_S", "ENERGY_DRIFT_REL"),
     "failure angle": ("FAIL_ANGLE_RAD", "FAIL_ANGLE_TRIAD_RAD"),
-    "sweep lanes": ("LANE_AGREEMENT_REL", "LANE_MARGIN_REL"),
+    "sweep lanes": ("LANE_AGREEMENT_REL", "LANE_MARGIN_REL", "SPLICED_REFERENCE_TOL",
+                    "LANE_AGREEMENT_REL"),
     "GPU kernels": ("GPU_AGREEMENT_REL",),
     "floating-point flags": (),
 }
