@@ -82,6 +82,16 @@ def force_lane_work(nf):
 
 
 @njit(inline='always', **JIT)
+def lane_trail(theta, l, npos, trail):
+    """Lane ``l``'s solutions at every position (its class III groups' e(a), e(b),
+    its inputs' laws) into ``trail``, as the careful tail and the force stages
+    take them."""
+    for k in range(npos):
+        for q in range(TRAIL_COLS):
+            trail[k, q] = theta[k, (1 + q) * LANES + l]
+
+
+@njit(inline='always', **JIT)
 def lane_margin(theta, l, k0, k1, npos, margin):
     """A spliced lane's singularity margin: the smallest of its careful window's
     (``margin``: positions k0 .. k1) and of the lane's own at every other
@@ -162,9 +172,10 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
             for l in range(filled):
                 # the lane vouches for its candidate unless it flagged itself
                 vouched = np.int64(1) if S[R_flag, l] == 0.0 else np.int64(0)
-                for k in range(npos):
-                    for q in range(TRAIL_COLS):
-                        trail[k, q] = theta[k, (1 + q) * LANES + l]
+                # its solutions handed over (``trail``) only where a stage reads them
+                handed = vouched == 0
+                if handed:
+                    lane_trail(theta, l, npos, trail)
                 err_l, start_l, full_l, margin_l = err[l], start_k[l], full[l], S[R_margin, l]
                 spliced = False
                 if vouched == 0:     # flagged: the careful walk from two positions before
@@ -193,12 +204,17 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                 # own forms were ill-conditioned)
                 how = (np.int64(LANE_METRICS) if in_force_lanes and vouched > 0 and not spliced
                        else vouched)
+                if how == 1 and not handed:     # (settle's force stage reads them)
+                    lane_trail(theta, l, npos, trail)
+                    handed = True
                 st = settle(pars[idx[l]], how, phis, phi_close, tols, settings, loads, col,
                             trail, qmax, qmin, err_l, start_l, full_l, margin_l, wk, fw, ww,
                             corr, metrics[idx[l]])
                 if st != NEEDS_FORCES:
                     status[idx[l]] = st
                     continue
+                if not handed:
+                    lane_trail(theta, l, npos, trail)
                 force_lane_in(pars[idx[l]], np.int64(forced), trail, FS, FT, phis, crank_tab)
                 fidx[forced] = idx[l]
                 forced += 1
