@@ -390,21 +390,19 @@ print(json.dumps({"calls": calls, "status": status.tolist(),
 """
 
 
-def test_a_failing_lane_is_walked_from_just_before_its_flag(synthesis, candidates, tmp_path):
-    """A lane that fails a few positions after its flag is walked on the careful
-    path from two positions before the flag (careful_tail), which finds the
-    failure, and never from the start (careful_positions): one block of lanes
-    whose candidates fail past position 10 of 180, run in numba's Python mode, each
-    call counted; the statuses and failure angles are the compiled run's."""
-    positions = 180       # (lanes take steps up to 2 deg; Python mode walks each line: seconds)
+def _counted_block(synthesis, candidates, tmp_path, pick):
+    """A block of lanes of the main job at 180 positions (lanes take steps up to
+    2 deg; Python mode walks each line: seconds), the rows ``pick(pb, status,
+    metrics)`` chooses (8, or every lane where a block has fewer: a block filled
+    in part walks padded with its first lane), run by ``evaluate`` in numba's
+    Python mode with each call of careful_tail and careful_positions counted
+    (``TAIL_COUNT``): (its output, the rows, the compiled run's statuses and
+    metrics of them)."""
+    positions = 180
     pb = build_problem(synthesis, dataclasses.replace(synthesis.sweep, positions=positions))
     status, metrics = pb.evaluate_rows(candidates)
-    step = pb.phis[1] - pb.phis[0]
-    k_fail = (metrics[:, ks.M_FAIL_PHI] - pb.phis[0]) / step      # positions walked
-    # a block of them: 8, or every lane where a block has fewer (a block filled in
-    # part walks padded with its first lane; Python mode walks each lane: seconds)
     lanes = min(pb.kernels.LANES, 8)
-    rows = np.flatnonzero((status != kc.OK) & (k_fail > 10) & (k_fail < positions - 5))[:lanes]
+    rows = np.flatnonzero(pick(pb, status, metrics))[:lanes]
     assert len(rows) == lanes
     np.save(tmp_path / "pars.npy", candidates[rows])
     r = subprocess.run([sys.executable, "-c", TAIL_COUNT, str(STUDIES / "ov7_synthesis.toml"),
@@ -413,11 +411,24 @@ def test_a_failing_lane_is_walked_from_just_before_its_flag(synthesis, candidate
                        timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
     out = json.loads(r.stdout.strip().splitlines()[-1])
-    assert len(out["calls"]["careful_tail"]) == len(rows)
-    assert all(st != kc.OK for st, _ in out["calls"]["careful_tail"])    # each found its failure
     assert out["calls"]["careful_positions"] == 0
     np.testing.assert_array_equal(out["status"], status[rows])
-    np.testing.assert_allclose(out["fail_phi"], metrics[rows, ks.M_FAIL_PHI], rtol=0,
+    return out, rows, status[rows], metrics[rows]
+
+
+def test_a_failing_lane_is_walked_from_just_before_its_flag(synthesis, candidates, tmp_path):
+    """A lane that fails a few positions after its flag is walked on the careful
+    path from two positions before the flag (careful_tail), which finds the
+    failure, and never from the start (careful_positions): one block of lanes
+    whose candidates fail past position 10 of 180, each call counted; the
+    statuses and failure angles are the compiled run's."""
+    def failing(pb, status, metrics):
+        k_fail = (metrics[:, ks.M_FAIL_PHI] - pb.phis[0]) / (pb.phis[1] - pb.phis[0])
+        return (status != kc.OK) & (k_fail > 10) & (k_fail < len(pb.phis) - 5)
+    out, rows, _, metrics = _counted_block(synthesis, candidates, tmp_path, failing)
+    assert len(out["calls"]["careful_tail"]) == len(rows)
+    assert all(st != kc.OK for st, _ in out["calls"]["careful_tail"])    # each found its failure
+    np.testing.assert_allclose(out["fail_phi"], metrics[:, ks.M_FAIL_PHI], rtol=0,
                                atol=2 * FAIL_ANGLE_TRIAD_RAD)
 
 
@@ -425,31 +436,18 @@ def test_a_flagged_lane_that_meets_no_failure_is_spliced(synthesis, candidates, 
     """A lane that flags itself and passes is walked on the careful path from two
     positions before its flag to three past its last (careful_tail), which finds
     no failure and splices the careful window into the lane's numbers, and never
-    from the start (careful_positions): one block of such lanes in numba's Python
-    mode, each call counted; the statuses and metrics are the compiled run's
-    (their exactness: assert_lanes_agree)."""
-    positions = 180
-    pb = build_problem(synthesis, dataclasses.replace(synthesis.sweep, positions=positions))
-    status, metrics = pb.evaluate_rows(candidates)
-    spliced = spliced_rows(pb, candidates, status, metrics)
-    lanes = min(pb.kernels.LANES, 8)
-    rows = np.flatnonzero(spliced)[:lanes]
-    assert len(rows) == lanes
-    np.save(tmp_path / "pars.npy", candidates[rows])
-    r = subprocess.run([sys.executable, "-c", TAIL_COUNT, str(STUDIES / "ov7_synthesis.toml"),
-                        str(tmp_path / "pars.npy"), str(positions)],
-                       env=child_env(NUMBA_DISABLE_JIT="1"), capture_output=True, text=True,
-                       timeout=600)
-    assert r.returncode == 0, r.stderr[-2000:]
-    out = json.loads(r.stdout.strip().splitlines()[-1])
-    assert out["calls"]["careful_tail"] == [[kc.OK, True]] * lanes
-    assert out["calls"]["careful_positions"] == 0
-    np.testing.assert_array_equal(out["status"], status[rows])
+    from the start (careful_positions): one block of such lanes, each call
+    counted; the statuses and metrics are the compiled run's (their exactness:
+    assert_lanes_agree)."""
+    def spliced(pb, status, metrics):
+        return spliced_rows(pb, candidates, status, metrics)
+    out, rows, _, metrics = _counted_block(synthesis, candidates, tmp_path, spliced)
+    assert out["calls"]["careful_tail"] == [[kc.OK, True]] * len(rows)
     got = np.array(out["metrics"], dtype=float)
     for col in (ks.M_STROKE, ks.M_DWELL, ks.M_MARGIN, ks.M_PEAK_R, ks.M_PEAK_MBAL):
-        np.testing.assert_allclose(got[:, col], metrics[rows, col], rtol=LANE_AGREEMENT_REL,
+        np.testing.assert_allclose(got[:, col], metrics[:, col], rtol=LANE_AGREEMENT_REL,
                                    atol=0, err_msg=f"metric column {col}")
-    np.testing.assert_array_equal(got[:, ks.M_NEWTON_MEAN], metrics[rows, ks.M_NEWTON_MEAN])
+    np.testing.assert_array_equal(got[:, ks.M_NEWTON_MEAN], metrics[:, ks.M_NEWTON_MEAN])
 
 
 def test_a_candidate_gets_the_same_numbers_wherever_it_runs(problem, candidates):
