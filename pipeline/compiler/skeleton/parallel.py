@@ -92,6 +92,35 @@ def lane_trail(theta, l, npos, trail):
 
 
 @njit(inline='always', **JIT)
+def flagged_lane(par, S, theta, l, phis, tols, w, trail, col, qmax, qmin, out, wk, ww):
+    """Lane ``l`` flagged itself (its candidate ``par``, metrics row ``out``): the
+    careful walk from two positions before its first flag to three past its
+    last (``careful_tail``), to the failure it most likely meets.  Returns
+    (status, how, dwell error, its start, full range, margin): the failure met,
+    or OK and how ``settle`` goes on, 0 (the careful path: the whole revolution)
+    or, where the tail met no failure and spliced its careful window into the
+    lane's rocker angles ``col`` and solutions ``trail``, 1 (the lane's metrics,
+    the scalar force stage from those solutions: the window is where the lane's
+    own forms were ill-conditioned)."""
+    npos = phis.shape[0]
+    lane_trail(theta, l, npos, trail)
+    k0 = np.int64(S[R_first_flag, l]) - 2
+    k1 = min(np.int64(S[R_last_flag, l]) + 3, npos)
+    if not (k0 > 3 and k0 < npos):
+        return OK, np.int64(0), math.nan, np.int64(-1), math.nan, math.nan
+    no_metrics(out)
+    for k in range(npos):     # (the lane's angles: the window splices)
+        col[k] = theta[k, l]
+    st, spliced, margin = careful_tail(constants(par), phis, k0, k1, trail, col, tols, out,
+                                       wk, ww)
+    if st != OK or not spliced:
+        return st, np.int64(0), math.nan, np.int64(-1), math.nan, math.nan
+    # the lane's numbers outside the window, the careful walk's inside
+    err, start, full = dwell_error(col, w, qmax, qmin)
+    return OK, np.int64(1), err, start, full, lane_margin(theta, l, k0, k1, npos, margin)
+
+
+@njit(inline='always', **JIT)
 def lane_margin(theta, l, k0, k1, npos, margin):
     """A spliced lane's singularity margin: the smallest of its careful window's
     (``margin``: positions k0 .. k1) and of the lane's own at every other
@@ -170,51 +199,30 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
             block_walk(S, theta, cph, sph, phis, tols, settings)
             dwell_lanes(theta, npos, w, LANES, W5, err, start_k, full)
             for l in range(filled):
-                # the lane vouches for its candidate unless it flagged itself
-                vouched = np.int64(1) if S[R_flag, l] == 0.0 else np.int64(0)
-                # its solutions handed over (``trail``) only where a stage reads them
-                handed = vouched == 0
-                if handed:
-                    lane_trail(theta, l, npos, trail)
+                # the lane vouches for its candidate unless it flagged itself: where it
+                # vouched, the force stage in the force lanes (LANE_METRICS)
+                flagged = S[R_flag, l] != 0.0
+                how = np.int64(LANE_METRICS) if in_force_lanes else np.int64(1)
                 err_l, start_l, full_l, margin_l = err[l], start_k[l], full[l], S[R_margin, l]
-                spliced = False
-                if vouched == 0:     # flagged: the careful walk from two positions before
-                    # its first flag to two past its last, to the failure it most likely meets
-                    k0 = np.int64(S[R_first_flag, l]) - 2
-                    k1 = min(np.int64(S[R_last_flag, l]) + 3, npos)
-                    if k0 > 3 and k0 < npos:
-                        no_metrics(metrics[idx[l]])
-                        for k in range(npos):     # (the lane's angles: the window splices)
-                            col[k] = theta[k, l]
-                        st, spliced, margin_w = careful_tail(
-                            constants(pars[idx[l]]), phis, k0, k1, trail, col, tols,
-                            metrics[idx[l]], wk, ww)
-                        if st != OK:
-                            status[idx[l]] = st
-                            continue
-                        if spliced:     # the lane's numbers outside the window, its own inside
-                            vouched = np.int64(1)
-                            margin_l = lane_margin(theta, l, k0, k1, npos, margin_w)
-                            err_l, start_l, full_l = dwell_error(col, w, qmax, qmin)
-                if want_law and S[R_flag, l] == 0.0:     # the lane's rocker angles
+                if flagged:     # the careful tail: its failure, or its window spliced
+                    st, how, err_l, start_l, full_l, margin_l = flagged_lane(
+                        pars[idx[l]], S, theta, l, phis, tols, w, trail, col, qmax, qmin,
+                        metrics[idx[l]], wk, ww)
+                    if st != OK:
+                        status[idx[l]] = st
+                        continue
+                elif want_law:     # the lane's rocker angles
                     for k in range(npos):
                         col[k] = theta[k, l]
-                # (where it vouched, the force stage in the force lanes; a spliced lane's
-                # by the scalar stage from its solutions: its window is where the lane's
-                # own forms were ill-conditioned)
-                how = (np.int64(LANE_METRICS) if in_force_lanes and vouched > 0 and not spliced
-                       else vouched)
-                if how == 1 and not handed:     # (settle's force stage reads them)
+                if how == 1 and not flagged:     # (settle's force stage reads its solutions)
                     lane_trail(theta, l, npos, trail)
-                    handed = True
                 st = settle(pars[idx[l]], how, phis, phi_close, tols, settings, loads, col,
                             trail, qmax, qmin, err_l, start_l, full_l, margin_l, wk, fw, ww,
                             corr, metrics[idx[l]])
                 if st != NEEDS_FORCES:
                     status[idx[l]] = st
                     continue
-                if not handed:
-                    lane_trail(theta, l, npos, trail)
+                lane_trail(theta, l, npos, trail)     # (a vouched lane's, for the force lanes)
                 force_lane_in(pars[idx[l]], np.int64(forced), trail, FS, FT, phis, crank_tab)
                 fidx[forced] = idx[l]
                 forced += 1
