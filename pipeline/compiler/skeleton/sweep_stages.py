@@ -163,11 +163,12 @@ def careful_tail(K, phis, k0, k1, trail, col, tols, out, wk, ww):
     last window the lane had certified with a flagged position's margin) and
     finds there the lane's own solution (every class III group's e(a), e(b) and
     the rocker's angle within tols[T_CLOSE], the closing check's measure): the
-    lane's numbers hold outside k0 .. k1, and the careful walk's replace them
-    inside, the rocker's angles in ``col`` (the lane's on entry) and the class
-    III solutions in ``trail``; the window's margin is its positions' smallest.
-    Otherwise (False) the caller walks the whole revolution (careful_positions,
-    which also checks that it closes)."""
+    lane's numbers hold outside k0 .. k1, and inside the careful walk's replace
+    them, walked once more to near rounding (``splice_window``): the rocker's
+    angles in ``col`` (the lane's on entry) and the class III solutions in
+    ``trail``; the window's margin is its positions' smallest.  Otherwise
+    (False) the caller walks the whole revolution (careful_positions, which also
+    checks that it closes)."""
     pos, d1, d2, margins, state, _ = wk
     found = ww[7]
     n = phis.shape[0]
