@@ -26,7 +26,7 @@ from numba import njit, types
 from numba.core.types.function_type import CompileResultWAP
 from numba.extending import typeof_impl
 
-from .config import (JIT_ALLOC, JIT_INNER, OK, BRANCH_JUMP, SINGULAR, S_ITERS, N_STATE,
+from .config import (JIT, JIT_ALLOC, JIT_INNER, OK, BRANCH_JUMP, SINGULAR, S_ITERS, N_STATE,
                      N_TOLS, T_MIN_STEP, T_NEWTON_TOL, T_WATCH, T_TOUCH, T_LOCATE, compile_for)
 from .continuation import MARGIN_SLOTS, closes, copy2, restore, work
 from .watch import (FOLD_BACK, LOCATE_MIN_STEP, LOCATE_NEWTON_TOL, RESOLVED, SUB, cubic_bound,
@@ -91,6 +91,18 @@ def worst_window(phis, vals, j0, j1, n):
     return best, best_j, best_w, best_f3
 
 
+@njit(inline='always', **JIT)
+def near_rounding(tols, ww):
+    """``tols`` with Newton's closure at near rounding (LOCATE_NEWTON_TOL), in the
+    watch's work array ww[8]: a located boundary's, and a spliced lane's window
+    (the walk's own tolerance leaves a short step's solution within it, not at it)."""
+    ltols = ww[8]
+    for q in range(N_TOLS):
+        ltols[q] = tols[q]
+    ltols[T_NEWTON_TOL] = min(tols[T_NEWTON_TOL], LOCATE_NEWTON_TOL)
+    return ltols
+
+
 @njit(**JIT_INNER)
 def locate(advance, K, watch_g, good, bad, st_bad, g_bad, good_state, tols, state, pos, d1, d2,
            margins, ww):
@@ -110,13 +122,10 @@ def locate(advance, K, watch_g, good, bad, st_bad, g_bad, good_state, tols, stat
     tried = margins[fail_g + 2]
     keep = ww[6]
     found = ww[7]
-    # each trial a short walk from the good side with few halvings (a trial
-    # beyond the boundary fails fast; the bracket shrinks anyway)
-    ltols = ww[8]
-    for q in range(N_TOLS):
-        ltols[q] = tols[q]
-    # closure to near rounding: Newton's tolerance blurs where a fold is
-    ltols[T_NEWTON_TOL] = min(tols[T_NEWTON_TOL], LOCATE_NEWTON_TOL)
+    # closure to near rounding: Newton's tolerance blurs where a fold is; each
+    # trial a short walk from the good side with few halvings (a trial beyond
+    # the boundary fails fast; the bracket shrinks anyway)
+    ltols = near_rounding(tols, ww)
     ltols[T_MIN_STEP] = max(tols[T_MIN_STEP], LOCATE_MIN_STEP)
     if (tried - good) * (bad - tried) > 0.0:
         bad = tried

@@ -103,12 +103,12 @@ def flagged_lane(par, S, theta, l, phis, tols, w, trail, col, qmax, qmin, out, w
     the scalar force stage from those solutions: the window is where the lane's
     own forms were ill-conditioned)."""
     npos = phis.shape[0]
-    lane_trail(theta, l, npos, trail)
     k0 = np.int64(S[R_first_flag, l]) - 2
     k1 = min(np.int64(S[R_last_flag, l]) + 3, npos)
     if not (k0 > 3 and k0 < npos):
         return OK, np.int64(0), math.nan, np.int64(-1), math.nan, math.nan
     no_metrics(out)
+    lane_trail(theta, l, npos, trail)
     for k in range(npos):     # (the lane's angles: the window splices)
         col[k] = theta[k, l]
     st, spliced, margin = careful_tail(constants(par), phis, k0, k1, trail, col, tols, out,

@@ -19,14 +19,14 @@ from .header import (math, np, njit, JIT, JIT_ALLOC, JIT_INNER, OK, BRANCH_JUMP,
                      SET_LAW0, LAW_BEST, SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING)
 from .header import M_EQUILIBRIUM, equilibrium_residual
 from .header import S_HANDED, S_CA, S_SA, S_CB, S_SB, S_A, S_B, T_CLOSE, start_triad
-from .header import N_TOLS, T_NEWTON_TOL, LOCATE_NEWTON_TOL
 from .header import M_SHAKING_F, M_SHAKING_M, shaking, may_reach
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, constants, position, advance, forces_at, transmission,
                          ROCKER_PIVOT, ROCKER_POINT, NEWTON_STEPS, N_WATCH, WATCH_G,
                          LANE_STEP_MAX)
 from ._mechanism import BODY_COM, BODY_TURN, BODY_MASS_OFF, CRANK_PIVOT
-from ...kernels.walk import (walk_angle, walk_start, walk_steps, locate, watch, watch_work)
+from ...kernels.walk import (walk_angle, walk_start, walk_steps, locate, watch, watch_work,
+                              near_rounding)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 # settle's ``vouched`` beyond the lane's 1 (and the careful path's <= 0): a lane's
@@ -170,7 +170,6 @@ def careful_tail(K, phis, k0, k1, trail, col, tols, out, wk, ww):
     (False) the caller walks the whole revolution (careful_positions, which also
     checks that it closes)."""
     pos, d1, d2, margins, state, _ = wk
-    found = ww[7]
     n = phis.shape[0]
     phi_prev = walk_start(K, phis[0], state)
     x0 = 0.0
@@ -190,26 +189,18 @@ def careful_tail(K, phis, k0, k1, trail, col, tols, out, wk, ww):
     if advance(K, phis[k0], phis[k0], np.int64(0), tols, state, pos, d1, d2, margins,
                np.bool_(False)) != OK:
         return OK, False, math.nan
-    spliced = k1 < n
     # (its history)
     watch(K, WATCH_G, np.int64(0), phis[k0], tols, state, pos, d1, d2, margins, ww)
-    for k in range(k0 + 1, k1 + 1 if spliced else k1):
-        st = advance(K, phis[k - 1], phis[k], np.int64(0), tols, state, pos, d1, d2, margins,
-                     np.bool_(False))
-        if st == OK:
-            st = watch(K, WATCH_G, k - k0, phis[k], tols, state, pos, d1, d2, margins, ww)
-            if st != OK:
-                if k == k1:     # (past the window: the whole walk decides)
-                    return OK, False, math.nan
-                out[M_FAIL_PHI] = found[1]
-                out[M_FAIL_GROUP] = found[2]
-                return st, False, math.nan
-        elif k == k1:
-            return OK, False, math.nan
-        else:
-            return failed(K, k - k0, phis[k - 1], phis[k], st, tols, out, wk, ww), False, \
-                math.nan
-    if not spliced:
+    for k in range(k0 + 1, k1):
+        st = careful_step(K, k - k0, phis[k - 1], phis[k], tols, out, wk, ww)
+        if st != OK:
+            return st, False, math.nan
+    # one position past the window, where the lane vouches again: its watch certifies
+    # the last window the lane certified with a flagged position's margin; where it
+    # fails there (not reported: the whole walk decides) the lane is not spliced
+    if k1 >= n or advance(K, phis[k1 - 1], phis[k1], np.int64(0), tols, state, pos, d1, d2,
+                          margins, np.bool_(False)) != OK or watch(
+            K, WATCH_G, k1 - k0, phis[k1], tols, state, pos, d1, d2, margins, ww) != OK:
         return OK, False, math.nan
     margin = splice_window(K, phis, k0, k1, x0, y0, trail, col, tols, wk, ww)
     return OK, margin >= 0.0, margin
@@ -225,10 +216,7 @@ def splice_window(K, phis, k0, k1, x0, y0, trail, col, tols, wk, ww):
     Returns the window's margin, or NaN where a step fails, k1 is not the lane's
     own solution or a step of the lane's rocker angle was beyond its series."""
     pos, d1, d2, margins, state, _ = wk
-    ltols = ww[8]
-    for q in range(N_TOLS):
-        ltols[q] = tols[q]
-    ltols[T_NEWTON_TOL] = min(tols[T_NEWTON_TOL], LOCATE_NEWTON_TOL)
+    ltols = near_rounding(tols, ww)
     for k in range(k0 + 1, k1 + 1):
         # the lane's rocker angles past the window are the sums of its increments, each
         # the atan series of a step's tan: exact where every step is within its range
