@@ -112,7 +112,10 @@ def child(chunks: int, map_path: Path | None) -> None:
     from pipeline.runs.problem import plain_problem
     from pipeline.study.reader import load_study
     study = load_study(STUDIES / "ov7_synthesis.toml")
-    problem = plain_problem(study, study.sweep)
+    spec = study.sweep
+    # (as `pipeline run --candidates`: enough chunks for the profile)
+    spec = spec.with_candidates(max(spec.candidates, (chunks + 1) * spec.chunk_size))
+    problem = plain_problem(study, spec)
     problem.evaluate_chunk(0, parallel=False)       # (the kernels loaded)
     rows = write_perf_map(map_path or Path(f"/tmp/perf-{os.getpid()}.map"))
     print(f"map: {len(rows)} functions")
