@@ -132,14 +132,15 @@ class SweepProblem:
                                  parallel, share)
         return status, metrics
 
-    def draw_chunk(self, chunk):
+    def draw_chunk(self, chunk, draw=None):
         """(x, rejected draws per triangle, parameter rows) of chunk ``chunk``; on
         the GPU, a Sobol sweep's are drawn there and its parameter rows stay there
-        (``gpu_draws``: the same bits)."""
+        (``gpu_draws``: the same bits).  ``draw(chunk)``: (x, rejected) as
+        ``draw_checked`` gives them, drawn elsewhere (``draw_ahead``)."""
         draws = self._device_draws()
         if draws is not None:
             return draws.draw(chunk)
-        x, rejected = draw_checked(self.spec, chunk)
+        x, rejected = draw_checked(self.spec, chunk) if draw is None else draw(chunk)
         return x, rejected, parameter_rows(self.plan, self.spec, x)
 
     def _device_draws(self):

@@ -33,6 +33,7 @@ from ..study.sweep_spec import SweepSpec
 from .problem import SweepProblem, plain_problem
 from ..compiler.notice import compile_notice
 from .builds import Watch
+from .draw_ahead import drawing_ahead
 # the journal and the results file have modules of their own
 from ..results.journal import MANIFEST_DEFAULTS, Journal, manifest_for
 from ..results.sweep_file import SweepFile, counted, summarize
@@ -159,13 +160,16 @@ def _run_locked(study, spec, out, resume, overwrite, scheduler, client, n_jobs, 
 
     def run_chunks(client):
         sf.path = journal.working_file(out)
-        return _run_chunks(spec, out, journal, problem, sf, client, n_jobs, progress,
-                           stop_after_chunks)
+        # the sampler's import and the draws in a process beside, from now on
+        with drawing_ahead(problem, client is None) as draw:
+            return _run_chunks(spec, out, journal, problem, sf, client, n_jobs, progress,
+                               stop_after_chunks, draw)
     return journalled(out, journal, manifest_for(study, spec), "chunk", scheduler, client,
                       run_chunks)
 
 
-def _run_chunks(spec, out, journal, problem, sf, client, n_jobs, progress, stop_after_chunks):
+def _run_chunks(spec, out, journal, problem, sf, client, n_jobs, progress, stop_after_chunks,
+                draw=None):
     # the file, fresh or rebuilt from the journal below; its reference design is the
     # first evaluation, which compiles a new mechanism's kernels (once, then cached)
     with compile_notice() as prep:
@@ -188,7 +192,7 @@ def _run_chunks(spec, out, journal, problem, sf, client, n_jobs, progress, stop_
         d = sf.datasets(f)
         record.open(f, lambda chunks: _write(sf, d, chunks, out))
         for c, x, status, metrics, rejected, kept in _chunks(problem, todo, client, n_jobs,
-                                                             watch):
+                                                             watch, draw):
             computed += len(status)
             if watch is None:
                 bar.update(len(status))
@@ -277,10 +281,11 @@ def _progress(spec, done, enabled):
                desc="sweep", enabled=enabled, unit_scale=True, smoothing=0.1)
 
 
-def _chunks(problem, todo, client, n_jobs, watch=None):
+def _chunks(problem, todo, client, n_jobs, watch=None, draw=None):
     """Yield (chunk, x, status, metrics) as chunks finish.  Locally, when the
     caller stops (an interruption, a failure), the chunk at work stops at its
-    next slice (``watch``) and the one queued behind it never starts."""
+    next slice (``watch``) and the one queued behind it never starts.  ``draw``:
+    the draws' source (``SweepProblem.draw_chunk``), where not this process."""
     if client is not None:
         yield from _dask_chunks(problem, todo, client)
         return
@@ -294,12 +299,12 @@ def _chunks(problem, todo, client, n_jobs, watch=None):
     watch = Watch() if watch is None else watch
     ahead = ThreadPoolExecutor(1, thread_name_prefix="pipeline-chunks")
     drawer = ThreadPoolExecutor(1, thread_name_prefix="pipeline-draws")
-    draws = {c: drawer.submit(problem.draw_chunk, c) for c in todo[:1]}
+    draws = {c: drawer.submit(problem.draw_chunk, c, draw) for c in todo[:1]}
 
     def evaluate(c, nxt):
         drawn = draws.pop(c).result()
         if nxt is not None:
-            draws[nxt] = drawer.submit(problem.draw_chunk, nxt)
+            draws[nxt] = drawer.submit(problem.draw_chunk, nxt, draw)
         return problem.evaluate_chunk(c, True, n_jobs, watch, drawn)
     try:
         pending = None
