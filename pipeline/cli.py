@@ -40,6 +40,8 @@ def _print(obj, fmt):
 
 
 def cmd_run(a):
+    from .runs.draw_ahead import prefork
+    prefork(a.study)    # a sweep's draws: their process forked first (runs.draw_ahead)
     with _loading("run"):
         from .runner import run_study
         from .study.reader import load_study

@@ -18,10 +18,15 @@ CHILD = textwrap.dedent("""
     from dataclasses import replace
     from pipeline.study.reader import load_study
     from pipeline.study.sampling import draw_checked
-    from pipeline.runs.draw_ahead import DrawAhead
-    spec = replace(load_study(sys.argv[1]).sweep, candidates=6000, chunk_size=1000)
-    ahead = DrawAhead.start(spec)
-    assert ahead is not None, "not forked"
+    from pipeline.runs import draw_ahead
+    study, search, scene = sys.argv[1:4]
+    for other in (search, scene):       # forked for a sweep's run only
+        draw_ahead.prefork(other)
+        assert not draw_ahead._WAITING, other
+    draw_ahead.prefork(study)           # before the study is read, as `pipeline run` does
+    ahead = draw_ahead._WAITING.pop()
+    spec = replace(load_study(study).sweep, candidates=6000, chunk_size=1000)
+    ahead.begin(spec)
     def same(c):
         x, rejected = ahead.draw(c)
         x0, rejected0 = draw_checked(spec, c)
@@ -40,8 +45,9 @@ CHILD = textwrap.dedent("""
 
 def test_forked_draws_are_the_runs_own_and_survive_the_child():
     argv, env = module_command("pipeline")      # (the package's python and path)
-    r = subprocess.run([argv[0], "-c", CHILD, str(STUDIES / "ov7_synthesis.toml")], env=env,
-                       capture_output=True, text=True, timeout=300)
+    studies = [str(STUDIES / f"{s}.toml") for s in ("ov7_synthesis", "ov7_search", "ov7_base")]
+    r = subprocess.run([argv[0], "-c", CHILD, *studies], env=env, capture_output=True,
+                       text=True, timeout=300)
     assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr[-3000:]
 
 
