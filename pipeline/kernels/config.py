@@ -120,7 +120,11 @@ T_WATCH = 11          # between-sample watch: a margin^2 that may dip this low b
 T_TOUCH = 12          # margin^2 at or below this at a located minimum: a toggle the crank
                       # passes between positions (the branch there is ambiguous): SINGULAR
 T_LOCATE = 13         # a failure between positions is located to this, rad
-N_TOLS = 14
+T_GO_ON = 14          # 1: after a failure at the smallest step a walk solves its target
+                      # straight from its last solution (a scene shows what can be shown);
+                      # 0: it reports the failure at once (a sweep's careful path, and a
+                      # failure's location, look no further than the failure)
+N_TOLS = 15
 
 # state columns of a class III group, either kind (per candidate, per group)
 S_A = 0
@@ -149,7 +153,7 @@ N_STATE = 19
 def default_tolerances(newton_tol=1e-12, newton_maxiter=50, newton_step=0.5,
                        singular=1e-9, jump=0.1, substep_deg=2.0, close=1e-7,
                        assembly_slack=1e-12, step_change=0.05, min_step=1e-5,
-                       first_step=1e-5, watch=1e-6, touch=1e-12, locate=1e-10):
+                       first_step=1e-5, watch=1e-6, touch=1e-12, locate=1e-10, go_on=True):
     """The tolerance vector the kernels take, with the product's defaults."""
     t = np.empty(N_TOLS)
     t[T_NEWTON_TOL] = newton_tol
@@ -166,4 +170,14 @@ def default_tolerances(newton_tol=1e-12, newton_maxiter=50, newton_step=0.5,
     t[T_WATCH] = watch
     t[T_TOUCH] = touch
     t[T_LOCATE] = locate
+    t[T_GO_ON] = 1.0 if go_on else 0.0
+    return t
+
+
+def stored_tolerances(stored):
+    """A tolerance vector read from a results file, completed with the defaults
+    of the entries added since it was written (T_GO_ON, 2026-12-06)."""
+    t = default_tolerances()
+    stored = np.asarray(stored, dtype=np.float64)
+    t[:len(stored)] = stored[:N_TOLS]
     return t

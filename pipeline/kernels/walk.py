@@ -27,7 +27,8 @@ from numba.core.types.function_type import CompileResultWAP
 from numba.extending import typeof_impl
 
 from .config import (JIT, JIT_ALLOC, JIT_INNER, OK, BRANCH_JUMP, SINGULAR, S_ITERS, N_STATE,
-                     N_TOLS, T_MIN_STEP, T_NEWTON_TOL, T_WATCH, T_TOUCH, T_LOCATE, compile_for)
+                     N_TOLS, T_MIN_STEP, T_NEWTON_TOL, T_WATCH, T_TOUCH, T_LOCATE, T_GO_ON,
+                     compile_for)
 from .continuation import MARGIN_SLOTS, closes, copy2, restore, work
 from .watch import (FOLD_BACK, LOCATE_MIN_STEP, LOCATE_NEWTON_TOL, RESOLVED, SUB, cubic_bound,
                     fold_distance, third_difference, uniform_hit, window_score, window_vertex)
@@ -100,6 +101,7 @@ def near_rounding(tols, ww):
     for q in range(N_TOLS):
         ltols[q] = tols[q]
     ltols[T_NEWTON_TOL] = min(tols[T_NEWTON_TOL], LOCATE_NEWTON_TOL)
+    ltols[T_GO_ON] = 0.0     # (a trial that fails is put back: nothing past it is read)
     return ltols
 
 

@@ -222,7 +222,8 @@ def _flywheel(group, fw):
 TOLERANCES = (("newton_tol", "1"), ("newton_maxiter", "1"), ("newton_step", "rad"),
               ("singular", "1"), ("jump", "rad"), ("substep", "rad"), ("close", "rad"),
               ("assembly_slack", "1"), ("step_change", "rad"), ("min_step", "1"),
-              ("first_step", "1"), ("watch", "1"), ("touch", "1"), ("locate", "rad"))
+              ("first_step", "1"), ("watch", "1"), ("touch", "1"), ("locate", "rad"),
+              ("go_on", "1"))
 
 
 def parameter_units(name) -> str:

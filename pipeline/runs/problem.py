@@ -179,6 +179,15 @@ class SweepProblem:
                 and self.robust is None and self.friction is None)
 
 
+def _sweep_tolerances(tols):
+    """The sweep's tolerances: ``tols`` (the defaults if None), a walk stopped at
+    its first failure (T_GO_ON 0: after it a scene's walk solves on, to show what
+    can be shown, which a sweep never reads; the same numbers)."""
+    tols = kc.default_tolerances() if tols is None else np.array(tols, dtype=np.float64)
+    tols[kc.T_GO_ON] = 0.0
+    return tols
+
+
 def plain_problem(study, spec: SweepSpec, tols=None, device="cpu") -> SweepProblem:
     """The sweep's problem of ``study`` under ``spec``: plain arrays a worker
     evaluates (its robust metrics' builds are ``runs.sweep.build_problem``'s)."""
@@ -192,7 +201,7 @@ def plain_problem(study, spec: SweepSpec, tols=None, device="cpu") -> SweepProbl
     law = out.motion_law
     return SweepProblem(
         spec=spec, plan=plan, phis=phis, phi_close=crank.phi0 + crank.rot * 2 * math.pi,
-        tols=kc.default_tolerances() if tols is None else tols,
+        tols=_sweep_tolerances(tols),
         rocker=(out.rocker[0], out.rocker[1]),
         dwell_w=int(round(out.dwell_deg * spec.positions / 360)),
         omega1=crank.omega1, eps1=crank.eps1,

@@ -93,7 +93,8 @@ def geometry_of(f, source) -> Geometry:
                dense_phi=f["dense/phi1"][()], dense_pos=f["dense/position"][()],
                dense_ok=bool((f["dense/status"][()] == kc.OK).all())
                and attr_text(f.attrs.get("status")) == "OK")
-    tols = f["mechanism/tolerances"][()] if "tolerances" in f["mechanism"] else None
+    tols = (kc.stored_tolerances(f["mechanism/tolerances"][()])
+            if "tolerances" in f["mechanism"] else None)
     sized = {}
     if "peaks" in f and "pin_d_min" in f["peaks"]:
         d = f["peaks/pin_d_min"]

@@ -115,6 +115,25 @@ def test_sweep_metrics_match_scene_path(baseline, synthesis):
         assert scene_metrics(synthesis, x[i], synthesis.sweep.positions)["status"] == status[i]
 
 
+def test_a_walk_stopped_at_its_failure_gives_the_sweep_the_same_numbers(synthesis):
+    """The sweep's tolerances stop a careful walk at its first failure (T_GO_ON 0;
+    a scene's walk solves on past it, to show what can be shown): a failed
+    candidate's status, angle and group, and every other number, are the same
+    to the bit as with the walk going on (whose work they never read)."""
+    problem = build_problem(synthesis, dataclasses.replace(synthesis.sweep, candidates=4000,
+                                                           chunk_size=4000))
+    assert problem.tols[kc.T_GO_ON] == 0.0
+    going_on = problem.tols.copy()
+    going_on[kc.T_GO_ON] = 1.0
+    _, _, pars = problem.draw_chunk(0)
+    status, metrics = problem.evaluate_rows(pars, n_jobs=1)
+    status_on, metrics_on = dataclasses.replace(problem, tols=going_on).evaluate_rows(pars,
+                                                                                      n_jobs=1)
+    assert (status == kc.SINGULAR).sum() >= 100     # (failures that walk past their fold)
+    assert np.array_equal(status, status_on)
+    assert np.array_equal(metrics, metrics_on, equal_nan=True)
+
+
 def test_apply_design_matches_parameter_rows(synthesis):
     spec = synthesis.sweep
     plan = synthesis.mechanism.compile()

@@ -204,3 +204,13 @@ def test_refusals_are_one_line(scenes, tmp_path, capsys):
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and words in err, err
     assert not list(tmp_path.iterdir())
+
+
+def test_a_file_written_before_the_go_on_entry_draws_with_its_tolerances():
+    """A scene file's stored tolerance vector from before T_GO_ON (14 entries) is
+    completed with the defaults, not read past its end by the kernels."""
+    from pipeline.kernels import config as kc
+    old = kc.default_tolerances(newton_tol=1e-11)[:kc.T_GO_ON]
+    t = kc.stored_tolerances(old)
+    assert len(t) == kc.N_TOLS and np.array_equal(t[:kc.T_GO_ON], old)
+    assert t[kc.T_GO_ON] == kc.default_tolerances()[kc.T_GO_ON] == 1.0

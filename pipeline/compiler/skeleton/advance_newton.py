@@ -6,7 +6,7 @@ The text below the marker line is pasted into the generated module
 readers, the names the generated module gives it."""
 
 from .header import (njit, JIT_INNER, OK, BRANCH_JUMP, NEWTON_MAXITER, T_SUBSTEP, T_MIN_STEP,
-                     accept, fold_limit, may_stop, predict, restore, step_limit)
+                     T_GO_ON, accept, fold_limit, may_stop, predict, restore, step_limit)
 from ._mechanism import (N_GROUPS, position)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
@@ -18,7 +18,8 @@ def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, with_
     fails or jumps branch (det J changes sign, or the correction exceeds
     tols[T_JUMP]) is retried at half the size, down to tols[T_MIN_STEP] of the
     full step, and only then reported (a step that ``fold_limit`` makes shorter
-    still is not retried: a failure there is the fold's).  Returns the first
+    still is not retried: a failure there is the fold's); then, where
+    tols[T_GO_ON], phi_to is solved straight from the last solution.  Returns the first
     non-OK status met on the way (margins[N_GROUPS]: its group;
     margins[N_GROUPS + 1]: the last angle reached, margins[N_GROUPS + 2]: the
     angle of the failing step).  (One call site of ``position``: numba inlines
@@ -77,6 +78,6 @@ def advance(K, phi_from, phi_to, order, tols, state, pos, d1, d2, margins, with_
             margins[N_GROUPS + 2] = target
         if st == NEWTON_MAXITER:
             restore(state)
-        if final:
-            return status
+        if final or tols[T_GO_ON] == 0.0:
+            return status       # (a sweep's careful path, a location: no further)
         straight = True

@@ -26,7 +26,7 @@ from pipeline.kernels.config import (JIT, JIT_ALLOC, JIT_ALLOC_INNER, JIT_INNER,
                                      N_STATE, N_TOLS, T_SINGULAR,
                                      T_ASSEMBLY_SLACK, T_SUBSTEP,
                                      T_MIN_STEP, T_NEWTON_TOL, T_JUMP, T_STEP_CHANGE, T_CLOSE,
-                                     T_WATCH, T_TOUCH, T_LOCATE)
+                                     T_WATCH, T_TOUCH, T_LOCATE, T_GO_ON)
 from pipeline.kernels.continuation import (MARGIN_SLOTS, accept, closes, copy2, fold_limit,
                                            may_stop, predict, restore, start_triad, step_limit,
                                            work, wrap)
@@ -63,7 +63,8 @@ __all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_ALLOC_INNER', 'JIT_INN
            'S_DET_SIGN', 'S_ITERS', 'S_MARGIN', 'S_HANDED', 'S_CA', 'S_SA', 'S_CB', 'S_SB',
            'N_STATE', 'N_TOLS', 'T_SINGULAR',
            'T_ASSEMBLY_SLACK', 'T_SUBSTEP', 'T_MIN_STEP', 'T_NEWTON_TOL', 'T_JUMP',
-           'T_STEP_CHANGE', 'T_CLOSE', 'T_WATCH', 'T_TOUCH', 'T_LOCATE', 'accept', 'fold_limit',
+           'T_STEP_CHANGE', 'T_CLOSE', 'T_WATCH', 'T_TOUCH', 'T_LOCATE', 'T_GO_ON', 'accept',
+           'fold_limit',
            'may_stop',
            'closes', 'copy2', 'predict', 'restore', 'start_triad', 'step_limit', 'work',
            'wrap', 'dynamics', 'applied_loads',
