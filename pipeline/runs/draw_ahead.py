@@ -158,11 +158,10 @@ _WAITING: list = []     # the child ``prefork`` forked, waiting for its sweep
 
 
 def prefork(study_path) -> None:
-    """Where ``pipeline run`` runs a sweep study (its file says kind = "sweep",
-    and it has no [search]),
-    the drawing process forked now, before the study is read and the package's
-    numerical part imported: the sampler's import then ends before the kernels'
-    load does.  A run that does not take it (a scene after all, a refusal, a
+    """Where ``pipeline run`` runs a sweep study (its file says kind = "sweep" and
+    has no [search]), the drawing process forked now, before the study is read
+    and the package's numerical part imported: the sampler's import then ends
+    before the kernels' load does.  A run that does not take it (a refusal, a
     GPU's or a cluster's draws) lets it go (``drawing_ahead``, or this
     process's end)."""
     try:
