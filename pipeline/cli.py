@@ -40,16 +40,20 @@ def _print(obj, fmt):
 
 
 def cmd_run(a):
-    from .runs.draw_ahead import prefork
+    from .runs.draw_ahead import let_go, prefork
     prefork(a.study)    # a sweep's draws: their process forked first (runs.draw_ahead)
-    with _loading("run"):
-        from .runner import run_study
-        from .study.reader import load_study
-        study = load_study(a.study)
-    res = run_study(study, a.output, candidates=a.candidates, resume=a.resume,
-                    overwrite=a.overwrite, scheduler=a.scheduler, n_jobs=a.jobs,
-                    chunk_size=a.chunk_size, progress=not a.quiet, pictures=not a.no_pictures,
-                    seed_from=a.seed_from, device=a.device, store=a.store)
+    try:
+        with _loading("run"):
+            from .runner import run_study
+            from .study.reader import load_study
+            study = load_study(a.study)
+        res = run_study(study, a.output, candidates=a.candidates, resume=a.resume,
+                        overwrite=a.overwrite, scheduler=a.scheduler, n_jobs=a.jobs,
+                        chunk_size=a.chunk_size, progress=not a.quiet,
+                        pictures=not a.no_pictures, seed_from=a.seed_from, device=a.device,
+                        store=a.store)
+    finally:
+        let_go()        # (a run that did not take it)
     info = {"results": str(res.results), **res.summary}
     if res.pictures:
         info["pictures"] = ", ".join(str(p) for p in res.pictures)

@@ -100,6 +100,13 @@ class DrawAhead:
             self.failed = True
         return draw_checked(self.spec, chunk)
 
+    def discard(self):
+        """The child of a run that did not take it ended at once (it has done
+        nothing but import and wait) and waited for."""
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(self.pid, signal.SIGKILL)
+        self.close()
+
     def close(self):
         """The child told to end (its pipe closed) and waited for; killed if it
         is still there after a second."""
@@ -118,10 +125,14 @@ class DrawAhead:
 
 
 def _close_all_but(*keep):
-    """Every file the child inherited closed but its standard streams and ``keep``:
-    the run's lock on its results file is the run's alone (a run killed with -9
-    is resumed at once, and the lock must go with it), and the pipe's other ends
-    are the run's."""
+    """Every file the child inherited closed but ``keep``, its standard streams
+    on /dev/null: the run's lock on its results file is the run's alone (a run
+    killed with -9 is resumed at once, and the lock must go with it), the pipe's
+    other ends are the run's, and a caller that reads the run's output to its
+    end never waits for the child (it writes nothing)."""
+    null = os.open(os.devnull, os.O_RDWR)
+    for fd in (0, 1, 2):
+        os.dup2(null, fd)
     for name in os.listdir("/proc/self/fd"):
         fd = int(name)
         if fd > 2 and fd not in keep:
@@ -176,6 +187,13 @@ def prefork(study_path) -> None:
             _WAITING.append(ahead)
 
 
+def let_go() -> None:
+    """The child ``prefork`` forked, where no run took it (a refused or failed
+    run), ended now rather than at this process's end."""
+    while _WAITING:
+        _WAITING.pop().discard()
+
+
 @contextlib.contextmanager
 def drawing_ahead(problem, local: bool):
     """Around a sweep's run: the draw its chunks take (``SweepProblem.draw_chunk``'s
@@ -187,7 +205,7 @@ def drawing_ahead(problem, local: bool):
     if local and problem.device == "cpu":
         ahead = waiting or DrawAhead.fork()
     elif waiting is not None:
-        waiting.close()
+        waiting.discard()
     if ahead is not None:
         ahead.begin(problem.spec)
     try:

@@ -1,7 +1,7 @@
 """A local sweep's draws in a forked process (pipeline.runs.draw_ahead): the
 run's own draws to the bit, whoever draws them and in whatever order; a child
-that ends leaves the draws to the run; the command line's run writes the same
-file with it and without it."""
+that ends leaves the draws to the run, one that no run takes is ended; the
+command line's run writes the same file with it and without it."""
 
 import subprocess
 import textwrap
@@ -23,6 +23,15 @@ CHILD = textwrap.dedent("""
     for other in (search, scene):       # forked for a sweep's run only
         draw_ahead.prefork(other)
         assert not draw_ahead._WAITING, other
+    draw_ahead.prefork(study)           # a run that does not take it: ended, waited for
+    pid = draw_ahead._WAITING[0].pid
+    draw_ahead.let_go()
+    assert not draw_ahead._WAITING
+    try:
+        os.waitpid(pid, os.WNOHANG)
+        raise AssertionError("the child was not waited for")
+    except ChildProcessError:
+        pass
     draw_ahead.prefork(study)           # before the study is read, as `pipeline run` does
     ahead = draw_ahead._WAITING.pop()
     spec = replace(load_study(study).sweep, candidates=6000, chunk_size=1000)
