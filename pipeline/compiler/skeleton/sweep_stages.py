@@ -182,9 +182,7 @@ def careful_tail(K, phis, k0, k1, trail, col, tols, out, wk, ww):
             x0 = pos[ROCKER_POINT, 0] - pos[ROCKER_PIVOT, 0]
             y0 = pos[ROCKER_POINT, 1] - pos[ROCKER_PIVOT, 1]
         phi_prev = phis[k]
-    for j in range(N_TRIADS):
-        start_triad(state, j, math.atan2(trail[k0, 4 * j + 1], trail[k0, 4 * j]),
-                    math.atan2(trail[k0, 4 * j + 3], trail[k0, 4 * j + 2]))
+    start_from_trail(state, trail, k0)
     # the lane's solutions at k0 confirmed by a solve there (a step of zero)
     if advance(K, phis[k0], phis[k0], np.int64(0), tols, state, pos, d1, d2, margins,
                np.bool_(False)) != OK:
@@ -207,6 +205,15 @@ def careful_tail(K, phis, k0, k1, trail, col, tols, out, wk, ww):
 
 
 @njit(inline='always', **JIT)
+def start_from_trail(state, trail, k):
+    """The class III groups started from a lane's solutions at position ``k``
+    (trail[k]: e(a), e(b) per group), as a walk starts from its guesses."""
+    for j in range(N_TRIADS):
+        start_triad(state, j, math.atan2(trail[k, 4 * j + 1], trail[k, 4 * j]),
+                    math.atan2(trail[k, 4 * j + 3], trail[k, 4 * j + 2]))
+
+
+@njit(inline='always', **JIT)
 def splice_window(K, phis, k0, k1, x0, y0, trail, col, tols, wk, ww):
     """The numbers of a spliced lane's window (``careful_tail``, which found no
     failure there): positions k0 .. k1 walked again from the lane's solutions
@@ -222,9 +229,7 @@ def splice_window(K, phis, k0, k1, x0, y0, trail, col, tols, wk, ww):
         # the atan series of a step's tan: exact where every step is within its range
         if not abs(col[k] - col[k - 1]) <= LANE_STEP_MAX:
             return math.nan
-    for j in range(N_TRIADS):
-        start_triad(state, j, math.atan2(trail[k0, 4 * j + 1], trail[k0, 4 * j]),
-                    math.atan2(trail[k0, 4 * j + 3], trail[k0, 4 * j + 2]))
+    start_from_trail(state, trail, k0)
     margin = math.inf
     for k in range(k0, k1 + 1):
         if advance(K, phis[max(k - 1, k0)], phis[k], np.int64(0), ltols, state, pos, d1, d2,
