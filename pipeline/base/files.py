@@ -95,15 +95,32 @@ def _remove_stale(target: Path):
     pattern = re.compile(rf"\.{re.escape(target.stem)}\.(\d+)(?:\.tmp-[A-Za-z0-9_]+)?"
                          rf"\.partial{re.escape(target.suffix)}")
     for p in target.parent.glob(f".{glob.escape(target.stem)}.*.partial{glob.escape(target.suffix)}"):
-        m = pattern.fullmatch(p.name)
-        if not m:
-            continue
-        try:
-            os.kill(int(m.group(1)), 0)
-        except ProcessLookupError:
-            p.unlink(missing_ok=True)
-        except OSError:
-            continue
+        _remove_if_dead(p, pattern.fullmatch(p.name))
+
+
+# any file's temporary file (``temporary_beside``): its target's stem, the writer's process id
+_ANY_TEMPORARY = re.compile(r"\..+\.(\d+)(?:\.tmp-[A-Za-z0-9_]+)?\.partial(?:\.[^.]+)?")
+
+
+def remove_stale_in(folder: Path):
+    """Every temporary file in ``folder`` left by a process that was killed, at
+    once: for a folder that one run writes many files into (a journal), which
+    then writes each with ``replacing(..., stale=False)`` instead of looking
+    through the whole folder for every file."""
+    for p in Path(folder).glob(".*.partial*"):
+        _remove_if_dead(p, _ANY_TEMPORARY.fullmatch(p.name))
+
+
+def _remove_if_dead(p: Path, m):
+    """``p`` removed where ``m`` (its name matched) names a process that is gone."""
+    if not m:
+        return
+    try:
+        os.kill(int(m.group(1)), 0)
+    except ProcessLookupError:
+        p.unlink(missing_ok=True)
+    except OSError:
+        pass
 
 
 # ----------------------------------------------------------------- output paths
@@ -285,7 +302,7 @@ def naming(e: Exception, target) -> OSError:
 
 
 @contextmanager
-def replacing(target, copy_of=None):
+def replacing(target, copy_of=None, stale=True):
     """Yield a temporary path to write ``target`` to; on success it is flushed
     and renamed over ``target``, on any error (or interruption) removed.  A
     target that is a symbolic link is written through: the file it leads to is
@@ -293,7 +310,9 @@ def replacing(target, copy_of=None):
     An operating-system error names ``target``.
 
     ``copy_of``: start from a copy of that file (an in-place update, such as
-    the analysis of a sweep, is made on the copy and swapped in)."""
+    the analysis of a sweep, is made on the copy and swapped in).  ``stale``:
+    a killed writer's temporary files of ``target`` are removed first (False:
+    the caller cleared the folder once, ``remove_stale_in``)."""
     target = Path(target)
     if target.is_symlink():
         if not target.exists():
@@ -303,7 +322,8 @@ def replacing(target, copy_of=None):
         raise ResultsError(target, "is a folder; give a file name")
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
-        _remove_stale(target)
+        if stale:
+            _remove_stale(target)
         tmp = temporary_beside(target)
     except OSError as e:
         raise naming(e, target) from None

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..base.errors import ResultsError
-from ..base.files import refuse_link, replacing
+from ..base.files import refuse_link, remove_stale_in, replacing
 from ..kernels import sweep as ks
 from .storage import study_digest
 from ..study.sweep_spec import SweepSpec
@@ -62,6 +62,12 @@ class Journal:
             return self.dir / "replacement.h5"
         return out
 
+    def clear_stale(self):
+        """A killed run's temporary files in the folder removed, once for the
+        run: each chunk is then written without looking through the folder
+        (which grows by a file a chunk) for its own."""
+        remove_stale_in(self.dir)
+
     def _atomic(self, path, data: bytes):
         with replacing(path) as tmp:    # the one atomic writer (files.replacing)
             tmp.write_bytes(data)
@@ -71,8 +77,8 @@ class Journal:
         ``path``, written by np.savez straight into the temporary file: through a
         buffer, a sweep's chunk cost the main thread twice the time (its copies
         into a growing BytesIO), the same bytes."""
-        with replacing(path) as tmp, open(tmp, "wb") as fh:
-            np.savez(fh, **arrays)
+        with replacing(path, stale=False) as tmp, open(tmp, "wb") as fh:
+            np.savez(fh, **arrays)     # (the folder's stale files: clear_stale, once)
 
     def save(self, chunk, x, status, metrics, rejected, index=None, counts=None):
         """One chunk's rows; with store = feasible only the rows kept, their

@@ -126,6 +126,7 @@ def journalled(out: Path, journal: Journal, manifest: dict, unit: str, scheduler
                 journal.dir.mkdir(parents=True, exist_ok=True)
                 first(journal)
             journal.start(dict(manifest, replaces=out.exists()))
+        journal.clear_stale()     # (a killed run's temporary files: once, not per unit)
         return run_units(client)
 
 

@@ -19,6 +19,7 @@ from support.faults import digest, one_line_error
 from pipeline.study.reader import load_study
 from pipeline.base.files import RunLock
 from pipeline.runs.sweep import run_sweep
+from pipeline.results.journal import Journal
 
 ROOT = Path(__file__).resolve().parents[2]
 N = 2000
@@ -191,6 +192,36 @@ def test_damaged_journal_chunk_is_one_line(studies, tmp_path, capsys):
     assert main(["run", str(studies / "ov7_synthesis.toml"), "-o", str(out), "--candidates",
                  "1000", "--chunk-size", "250", "--resume", "-q"]) == 2
     one_line_error(capsys, "damaged journal chunk", chunk.name)
+
+
+def test_a_killed_runs_journal_temporaries_go_once_as_the_run_resumes(studies, tmp_path,
+                                                                        monkeypatch):
+    study = load_study(studies / "ov7_synthesis.toml")
+    out = tmp_path / "s.h5"
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(study, out, candidates=1000, chunk_size=250, progress=False,
+                  stop_after_chunks=2)
+    parts = tmp_path / "s.h5.parts"
+    dead = parts / ".chunk_0000002.999999999.tmp-ab_12x.partial.npz"    # a killed writer's
+    live = parts / f".chunk_0000003.{os.getpid()}.tmp-cd_34y.partial.npz"  # a live one's
+    other = parts / "chunk_0000009.npz.keep"                            # not a temporary
+    for p in (dead, live, other):
+        p.write_bytes(b"x")
+    scans, seen = [], []
+    real = files._remove_stale
+    monkeypatch.setattr(files, "_remove_stale", lambda t: (scans.append(t), real(t)))
+    clear = Journal.clear_stale
+
+    def cleared(journal):     # (the folder itself goes once the run completes)
+        clear(journal)
+        seen.append([p.exists() for p in (dead, live, other)])
+    monkeypatch.setattr(Journal, "clear_stale", cleared)
+    run_sweep(study, out, candidates=1000, chunk_size=250, progress=False, resume=True)
+    assert seen == [[False, True, True]]
+    # each chunk written without a look through the folder for its own stale files
+    assert not [t for t in scans if t.parent == parts]
+    with h5py.File(out, "r") as f:
+        assert f["candidates/status"].shape == (1000,)
 
 
 def test_damaged_results_file_is_one_line(tmp_path, capsys):
