@@ -218,25 +218,38 @@ def row_of(f, cid: int) -> int:
     return j
 
 
-def attach(d, dims):
+def attach(d, dims, scales=None):
     """Name the dimensions of dataset ``d``: each entry the name of a dimension
     scale in its group or a group above it (or a dataset of its group, which
-    becomes the scale: phi1 of a curves group, t of a dynamics case)."""
+    becomes the scale: phi1 of a curves group, t of a dynamics case).
+    ``scales``: the scales found so far for datasets of ``d``'s group, by name
+    (``put``'s, one dict per group object: a scene's file names the same few
+    dimensions in every dataset, and each look took a third of its writing)."""
     for i, name in enumerate(dims):
         if name is None:
             continue
-        g = d.parent
-        while True:
-            if name in g and isinstance(g[name], h5py.Dataset):
-                s = g[name]
-                if not h5py.h5ds.is_scale(s.id):
-                    s.make_scale(name)
-                break
-            if g.name == "/":
-                raise KeyError(f"no dimension scale {name!r} above {d.name}")
-            g = g.parent
+        s = scales.get(name) if scales is not None else None
+        if s is None:
+            s = _scale_above(d, name)
+            if scales is not None:
+                scales[name] = s
         if s.id != d.id:
             d.dims[i].attach_scale(s)
+
+
+def _scale_above(d, name):
+    """The dimension scale ``name`` for dataset ``d``: a dataset of that name in its
+    group or the nearest group above it (made a scale if it is not one)."""
+    g = d.parent
+    while True:
+        s = g.get(name)
+        if isinstance(s, h5py.Dataset):
+            if not h5py.h5ds.is_scale(s.id):
+                s.make_scale(name)
+            return s
+        if g.name == "/":
+            raise KeyError(f"no dimension scale {name!r} above {d.name}")
+        g = g.parent
 
 
 def variables(group) -> list:
@@ -276,7 +289,10 @@ def put(group, name, data, units, long_name, dims=None, **attrs):
     for k, v in attrs.items():
         d.attrs[k] = v
     if dims:
-        attach(d, dims)
+        # (the group's own dataset of this name, from now on nearer than any above)
+        scales = group.__dict__.setdefault("_pipeline_scales", {})
+        scales.pop(name, None)
+        attach(d, dims, scales)
     return d
 
 
