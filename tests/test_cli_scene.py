@@ -107,3 +107,36 @@ def test_bad_study_exit_code(tmp_path, capsys):
     assert main(["run", str(p), "-o", str(tmp_path / "x.h5")]) == 2
     err = capsys.readouterr().err
     assert "s.toml" in err and "study.name" in err
+
+
+def test_the_program_collects_its_garbage_seldom_but_still_collects_it(monkeypatch):
+    import gc
+
+    from pipeline import cli
+    saved = gc.get_threshold()
+    seen = []
+
+    def command():
+        starts = []
+
+        def count(phase, info):
+            if phase == "start":
+                starts.append(info["generation"])
+        gc.callbacks.append(count)
+        try:
+            for _ in range(200_000):        # cycles a command leaves behind
+                a = []
+                a.append(a)
+        finally:
+            gc.callbacks.remove(count)
+        seen.append(len(starts))
+        return 0
+    monkeypatch.setattr(cli, "main", command)
+    gc.set_threshold(700, 10, 10)           # (Python's default, whatever the session set)
+    try:
+        assert cli.script() == 0
+    finally:
+        gc.unfreeze()
+        gc.set_threshold(*saved)
+    # Python's default collects some 280 times over 200,000 allocations
+    assert 1 <= seen[0] <= 200_000 // 20_000
