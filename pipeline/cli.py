@@ -532,22 +532,15 @@ def script() -> int:
     command made (numba's, matplotlib's: 0.3 million) and kept a finished
     command silent for a second before the prompt came back; the objects are
     frozen out of it (``gc.freeze``), the operating system takes the memory.
-    Fewer collections on the way (GC_THRESHOLDS): the imports and numba's first
-    loads make objects that live as long as the process, and at Python's default
-    (a collection every 700 allocations net) the collector walked them some 300
-    times, 0.13 s of a scene's 1.5 s.
+    Fewer collections on the way (``base.processes.collect_seldom``).
     Not in ``main``, which tests and notebooks call in a process that goes on."""
     import gc
-    gc.set_threshold(*GC_THRESHOLDS)
+
+    from .base.processes import collect_seldom
+    collect_seldom()
     code = main()
     gc.freeze()
     return code
-
-
-# the program's garbage collections: the youngest every 50,000 allocations net (0.05 s of
-# collections in a scene or a sweep instead of 0.13 s; the cycles a command leaves are
-# still collected, 50,000 objects at most waiting), the older two at Python's ratios
-GC_THRESHOLDS = (50_000, 10, 10)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -391,6 +391,8 @@ if __name__ == "__main__":      # a worker of ``_in_processes``
     # print, a library's note) goes to the error output, which the parent keeps
     answers = os.fdopen(os.dup(1), "wb")
     os.dup2(2, 1)
+    from ..base.processes import collect_seldom
+    collect_seldom()
     try:
         _serve(sys.stdin.buffer, answers)
     except KeyboardInterrupt:   # (the terminal's Ctrl-C reaches the workers too)

@@ -151,4 +151,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
+    from ..base.processes import collect_seldom
+    collect_seldom()
     raise SystemExit(main())
