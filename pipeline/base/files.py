@@ -88,18 +88,20 @@ def temporary_beside(target) -> Path:
     return Path(name)
 
 
+# a temporary file's name (``temporary_beside``): its target's stem and suffix, the
+# writer's process id (the name ends in one way only: the id, its random part, "partial")
+_TEMPORARY = re.compile(r"\.(?P<stem>.+)\.(?P<pid>\d+)(?:\.tmp-[A-Za-z0-9_]+)?"
+                        r"\.partial(?P<suffix>(?:\.[^.]+)?)")
+
+
 def _remove_stale(target: Path):
     """Temporary files of ``target`` left by a process that was killed (their
     process id is gone); the whole name must match, so another file's
     temporary file is never touched."""
-    pattern = re.compile(rf"\.{re.escape(target.stem)}\.(\d+)(?:\.tmp-[A-Za-z0-9_]+)?"
-                         rf"\.partial{re.escape(target.suffix)}")
     for p in target.parent.glob(f".{glob.escape(target.stem)}.*.partial{glob.escape(target.suffix)}"):
-        _remove_if_dead(p, pattern.fullmatch(p.name))
-
-
-# any file's temporary file (``temporary_beside``): its target's stem, the writer's process id
-_ANY_TEMPORARY = re.compile(r"\..+\.(\d+)(?:\.tmp-[A-Za-z0-9_]+)?\.partial(?:\.[^.]+)?")
+        m = _TEMPORARY.fullmatch(p.name)
+        if m and m["stem"] == target.stem and m["suffix"] == target.suffix:
+            _remove_if_dead(p, int(m["pid"]))
 
 
 def remove_stale_in(folder: Path):
@@ -108,15 +110,15 @@ def remove_stale_in(folder: Path):
     then writes each with ``replacing(..., stale=False)`` instead of looking
     through the whole folder for every file."""
     for p in Path(folder).glob(".*.partial*"):
-        _remove_if_dead(p, _ANY_TEMPORARY.fullmatch(p.name))
+        m = _TEMPORARY.fullmatch(p.name)
+        if m:
+            _remove_if_dead(p, int(m["pid"]))
 
 
-def _remove_if_dead(p: Path, m):
-    """``p`` removed where ``m`` (its name matched) names a process that is gone."""
-    if not m:
-        return
+def _remove_if_dead(p: Path, pid: int):
+    """``p`` removed where process ``pid``, its writer, is gone."""
     try:
-        os.kill(int(m.group(1)), 0)
+        os.kill(pid, 0)
     except ProcessLookupError:
         p.unlink(missing_ok=True)
     except OSError:
