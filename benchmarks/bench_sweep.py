@@ -3,7 +3,12 @@
 Candidates per second of the kernel on the default study's candidates with
 full metrics (positions, dwell, then forces for the still-feasible ones) and
 with dwell-only metrics (no force stage), and the 1- vs all-thread scaling,
-all in one process after a warm-up (compile time reported separately).
+all in one process after a warm-up (compile time reported separately).  Then
+the careful path alone (``evaluate_careful``, every candidate walked as the
+lanes' failures are), on one thread, against the lanes' full metrics, the
+rounds alternated: the rate a sweep could have on the plan path, whose kernels
+have the careful path only (issue 53: whether a new mechanism's sweep could start
+on them while its module compiles).
 
     python benchmarks/bench_sweep.py [--candidates 20000]
 """
@@ -80,6 +85,34 @@ def main(argv=None):
         print(f"scaling 1 -> {t} threads: x{res[('full metrics', t)] / res[('full metrics', 1)]:.2f} "
               f"(full), x{res[('dwell-only', t)] / res[('dwell-only', 1)]:.2f} (dwell-only)")
     print(f"first call (compile or cache load): {compile_s:.1f} s")
+    careful_against_lanes(full_pb, pars[:max(50, a.candidates // 4)], repeat)
+
+
+def careful_rows(pb, pars):
+    """Every row of ``pars`` through ``evaluate_careful``, one at a time."""
+    from pipeline.kernels.sweep import N_METRICS
+    k, npos = pb.kernels, len(pb.phis)
+    col, trail, out = np.empty(npos), np.empty((npos + 1, 4)), np.empty(N_METRICS)
+    q1, q2 = (np.empty(npos + pb.dwell_w + 1, np.int64) for _ in range(2))
+    settings = pb.settings()
+    for par in pars:
+        k.evaluate_careful(par, pb.phis, pb.phi_close, pb.tols, settings, pb.loads, col,
+                           trail, q1, q2, out)
+
+
+def careful_against_lanes(pb, pars, repeat):
+    """Candidates/s on one thread of the careful path alone and of the lanes (the
+    sweep's own ``evaluate``), alternated, and what the careful rate means for
+    100,000 candidates."""
+    careful_rows(pb, pars[:2])      # (compiled or loaded first)
+    careful, lanes = [], []
+    for _ in range(max(repeat, 2)):
+        careful.append(len(pars) / best_of(lambda: careful_rows(pb, pars), repeat=1))
+        lanes.append(len(pars) / best_of(lambda: pb.evaluate_rows(pars, True, 1), repeat=1))
+    c, ln = max(careful), max(lanes)
+    print(f"\ncareful path alone, 1 thread, {len(pars):,} candidates: {c:,.0f} c/s against "
+          f"the lanes' {ln:,.0f} (x{ln / c:.1f}); 100,000 candidates on it take "
+          f"{1e5 / c:.0f} s of one core")
 
 
 if __name__ == "__main__":
