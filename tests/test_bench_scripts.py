@@ -36,6 +36,7 @@ SMOKE = {
     "bench_host.py": (["--smoke", "-o", "{tmp}"], "host.md"),
     "bench_new_mechanism.py": (["--smoke", "-o", "{tmp}"], "new_mechanism.md"),
     "bench_profile.py": (["--smoke", "-o", "{tmp}"], "profile.md"),
+    "bench_plan_lanes.py": (["--smoke", "-o", "{tmp}"], "plan_lanes.md"),
 }
 
 
