@@ -35,8 +35,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks.common import ROOT, STUDIES, beside_done, hardware  # noqa: E402
-from pipeline.base.files import write_text  # noqa: E402
+from benchmarks.common import ROOT, STUDIES, beside_done, hardware, write_table  # noqa: E402
 
 SCENES = ("ov7_base", "warp_feed_fourbar", "feed_fivebar", "ov7_class3", "ov7_class3_slider",
           "ov7_friction", "scotch_yoke_rpp", "slotted_rocker_prp", "ppr_cross_slide",
@@ -124,10 +123,7 @@ def main(argv=None):
     studies = SCENES[:1] if a.smoke else tuple(a.study or SCENES)
     rounds = 1 if a.smoke else a.rounds
     text = table(measure(studies, rounds), rounds)
-    print(text)
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
-    write_text(out / "new_mechanism.md", text)
+    write_table(a.out, "new_mechanism.md", text)
     return text
 
 

@@ -42,8 +42,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks.common import ROOT, STUDIES, hardware  # noqa: E402
-from pipeline.base.files import write_text  # noqa: E402
+from benchmarks.common import ROOT, STUDIES, hardware, write_table  # noqa: E402
 
 _IND = " " * 12         # the lane loop's body in the generated walk
 _OUTER = {"S", "theta", "k", "cph", "sph", "armed", "tol", "jump", "step_change",
@@ -263,10 +262,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     r = measure(2 if a.smoke else a.blocks, 1 if a.smoke else a.rounds)
     text = table(r)
-    print(text)
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
-    write_text(out / "plan_lanes.md", text)
+    write_table(a.out, "plan_lanes.md", text)
     return r
 
 

@@ -85,6 +85,15 @@ def smoke_main(run, doc, written):
     run(a.smoke, a.output)
 
 
+def write_table(folder, name, text):
+    """A benchmark's table printed, and written to ``folder``/``name`` (made if new)."""
+    from pipeline.base.files import write_text
+    print(text)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    write_text(folder / name, text)
+
+
 def beside_done(limit=120.0):
     """Wait until no process compiles beside a run (pipeline.compiler.beside,
     which a first sweep starts and which may outlive it by a moment): the next
