@@ -92,7 +92,8 @@ def careful_rows(pb, pars):
     """Every row of ``pars`` through ``evaluate_careful``, one at a time."""
     from pipeline.kernels.sweep import N_METRICS
     k, npos = pb.kernels, len(pb.phis)
-    col, trail, out = np.empty(npos), np.empty((npos + 1, 4)), np.empty(N_METRICS)
+    col, out = np.empty(npos), np.empty(N_METRICS)
+    trail = np.empty((npos + 1, max(k.TRAIL_COLS, 1)))
     q1, q2 = (np.empty(npos + pb.dwell_w + 1, np.int64) for _ in range(2))
     settings = pb.settings()
     for par in pars:
