@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import sys
+from pathlib import Path
 
 import numba
 import numpy as np
@@ -88,23 +90,12 @@ def main(argv=None):
     careful_against_lanes(full_pb, pars[:max(50, a.candidates // 4)], repeat)
 
 
-def careful_rows(pb, pars):
-    """Every row of ``pars`` through ``evaluate_careful``, one at a time."""
-    from pipeline.kernels.sweep import N_METRICS
-    k, npos = pb.kernels, len(pb.phis)
-    col, out = np.empty(npos), np.empty(N_METRICS)
-    trail = np.empty((npos + 1, max(k.TRAIL_COLS, 1)))
-    q1, q2 = (np.empty(npos + pb.dwell_w + 1, np.int64) for _ in range(2))
-    settings = pb.settings()
-    for par in pars:
-        k.evaluate_careful(par, pb.phis, pb.phi_close, pb.tols, settings, pb.loads, col,
-                           trail, q1, q2, out)
-
-
 def careful_against_lanes(pb, pars, repeat):
     """Candidates/s on one thread of the careful path alone and of the lanes (the
     sweep's own ``evaluate``), alternated, and what the careful rate means for
     100,000 candidates."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+    from support.lanes import careful_rows      # (the lane tests' reference rows)
     careful_rows(pb, pars[:2])      # (compiled or loaded first)
     careful, lanes = [], []
     for _ in range(max(repeat, 2)):
