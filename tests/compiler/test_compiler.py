@@ -280,6 +280,49 @@ def test_a_scene_s_forces_wait_for_the_process_beside_that_compiles_them():
     assert len(waited) == 1
 
 
+def test_a_sweep_s_evaluate_compiles_after_the_process_beside_has_its_kernels():
+    """Where a process beside compiles a sweep module's stand-alone kernels,
+    the run first compiles the rest of what evaluate calls (compile_run_side),
+    then waits for the line that says the process beside is done, so that
+    evaluate loads them instead of racing it to them; with no process beside
+    (or after the first time) it compiles nothing before evaluate."""
+    import threading
+    import time
+    import types
+    import pipeline.compiler as pc
+    from pipeline.compiler import beside
+    order = []
+    never = threading.Event()
+
+    class Proc:
+        def __init__(self, line):
+            self.stdout = types.SimpleNamespace(readline=lambda: order.append("read") or line)
+    mod = types.SimpleNamespace(__name__="pipeline_mech_z", evaluate="its evaluate")
+    real = beside.compile_run_side
+    try:
+        beside.compile_run_side = lambda m: order.append(("run side", m.__name__))
+        assert pc.ready_to_evaluate(mod) == "its evaluate" and order == []
+        for line in (beside.STANDALONE_DONE + "\n", ""):      # (said, or ended without)
+            order.clear()
+            pc._BESIDE[(mod.__name__, "walk")] = Proc(line)
+            assert pc.ready_to_evaluate(mod) == "its evaluate"
+            assert order == [("run side", "pipeline_mech_z"), "read"]
+            order.clear()
+            assert pc.ready_to_evaluate(mod) == "its evaluate" and order == []
+        # a process that never says it: the run waits no longer than asked
+        never = threading.Event()
+        stuck = Proc(None)
+        stuck.stdout.readline = never.wait
+        pc._BESIDE[(mod.__name__, "walk")] = stuck
+        t = time.perf_counter()
+        assert pc.ready_to_evaluate(mod, timeout=0.2) == "its evaluate"
+        assert 0.2 <= time.perf_counter() - t < 60.0
+    finally:
+        never.set()
+        beside.compile_run_side = real
+        pc._BESIDE.pop((mod.__name__, "walk"), None)
+
+
 def test_after_the_library_a_design_of_the_sweep_rerun_as_a_scene_compiles_nothing(problem,
                                                                                  synthesis):
     """After a sweep's kernels the process beside compiles the library
@@ -684,21 +727,24 @@ def test_the_stand_alone_kernels_compile_beside_for_evaluate_s_types(problem, ca
     where the module has a lane walk, its cache is empty and it is not
     turned off."""
     from numba.core import event
-    from pipeline.compiler.beside import compile_standalone
+    from pipeline.compiler.beside import STANDALONE_DONE, compile_run_side, compile_standalone
     k = problem.kernels
     status, metrics = problem.evaluate_rows(candidates)
     assert (metrics[:, ks.M_FORCES_DONE] == 1.0).sum() > k.LANES     # force blocks ran
     with event.install_recorder("numba:compile") as rec:
         compile_standalone(k)
+        compile_run_side(k)         # (what the run compiles meanwhile: ready_to_evaluate)
     compiled = {e.data["dispatcher"].py_func.__name__ for _, e in rec.buffer}
     assert not compiled & {"force_lanes", "walk", "force_flush", "force_stage", "force_lane_in",
                            "block_walk", "careful_tail", "setup_lane", "dwell_error",
-                           "dwell_lanes", "law_error"}, compiled
+                           "dwell_lanes", "law_error", "settle", "flush_forces"}, compiled
     assert k.force_lanes.signatures and k.walk.signatures      # called (loaded, or there)
+    assert k.settle.signatures and k.flush_forces.signatures
     r = subprocess.run([sys.executable, "-m", "pipeline.compiler.beside", k.__name__,
                         str(Path(k.SOURCE_PATH).parent)], env=child_env(),
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.splitlines()[0] == STANDALONE_DONE      # (what the run waits for)
     # the trigger (pipeline.compiler._compile_beside)
     import types
 
