@@ -35,6 +35,7 @@ SMOKE = {
     "bench_yardstick.py": (["--smoke", "-o", "{tmp}"], "yardstick.md"),
     "bench_host.py": (["--smoke", "-o", "{tmp}"], "host.md"),
     "bench_new_mechanism.py": (["--smoke", "-o", "{tmp}"], "new_mechanism.md"),
+    "bench_new_sweep.py": (["--smoke", "-o", "{tmp}"], "new_sweep.md"),
     "bench_profile.py": (["--smoke", "-o", "{tmp}"], "profile.md"),
     "bench_plan_lanes.py": (["--smoke", "-o", "{tmp}"], "plan_lanes.md"),
 }
