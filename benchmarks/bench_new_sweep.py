@@ -1,7 +1,7 @@
 """A new sweep mechanism's first candidates, end to end: the compile beside the run, or not.
 
     python benchmarks/bench_new_sweep.py [--rounds 3] [--study NAME] [--candidates 100000]
-                                         [--against DIR] [--smoke] [-o DIR]
+                                         [--one-process] [--against DIR] [--smoke] [-o DIR]
 
 ``pipeline run STUDY --candidates N`` (the main job's study by default, 100,000
 candidates) in a fresh process, the wall time of the whole process, as a
@@ -13,7 +13,8 @@ alternated round by round on the same machine:
 * beside: the default; the run compiles the careful stages and ``evaluate``
   while a process beside compiles the force lanes, the force stage and the lane
   walk (``pipeline.compiler.beside``);
-* one process: ``PIPELINE_COMPILE_BESIDE=0``, every kernel in the run;
+* with ``--one-process``, ``PIPELINE_COMPILE_BESIDE=0``: every kernel in the
+  run (what the process beside buys; about 1.6 times as long);
 * with ``--against DIR``, another checkout of the package (an earlier commit:
   ``git worktree add DIR REV``) the default way, so that "sooner than before"
   is measured in one run, alternately.
@@ -40,9 +41,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from benchmarks.bench_new_mechanism import _env, _forget_mechanisms  # noqa: E402
 from benchmarks.common import ROOT, STUDIES, beside_done, hardware, write_table  # noqa: E402
 
-def ways(against=None):
+def ways(one_process=False, against=None):
     """{way: (checkout, environment settings)}."""
-    out = {"beside": (ROOT, {}), "one process": (ROOT, {"PIPELINE_COMPILE_BESIDE": "0"})}
+    out = {"beside": (ROOT, {})}
+    if one_process:
+        out["one process"] = (ROOT, {"PIPELINE_COMPILE_BESIDE": "0"})
     if against is not None:
         out[f"beside, {Path(against).name}"] = (Path(against).resolve(), {})
     return out
@@ -114,13 +117,15 @@ def main(argv=None):
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--study", default="ov7_synthesis", help="a sweep study of studies/")
     ap.add_argument("--candidates", type=int, default=100_000)
+    ap.add_argument("--one-process", action="store_true",
+                    help="also every kernel in the run's process (PIPELINE_COMPILE_BESIDE=0)")
     ap.add_argument("--against", help="another checkout of the package, run the default way")
     ap.add_argument("--smoke", action="store_true", help="that it runs: 500 candidates, once")
     ap.add_argument("-o", "--out", default=str(ROOT / "results" / "bench"))
     a = ap.parse_args(argv)
     if a.against and not (Path(a.against) / "pipeline" / "__init__.py").is_file():
         ap.error(f"--against {a.against}: no checkout of the package there (pipeline/)")
-    chosen = ways(a.against)
+    chosen = ways(a.one_process, a.against)
     study, n, rounds = a.study, a.candidates, a.rounds
     if a.smoke:
         chosen = {"beside": chosen["beside"]}

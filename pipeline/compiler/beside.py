@@ -55,10 +55,12 @@ def compile_standalone(mod) -> None:
         return
     a1, a2 = np.zeros(4), np.zeros((4, 4))
     par = np.ones(mod.N_PARAMS)
-    K = mod.constants(par)
-    wk = mod.work(mod.N_POINTS, mod.N_GROUPS, mod.N_TRIADS)
-    fw = mod.force_work(mod.N_BODIES, mod.N_JOINTS, mod.N_SLIDES + mod.N_INPUTS)
-    ww = mod.watch_work(mod.N_WATCH, mod.N_TRIADS)
+    # the constants and the work arrays by the kernels' Python (the same types): their
+    # compile (0.9 s, which the run does too) would hold back the force lanes
+    K = mod.constants.py_func(par)
+    wk = mod.work.py_func(mod.N_POINTS, mod.N_GROUPS, mod.N_TRIADS)
+    fw = mod.force_work.py_func(mod.N_BODIES, mod.N_JOINTS, mod.N_SLIDES + mod.N_INPUTS)
+    ww = mod.watch_work.py_func(mod.N_WATCH, mod.N_TRIADS)
     i64, b = np.int64(0), True
     loads = np.zeros((npos, 1, 3))
     status = np.zeros(4, np.int8)       # (the run's status array: pipeline.runs.problem)
