@@ -167,11 +167,10 @@ def _compile_beside(mod, kernel="walk", *what) -> None:
         if proc is None or proc.poll() is not None:
             del _BESIDE[key]
     argv, env = module_command("pipeline.compiler.beside", mod.__name__, str(path.parent), *what)
-    try:        # (a sweep's says when its kernels are in the cache: ready_to_evaluate)
+    try:
         _BESIDE[(mod.__name__, kernel)] = subprocess.Popen(
-            argv, env=env, stdin=subprocess.DEVNULL,
-            stdout=subprocess.PIPE if kernel == "walk" else subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL, text=True)
+            argv, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL)
     except OSError:         # no second process: the run compiles them itself
         pass
 
@@ -191,29 +190,6 @@ def await_beside(mod, kernel, timeout=120.0) -> None:
             proc.wait(timeout)
         except subprocess.TimeoutExpired:   # (then this process compiles it)
             pass
-
-
-def ready_to_evaluate(mod, timeout=300.0):
-    """``mod.evaluate``, a sweep module's; where a process beside this one
-    compiles its stand-alone kernels (``_compile_beside``), first the rest
-    of what ``evaluate`` calls, here (``beside.compile_run_side``), then a
-    wait (at most ``timeout`` seconds) for the process beside to say that its
-    kernels are in numba's cache, so that ``evaluate``, which links them all,
-    compiles last and loads them instead of racing the process beside to them
-    (it reached the force stage a second before it was there, and compiled it
-    again: 4 s)."""
-    proc = _BESIDE.pop((getattr(mod, "__name__", None), "walk"), None)
-    if proc is not None and proc.stdout is not None:
-        import threading
-
-        from .beside import compile_run_side
-        compile_run_side(mod)
-        # its line (beside.STANDALONE_DONE), or '' where it ended without it (then
-        # evaluate compiles what it lacks)
-        reader = threading.Thread(target=proc.stdout.readline, daemon=True)
-        reader.start()
-        reader.join(timeout)
-    return mod.evaluate
 
 
 def scene_kernels_for(plan, forces=False):

@@ -110,13 +110,12 @@ class SweepProblem:
             if self.device == "gpu":
                 status, metrics = self.gpu().evaluate_rows(pars)
             else:
-                from ..compiler import ready_to_evaluate
                 from ..compiler.parallel import run_rows
                 n = pars.shape[0]
                 status = np.zeros(n, np.int8)
                 metrics = np.full((n, ks.N_METRICS), np.nan)
-                run_rows(ready_to_evaluate(self.kernels), np.ascontiguousarray(pars),
-                         self.phis, self.phi_close, self.tols, self.settings(), self.loads, status,
+                run_rows(self.kernels.evaluate, np.ascontiguousarray(pars), self.phis,
+                         self.phi_close, self.tols, self.settings(), self.loads, status,
                          metrics, n_jobs=n_jobs if parallel else 1)
             if self.robust is not None or self.friction is not None:
                 # the robust metrics' columns after the kernels', then the friction's

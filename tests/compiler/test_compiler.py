@@ -122,7 +122,8 @@ def test_every_kernel_of_the_sweep_compiles_once(problem, candidates):
                 | compiled.get(d, set()))
     generated = {name: getattr(mod, name) for name in (
         "setup_lane", "block_walk", "force_lane_in", "careful_tail", "force_stage", "walk",
-        "force_lanes", "force_flush", "settle", "evaluate", "watch", "locate", "refine")}
+        "force_lanes", "force_flush", "settle", "flush_forces", "evaluate_lanes", "watch",
+        "locate", "refine")}
     library = {"start_triad": continuation.start_triad, "_stalls": triad._stalls,
                "_nan_joints": triad._nan_joints}
     seen = {name: versions(d) for name, d in {**generated, **library}.items()}
@@ -133,6 +134,26 @@ def test_every_kernel_of_the_sweep_compiles_once(problem, candidates):
     callers = {n: [d.py_func.__name__ for d in compiled if n in d.py_func.__code__.co_names
                    and d.py_func.__globals__.get(n) is k] for n, k in library.items()}
     assert not [n for n in library if callers[n] and not seen[n]], callers
+
+
+def test_evaluate_calls_settle_and_flush_forces_through_their_addresses(problem, candidates):
+    """The sweep's evaluate_lanes holds no copy of settle's or flush_forces' code
+    (its compile would have LLVM optimise and emit them once more): it calls them
+    through the addresses callees() gives, each compiled once for the types it
+    passes them; and flush_forces calls settle likewise."""
+    mod = problem.kernels
+    problem.evaluate_rows(np.ascontiguousarray(candidates[:64]), parallel=False)
+    at = mod.callees()
+    assert at.dtype == np.int64 and at.shape == (2,) and (at > 0).all()
+    assert len(mod.settle.signatures) == 1 and len(mod.flush_forces.signatures) == 1
+
+    def defines(kernel, name):
+        ir = next(iter(kernel.inspect_llvm().values()))
+        return [ln for ln in ir.splitlines() if ln.startswith("define") and name in ln]
+    assert defines(mod.settle, "settle")            # (the test can see a definition)
+    assert not defines(mod.evaluate_lanes, "settle")
+    assert not defines(mod.evaluate_lanes, "flush_forces")
+    assert not defines(mod.flush_forces, "settle")
 
 
 def test_the_scene_s_walk_is_compiled_once_for_every_mechanism():
@@ -278,49 +299,6 @@ def test_a_scene_s_forces_wait_for_the_process_beside_that_compiles_them():
     pc.await_beside(mod, "forces_curve")
     pc.await_beside(mod, "forces_curve")
     assert len(waited) == 1
-
-
-def test_a_sweep_s_evaluate_compiles_after_the_process_beside_has_its_kernels():
-    """Where a process beside compiles a sweep module's stand-alone kernels,
-    the run first compiles the rest of what evaluate calls (compile_run_side),
-    then waits for the line that says the process beside is done, so that
-    evaluate loads them instead of racing it to them; with no process beside
-    (or after the first time) it compiles nothing before evaluate."""
-    import threading
-    import time
-    import types
-    import pipeline.compiler as pc
-    from pipeline.compiler import beside
-    order = []
-    never = threading.Event()
-
-    class Proc:
-        def __init__(self, line):
-            self.stdout = types.SimpleNamespace(readline=lambda: order.append("read") or line)
-    mod = types.SimpleNamespace(__name__="pipeline_mech_z", evaluate="its evaluate")
-    real = beside.compile_run_side
-    try:
-        beside.compile_run_side = lambda m: order.append(("run side", m.__name__))
-        assert pc.ready_to_evaluate(mod) == "its evaluate" and order == []
-        for line in (beside.STANDALONE_DONE + "\n", ""):      # (said, or ended without)
-            order.clear()
-            pc._BESIDE[(mod.__name__, "walk")] = Proc(line)
-            assert pc.ready_to_evaluate(mod) == "its evaluate"
-            assert order == [("run side", "pipeline_mech_z"), "read"]
-            order.clear()
-            assert pc.ready_to_evaluate(mod) == "its evaluate" and order == []
-        # a process that never says it: the run waits no longer than asked
-        never = threading.Event()
-        stuck = Proc(None)
-        stuck.stdout.readline = never.wait
-        pc._BESIDE[(mod.__name__, "walk")] = stuck
-        t = time.perf_counter()
-        assert pc.ready_to_evaluate(mod, timeout=0.2) == "its evaluate"
-        assert 0.2 <= time.perf_counter() - t < 60.0
-    finally:
-        never.set()
-        beside.compile_run_side = real
-        pc._BESIDE.pop((mod.__name__, "walk"), None)
 
 
 def test_after_the_library_a_design_of_the_sweep_rerun_as_a_scene_compiles_nothing(problem,
@@ -727,24 +705,21 @@ def test_the_stand_alone_kernels_compile_beside_for_evaluate_s_types(problem, ca
     where the module has a lane walk, its cache is empty and it is not
     turned off."""
     from numba.core import event
-    from pipeline.compiler.beside import STANDALONE_DONE, compile_run_side, compile_standalone
+    from pipeline.compiler.beside import compile_standalone
     k = problem.kernels
     status, metrics = problem.evaluate_rows(candidates)
     assert (metrics[:, ks.M_FORCES_DONE] == 1.0).sum() > k.LANES     # force blocks ran
     with event.install_recorder("numba:compile") as rec:
         compile_standalone(k)
-        compile_run_side(k)         # (what the run compiles meanwhile: ready_to_evaluate)
     compiled = {e.data["dispatcher"].py_func.__name__ for _, e in rec.buffer}
     assert not compiled & {"force_lanes", "walk", "force_flush", "force_stage", "force_lane_in",
                            "block_walk", "careful_tail", "setup_lane", "dwell_error",
-                           "dwell_lanes", "law_error", "settle", "flush_forces"}, compiled
+                           "dwell_lanes", "law_error"}, compiled
     assert k.force_lanes.signatures and k.walk.signatures      # called (loaded, or there)
-    assert k.settle.signatures and k.flush_forces.signatures
     r = subprocess.run([sys.executable, "-m", "pipeline.compiler.beside", k.__name__,
                         str(Path(k.SOURCE_PATH).parent)], env=child_env(),
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
-    assert r.stdout.splitlines()[0] == STANDALONE_DONE      # (what the run waits for)
     # the trigger (pipeline.compiler._compile_beside)
     import types
 

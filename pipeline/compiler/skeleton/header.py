@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 from numba import njit
+from numba.core.config import DISABLE_JIT
 
 from pipeline.kernels.config import (JIT, JIT_ALLOC, JIT_ALLOC_INNER, JIT_INNER, JIT_FIRST_CLASS,
                                      JIT_LANES, OK,
@@ -31,6 +32,7 @@ from pipeline.kernels.continuation import (MARGIN_SLOTS, accept, closes, copy2, 
                                            may_stop, predict, restore, start_triad, step_limit,
                                            work, wrap)
 from pipeline.kernels import dynamics
+from pipeline.kernels.calls import first_class, function_at
 from pipeline.kernels.forces import (applied_loads, equilibrium_residual, force_work, gauss_solve,
                                      kinetostatics, shaking)
 from pipeline.kernels.geometry import may_reach
@@ -85,4 +87,4 @@ __all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_ALLOC_INNER', 'JIT_INN
            'FOLD_BACK', 'LOCATE_MIN_STEP',
            'LOCATE_NEWTON_TOL', 'RESOLVED', 'SUB', 'cubic_bound', 'fold_distance',
            'third_difference', 'uniform_hit', 'window_score', 'window_vertex', 'may_reach',
-           'MARGIN_SLOTS', 'scene_revolution')
+           'MARGIN_SLOTS', 'scene_revolution', 'DISABLE_JIT', 'first_class', 'function_at')

@@ -15,7 +15,7 @@ from .header import (math, np, njit, JIT, JIT_INNER, OK, M_FORCES_DONE, M_PEAK_A
                      T_NEWTON_TOL, T_SINGULAR, fold_cd, may_reach)
 from ._mechanism import (N_JOINTS, LANES, N_FROWS, FT_COLS, ACC_COL, N_TRANS, TR_COL, F_pm,
                          F_pe, F_bad, force_lanes)
-from .sweep_stages import settle, LANE_FORCES, reaction_peak, force_peaks_out
+from .sweep_stages import LANE_FORCES, reaction_peak, force_peaks_out
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 @njit(**JIT)
@@ -98,14 +98,14 @@ def force_flush(fidx, filled, FS, FT, RB, phis, tols, settings, loads, status, m
         status[i] = OK
 
 
-# inline='always': evaluate's two call sites (a full block, and the last); as a
-# function of its own it would link settle's code once more (compile time)
+# inline='always': one call site (flush_forces)
 @njit(inline='always', **JIT)
 def force_refused(pars, fidx, filled, FS, FT, phis, phi_close, tols, settings, loads, col,
-                  trail, qmax, qmin, wk, fw, ww, corr, status, metrics):
-    """The scalar force stage (``settle`` with LANE_FORCES) of the candidates
-    fidx[:filled] of a flushed block whose lane could not vouch for them, from
-    the lane walk's class III solutions (FT's first columns)."""
+                  trail, qmax, qmin, wk, fw, ww, corr, status, metrics, settle_at):
+    """The scalar force stage (``settle`` with LANE_FORCES, called as
+    ``settle_at``: through its address) of the candidates fidx[:filled] of a
+    flushed block whose lane could not vouch for them, from the lane walk's
+    class III solutions (FT's first columns)."""
     npos = phis.shape[0]
     for l in range(filled):
         if FS[F_bad * LANES + l] != 0.0:
@@ -113,6 +113,6 @@ def force_refused(pars, fidx, filled, FS, FT, phis, phi_close, tols, settings, l
             for k in range(npos):
                 for q in range(trail.shape[1]):
                     trail[k, q] = FT[k, q * LANES + l]
-            status[i] = settle(pars[i], np.int64(LANE_FORCES), phis, phi_close, tols, settings,
-                               loads, col, trail, qmax, qmin, 0.0, np.int64(-1), 0.0, 0.0, wk,
-                               fw, ww, corr, metrics[i])
+            status[i] = settle_at(pars[i], np.int64(LANE_FORCES), phis, phi_close, tols,
+                                  settings, loads, col, trail, qmax, qmin, 0.0, np.int64(-1),
+                                  0.0, 0.0, wk, fw, ww, corr, metrics[i])

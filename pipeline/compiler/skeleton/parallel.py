@@ -14,7 +14,7 @@ readers, the names the generated module gives it."""
 
 from .header import (math, np, njit, JIT, JIT_ALLOC, JIT_ALLOC_INNER, JIT_INNER, OK, work,
                      force_work, dwell_lanes, dwell_error, M_FAIL_PHI, M_FAIL_GROUP, SET_DWELL_W,
-                     SET_WANT_LAW)
+                     SET_WANT_LAW, DISABLE_JIT, first_class, function_at)
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, LANES, N_LANE_ROWS, THETA_COLS, THETA_IN, TRAIL_COLS,
                          MARGIN_COL,
@@ -146,25 +146,72 @@ def pad_block(S, theta, filled, npos):
                 theta[k, q * LANES + l] = theta[k, q * LANES]
 
 
+# (called through its address: ``callees``; settle likewise, not linked into it)
 @njit(**JIT_ALLOC_INNER)
 def flush_forces(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols, settings, loads, col,
-                 trail, qmax, qmin, wk, fw, ww, corr, status, metrics):
+                 trail, qmax, qmin, wk, fw, ww, corr, status, metrics, called):
     """The force lanes' block of ``forced`` candidates solved together, then those
     it refused by the scalar force stage (``forced``: np.int64, no literal
-    argument, one compiled version)."""
+    argument, one compiled version; ``called``: ``callees()``)."""
     force_flush(fidx, forced, FS, FT, RB, phis, tols, settings, loads, status, metrics)
     force_refused(pars, fidx, forced, FS, FT, phis, phi_close, tols, settings, loads, col,
-                  trail, qmax, qmin, wk, fw, ww, corr, status, metrics)
+                  trail, qmax, qmin, wk, fw, ww, corr, status, metrics,
+                  function_at(called[0], SETTLE_FN))
+
+
+# the function types of settle and flush_forces as evaluate_lanes calls them (``callees``)
+SETTLE_FN = None
+FLUSH_FN = None
+_CALLEES = []
+
+
+def callees():
+    """The addresses of ``settle`` and ``flush_forces`` compiled (or loaded from
+    numba's cache) for the types ``evaluate_lanes`` passes them, which calls
+    them through these (``pipeline.kernels.calls``): its own compile then does
+    not link their code and optimise it once more.  Once per process; in
+    numba's Python mode the kernels themselves."""
+    global SETTLE_FN, FLUSH_FN
+    if DISABLE_JIT:
+        return (settle, flush_forces)
+    if not _CALLEES:
+        n = 4
+        a1, a2, i1 = np.zeros(n), np.zeros((n, n)), np.zeros(n, np.int64)
+        i64, f64 = np.int64(0), 0.0
+        wk = (work.py_func(N_POINTS, N_GROUPS, N_TRIADS),
+              force_work.py_func(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS),
+              watch_work.py_func(N_WATCH, N_TRIADS))
+        loads = np.zeros((n, 1, 3))
+        SETTLE_FN, at_settle = first_class(settle, (a1, i64, a1, f64, a1, a1, loads, a1, a2, i1,
+                                                    i1, f64, i64, f64, f64, *wk, a1, a1))
+        FLUSH_FN, at_flush = first_class(flush_forces, (
+            a2, i1, i64, a1, a2, a2, a1, f64, a1, a1, loads, a1, a2, i1, i1, *wk, a1,
+            np.zeros(n, np.int8), a2, i1))
+        _CALLEES[:] = [np.array([at_settle, at_flush], np.int64)]
+    return _CALLEES[0]
+
+
+def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metrics):
+    """``evaluate_lanes`` for rows lo .. hi - 1 of ``pars`` (C-ordered, as
+    ``status`` and ``metrics``): the sweep's stages, ``settle`` and
+    ``flush_forces`` called through their addresses (``callees``)."""
+    return evaluate_lanes(pars, lo, hi, np.ascontiguousarray(phis), phi_close,
+                          np.ascontiguousarray(tols), np.ascontiguousarray(settings),
+                          np.ascontiguousarray(loads), status, metrics, callees())
 
 
 @njit(**JIT_ALLOC)
-def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metrics):
+def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metrics,
+                   called):
     """The sweep's stages for rows lo .. hi - 1 of ``pars``: candidates that
     assemble at phis[0] fill a block of lanes walked in lock-step, the others and
     every lane the lanes cannot vouch for take the careful path; those vouched
     for that reach the force stage gather in a block (fidx) for the force lanes.
     A lane's numbers do not depend on its neighbours.  Serial: the caller runs
-    ranges on threads (``pipeline.compiler.parallel``; the GIL released)."""
+    ranges on threads (``pipeline.compiler.parallel``; the GIL released).
+    ``called``: the addresses of settle and flush_forces (``callees``)."""
+    settle_at = function_at(called[0], SETTLE_FN)
+    flush_at = function_at(called[1], FLUSH_FN)
     npos = phis.shape[0]
     w = int(settings[SET_DWELL_W])
     close = phi_close if math.isfinite(phi_close) else phis[0]
@@ -191,9 +238,9 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
             elif code > 0:
                 status[i] = fails_at_start(code, phis, margins, metrics[i])
             else:
-                status[i] = settle(pars[i], np.int64(-1), phis, phi_close, tols, settings,
-                                   loads, col, trail, qmax, qmin, 0.0, np.int64(-1), 0.0,
-                                   0.0, wk, fw, ww, corr, metrics[i])
+                status[i] = settle_at(pars[i], np.int64(-1), phis, phi_close, tols, settings,
+                                      loads, col, trail, qmax, qmin, 0.0, np.int64(-1), 0.0,
+                                      0.0, wk, fw, ww, corr, metrics[i])
         if filled == LANES or (i == hi and filled > 0):
             pad_block(S, theta, filled, npos)
             block_walk(S, theta, cph, sph, phis, tols, settings)
@@ -216,9 +263,9 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                         col[k] = theta[k, l]
                 if how == 1 and not flagged:     # (settle's force stage reads its solutions)
                     lane_trail(theta, l, npos, trail)
-                st = settle(pars[idx[l]], how, phis, phi_close, tols, settings, loads, col,
-                            trail, qmax, qmin, err_l, start_l, full_l, margin_l, wk, fw, ww,
-                            corr, metrics[idx[l]])
+                st = settle_at(pars[idx[l]], how, phis, phi_close, tols, settings, loads,
+                               col, trail, qmax, qmin, err_l, start_l, full_l, margin_l, wk, fw,
+                               ww, corr, metrics[idx[l]])
                 if st != NEEDS_FORCES:
                     status[idx[l]] = st
                     continue
@@ -227,11 +274,11 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                 fidx[forced] = idx[l]
                 forced += 1
                 if forced == LANES:
-                    flush_forces(pars, fidx, np.int64(forced), FS, FT, RB, phis, phi_close,
-                                 tols, settings, loads, col, trail, qmax, qmin, wk, fw, ww,
-                                 corr, status, metrics)
+                    flush_at(pars, fidx, np.int64(forced), FS, FT, RB, phis, phi_close, tols,
+                             settings, loads, col, trail, qmax, qmin, wk, fw, ww, corr, status,
+                             metrics, called)
                     forced = 0
             filled = 0
     if forced > 0:
-        flush_forces(pars, fidx, np.int64(forced), FS, FT, RB, phis, phi_close, tols, settings,
-                     loads, col, trail, qmax, qmin, wk, fw, ww, corr, status, metrics)
+        flush_at(pars, fidx, np.int64(forced), FS, FT, RB, phis, phi_close, tols, settings,
+                 loads, col, trail, qmax, qmin, wk, fw, ww, corr, status, metrics, called)
