@@ -294,7 +294,7 @@ def sweep_case(sizes, repeat, rows):
                           omega1=pb.omega1, eps1=pb.eps1, gravity=pb.plan.gravity,
                           forces=spec.wants_forces)
     run = lambda p: pb.evaluate_rows(p, True)
-    first, how = _first_call(pb.kernels.evaluate, lambda: run(pars[:2]))
+    first, how = _first_call(pb.kernels.evaluate_lanes, lambda: run(pars[:2]))
 
     # correct first: candidates of every kind (forces run, constraints missed, failed)
     case = "sweep (synthesis study)"
@@ -367,7 +367,7 @@ def _cold_probe():
     t_batch, how_batch = _first_call(batch, lambda: batch_revolutions(study, pars, 12, 0, False))
     pb, rows = _draw(load_study(STUDIES / "ov7_synthesis.toml"), 2)
     t = time.perf_counter()
-    evaluate = pb.kernels.evaluate
+    evaluate = pb.kernels.evaluate_lanes      # (evaluate's jitted body)
     gen_sweep = time.perf_counter() - t
     t_sweep, how_sweep = _first_call(evaluate, lambda: pb.evaluate_rows(rows, True))
     t_batch += gen_batch

@@ -208,8 +208,7 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
     every lane the lanes cannot vouch for take the careful path; those vouched
     for that reach the force stage gather in a block (fidx) for the force lanes.
     A lane's numbers do not depend on its neighbours.  Serial: the caller runs
-    ranges on threads (``pipeline.compiler.parallel``; the GIL released).
-    ``called``: the addresses of settle and flush_forces (``callees``)."""
+    ranges on threads (the GIL released).  ``called``: ``callees()``."""
     settle_at = function_at(called[0], SETTLE_FN)
     flush_at = function_at(called[1], FLUSH_FN)
     npos = phis.shape[0]
