@@ -11,8 +11,8 @@ sweep of another mechanism, or ``pipeline compile --library``).  The ways,
 alternated round by round on the same machine:
 
 * beside: the default; the run compiles the careful stages and ``evaluate``
-  while a process beside compiles the force lanes, the force stage and the lane
-  walk (``pipeline.compiler.beside``);
+  while a process beside compiles the force lanes, the lane walk and the
+  kernels round them (``pipeline.compiler.beside``);
 * with ``--one-process``, ``PIPELINE_COMPILE_BESIDE=0``: every kernel in the
   run (what the process beside buys; about 1.6 times as long);
 * with ``--against DIR``, another checkout of the package (an earlier commit:
