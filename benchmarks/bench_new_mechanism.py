@@ -26,7 +26,6 @@ Issue 53's line: a new mechanism's scene in at most 2 s end to end.
 from __future__ import annotations
 
 import argparse
-import os
 import subprocess
 import sys
 import tempfile
@@ -35,7 +34,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks.common import ROOT, STUDIES, beside_done, hardware, write_table  # noqa: E402
+from benchmarks.common import (ROOT, STUDIES, beside_done, forget_mechanisms,  # noqa: E402
+                               fresh_mechanism_env, hardware, write_table)
 
 SCENES = ("ov7_base", "warp_feed_fourbar", "feed_fivebar", "ov7_class3", "ov7_class3_slider",
           "ov7_friction", "scotch_yoke_rpp", "slotted_rocker_prp", "ppr_cross_slide",
@@ -43,29 +43,10 @@ SCENES = ("ov7_base", "warp_feed_fourbar", "feed_fivebar", "ov7_class3", "ov7_cl
 WAYS = {"plan path": "1", "generated": "0"}
 
 
-def _forget_mechanisms(cache: Path) -> None:
-    """Every generated module and its compiled code gone (numba's cache beside
-    the module, or under NUMBA_CACHE_DIR by the module's folder); the plan
-    path's stay."""
-    places = [cache, cache / "__pycache__"]
-    if os.environ.get("NUMBA_CACHE_DIR"):       # (numba: a folder per source folder)
-        places += Path(os.environ["NUMBA_CACHE_DIR"]).glob(f"{cache.name}_*")
-    for place in places:
-        for f in place.glob("pipeline_mech_*"):
-            f.unlink()
-
-
-def _env(**settings):
-    """The runs' environment: this one with ``settings``, bytecode written."""
-    env = dict(os.environ, **settings)
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
-    return env
-
-
 def scene_seconds(study, cache, out, plan_path):
     """Wall seconds of ``pipeline run study`` as a new mechanism."""
-    _forget_mechanisms(cache)
-    env = _env(PIPELINE_CACHE_DIR=str(cache), PIPELINE_PLAN_PATH=plan_path)
+    forget_mechanisms(cache)
+    env = fresh_mechanism_env(PIPELINE_CACHE_DIR=str(cache), PIPELINE_PLAN_PATH=plan_path)
     t = time.perf_counter()
     subprocess.run([sys.executable, "-m", "pipeline.cli", "run", str(STUDIES / f"{study}.toml"),
                     "-o", str(out / f"{study}.h5"), "--overwrite", "--no-pictures", "-q"],
@@ -82,7 +63,7 @@ def measure(studies, rounds, echo=print):
         # (a folder name of its own: numba's cache names its folder after it)
         cache, out = Path(d) / f"modules_{Path(d).name}", Path(d) / "out"
         out.mkdir()
-        env = _env(PIPELINE_CACHE_DIR=str(cache))
+        env = fresh_mechanism_env(PIPELINE_CACHE_DIR=str(cache))
         t = time.perf_counter()     # the library, once per installation (not timed below)
         subprocess.run([sys.executable, "-m", "pipeline.cli", "compile", "--library", "-q"],
                        env=env, check=True, cwd=ROOT)

@@ -38,8 +38,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks.bench_new_mechanism import _env, _forget_mechanisms  # noqa: E402
-from benchmarks.common import ROOT, STUDIES, beside_done, hardware, write_table  # noqa: E402
+from benchmarks.common import (ROOT, STUDIES, beside_done, forget_mechanisms,  # noqa: E402
+                               fresh_mechanism_env, hardware, write_table)
 
 def ways(one_process=False, against=None):
     """{way: (checkout, environment settings)}."""
@@ -54,7 +54,7 @@ def ways(one_process=False, against=None):
 def _run_env(code, cache, settings):
     """The runs' environment for the checkout ``code`` (its package first on the
     path, the process beside's too)."""
-    env = _env(PIPELINE_CACHE_DIR=str(cache), **settings)
+    env = fresh_mechanism_env(PIPELINE_CACHE_DIR=str(cache), **settings)
     env["PYTHONPATH"] = os.pathsep.join([str(code)] + [p for p in env.get("PYTHONPATH", "")
                                                        .split(os.pathsep) if p])
     return env
@@ -64,7 +64,7 @@ def sweep_seconds(study, n, cache, out, code, settings, keep=False):
     """Wall seconds of ``pipeline run study --candidates n`` as a new mechanism
     (``keep``: as the cache has it)."""
     if not keep:
-        _forget_mechanisms(cache)
+        forget_mechanisms(cache)
     t = time.perf_counter()
     subprocess.run([sys.executable, "-m", "pipeline.cli", "run", str(STUDIES / f"{study}.toml"),
                     "--candidates", str(n), "-o", str(out / f"{study}.h5"), "--overwrite", "-q"],

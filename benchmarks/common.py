@@ -94,6 +94,25 @@ def write_table(folder, name, text):
     write_text(folder / name, text)
 
 
+def forget_mechanisms(cache: Path) -> None:
+    """Every generated module and its compiled code gone (numba's cache beside
+    the module, or under NUMBA_CACHE_DIR by the module's folder); the plan
+    path's stay."""
+    places = [cache, cache / "__pycache__"]
+    if os.environ.get("NUMBA_CACHE_DIR"):       # (numba: a folder per source folder)
+        places += Path(os.environ["NUMBA_CACHE_DIR"]).glob(f"{cache.name}_*")
+    for place in places:
+        for f in place.glob("pipeline_mech_*"):
+            f.unlink()
+
+
+def fresh_mechanism_env(**settings):
+    """The runs' environment: this one with ``settings``, bytecode written."""
+    env = dict(os.environ, **settings)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    return env
+
+
 def beside_done(limit=120.0):
     """Wait until no process compiles beside a run (pipeline.compiler.beside,
     which a first sweep starts and which may outlive it by a moment): the next
