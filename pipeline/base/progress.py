@@ -22,6 +22,22 @@ log = logging.getLogger("pipeline")
 QUIET_S = 10.0      # a plain line at least this often while a stage runs off a terminal
 REDRAW_S = 0.5      # a terminal's live line is redrawn this often
 
+_said_at = [time.perf_counter()]    # when the command last said something
+
+
+def said_now():
+    """Note that the command has just said something (a log line, a live line's
+    redraw): a stage's ``after`` counts from there (``ticking``)."""
+    _said_at[0] = time.perf_counter()
+
+
+def _note_said(record) -> bool:
+    said_now()          # a line the "pipeline" logger lets through: said now
+    return True
+
+
+log.addFilter(_note_said)
+
 
 def on_terminal() -> bool:
     """Progress goes to stderr: is that a terminal a person watches?"""
@@ -84,6 +100,7 @@ def bar(total=None, *, initial=0, desc="", unit="it", enabled=True, **tqdm_kw):
     def redraw():
         while not stop.wait(REDRAW_S):
             b.refresh()         # under the bar's own lock, as update() draws
+            said_now()
 
     th = threading.Thread(target=redraw, daemon=True, name="pipeline-progress-bar")
     th.start()
@@ -94,6 +111,7 @@ def bar(total=None, *, initial=0, desc="", unit="it", enabled=True, **tqdm_kw):
         if th is not threading.current_thread():
             th.join()
         close()
+        said_now()
 
     b.close = closing
     return b
@@ -132,7 +150,10 @@ def ticking(what: str, *, after: float = 0.0, say_done: bool = True):
     """A stage of unknown length: ``what`` and the seconds it has taken, live on
     a terminal (redrawn every REDRAW_S), a plain line every QUIET_S elsewhere,
     and (``say_done``) a line with its time at the end.  ``after``: nothing at
-    all unless the stage takes longer than that (a cache that may be warm).
+    all unless the stage takes that long (a cache that may be warm), counted from
+    the last thing the command said (within QUIET_S): stages that each stay under
+    it, one after another, never leave a person in silence for longer (two of a
+    search's did).
     Yields an object whose ``set(text)`` changes what the line says.  The live
     line fits the terminal's width, its seconds always in it (``live_line``)."""
     t = _Ticker(what)
@@ -153,18 +174,25 @@ def ticking(what: str, *, after: float = 0.0, say_done: bool = True):
             bar_ = tqdm(total=None, bar_format="{desc}", leave=False, dynamic_ncols=True)
             bar_.set_description_str(live_line(t.what, elapsed(), terminal_width()))
             line.append(bar_)
+            said_now()
         else:
             log.info("%s ...", t.what)
         started.set()
 
+    # the silence left before ``after`` is reached, counted from the last thing said
+    # (said more than QUIET_S ago: no one is waiting on it, ``after`` from now)
+    since = t0 - _said_at[0]
+    quiet_s = max(0.0, after - since) if 0.0 <= since < QUIET_S else after
+
     def tick():
-        if after and stop.wait(after):
+        if after and stop.wait(quiet_s):
             return
         if not started.is_set():
             begin()
         while not stop.wait(REDRAW_S if term else QUIET_S):
             if term:
                 line[0].set_description_str(live_line(t.what, elapsed(), terminal_width()))
+                said_now()
             else:
                 log.info("%s: still at work, %.0f s", t.what, elapsed())
 
@@ -187,5 +215,6 @@ def ticking(what: str, *, after: float = 0.0, say_done: bool = True):
             th.join()
             for b in line:
                 b.close()
+                said_now()      # the live line wiped
     if ok and say_done and started.is_set():
         log.info("%s: %.1f s", what, elapsed())

@@ -51,6 +51,24 @@ def test_plain_lines_off_a_terminal(caplog, monkeypatch):
     assert "sweep: 10/10 cand" in text and "\r" not in text
 
 
+def test_a_stage_s_quiet_start_counts_from_the_last_thing_said(caplog, monkeypatch):
+    """Two quiet stages in a row (a search's first draw, then its compile notice)
+    left a person 2 s in silence: a stage's ``after`` counts from the last thing
+    the command said.  Said a moment ago, a stage with a long ``after`` stays
+    quiet; said ``after`` ago, the same stage is said at once."""
+    long_s = 2 * HANG_GUARD_S
+    with caplog.at_level(logging.INFO, logger="pipeline"):
+        progress.log.info("header")
+        assert time.perf_counter() - progress._said_at[0] < 1.0     # the header noted
+        with progress.ticking("quiet stage", after=long_s, say_done=False):
+            time.sleep(0.2)
+        assert "quiet stage" not in caplog.text
+        monkeypatch.setattr(progress, "_said_at", [time.perf_counter() - long_s + 0.1])
+        monkeypatch.setattr(progress, "QUIET_S", 3 * HANG_GUARD_S)
+        with progress.ticking("second stage", after=long_s, say_done=False):
+            wait_for("the stage said at once", lambda: "second stage ..." in caplog.text)
+
+
 def test_a_bar_on_a_terminal_moves_between_updates(monkeypatch):
     """A chunk that takes long still sees the bar's time redrawn (every
     REDRAW_S), and closing the bar ends its redrawing thread."""
