@@ -136,26 +136,28 @@ def test_every_kernel_of_the_sweep_compiles_once(problem, candidates):
     assert not [n for n in library if callers[n] and not seen[n]], callers
 
 
-def test_evaluate_calls_settle_and_flush_forces_through_their_addresses(problem, candidates):
-    """The sweep's evaluate_lanes calls settle and flush_forces, and flush_forces
-    (with force_refused, inlined into it) calls settle, only through the
-    addresses callees() gives (so their compiles do not link settle's code and
-    have LLVM optimise it once more: tests/kernels/test_calls.py holds that a
-    call through an address links nothing), each kernel compiled once, for the
-    types they pass it."""
+def test_evaluate_calls_its_big_callees_through_their_addresses(problem, candidates):
+    """The sweep's evaluate_lanes calls settle, flush_forces, setup_lane and (in
+    flagged_lane, inlined into it) careful_tail, and flush_forces (with
+    force_refused, inlined into it) calls settle, only through the addresses
+    callees() gives (so their compiles do not link these kernels' code and have
+    LLVM optimise it once more: tests/kernels/test_calls.py holds that a call
+    through an address links nothing), each kernel compiled once, for the types
+    they pass it."""
     import ast
     import inspect
     mod = problem.kernels
     problem.evaluate_rows(np.ascontiguousarray(candidates[:64]), parallel=False)
     at = mod.callees()
-    assert at.dtype == np.int64 and at.shape == (2,) and (at > 0).all()
-    assert len(mod.settle.signatures) == 1 and len(mod.flush_forces.signatures) == 1
-    for kernel in (mod.evaluate_lanes, mod.flush_forces, mod.force_refused):
+    assert at.dtype == np.int64 and at.shape == (4,) and (at > 0).all()
+    big = ("settle", "flush_forces", "setup_lane", "careful_tail")
+    assert [len(getattr(mod, k).signatures) for k in big] == [1] * 4
+    for kernel in (mod.evaluate_lanes, mod.flush_forces, mod.force_refused, mod.flagged_lane):
         tree = ast.parse(inspect.getsource(kernel.py_func))
         called = {n.func.id for n in ast.walk(tree)
                   if isinstance(n, ast.Call) and isinstance(n.func, ast.Name)}
-        assert "function_at" in called or kernel is mod.force_refused
-        assert not called & {"settle", "flush_forces"}, (kernel, called)
+        assert ("function_at" in called) == (kernel in (mod.evaluate_lanes, mod.flush_forces))
+        assert not called & set(big), (kernel, called)
 
 
 def test_the_scene_s_walk_is_compiled_once_for_every_mechanism():

@@ -6,6 +6,7 @@ writes its own (``pipeline.compiler.generate``, ``lanes``, ``forces``).
 
 # the plan's constants (generate)
 N_POINTS = N_GROUPS = N_TRIADS = N_BODIES = N_JOINTS = N_SLIDES = N_INPUTS = 0
+N_PARAMS = 0        # a candidate's parameters
 CRANK_PIVOT = 0     # point index of the crank's pivot (the shaking moment's reference)
 GRAVITY = 0.0
 BODY_COM = BODY_TURN = BODY_MASS_OFF = LOAD_BODY = LOAD_POINT = None     # index arrays

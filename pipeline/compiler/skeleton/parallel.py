@@ -17,7 +17,7 @@ from .header import (math, np, njit, JIT, JIT_ALLOC, JIT_ALLOC_INNER, JIT_INNER,
                      SET_WANT_LAW, DISABLE_JIT, first_class, function_at)
 from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
                          N_INPUTS, LANES, N_LANE_ROWS, THETA_COLS, THETA_IN, TRAIL_COLS,
-                         MARGIN_COL,
+                         MARGIN_COL, N_PARAMS,
                          R_margin, R_flag, R_first_flag, R_last_flag, setup_lane,
                          block_walk, lanes_apply, constants, N_WATCH)
 from ._mechanism import (HAS_LANE_FORCES, N_FROWS, FT_COLS, N_RCOLS, force_lane_in)
@@ -92,10 +92,12 @@ def lane_trail(theta, l, npos, trail):
 
 
 @njit(inline='always', **JIT)
-def flagged_lane(par, S, theta, l, phis, tols, w, trail, col, qmax, qmin, out, wk, ww):
+def flagged_lane(par, S, theta, l, phis, tols, w, trail, col, qmax, qmin, out, wk, ww,
+                 tail_at):
     """Lane ``l`` flagged itself (its candidate ``par``, metrics row ``out``): the
     careful walk from two positions before its first flag to three past its
-    last (``careful_tail``), to the failure it most likely meets.  Returns
+    last (``careful_tail``, called through its address ``tail_at``), to the
+    failure it most likely meets.  Returns
     (status, how, dwell error, its start, full range, margin): the failure met,
     or OK and how ``settle`` goes on, 0 (the careful path: the whole revolution)
     or, where the tail met no failure and spliced its careful window into the
@@ -111,8 +113,7 @@ def flagged_lane(par, S, theta, l, phis, tols, w, trail, col, qmax, qmin, out, w
     lane_trail(theta, l, npos, trail)
     for k in range(npos):     # (the lane's angles: the window splices)
         col[k] = theta[k, l]
-    st, spliced, margin = careful_tail(constants(par), phis, k0, k1, trail, col, tols, out,
-                                       wk, ww)
+    st, spliced, margin = tail_at(constants(par), phis, k0, k1, trail, col, tols, out, wk, ww)
     if st != OK or not spliced:
         return st, np.int64(0), math.nan, np.int64(-1), math.nan, math.nan
     # the lane's numbers outside the window, the careful walk's inside
@@ -159,21 +160,25 @@ def flush_forces(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols, settings
                   function_at(called[0], SETTLE_FN))
 
 
-# the function types of settle and flush_forces as evaluate_lanes calls them (``callees``)
+# the function types of the kernels evaluate_lanes calls through their addresses
+# (``callees``): settle, flush_forces, setup_lane, careful_tail
 SETTLE_FN = None
 FLUSH_FN = None
+SETUP_FN = None
+TAIL_FN = None
 _CALLEES = []
 
 
 def callees():
-    """The addresses of ``settle`` and ``flush_forces`` compiled (or loaded from
-    numba's cache) for the types ``evaluate_lanes`` passes them, which calls
-    them through these (``pipeline.kernels.calls``): its own compile then does
-    not link their code and optimise it once more.  Once per process; in
-    numba's Python mode the kernels themselves."""
-    global SETTLE_FN, FLUSH_FN
+    """The addresses of ``settle``, ``flush_forces``, ``setup_lane`` and
+    ``careful_tail`` compiled (or loaded from numba's cache) for the types
+    ``evaluate_lanes`` passes them, which calls them through these
+    (``pipeline.kernels.calls``): its own compile then does not link their code
+    and optimise it once more.  Once per process; in numba's Python mode the
+    kernels themselves."""
+    global SETTLE_FN, FLUSH_FN, SETUP_FN, TAIL_FN
     if DISABLE_JIT:
-        return (settle, flush_forces)
+        return (settle, flush_forces, setup_lane, careful_tail)
     if not _CALLEES:
         n = 4
         a1, a2, i1 = np.zeros(n), np.zeros((n, n)), np.zeros(n, np.int64)
@@ -187,14 +192,20 @@ def callees():
         FLUSH_FN, at_flush = first_class(flush_forces, (
             a2, i1, i64, a1, a2, a2, a1, f64, a1, a1, loads, a1, a2, i1, i1, *wk, a1,
             np.zeros(n, np.int8), a2, i1))
-        _CALLEES[:] = [np.array([at_settle, at_flush], np.int64)]
+        pos, d1, d2, margins, state, _ = wk[0]
+        SETUP_FN, at_setup = first_class(setup_lane, (a2, i64, i64, a1, f64, a1, a2, a2, pos,
+                                                      d1, d2, margins, state))
+        TAIL_FN, at_tail = first_class(careful_tail, (constants(np.ones(N_PARAMS)), a1, i64,
+                                                      i64, a2, a1, a1, a1, wk[0], wk[2]))
+        _CALLEES[:] = [np.array([at_settle, at_flush, at_setup, at_tail], np.int64)]
     return _CALLEES[0]
 
 
 def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metrics):
     """``evaluate_lanes`` for rows lo .. hi - 1 of ``pars`` (C-ordered, as
-    ``status`` and ``metrics``): the sweep's stages, ``settle`` and
-    ``flush_forces`` called through their addresses (``callees``)."""
+    ``status`` and ``metrics``): the sweep's stages, ``settle``,
+    ``flush_forces``, ``setup_lane`` and ``careful_tail`` called through their
+    addresses (``callees``)."""
     return evaluate_lanes(pars, lo, hi, np.ascontiguousarray(phis), phi_close,
                           np.ascontiguousarray(tols), np.ascontiguousarray(settings),
                           np.ascontiguousarray(loads), status, metrics, callees())
@@ -211,6 +222,8 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
     ranges on threads (the GIL released).  ``called``: ``callees()``."""
     settle_at = function_at(called[0], SETTLE_FN)
     flush_at = function_at(called[1], FLUSH_FN)
+    setup_at = function_at(called[2], SETUP_FN)
+    tail_at = function_at(called[3], TAIL_FN)
     npos = phis.shape[0]
     w = int(settings[SET_DWELL_W])
     close = phi_close if math.isfinite(phi_close) else phis[0]
@@ -229,8 +242,8 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
         if i < hi:
             code = -1
             if fast:     # (np.int64(...): no literal argument, one compiled version)
-                code = setup_lane(pars, i, np.int64(filled), phis, close, tols, S, theta, pos,
-                                  d1, d2, margins, state)
+                code = setup_at(pars, i, np.int64(filled), phis, close, tols, S, theta, pos,
+                                d1, d2, margins, state)
             if code == OK:
                 idx[filled] = i
                 filled += 1
@@ -253,7 +266,7 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
                 if flagged:     # the careful tail: its failure, or its window spliced
                     st, how, err_l, start_l, full_l, margin_l = flagged_lane(
                         pars[idx[l]], S, theta, l, phis, tols, w, trail, col, qmax, qmin,
-                        metrics[idx[l]], wk, ww)
+                        metrics[idx[l]], wk, ww, tail_at)
                     if st != OK:
                         status[idx[l]] = st
                         continue
