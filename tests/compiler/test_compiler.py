@@ -137,21 +137,21 @@ def test_every_kernel_of_the_sweep_compiles_once(problem, candidates):
 
 
 def test_evaluate_calls_its_big_callees_through_their_addresses(problem, candidates):
-    """The sweep's evaluate_lanes calls settle, flush_forces, setup_lane and (in
-    flagged_lane, inlined into it) careful_tail, and flush_forces (with
-    force_refused, inlined into it) calls settle, only through the addresses
-    callees() gives (so their compiles do not link these kernels' code and have
-    LLVM optimise it once more: tests/kernels/test_calls.py holds that a call
-    through an address links nothing), each kernel compiled once, for the types
-    they pass it."""
+    """The sweep's evaluate_lanes calls settle, flush_forces, setup_lane,
+    block_walk and (in flagged_lane, inlined into it) careful_tail, and
+    flush_forces calls force_flush and (in force_refused, inlined into it)
+    settle, only through the addresses callees() gives (so their compiles do not
+    link these kernels' code and have LLVM optimise it once more:
+    tests/kernels/test_calls.py holds that a call through an address links
+    nothing), each kernel compiled once, for the types they pass it."""
     import ast
     import inspect
     mod = problem.kernels
     problem.evaluate_rows(np.ascontiguousarray(candidates[:64]), parallel=False)
     at = mod.callees()
-    assert at.dtype == np.int64 and at.shape == (4,) and (at > 0).all()
-    big = ("settle", "flush_forces", "setup_lane", "careful_tail")
-    assert [len(getattr(mod, k).signatures) for k in big] == [1] * 4
+    big = ("settle", "flush_forces", "setup_lane", "careful_tail", "block_walk", "force_flush")
+    assert at.dtype == np.int64 and at.shape == (len(big),) and (at > 0).all()
+    assert [len(getattr(mod, k).signatures) for k in big] == [1] * len(big)
     for kernel in (mod.evaluate_lanes, mod.flush_forces, mod.force_refused, mod.flagged_lane):
         tree = ast.parse(inspect.getsource(kernel.py_func))
         called = {n.func.id for n in ast.walk(tree)

@@ -153,32 +153,39 @@ def flush_forces(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols, settings
                  trail, qmax, qmin, wk, fw, ww, corr, status, metrics, called):
     """The force lanes' block of ``forced`` candidates solved together, then those
     it refused by the scalar force stage (``forced``: np.int64, no literal
-    argument, one compiled version; ``called``: ``callees()``)."""
-    force_flush(fidx, forced, FS, FT, RB, phis, tols, settings, loads, status, metrics)
+    argument, one compiled version; ``called``: ``callees()``, force_flush's and
+    settle's addresses among them)."""
+    function_at(called[5], FORCE_FLUSH_FN)(fidx, forced, FS, FT, RB, phis, tols, settings,
+                                           loads, status, metrics)
     force_refused(pars, fidx, forced, FS, FT, phis, phi_close, tols, settings, loads, col,
                   trail, qmax, qmin, wk, fw, ww, corr, status, metrics,
                   function_at(called[0], SETTLE_FN))
 
 
-# the function types of the kernels evaluate_lanes calls through their addresses
-# (``callees``): settle, flush_forces, setup_lane, careful_tail
+# the function types of the kernels evaluate_lanes and flush_forces call through their
+# addresses (``callees``): settle, flush_forces, setup_lane, careful_tail, block_walk,
+# force_flush
 SETTLE_FN = None
 FLUSH_FN = None
 SETUP_FN = None
 TAIL_FN = None
+BLOCK_WALK_FN = None
+FORCE_FLUSH_FN = None
 _CALLEES = []
 
 
 def callees():
-    """The addresses of ``settle``, ``flush_forces``, ``setup_lane`` and
-    ``careful_tail`` compiled (or loaded from numba's cache) for the types
-    ``evaluate_lanes`` passes them, which calls them through these
-    (``pipeline.kernels.calls``): its own compile then does not link their code
-    and optimise it once more.  Once per process; in numba's Python mode the
-    kernels themselves."""
-    global SETTLE_FN, FLUSH_FN, SETUP_FN, TAIL_FN
+    """The addresses of ``settle``, ``flush_forces``, ``setup_lane``,
+    ``careful_tail``, ``block_walk`` and ``force_flush`` compiled (or loaded
+    from numba's cache) for the types ``evaluate_lanes`` and ``flush_forces``
+    pass them, which call them through these (``pipeline.kernels.calls``):
+    their own compiles then do not link these kernels' code and optimise it
+    once more.  Each is called once per candidate or per block, never in a
+    loop over positions.  Once per process; in numba's Python mode the kernels
+    themselves."""
+    global SETTLE_FN, FLUSH_FN, SETUP_FN, TAIL_FN, BLOCK_WALK_FN, FORCE_FLUSH_FN
     if DISABLE_JIT:
-        return (settle, flush_forces, setup_lane, careful_tail)
+        return (settle, flush_forces, setup_lane, careful_tail, block_walk, force_flush)
     if not _CALLEES:
         n = 4
         a1, a2, i1 = np.zeros(n), np.zeros((n, n)), np.zeros(n, np.int64)
@@ -189,23 +196,28 @@ def callees():
         loads = np.zeros((n, 1, 3))
         SETTLE_FN, at_settle = first_class(settle, (a1, i64, a1, f64, a1, a1, loads, a1, a2, i1,
                                                     i1, f64, i64, f64, f64, *wk, a1, a1))
+        status = np.zeros(n, np.int8)       # (the run's: pipeline.runs.problem)
+        # (each before its callers: they read its function type when they compile)
+        FORCE_FLUSH_FN, at_force_flush = first_class(force_flush, (
+            i1, i64, a1, a2, a2, a1, a1, a1, loads, status, a2))
         FLUSH_FN, at_flush = first_class(flush_forces, (
-            a2, i1, i64, a1, a2, a2, a1, f64, a1, a1, loads, a1, a2, i1, i1, *wk, a1,
-            np.zeros(n, np.int8), a2, i1))
+            a2, i1, i64, a1, a2, a2, a1, f64, a1, a1, loads, a1, a2, i1, i1, *wk, a1, status,
+            a2, i1))
         pos, d1, d2, margins, state, _ = wk[0]
         SETUP_FN, at_setup = first_class(setup_lane, (a2, i64, i64, a1, f64, a1, a2, a2, pos,
                                                       d1, d2, margins, state))
         TAIL_FN, at_tail = first_class(careful_tail, (constants(np.ones(N_PARAMS)), a1, i64,
                                                       i64, a2, a1, a1, a1, wk[0], wk[2]))
-        _CALLEES[:] = [np.array([at_settle, at_flush, at_setup, at_tail], np.int64)]
+        BLOCK_WALK_FN, at_walk = first_class(block_walk, (a2, a2, a1, a1, a1, a1, a1))
+        _CALLEES[:] = [np.array([at_settle, at_flush, at_setup, at_tail, at_walk,
+                                 at_force_flush], np.int64)]
     return _CALLEES[0]
 
 
 def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metrics):
     """``evaluate_lanes`` for rows lo .. hi - 1 of ``pars`` (C-ordered, as
-    ``status`` and ``metrics``): the sweep's stages, ``settle``,
-    ``flush_forces``, ``setup_lane`` and ``careful_tail`` called through their
-    addresses (``callees``)."""
+    ``status`` and ``metrics``): the sweep's stages, the big ones called
+    through their addresses (``callees``)."""
     return evaluate_lanes(pars, lo, hi, np.ascontiguousarray(phis), phi_close,
                           np.ascontiguousarray(tols), np.ascontiguousarray(settings),
                           np.ascontiguousarray(loads), status, metrics, callees())
@@ -216,14 +228,12 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
                    called):
     """The sweep's stages for rows lo .. hi - 1 of ``pars``: candidates that
     assemble at phis[0] fill a block of lanes walked in lock-step, the others and
-    every lane the lanes cannot vouch for take the careful path; those vouched
-    for that reach the force stage gather in a block (fidx) for the force lanes.
-    A lane's numbers do not depend on its neighbours.  Serial: the caller runs
-    ranges on threads (the GIL released).  ``called``: ``callees()``."""
-    settle_at = function_at(called[0], SETTLE_FN)
-    flush_at = function_at(called[1], FLUSH_FN)
-    setup_at = function_at(called[2], SETUP_FN)
-    tail_at = function_at(called[3], TAIL_FN)
+    every lane the lanes cannot vouch for the careful path; those vouched for that
+    reach the force stage gather in a block (fidx) for the force lanes.  Serial
+    (the caller runs ranges on threads).  ``called``: ``callees()``."""
+    settle_at, flush_at = function_at(called[0], SETTLE_FN), function_at(called[1], FLUSH_FN)
+    setup_at, tail_at = function_at(called[2], SETUP_FN), function_at(called[3], TAIL_FN)
+    block_walk_at = function_at(called[4], BLOCK_WALK_FN)
     npos = phis.shape[0]
     w = int(settings[SET_DWELL_W])
     close = phi_close if math.isfinite(phi_close) else phis[0]
@@ -255,7 +265,7 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
                                       0.0, wk, fw, ww, corr, metrics[i])
         if filled == LANES or (i == hi and filled > 0):
             pad_block(S, theta, filled, npos)
-            block_walk(S, theta, cph, sph, phis, tols, settings)
+            block_walk_at(S, theta, cph, sph, phis, tols, settings)
             dwell_lanes(theta, npos, w, LANES, W5, err, start_k, full)
             for l in range(filled):
                 # the lane vouches for its candidate unless it flagged itself: where it
