@@ -50,16 +50,10 @@ def compile_standalone(mod) -> None:
         return
     a1, a2 = np.zeros(4), np.zeros((4, 4))
     par = np.ones(mod.N_PARAMS)
-    K = mod.constants(par)
-    wk = mod.work(mod.N_POINTS, mod.N_GROUPS, mod.N_TRIADS)
-    ww = mod.watch_work(mod.N_WATCH, mod.N_TRIADS)
-    i64, f64 = np.int64(0), 0.0
-    loads = np.zeros((npos, 1, 3))
-    status = np.zeros(4, np.int8)       # (the run's status array: pipeline.runs.problem)
-    ix = np.zeros(4, np.int64)
+    samples = mod.callee_samples()      # (the types evaluate_lanes passes, as the run's)
 
     def compile_(name, *args):
-        getattr(mod, name).compile(tuple(typeof(x) for x in args))
+        getattr(mod, name).compile(tuple(typeof(x) for x in args or samples[name]))
 
     forces = getattr(mod, "HAS_LANE_FORCES", False)
     if forces:
@@ -73,13 +67,13 @@ def compile_standalone(mod) -> None:
     c = np.cos(np.arange(float(npos)))
     mod.walk(s.reshape(-1), lanes, theta, c, c, 2, 1, 1e-12, 0.1, 0.05, 1e-3, 1e-7, 1e-6)
     compile_metrics(mod)
-    compile_("block_walk", a2, a2, a1, a1, a1, a1, a1)
+    compile_("block_walk")
     if forces:
-        compile_("force_flush", ix, i64, a1, a2, a2, a1, a1, a1, loads, status, a2)
-        compile_("force_lane_in", par, i64, a2, a1, a2, a1, a2)
+        compile_("force_flush")
+        compile_("force_lane_in", par, np.int64(0), a2, a1, a2, a1, a2)
     # (by now the run has usually compiled position, advance and the watch: numba's cache)
-    compile_("setup_lane", a2, i64, i64, a1, f64, a1, a2, a2, a2, a2, a2, a1, a2)
-    compile_("careful_tail", K, a1, i64, i64, a2, a1, a1, a1, wk, ww)
+    compile_("setup_lane")
+    compile_("careful_tail")
 
 
 def compile_metrics(mod) -> None:

@@ -174,41 +174,53 @@ FORCE_FLUSH_FN = None
 _CALLEES = []
 
 
+def callee_samples():
+    """Sample arguments of the types ``evaluate_lanes`` and ``flush_forces`` pass
+    the kernels they call through their addresses, by kernel name, in the
+    order ``callees`` compiles them (each before its callers); the process
+    beside compiles some of them for the same types (``pipeline.compiler.beside``)."""
+    n = 4
+    a1, a2, i1 = np.zeros(n), np.zeros((n, n)), np.zeros(n, np.int64)
+    i64, f64 = np.int64(0), 0.0
+    wk = (work.py_func(N_POINTS, N_GROUPS, N_TRIADS),
+          force_work.py_func(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS),
+          watch_work.py_func(N_WATCH, N_TRIADS))
+    loads = np.zeros((n, 1, 3))
+    status = np.zeros(n, np.int8)       # (the run's: pipeline.runs.problem)
+    pos, d1, d2, margins, state, _ = wk[0]
+    return {
+        "settle": (a1, i64, a1, f64, a1, a1, loads, a1, a2, i1, i1, f64, i64, f64, f64, *wk,
+                   a1, a1),
+        "force_flush": (i1, i64, a1, a2, a2, a1, a1, a1, loads, status, a2),
+        "flush_forces": (a2, i1, i64, a1, a2, a2, a1, f64, a1, a1, loads, a1, a2, i1, i1, *wk,
+                         a1, status, a2, i1),
+        "setup_lane": (a2, i64, i64, a1, f64, a1, a2, a2, pos, d1, d2, margins, state),
+        "careful_tail": (constants(np.ones(N_PARAMS)), a1, i64, i64, a2, a1, a1, a1, wk[0],
+                         wk[2]),
+        "block_walk": (a2, a2, a1, a1, a1, a1, a1),
+    }
+
+
 def callees():
     """The addresses of ``settle``, ``flush_forces``, ``setup_lane``,
     ``careful_tail``, ``block_walk`` and ``force_flush`` compiled (or loaded
     from numba's cache) for the types ``evaluate_lanes`` and ``flush_forces``
-    pass them, which call them through these (``pipeline.kernels.calls``):
-    their own compiles then do not link these kernels' code and optimise it
-    once more.  Each is called once per candidate or per block, never in a
-    loop over positions.  Once per process; in numba's Python mode the kernels
-    themselves."""
+    pass them (``callee_samples``), which call them through these
+    (``pipeline.kernels.calls``): their own compiles then do not link these
+    kernels' code and optimise it once more.  Each is called once per
+    candidate or per block, never in a loop over positions.  Once per process;
+    in numba's Python mode the kernels themselves."""
     global SETTLE_FN, FLUSH_FN, SETUP_FN, TAIL_FN, BLOCK_WALK_FN, FORCE_FLUSH_FN
     if DISABLE_JIT:
         return (settle, flush_forces, setup_lane, careful_tail, block_walk, force_flush)
     if not _CALLEES:
-        n = 4
-        a1, a2, i1 = np.zeros(n), np.zeros((n, n)), np.zeros(n, np.int64)
-        i64, f64 = np.int64(0), 0.0
-        wk = (work.py_func(N_POINTS, N_GROUPS, N_TRIADS),
-              force_work.py_func(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS),
-              watch_work.py_func(N_WATCH, N_TRIADS))
-        loads = np.zeros((n, 1, 3))
-        SETTLE_FN, at_settle = first_class(settle, (a1, i64, a1, f64, a1, a1, loads, a1, a2, i1,
-                                                    i1, f64, i64, f64, f64, *wk, a1, a1))
-        status = np.zeros(n, np.int8)       # (the run's: pipeline.runs.problem)
-        # (each before its callers: they read its function type when they compile)
-        FORCE_FLUSH_FN, at_force_flush = first_class(force_flush, (
-            i1, i64, a1, a2, a2, a1, a1, a1, loads, status, a2))
-        FLUSH_FN, at_flush = first_class(flush_forces, (
-            a2, i1, i64, a1, a2, a2, a1, f64, a1, a1, loads, a1, a2, i1, i1, *wk, a1, status,
-            a2, i1))
-        pos, d1, d2, margins, state, _ = wk[0]
-        SETUP_FN, at_setup = first_class(setup_lane, (a2, i64, i64, a1, f64, a1, a2, a2, pos,
-                                                      d1, d2, margins, state))
-        TAIL_FN, at_tail = first_class(careful_tail, (constants(np.ones(N_PARAMS)), a1, i64,
-                                                      i64, a2, a1, a1, a1, wk[0], wk[2]))
-        BLOCK_WALK_FN, at_walk = first_class(block_walk, (a2, a2, a1, a1, a1, a1, a1))
+        s = callee_samples()
+        SETTLE_FN, at_settle = first_class(settle, s["settle"])
+        FORCE_FLUSH_FN, at_force_flush = first_class(force_flush, s["force_flush"])
+        FLUSH_FN, at_flush = first_class(flush_forces, s["flush_forces"])
+        SETUP_FN, at_setup = first_class(setup_lane, s["setup_lane"])
+        TAIL_FN, at_tail = first_class(careful_tail, s["careful_tail"])
+        BLOCK_WALK_FN, at_walk = first_class(block_walk, s["block_walk"])
         _CALLEES[:] = [np.array([at_settle, at_flush, at_setup, at_tail, at_walk,
                                  at_force_flush], np.int64)]
     return _CALLEES[0]
