@@ -50,6 +50,28 @@ else:
     function_at = intrinsic(_function_at)
 
 
+def _unliteral(typingctx, value):
+    """``value``, typed as a value known only at run time.  numba types a constant
+    argument (``True``, ``50``) as its literal and compiles the callee, and all it
+    calls, once per literal: a kernel called with ``True`` in one place and
+    ``False`` in another was compiled twice (the friction integrator's evaluation,
+    11 s of its 38).  ``callee(..., unliteral(True))`` compiles it once for both:
+    the same operations on the same values, so the same bits."""
+    target = types.unliteral(value)
+
+    def codegen(context, builder, sig, args):
+        return context.cast(builder, args[0], sig.args[0], sig.return_type)
+    return target(value), codegen
+
+
+if config.DISABLE_JIT:
+    def unliteral(value):
+        """(numba's Python mode: ``value`` itself.)"""
+        return value
+else:
+    unliteral = intrinsic(_unliteral)
+
+
 def first_class(kernel, args):
     """(numba FunctionType, address) of ``kernel`` compiled (or loaded from
     numba's cache) for the types of the sample arguments ``args``: the address

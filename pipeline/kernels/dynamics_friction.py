@@ -33,6 +33,7 @@ import math
 import numpy as np
 from numba import njit, types
 
+from .calls import unliteral
 from .config import FRICTION_LOCK, JIT, JIT_ALLOC, OK, SINGULAR, compile_for
 from .continuation import work
 from .dynamics import (_DRIVE, _F1, _I1, _I2, MASSES, OMEGA_STOP, SIZES, TOO_FAST, acceleration,
@@ -59,8 +60,8 @@ def _m_bal(eps, omega, pos, d1, d2, gravity, par, body_com, body_turn, body_mass
     friction_forces(pos, d1, d2, omega, eps, gravity, par, body_com, body_turn, body_mass_off,
                     joint_point, joint_bodies, slide_bodies, slide_dir, slide_angle, crank_body,
                     load_body, load_point, loads_k, f_rev, radius, f_slide, block, FRICTION_REL,
-                    FRICTION_MAX_ITER, a0, b0, jac, res, x, sense, loads_out, r_out, slide_out,
-                    fric, speed, found, keep)
+                    unliteral(FRICTION_MAX_ITER), a0, b0, jac, res, x, sense, loads_out, r_out,
+                    slide_out, fric, speed, found, keep)
     if found[0] != OK:
         return FRICTION_LOCK, math.nan
     if not math.isfinite(found[1]):
@@ -156,7 +157,7 @@ def rk4_in_regime(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h
             return SINGULAR
         st, es = _eval(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t,
                        damping, ts, ps, ws, state, last, pos, d1, d2, margins, loads_k,
-                       friction, fw, regime, True, fw[0])
+                       friction, fw, regime, unliteral(True), fw[0])
         if st != OK:
             return st
         weight = 2.0 if s < 3 else 1.0
@@ -187,7 +188,7 @@ def _trial(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t, dam
         return TOO_FAST, math.nan, False
     st, e = _eval(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t, damping,
                   t + h, end[0], end[1], state, last, pos, d1, d2, margins, loads_k, friction,
-                  fw, after, False, speed1)
+                  fw, after, unliteral(False), speed1)
     return st, e, st == OK and _same(after, regime) and not _dips(speed0, speed1,
                                                                    end[0] - p)
 
@@ -282,7 +283,7 @@ def rk4_friction(advance, start, K, sizes, masses, par, tols, const, tab_phi, h_
     crossing = -1
     st, e = _eval(advance, K, masses, par, tols, const, tab_phi, h_phi, tab_t, h_t, damping,
                   0.0, p, w, state, last, pos, d1, d2, margins, loads_k, friction, fw, regime,
-                  False, speed0)
+                  unliteral(False), speed0)
     n = 0
     while st == OK:
         if record(n, n_sub, tail0, dt, p, w, e, out_t, out_phi, out_omega, out_eps, tail_t,

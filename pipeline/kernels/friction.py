@@ -30,6 +30,7 @@ import math
 
 from numba import njit
 
+from .calls import unliteral
 from .config import FRICTION_LOCK, JIT, OK
 from .forces import MM, assemble_forces, body_motion, gauss_solve, slide_direction
 
@@ -410,7 +411,8 @@ def friction_revolution(phis, pos, d1, d2, omega1, eps1, gravity, par, body_com,
                         body_mass_off, joint_point, joint_bodies, slide_bodies, slide_dir,
                         slide_angle, crank_body, load_body, load_point, loads[k], f_rev, radius,
                         f_slide, block, rel_tol, max_iter, a0, b0, jac, res, x, sense,
-                        loads_out, r_out, slide_out, friction_out, speed_out, found, False)
+                        loads_out, r_out, slide_out, friction_out, speed_out, found,
+                        unliteral(False))
         if found[0] != OK:
             out[0] = found[0]
             out[7] = k
