@@ -463,8 +463,9 @@ def walk_on(advance, K, state_from, phi_from, phi, order, tols, pos_out, d1_out,
                                           state_from.shape[0])
     copy2(state_from, state)
     st = advance(K, phi_from, phi, order, tols, state, pos, d1, d2, margins, True)
-    record(0, st, order, state, pos, d1, d2, margins, pos_out, d1_out, d2_out, status_out,
-           margin_out, iters_out)
+    # (np.int64: a literal 0 compiled ``record`` once more beside walk_revolution's int64 k)
+    record(np.int64(0), st, order, state, pos, d1, d2, margins, pos_out, d1_out, d2_out,
+           status_out, margin_out, iters_out)
     return st
 
 
