@@ -309,20 +309,11 @@ def new_mechanism_cache(tmp_path):
     own (SEARCH_KERNELS), which compile too.  (An empty cache compiled the
     installation's kernels as well: 20-40 s more of this test; a scene on a new
     installation is tests/compiler/test_library.py's.)"""
-    import os
-    import shutil
-
-    from numba.core.caching import _CacheLocator
-
     from pipeline import group_types, kernels
-    suite, numba_cache = Path(os.environ["NUMBA_CACHE_DIR"]), tmp_path / "numba"
+    from support.caches import copy_compiled
     folders = [Path(kernels.__file__).parent] + [
         d for d in Path(group_types.__file__).parent.iterdir() if (d / "kernels.py").exists()]
-    for folder in folders:
-        name = _CacheLocator.get_suitable_cache_subpath(str(folder / "x.py"))
-        if (suite / name).is_dir():
-            shutil.copytree(suite / name, numba_cache / name, ignore=lambda _, names: [
-                n for n in names if n.split(".")[0] in SEARCH_KERNELS])
+    numba_cache = copy_compiled(folders, tmp_path / "numba", skip=SEARCH_KERNELS)
     assert not list(numba_cache.rglob("pareto.*")) and not list(numba_cache.rglob("nsga2_ops.*"))
     return child_env(PIPELINE_CACHE_DIR=str(tmp_path / "modules"),
                      NUMBA_CACHE_DIR=str(numba_cache))

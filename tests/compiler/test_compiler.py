@@ -1029,14 +1029,13 @@ def test_a_second_run_compiles_nothing(tmp_path):
     whole library once more (half a minute); the generated module is new."""
     import json
     import os
-    import shutil
     import subprocess
     import sys
+
+    from pipeline import kernels
+    from support.caches import copy_compiled
     cache = tmp_path / "cache"
-    session = Path(os.environ["NUMBA_CACHE_DIR"])
-    for lib in session.glob("kernels_*"):           # numba's folder for pipeline/kernels
-        shutil.copytree(lib, cache / "numba" / lib.name,
-                        ignore=shutil.ignore_patterns("*.tmp*"))
+    copy_compiled([Path(kernels.__file__).parent], cache / "numba")
     env = dict(os.environ, PIPELINE_CACHE_DIR=str(cache / "modules"),
                NUMBA_CACHE_DIR=str(cache / "numba"))
     runs = []
