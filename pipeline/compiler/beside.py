@@ -66,7 +66,7 @@ def compile_standalone(mod) -> None:
     theta = np.zeros((npos, lanes * mod.THETA_COLS))
     c = np.cos(np.arange(float(npos)))
     mod.walk(s.reshape(-1), lanes, theta, c, c, 2, 1, 1e-12, 0.1, 0.05, 1e-3, 1e-7, 1e-6)
-    compile_metrics(mod)
+    compile_metrics()
     compile_("block_walk")
     if forces:
         compile_("force_flush")
@@ -76,13 +76,12 @@ def compile_standalone(mod) -> None:
     compile_("careful_tail")
 
 
-def compile_metrics(mod) -> None:
+def compile_metrics() -> None:
     """Compile (or load) the library's metric kernels that ``settle`` and
-    ``evaluate`` call, for the argument types they give them (the lane width
-    and the law's column are literal constants there): the dwell error, in
-    lanes and alone, and the law error.  They call nothing of the mechanism's,
-    so the process beside has them in numba's cache before the run reaches
-    them."""
+    ``evaluate`` call, for the argument types they give them (the law's column
+    is a literal constant there): the dwell error, in lanes and alone, and the
+    law error.  They call nothing of the mechanism's, so the process beside has
+    them in numba's cache before the run reaches them."""
     from numba import typeof, types
     from pipeline.kernels import metrics
     from pipeline.kernels.sweep import SET_LAW0
@@ -90,8 +89,7 @@ def compile_metrics(mod) -> None:
     metrics.dwell_error.compile((f1, types.int64, i1, i1))
     metrics.law_error.compile((f1, f1, types.literal(SET_LAW0), types.boolean, f1))
     metrics.dwell_lanes.compile((typeof(np.zeros((1, 1))), types.int64, types.int64,
-                                 types.literal(mod.LANES), typeof(np.zeros((1, 1, 1))), f1, i1,
-                                 f1))
+                                 types.int64, typeof(np.zeros((1, 1, 1))), f1, i1, f1))
 
 
 def compile_library() -> None:

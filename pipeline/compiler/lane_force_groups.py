@@ -162,24 +162,25 @@ def transmission_lines(q, kind, args, c):
 
 def peak_lines(plan, rocker, c):
     """force_stage's SET_WANT_PEAKS lines: the working point's acceleration
-    (its point index ``iw`` known at run time: a select over the points) into
+    (its point index ``iw`` known at run time: a select over the points,
+    ``pick``'s blends rather than branches LLVM writes as masked stores) into
     RB's last two columns (force_flush takes their peak |a| with the scalar
     stage's own loop), and the running maximum of the output rocker's
     |angular acceleration| (the same lines as force_stage's)."""
     n = len(plan.point_names)
     col = 2 * len(plan.joint_names)
 
-    def pick(stem):
+    def chosen(stem):
         expr = f"{stem.format(n - 1)}"
         for i in range(n - 2, -1, -1):
-            expr = f"({stem.format(i)} if iw == {i} else {expr})"
+            expr = f"pick(iw == {i}, {stem.format(i)}, {expr})"
         return expr
     piv, pt = plan.point(rocker[0]), plan.point(rocker[1])
     return [
         "# the working point's |a| = |r'' omega1^2 + r' eps1| (mm/s^2), its peak in force_flush",
         "w2 = omega1 * omega1",
-        f"RB[k, {col} * LANES + l] = {pick('A{}_0')} * w2 + {pick('V{}_0')} * eps1",
-        f"RB[k, {col + 1} * LANES + l] = {pick('A{}_1')} * w2 + {pick('V{}_1')} * eps1",
+        f"RB[k, {col} * LANES + l] = {chosen('A{}_0')} * w2 + {chosen('V{}_0')} * eps1",
+        f"RB[k, {col + 1} * LANES + l] = {chosen('A{}_1')} * w2 + {chosen('V{}_1')} * eps1",
         "# the output rocker's eps = theta'' omega1^2 + theta' eps1 (geometry.angle_analogs)",
         f"dx = P{pt}_0 - P{piv}_0", f"dy = P{pt}_1 - P{piv}_1",
         f"d1x = V{pt}_0 - V{piv}_0", f"d1y = V{pt}_1 - V{piv}_1",

@@ -230,7 +230,10 @@ def _metric_lines(plan, rocker, items):
         L += transmission_lines(q, kind, args, _c)
         L += [f"RB[k, {tr_col + 2 * q} * LANES + l] = abs(ux * wy - uy * wx)",
               f"RB[k, {tr_col + 2 * q + 1} * LANES + l] = abs(ux * wx + uy * wy)"]
-    return L + [f"{_c('bad')} = 1.0 if bad else {_c('bad')}"]
+    # the verdict as arithmetic on 0 and 1 (their max), exact: a select of the row's
+    # own value is a masked store (microcoded on AMD's AVX2 cores)
+    return L + ["bad_now = 1.0 if bad else 0.0", f"bad_was = {_c('bad')}",
+                f"{_c('bad')} = bad_was + bad_now - bad_was * bad_now"]
 
 
 def _force_lanes(triads, L):

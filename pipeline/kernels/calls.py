@@ -73,6 +73,30 @@ else:
     unliteral = intrinsic(_unliteral)
 
 
+def _pick(typingctx, cond, a, b):
+    """``a`` where ``cond``, else ``b``: one LLVM ``select`` of two values of the
+    same float type, both already computed.  numba writes ``a if cond else b``
+    as branches; in a long lane loop LLVM could not hoist a test that the loop
+    never changes (the force lanes' choice of the working point among the
+    points), turned the branches into one masked store per point (microcoded
+    on AMD's AVX2 cores, 12 of the force lanes' 15) and kept them; a select
+    chain is a blend per point instead.  The same value, so the same bits."""
+    if not (isinstance(cond, types.Boolean) and isinstance(a, types.Float) and a == b):
+        return None
+
+    def codegen(context, builder, sig, args):
+        return builder.select(args[0], args[1], args[2])
+    return a(cond, a, b), codegen
+
+
+if config.DISABLE_JIT:
+    def pick(cond, a, b):
+        """(numba's Python mode: ``a if cond else b``.)"""
+        return a if cond else b
+else:
+    pick = intrinsic(_pick)
+
+
 def first_class(kernel, args):
     """(numba FunctionType, address) of ``kernel`` compiled (or loaded from
     numba's cache) for the types of the sample arguments ``args``: the address

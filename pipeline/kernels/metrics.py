@@ -93,29 +93,32 @@ def dwell_lanes(theta, n, w, lanes, W5, err, start, full):
     / Gil-Werman, prefix and suffix extrema in blocks of the window's w + 1
     samples over the revolution extended by w; the same windows, the same exact
     extrema and the same tie rule (the first start) as ``dwell_error``, hence
-    the same results.  W5: work array of at least (5, n + w, lanes).  Writes
-    err (NaN where ``dwell_error`` gives NaN), start (-1 there) and full."""
+    the same results.  W5: work array of at least (5, n + w, lanes), n + w >= 4.
+    Writes err (NaN where ``dwell_error`` gives NaN), start (-1 there) and full.
+
+    Give ``lanes`` as a run-time value (an array's shape): a constant count has
+    LLVM unroll the lane loops, which then stay scalar.  No value is written back
+    where the same loop read it (a select of a row's own value, which LLVM writes
+    with masked stores, microcoded on AMD's AVX2 cores), and each lane loop
+    touches few arrays (LLVM checks every pair for overlap before it vectorizes)."""
     b = w + 1
     m = n + w
     pmax = W5[0]
     smax = W5[1]
     pmin = W5[2]
     smin = W5[3]
-    hi = W5[4, 0]
-    lo = W5[4, 1]
-    bad = W5[4, 2]
-    # counters instead of j % n and j % b: an integer division per row costs
-    # more than the row's work
     q = 0                         # j % b
     for j in range(m):
         k = j if j < n else j - n
         if q == 0:
             for l in range(lanes):
                 pmax[j, l] = theta[k, l]
+            for l in range(lanes):
                 pmin[j, l] = theta[k, l]
         else:
             for l in range(lanes):
                 pmax[j, l] = max(pmax[j - 1, l], theta[k, l])
+            for l in range(lanes):
                 pmin[j, l] = min(pmin[j - 1, l], theta[k, l])
         q = 0 if q == b - 1 else q + 1
     q = (m - 1) % b
@@ -124,34 +127,55 @@ def dwell_lanes(theta, n, w, lanes, W5, err, start, full):
         if q == b - 1 or j == m - 1:
             for l in range(lanes):
                 smax[j, l] = theta[k, l]
+            for l in range(lanes):
                 smin[j, l] = theta[k, l]
         else:
             for l in range(lanes):
                 smax[j, l] = max(smax[j + 1, l], theta[k, l])
+            for l in range(lanes):
                 smin[j, l] = min(smin[j + 1, l], theta[k, l])
         q = b - 1 if q == 0 else q - 1
+    # the revolution's extremes: its blocks' (the suffix extrema at their first rows)
+    hi = W5[4, 0]
+    lo = W5[4, 1]
+    nan = W5[4, 2]
+    first = W5[4, 3]
     for l in range(lanes):
-        hi[l] = theta[0, l]
-        lo[l] = theta[0, l]
-        bad[l] = 0.0
-        err[l] = math.inf
-        start[l] = -1
+        h = smax[0, l]
+        o = smin[0, l]
+        for j in range(b, m, b):
+            h = max(h, smax[j, l])
+            o = min(o, smin[j, l])
+        hi[l] = h
+        lo[l] = o
+        nan[l] = 0.0
+        first[l] = 0.0
     for k in range(n):
         for l in range(lanes):
-            v = theta[k, l]
-            hi[l] = max(hi[l], v)
-            lo[l] = min(lo[l], v)
-            bad[l] = max(bad[l], 0.0 if v - v == 0.0 else 1.0)    # NaN or inf
-    for s in range(n):      # window s..s+w: suffix of s's block, prefix of (s+w)'s
+            nan[l] += theta[k, l] - theta[k, l]     # stays 0.0 unless a NaN or inf
+    # window s..s+w: the suffix of s's block and the prefix of (s+w)'s; its range
+    # overwrites smax[s] (read there for the last time)
+    rng = smax
+    for s in range(n):
         for l in range(lanes):
-            r = max(smax[s, l], pmax[s + w, l]) - min(smin[s, l], pmin[s + w, l])
-            if r < err[l]:
-                err[l] = r
-                start[l] = s
+            rng[s, l] = max(smax[s, l], pmax[s + w, l]) - min(smin[s, l], pmin[s + w, l])
+    # the least range's first window: the running least range (into pmin) falls to
+    # it there, so its start counts the windows before where it is still above
+    least = pmin
+    for l in range(lanes):
+        least[0, l] = rng[0, l]
+    for s in range(1, n):
+        for l in range(lanes):
+            least[s, l] = min(least[s - 1, l], rng[s, l])
+    for s in range(n):
+        for l in range(lanes):
+            first[l] += 1.0 if least[s, l] > least[n - 1, l] else 0.0
     for l in range(lanes):
         f = hi[l] - lo[l]
         full[l] = f
-        if bad[l] != 0.0:
+        err[l] = least[n - 1, l]
+        start[l] = int(first[l])
+        if nan[l] != 0.0:
             err[l] = math.nan
             start[l] = -1
             full[l] = math.nan

@@ -896,6 +896,11 @@ def test_dwell_lanes_equals_dwell_error():
         th[:, 3] = 1.0                       # a rocker that does not move: NaN
         if trial % 3 == 0:
             th[int(rng.integers(n)), 2] = np.nan
+        if trial % 4 == 0:                   # an infinite angle: NaN
+            th[int(rng.integers(n)), 5] = np.inf if trial % 8 else -np.inf
+        if trial % 5 == 0:                   # zeros of both signs: ties in every extremum
+            th[:, 6] = np.where(rng.random(n) < 0.5, 0.0, -0.0)
+            th[: n // 2, 7] = np.where(rng.random(n // 2) < 0.5, 0.0, -0.0)
         W5 = np.empty((5, n + w, L))
         e, s, f = np.empty(L), np.empty(L, np.int64), np.empty(L)
         dwell_lanes(th, n, w, L, W5, e, s, f)

@@ -5,7 +5,7 @@ compile does not link the callee's code."""
 import numpy as np
 from numba import njit
 
-from pipeline.kernels.calls import first_class, function_at, unliteral
+from pipeline.kernels.calls import first_class, function_at, pick, unliteral
 
 
 @njit(cache=False)
@@ -77,6 +77,26 @@ def test_a_callee_called_with_two_literals_compiles_once_through_unliteral():
     assert [str(s) for s in new] == ["(float64, bool, int64)"], new
     _flagged(1.5, True, 3)                                  # from Python: the same one
     assert len(_flagged.signatures) == 3
+
+
+@njit(cache=False)
+def _picked(which, a, out):
+    for i in range(a.shape[0]):
+        out[i] = pick(which == 0, a[i, 0], pick(which == 1, a[i, 1], a[i, 2]))
+
+
+def test_pick_is_the_conditional_expression_to_the_bit():
+    """``pick(c, a, b)`` is ``a if c else b`` for every value a float takes,
+    NaN (its payload and sign), infinities and signed zeros among them."""
+    vals = np.array([0.0, -0.0, 1.5, -2.25, np.inf, -np.inf, np.nan, -np.nan, 5e-324,
+                     np.frombuffer(np.uint64(0x7FF8_0000_DEAD_BEEF).tobytes())[0]])
+    rng = np.random.default_rng(3)
+    a = rng.choice(vals, (200, 3))
+    for which in range(3):
+        out = np.empty(200)
+        _picked(which, a, out)
+        want = np.array([x[0] if which == 0 else (x[1] if which == 1 else x[2]) for x in a])
+        assert out.tobytes() == want.tobytes()
 
 
 def test_the_friction_integrator_passes_its_callees_no_literal():

@@ -32,7 +32,7 @@ from pipeline.kernels.continuation import (MARGIN_SLOTS, accept, closes, copy2, 
                                            may_stop, predict, restore, start_triad, step_limit,
                                            work, wrap)
 from pipeline.kernels import dynamics
-from pipeline.kernels.calls import first_class, function_at
+from pipeline.kernels.calls import first_class, function_at, pick
 from pipeline.kernels.forces import (applied_loads, equilibrium_residual, force_work, gauss_solve,
                                      kinetostatics, shaking)
 from pipeline.kernels.geometry import may_reach
@@ -87,4 +87,5 @@ __all__ = ('math', 'np', 'njit', 'JIT', 'JIT_ALLOC', 'JIT_ALLOC_INNER', 'JIT_INN
            'FOLD_BACK', 'LOCATE_MIN_STEP',
            'LOCATE_NEWTON_TOL', 'RESOLVED', 'SUB', 'cubic_bound', 'fold_distance',
            'third_difference', 'uniform_hit', 'window_score', 'window_vertex', 'may_reach',
-           'MARGIN_SLOTS', 'scene_revolution', 'DISABLE_JIT', 'first_class', 'function_at')
+           'MARGIN_SLOTS', 'scene_revolution', 'DISABLE_JIT', 'first_class', 'function_at',
+           'pick')
