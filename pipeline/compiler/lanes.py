@@ -58,7 +58,8 @@ def _lane_rows(consts, triads, watched):
     rows = list(consts)
     for e in triads:
         rows += [f"t{e.triad_row}_{x}" for x in TRIAD_ROWS]
-    rows += ["rock_x", "rock_y", "theta", "margin", "flag", "first_flag", "last_flag"]
+    rows += ["rock_x", "rock_y", "theta", "margin", "margin_b", "flag", "first_flag",
+             "last_flag"]
     for i, e in enumerate(watched):
         rows += [f"w{i}_{x}" for x in ("k3", "k2", "k1")]
     return rows
@@ -232,7 +233,6 @@ def _rocker_step_lines(piv, pt):
         "S[R_rock_x, l] = ux", "S[R_rock_y, l] = uy", "S[R_theta, l] = th",
         "theta[k, l] = th",
         "theta[k, MARGIN_COL * LANES + l] = margin",
-        "S[R_margin, l] = min(S[R_margin, l], margin)",
         "flagged = bad | low | big",
         # the flags as arithmetic on 0/1 and whole numbers (exact: the values of the
         # max and the selects, bit for bit), not as a select of the row's own value,
@@ -285,7 +285,23 @@ def _block_walk():
         "    # (the watch's windows wrap round the close)",
         "    walk(S.reshape(N_LANE_ROWS * LANES), S.shape[1], theta, cph_tab, sph_tab, "
         "npos + 3, npos,",
-        "         tol, jump, step_change, margin_safe, close, tols[T_WATCH])", "", ""]
+        "         tol, jump, step_change, margin_safe, close, tols[T_WATCH])",
+        "    # the lane's least margin from its column, position by position as the walk",
+        "    # met them, in a loop of its own over two rows of S in turn: the running value",
+        "    # written back where the walk read it was a masked store (microcoded on AMD's",
+        "    # AVX2 cores)",
+        "    n_lanes = S.shape[1]",
+        "    for k in range(1, npos + 3, 2):",
+        "        for l in range(n_lanes):",
+        "            S[R_margin_b, l] = min(S[R_margin, l], theta[k, MARGIN_COL * LANES + l])",
+        "        if k + 1 == npos + 3:",
+        "            for l in range(n_lanes):",
+        "                S[R_margin, l] = S[R_margin_b, l]",
+        "        else:",
+        "            for l in range(n_lanes):",
+        "                S[R_margin, l] = min(S[R_margin_b, l],",
+        "                                     theta[k + 1, MARGIN_COL * LANES + l])",
+        "", ""]
 
 
 def _lanes_apply():
