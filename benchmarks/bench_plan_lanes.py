@@ -55,10 +55,12 @@ def _pieces(src):
     """(the lane loop's body cut at each group's comment, the lines after the loop) of
     the generated ``walk`` in module source ``src``."""
     walk = re.search(r"^def walk\(S.*?(?=^\S)", src, re.S | re.M).group(0).splitlines()
-    start = next(i for i, x in enumerate(walk) if x.strip() == "for l in range(n_lanes):")
+    start = next(i for i, x in enumerate(walk) if x.strip().startswith("for l in range(n_lanes"))
     end = next(i for i, x in enumerate(walk) if x.strip().startswith("if k == k_close:"))
     chunks, cur = [], []
     for line in walk[start + 1:end]:
+        if re.search(r"HALF \+ l\]|\b\w+_h\b", line):
+            continue        # (the second lane of a pair: the split walks one at a time)
         if line.startswith((_IND + "# group ", _IND + "# the output rocker")) and cur:
             chunks.append(cur)
             cur = []

@@ -34,6 +34,7 @@ increments, atan of a small argument by its series.
 
 from __future__ import annotations
 
+import ast
 import math
 import re
 
@@ -72,6 +73,7 @@ def _lane_constants(plan, names, rocker, width, fast, rows, n_triads, n_inputs):
     src = [f"ROCKER_PIVOT = {names.I(ipiv)}   # {text(rocker[0])}",
            f"ROCKER_POINT = {names.I(ipt)}   # {text(rocker[1])}",
            f"LANES = {width}",
+           f"HALF = {width // 2}   # the walk's lanes in pairs: l and HALF + l",
            f"HAS_LANES = {fast}   # every kinematic group has a lane form",
            f"NEWTON_STEPS = {NEWTON_STEPS}   # Newton steps per position in the lanes",
            f"LANE_STEP_MAX = {math.atan(ATAN_ARG)!r}   # the largest rocker step the lanes' "
@@ -105,7 +107,7 @@ def lane_kernel(plan, names, ems, rocker, width, watch=True):
         src += ["\n" + no_lane_path("A group without a lane form")]
         return "\n".join(src) + "\n"
     rocker_xy = (names.xy(plan.point(rocker[0])), names.xy(plan.point(rocker[1])))
-    src += [""] + _walk(plan, names, kin, triads, watched, rocker_xy) + ["", ""]
+    src += [""] + _walk(plan, names, kin, triads, watched, rocker_xy, width) + ["", ""]
     src += _setup_lane(consts, inputs, triads, watched)
     src += _block_walk() + _lanes_apply()
     return "\n".join(src) + "\n\n"
@@ -177,7 +179,7 @@ def _flat(line):
     return re.sub(r"S\[(R_\w+), l\]", r"S[\1 * LANES + l]", line)
 
 
-def _walk(plan, names, kin, triads, watched, rocker_xy):
+def _walk(plan, names, kin, triads, watched, rocker_xy, width):
     """Source of ``walk``: every lane of a block advanced one crank position at a
     time, each group's lane lines, the output rocker's angle and the flags; at
     the closing position, the class III groups' return to their start."""
@@ -209,11 +211,51 @@ def _walk(plan, names, kin, triads, watched, rocker_xy):
         if e in watched:
             inner += _watch_lines(watched.index(e), e)
     inner += _rocker_step_lines(*rocker_xy)
-    walk += ["            " + _flat(line) for line in inner]
+    paired = _paired([_flat(line) for line in inner]) if width % 2 == 0 else None
+    if paired:      # (n_lanes is LANES: block_walk passes S's width)
+        walk[-1] = "        for l in range(n_lanes - HALF):   # lanes l and HALF + l"
+        walk += ["            " + line for line in paired]
+    else:
+        walk += ["            " + _flat(line) for line in inner]
     if triads:
         walk += ["        if k == k_close:"] + ["            " + _flat(x)
                                                   for x in _closing_lines(triads)]
     return walk
+
+
+def _paired(lines):
+    """The walk's lane lines for lanes l and HALF + l, statement by statement in
+    turn (the second lane's local names with the suffix ``_h``), or None where a
+    line is not a plain assignment.  A lane's position is one long chain of
+    dependent operations (two Newton steps, the cos/sin series, the divisions):
+    with one vector of lanes in the loop's body the core waits on its latencies,
+    and the next vector's chain comes too late to fill the wait (the body is
+    longer than the core's reorder window); two chains side by side fill it.
+    The same operations on each lane, so the same bits.  Measured: the main
+    job's walk 20 % faster on this AMD EPYC (AVX2); four chains spilled so many
+    registers that the walk took three times as long."""
+    local = set()
+    for line in lines:
+        code = line.split("#")[0].strip()
+        if not code:
+            continue
+        try:
+            tree = ast.parse(code)
+        except SyntaxError:
+            return None
+        if len(tree.body) != 1 or not isinstance(tree.body[0], (ast.Assign, ast.AugAssign)):
+            return None
+        local |= {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)
+                  and isinstance(n.ctx, ast.Store)}
+    names = re.compile(r"\b(" + "|".join(sorted(local, key=len, reverse=True)) + r")\b")
+    out = []
+    for line in lines:
+        code = line.split("#")[0].rstrip()
+        out.append(line)
+        if code.strip():
+            twin = re.sub(r"\+ l\]", "+ HALF + l]", names.sub(r"\1_h", code))
+            out.append(re.sub(r"\[k, l\]", "[k, HALF + l]", twin))
+    return out
 
 
 def _rocker_step_lines(piv, pt):
