@@ -247,7 +247,8 @@ def _paired(lines):
             return None
         local |= {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)
                   and isinstance(n.ctx, ast.Store)}
-    names = re.compile(r"\b(" + "|".join(sorted(local, key=len, reverse=True)) + r")\b")
+    names = re.compile(r"(?<![.\w])(" + "|".join(sorted(local, key=len, reverse=True))
+                       + r")\b")     # (not an attribute: math.inf)
     out = []
     for line in lines:
         code = line.split("#")[0].rstrip()
