@@ -278,8 +278,7 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
         if filled == LANES or (i == hi and filled > 0):
             pad_block(S, theta, filled, npos)
             block_walk_at(S, theta, cph, sph, phis, tols, settings)
-            # (the lane count as the array's shape, known only at run time: dwell_lanes)
-            dwell_lanes(theta, npos, w, W5.shape[2], W5, err, start_k, full)
+            dwell_lanes(theta, npos, w, W5.shape[2], W5, err, start_k, full)  # (lanes: run time)
             for l in range(filled):
                 # the lane vouches for its candidate unless it flagged itself: where it
                 # vouched, the force stage in the force lanes (LANE_METRICS)
