@@ -107,6 +107,8 @@ def dwell_lanes(theta, n, w, lanes, W5, err, start, full):
     smax = W5[1]
     pmin = W5[2]
     smin = W5[3]
+    # counters instead of j % n and j % b: an integer division per row costs
+    # more than the row's work
     q = 0                         # j % b
     for j in range(m):
         k = j if j < n else j - n
