@@ -51,6 +51,40 @@ def _fsync_dir(folder: Path):
         os.close(fd)
 
 
+class Writeback:
+    """The pages of a growing file that ``replacing`` will fsync once complete,
+    written to the disk while the file grows: ``kick()`` (after a flush) starts
+    one fsync of ``path`` on a thread of its own unless one is under way (fsync
+    lets other threads run), so that the final fsync, which the run waits for
+    alone, finds little left: the main job's 1,000,000-candidate file (114 MB)
+    took 0.18 s there.  The same pages go to the disk either way; an error is
+    the final fsync's to report."""
+
+    def __init__(self, path):
+        self.path = Path(path)
+        self._pool = self._busy = None
+
+    def kick(self):
+        if self._busy is not None and not self._busy.done():
+            return
+        if self._pool is None:
+            from concurrent.futures import ThreadPoolExecutor
+            self._pool = ThreadPoolExecutor(1, thread_name_prefix="pipeline-writeback")
+        self._busy = self._pool.submit(self._sync)
+
+    def _sync(self):
+        try:
+            _fsync(self.path)
+        except OSError:
+            pass
+
+    def close(self):
+        """Wait for the fsync under way, if any."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None
+
+
 # The fault-injection hook of the tests (tests/base/test_faults.py): the environment
 # variable names a point of the write path where the process kills itself with
 # SIGKILL, as a power cut or `kill -9` would, so that a test knows the point was

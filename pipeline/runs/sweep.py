@@ -24,7 +24,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from ..base.files import RunLock, fault_point
+from ..base.files import RunLock, Writeback, fault_point
 from ..base.limits import CHUNK_WHY, MAX_CHUNK
 from ..results.storage import hdf5_writing, same_study
 from ..study.objectives import feasibility
@@ -183,12 +183,16 @@ def _run_chunks(spec, out, journal, problem, sf, client, n_jobs, progress, stop_
     bar = _progress(spec, len(finished), progress)
     # locally the bar is told as a chunk's work goes (its robust builds slice by slice)
     watch = Watch(bar.update) if client is None else None
+    # a replacement (written in the journal folder, renamed over ``out`` when
+    # complete) is fsync'ed then: its pages go to the disk as it grows
+    writeback = Writeback(sf.path) if Path(sf.path) != Path(out) else None
     record = SaveThenWrite(lambda chunks: [journal.save(*_journal_part(c)) for c in chunks],
-                           flush_every_s=1.0)     # the HDF5 file: once a second
+                           flush_every_s=1.0, writeback=writeback)  # the file: once a second
     computed = 0
     # each chunk is journalled as it comes: on a failure nothing is kept back to save
     with stopping_safely(out, journal, bar, spec.n_chunks, "chunk"), \
-            hdf5_writing(sf.path, expendable=False) as f:
+            hdf5_writing(sf.path, expendable=False) as f, \
+            (contextlib.closing(writeback) if writeback else contextlib.nullcontext()):
         d = sf.datasets(f)
         record.open(f, lambda chunks: _write(sf, d, chunks, out))
         for c, x, status, metrics, rejected, kept in _chunks(problem, todo, client, n_jobs,

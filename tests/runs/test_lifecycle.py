@@ -74,6 +74,46 @@ def test_a_file_to_be_written_again_gets_no_more_units_but_the_journal_does():
     assert events == [("save", [0, 1])]
 
 
+class _Writeback:
+    def __init__(self, events):
+        self.events = events
+
+    def kick(self):
+        self.events.append(("writeback",))
+
+
+def test_a_file_to_be_fsynced_when_complete_goes_to_the_disk_after_each_flush():
+    events = []
+    r = SaveThenWrite(lambda units: events.append(("save", units)),
+                      writeback=_Writeback(events))
+    r.open(_File(events), lambda units: events.append(("write", units)))
+    r.add(0)
+    assert events == [("save", [0]), ("write", [0]), ("flush",), ("writeback",)]
+
+
+def test_the_writeback_syncs_the_file_once_at_a_time_and_close_waits_for_it(
+        tmp_path, monkeypatch):
+    import threading
+    from pipeline.base import files
+    started, release, synced = threading.Event(), threading.Event(), []
+
+    def slow_fsync(path):
+        started.set()
+        release.wait(10)
+        synced.append(path)
+    monkeypatch.setattr(files, "_fsync", slow_fsync)
+    w = files.Writeback(tmp_path / "r.h5")
+    w.kick()
+    assert started.wait(10)
+    w.kick()                    # one under way: no second
+    release.set()
+    w.close()
+    assert synced == [tmp_path / "r.h5"]
+    w.kick()                    # a new one after it
+    w.close()
+    assert synced == [tmp_path / "r.h5"] * 2
+
+
 @pytest.mark.parametrize("stop", [KeyboardInterrupt, RuntimeError])
 def test_an_interruption_or_a_failure_keeps_every_finished_unit(tmp_path, stop):
     events = []
