@@ -272,10 +272,51 @@ def test_refusals(synthesis, tmp_path, baseline, studies):
 
 
 # ---------------------------------------------------------------- engines and threads
-def test_thread_count_does_not_change_results(synthesis, tmp_path, baseline):
+@pytest.mark.parametrize("jobs", [1, 3])
+def test_thread_count_does_not_change_results(synthesis, tmp_path, baseline, jobs):
+    """One thread, or three chunks side by side (each on a thread, the last in
+    ranges): the baseline's file."""
     out = tmp_path / "t1.h5"
-    run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False, n_jobs=1)
+    run_sweep(synthesis, out, candidates=N, chunk_size=CHUNK, progress=False, n_jobs=jobs)
     assert_same_results(baseline, out)
+
+
+class _Chunks:
+    """A sweep problem that records how each chunk is drawn and evaluated."""
+    device, robust, friction = "cpu", None, None
+
+    def __init__(self):
+        import threading
+        self.drawn, self.evaluated, self.lock = [], [], threading.Lock()
+
+    def draw_chunk(self, c, draw=None):
+        self.drawn.append(c)
+        return ("drawn", c)
+
+    def evaluate_chunk(self, c, parallel, n_jobs, watch, drawn):
+        import time
+        assert drawn == ("drawn", c)
+        time.sleep(0.01 * (c % 3))      # chunks end out of their order
+        with self.lock:
+            self.evaluated.append((c, n_jobs))
+        return (c,)
+
+
+@pytest.mark.parametrize("jobs", [1, 2, 3])
+def test_chunks_side_by_side_come_back_in_order(jobs):
+    """On k > 1 threads k chunks run side by side, each whole on one thread
+    (the last shared out in ranges on all k); drawn in order; yielded in order."""
+    from pipeline.runs.sweep import _chunks
+    problem = _Chunks()
+    todo = [0, 1, 2, 3, 5, 8, 9]
+    assert [r[0] for r in _chunks(problem, todo, None, jobs)] == todo
+    assert problem.drawn == todo
+    threads = dict(problem.evaluated)
+    assert threads == {c: (jobs if c == 9 or jobs == 1 else 1) for c in todo}
+    problem.robust = "builds"          # robust builds share their own work out
+    problem.evaluated.clear()
+    list(_chunks(problem, todo, None, jobs))
+    assert {k for _, k in problem.evaluated} == {jobs}
 
 
 @pytest.mark.parametrize("processes", [False, True], ids=["threads", "worker-processes"])
