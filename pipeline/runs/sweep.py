@@ -309,7 +309,9 @@ def _chunks(problem, todo, client, n_jobs, watch=None, draw=None):
     from ..compiler.parallel import default_jobs
     watch = Watch() if watch is None else watch
     jobs = default_jobs() if n_jobs is None else n_jobs
-    side = jobs if jobs > 1 and _side_by_side(problem) else 1
+    # (at most MAX_CHUNK rows side by side: what a chunk may hold stays in memory)
+    side = min(jobs, max(1, MAX_CHUNK // problem.spec.chunk_size)) if (
+        jobs > 1 and _side_by_side(problem)) else 1
     chunk_jobs = 1 if side > 1 else n_jobs
     ahead = ThreadPoolExecutor(side, thread_name_prefix="pipeline-chunks")
     drawer = ThreadPoolExecutor(1, thread_name_prefix="pipeline-draws")

@@ -285,9 +285,10 @@ class _Chunks:
     """A sweep problem that records how each chunk is drawn and evaluated."""
     device, robust, friction = "cpu", None, None
 
-    def __init__(self):
+    def __init__(self, chunk_size=1000):
         import threading
         self.drawn, self.evaluated, self.lock = [], [], threading.Lock()
+        self.spec = dataclasses.make_dataclass("Spec", ["chunk_size"])(chunk_size)
 
     def draw_chunk(self, c, draw=None):
         self.drawn.append(c)
@@ -306,6 +307,7 @@ class _Chunks:
 def test_chunks_side_by_side_come_back_in_order(jobs):
     """On k > 1 threads k chunks run side by side, each whole on one thread
     (the last shared out in ranges on all k); drawn in order; yielded in order."""
+    from pipeline.base.limits import MAX_CHUNK
     from pipeline.runs.sweep import _chunks
     problem = _Chunks()
     todo = [0, 1, 2, 3, 5, 8, 9]
@@ -317,6 +319,9 @@ def test_chunks_side_by_side_come_back_in_order(jobs):
     problem.evaluated.clear()
     list(_chunks(problem, todo, None, jobs))
     assert {k for _, k in problem.evaluated} == {jobs}
+    big = _Chunks(chunk_size=MAX_CHUNK)     # one chunk of the largest size at a time
+    list(_chunks(big, todo, None, jobs))
+    assert {k for _, k in big.evaluated} == {jobs}
 
 
 @pytest.mark.parametrize("processes", [False, True], ids=["threads", "worker-processes"])
