@@ -16,9 +16,10 @@ HDF5 file.  Both count candidate-positions (every candidate x 360 positions) per
 the journal and the HDF5 file are written on the process's main thread, beside them), and
 the yardstick runs k OpenMP threads pinned to cores.  ``--confined`` also confines the
 process to k cores (CPU affinity), so that the main thread's writing shares them.  Each
-round runs the yardstick and the project alternately, for 1 core then all cores; the table
-gives each round and the median ratio (the machine's speed drifts, so only ratios taken side
-by side mean anything).  The run's own wall time (``wall_time_s``: the
+round runs, for 1 core then all cores, the yardstick, the project and the yardstick again,
+and holds the project against the mean of the two yardstick runs; the table gives each round
+(the yardstick's runs before and after beside their mean) and the median ratio (the
+machine's speed drifts, so only ratios taken side by side mean anything).  The run's own wall time (``wall_time_s``: the
 chunks, from the first to the file complete) is shown beside, so the fixed cost of a process
 is seen apart.
 
@@ -112,14 +113,22 @@ def measure(candidates: int, rounds: int, core_counts: list[int], confined=False
         process_run(all_cores, 2_000, out, False)  # the kernels in numba's cache, imports warm
         for r in range(rounds):
             for k in core_counts:
-                c_rate = (yardstick_rate(exe, k, min(C_CANDIDATES, candidates) * k)
-                          if exe is not None else float("nan"))
+                # the yardstick right before and right after the process, their mean
+                # its rate: the machine's pace drifts within a round
+                def c_run():
+                    return (yardstick_rate(exe, k, min(C_CANDIDATES, candidates) * k)
+                            if exe is not None else float("nan"))
+                before = c_run()
                 wall, inner = process_run(all_cores[:k], candidates, out, confined)
+                after = c_run()
+                c_rate = 0.5 * (before + after)
                 rate = candidates * POSITIONS / wall
-                rows.append({"round": r + 1, "cores": k, "yardstick": c_rate, "process": rate,
+                rows.append({"round": r + 1, "cores": k, "yardstick": c_rate,
+                             "yardstick_span": (before, after), "process": rate,
                              "wall": wall, "run_wall": inner, "ratio": rate / c_rate})
-                echo(f"round {r + 1}, {k} core(s): triad_full {c_rate / 1e6:.1f} M/s, "
-                     f"pipeline run {rate / 1e6:.1f} M/s ({wall:.1f} s, chunks {inner:.1f} s): "
+                echo(f"round {r + 1}, {k} core(s): triad_full {c_rate / 1e6:.1f} M/s "
+                     f"({before / 1e6:.1f} before, {after / 1e6:.1f} after), pipeline run "
+                     f"{rate / 1e6:.1f} M/s ({wall:.1f} s, chunks {inner:.1f} s): "
                      f"{rate / c_rate:.2f}x")
     return rows
 
@@ -132,10 +141,13 @@ def table(rows: list[dict], candidates: int, confined=False) -> str:
              "Million candidate-positions per second (every candidate x 360 positions); the "
              f"process timed from its start to its exit; on k cores: {how} "
              "(the yardstick: k pinned threads).", "",
-             "| round | cores | triad_full | pipeline run | ratio | process s | chunks s |",
+             "| round | cores | triad_full (before, after) | pipeline run | ratio | process s "
+             "| chunks s |",
              "|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['round']} | {r['cores']} | {r['yardstick'] / 1e6:.1f} | "
+        b, a = r["yardstick_span"]
+        lines.append(f"| {r['round']} | {r['cores']} | {r['yardstick'] / 1e6:.1f} "
+                     f"({b / 1e6:.1f}, {a / 1e6:.1f}) | "
                      f"{r['process'] / 1e6:.1f} | {r['ratio']:.2f}x | {r['wall']:.1f} | "
                      f"{r['run_wall']:.1f} |")
     lines += ["", "Median ratio per core count:", ""]
