@@ -335,10 +335,12 @@ def test_a_search_s_compile_is_said_before_its_bar(studies, tmp_path):
     from pipeline.study.reader import load_study
     from support.lock_cases import fourbar_sweep_study
     study = tmp_path / "fourbar_search.toml"
-    study.write_text(fourbar_sweep_study().replace(
-        'L12 = { param = "crank.length" }', 'L12 = { param = "crank.length", min = 12, max = 16 }'
-    ).replace('L_AB = { param = "dyad.L_AB" }', 'L_AB = { param = "dyad.L_AB", min = 38, max = 44 }')
-        + '\n[search]\nmethod = "nsga2"\npopulation = 100\nevaluations = 1000\nseed = 1\n')
+    text = fourbar_sweep_study()
+    for name, bounds in (("crank.length", "min = 12, max = 16"),
+                         ("dyad.L_AB", "min = 38, max = 44")):     # (a search's bounds)
+        text = text.replace(f'param = "{name}" }}', f'param = "{name}", {bounds} }}')
+    study.write_text(text + '\n[search]\nmethod = "nsga2"\npopulation = 100\n'
+                     'evaluations = 1000\nseed = 1\n')
     population = load_study(study).search.population
     pieces = []
     code, times, end, text = run_on_terminal(CLI + ["run", str(study), "-o",
