@@ -335,11 +335,8 @@ def test_a_search_s_compile_is_said_before_its_bar(studies, tmp_path):
     from pipeline.study.reader import load_study
     from support.lock_cases import fourbar_sweep_study
     study = tmp_path / "fourbar_search.toml"
-    text = fourbar_sweep_study()
-    for name, bounds in (("crank.length", "min = 12, max = 16"),
-                         ("dyad.L_AB", "min = 38, max = 44")):     # (a search's bounds)
-        text = text.replace(f'param = "{name}" }}', f'param = "{name}", {bounds} }}')
-    study.write_text(text + '\n[search]\nmethod = "nsga2"\npopulation = 100\n'
+    study.write_text(fourbar_sweep_study(bounds={"L12": (12.0, 16.0), "L_AB": (38.0, 44.0)})
+                     + '\n[search]\nmethod = "nsga2"\npopulation = 100\n'
                      'evaluations = 1000\nseed = 1\n')
     population = load_study(study).search.population
     pieces = []

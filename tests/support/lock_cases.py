@@ -82,16 +82,19 @@ POINTS_OF = {"fourbar": ("P2", "P4", "P3"), "slider": ("P2", "P3", "P4"),
              "coulisse": ("P2", "P3", "P4"), "triad": ("P2", "P6", "P7", "P3", "P4", "P5")}
 
 
-def fourbar_sweep_study(rot=-1, phi0_deg=10.0, positions=360):
+def fourbar_sweep_study(rot=-1, phi0_deg=10.0, positions=360, bounds=None):
     """A sweep study over the four-bar (output rocker P4 -> P3), for rows
-    built by the four-bar constructors with the same phi0, rot and positions."""
+    built by the four-bar constructors with the same phi0, rot and positions;
+    ``bounds``: {variable: (min, max)} (L12, L_AB), as a search needs them."""
     crank = (f"length = 15.0\nphiM0 = 0.0\nomega1 = {60.0 * rot}\neps1 = 0.0\nrot = {rot}\n"
              f"phi0 = {phi0_deg!r}\n")
+    bounds = {k: f", min = {lo!r}, max = {hi!r}" for k, (lo, hi) in (bounds or {}).items()}
     sweep = ('\n[sweep]\ncandidates = 100\nseed = 1\nsampler = "uniform"\n'
              f"positions = {positions}\nchunk_size = 100\nstroke_radius = 60.0\n"
              'objectives = ["dwell_error"]\nmetrics = ["dwell_error", "stroke"]\n\n'
-             '[sweep.variables]\nL12 = { param = "crank.length" }\n'
-             'L_AB = { param = "dyad.L_AB" }\n\n'
+             '[sweep.variables]\n'
+             f'L12 = {{ param = "crank.length"{bounds.get("L12", "")} }}\n'
+             f'L_AB = {{ param = "dyad.L_AB"{bounds.get("L_AB", "")} }}\n\n'
              "[sweep.constraints]\nstroke = [0.0, 1000.0]\n")
     return _study(
         "fourbar_lock_sweep", 'P1 = [0.0, 0.0]\nP4 = [38.0, 0.0]\n', crank,
