@@ -6,7 +6,8 @@
   folder (``compile_cache`` below), set in ``os.environ`` before ``pipeline`` or
   numba is imported, so every test and every subprocess a test starts (the CLI,
   Dask worker processes, the GPU simulator) shares one warm cache and nothing is
-  written into the checkout or the home folder.
+  written into the checkout or the home folder but the package's bytecode
+  (``package_bytecode`` below, where Python writes none itself).
 * Hypothesis runs the registered profile ``ci`` (derandomized, no deadline, no
   example database): the same examples on every run and machine, no
   wall-clock limit on a loaded machine.  ``HYPOTHESIS_PROFILE=dev`` draws
@@ -53,11 +54,25 @@ def pytest_configure(config):
     else:
         cache = compile_cache(config, base)
         os.environ["PIPELINE_TEST_COMPILE_CACHE"] = str(cache)
+        package_bytecode()
     os.environ["PIPELINE_CACHE_DIR"] = str(cache / "modules")
     os.environ["NUMBA_CACHE_DIR"] = str(cache / "numba")
     # no compile beside a run (pipeline.compiler.beside): the suite's two workers keep
     # both cores busy already; tests/compiler/test_compiler.py tests it on its own
     os.environ["PIPELINE_COMPILE_BESIDE"] = "0"
+
+
+def package_bytecode():
+    """The package's modules byte-compiled into its ``__pycache__`` folders (ignored by
+    git), as pip writes them for an installed copy; an editable install leaves that to
+    Python's first import, which writes nothing where PYTHONDONTWRITEBYTECODE is set (as
+    in some sandboxes): every worker and every child process a test starts (about 120)
+    then compiled the package's source again, 0.2-0.3 s each.  A module changed later is
+    compiled from its source as before (its bytecode records the source's time and
+    size); compileall leaves bytecode that is up to date as it is."""
+    if sys.dont_write_bytecode:
+        import compileall
+        compileall.compile_dir(ROOT / "pipeline", quiet=2)
 
 
 def compile_cache(config, base):
