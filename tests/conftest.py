@@ -7,7 +7,8 @@
   numba is imported, so every test and every subprocess a test starts (the CLI,
   Dask worker processes, the GPU simulator) shares one warm cache and nothing is
   written into the checkout or the home folder but the package's bytecode
-  (``package_bytecode`` below, where Python writes none itself).
+  (``package_bytecode`` below, where Python writes none itself; the libraries'
+  goes beside them: ``library_bytecode``).
 * Hypothesis runs the registered profile ``ci`` (derandomized, no deadline, no
   example database): the same examples on every run and machine, no
   wall-clock limit on a loaded machine.  ``HYPOTHESIS_PROFILE=dev`` draws
@@ -60,6 +61,68 @@ def pytest_configure(config):
     # no compile beside a run (pipeline.compiler.beside): the suite's two workers keep
     # both cores busy already; tests/compiler/test_compiler.py tests it on its own
     os.environ["PIPELINE_COMPILE_BESIDE"] = "0"
+    if not os.environ.get("PYTEST_XDIST_WORKER"):
+        library_bytecode()
+
+
+# What the suite's processes import, in two groups of about the same cost (a
+# process each): the command line and the libraries its commands and the tests bring
+IMPORTED = (("pipeline.cli", "pipeline.api", "pipeline.runs.sweep", "pipeline.runs.search",
+             "numba", "scipy.stats", "scipy.optimize", "scipy.interpolate", "tqdm",
+             "tqdm.contrib.logging", "pymoo.optimize", "pymoo.algorithms.moo.nsga2",
+             "hypothesis.strategies", "xdist", "mpmath", "h5py._hl.dims"),
+            ("pipeline.views.page", "matplotlib.pyplot", "matplotlib.animation",
+             "matplotlib.backends.backend_agg", "PIL.features", "PIL.PngImagePlugin",
+             "PIL.JpegImagePlugin", "PIL.GifImagePlugin", "PIL.BmpImagePlugin",
+             "PIL.PpmImagePlugin", "plotly.graph_objects", "plotly.offline", "jinja2",
+             "dask.distributed", "xarray", "h5netcdf", "nbclient", "nbformat",
+             "ipykernel.kernelapp", "ezdxf", "pyarrow.parquet", "pyarrow.pandas_compat",
+             "pandas", "sklearn.ensemble", "sklearn.inspection", "sklearn.model_selection",
+             "sklearn.cluster"))
+
+
+# (numba imports its typing and lowering registries at its first compile or cache load)
+_IMPORT = """
+import importlib, sys
+for name in sys.argv[1:]:
+    try:
+        importlib.import_module(name)
+    except ImportError:     # (a library the suite then skips or reports)
+        pass
+if "numba" in sys.modules:
+    from numba.core.registry import cpu_target
+    cpu_target.typing_context.refresh()
+    cpu_target.target_context.refresh()
+"""
+
+
+def library_bytecode():
+    """The bytecode of the modules the suite's processes import (``IMPORTED``, and
+    what they import) written by importing them once, where Python writes none
+    (PYTHONDONTWRITEBYTECODE, as in some sandboxes) and the libraries were
+    installed without theirs (``pip install --no-compile``, as the README's test
+    command installs them: pip's compiling of every file of every library took
+    about 55 s of the install, importing what the suite uses takes about a third of
+    that, on two cores here): otherwise every worker and every process a test starts
+    would compile the libraries' sources again.  Bytecode that is there already is
+    only read."""
+    import subprocess
+    if not sys.dont_write_bytecode or all(_has_bytecode(name) for name in ("scipy", "plotly")):
+        return
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    runs = [subprocess.Popen([sys.executable, "-c", _IMPORT, *group],
+                             env=env, cwd=ROOT, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL)
+            for group in IMPORTED]
+    for r in runs:
+        r.wait()
+
+
+def _has_bytecode(package):
+    """Whether the package's ``__init__`` has its bytecode (found, not imported)."""
+    import importlib.util
+    spec = importlib.util.find_spec(package)
+    return spec is not None and bool(spec.cached) and os.path.exists(spec.cached)
 
 
 def package_bytecode():

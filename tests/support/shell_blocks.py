@@ -12,7 +12,7 @@ fails the test that meets it, so that nothing shown goes unrun:
   command ``--resume``s is stopped after its first chunk, as if interrupted;
 * ``pip install -e . && ...``: the suite runs in that installation already, so
   the rest of the line runs;
-* ``pip install -e ".[test]" && python -m pytest -q`` is the suite itself:
+* ``pip install --no-compile -e ".[test]" && python -m pytest -q`` is the suite itself:
   checked to be what ``.ci/run`` runs, not run inside itself."""
 
 import contextlib
@@ -31,7 +31,7 @@ CI_RUN = ROOT / ".ci" / "run"
 SMALL = "3000"                  # candidates of a sweep the tests run
 SEARCH_EVALUATIONS = 300        # evaluations of an adaptive search the tests run
 MAIN_JOB = "pipeline run studies/ov7_synthesis.toml"
-INSTALLED = ("pip install -e . && ", 'pip install -e ".[test]" && ')
+INSTALLED = ("pip install -e . && ", 'pip install --no-compile -e ".[test]" && ')
 FENCE = re.compile(r"^```(\w*)[^\n]*\n(.*?)^```[ \t]*$", re.M | re.S)
 
 
