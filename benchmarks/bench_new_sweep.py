@@ -16,8 +16,9 @@ alternated round by round on the same machine:
 * with ``--one-process``, ``PIPELINE_COMPILE_BESIDE=0``: every kernel in the
   run (what the process beside buys; about 1.6 times as long);
 * with ``--against DIR``, another checkout of the package (an earlier commit:
-  ``git worktree add DIR REV``) the default way, so that "sooner than before"
-  is measured in one run, alternately.
+  ``git worktree add DIR REV``) the default way (and in one process, with
+  ``--one-process``), so that "sooner than before" is measured in one run,
+  alternately.
 
 Issue 53's line: a new mechanism's sweep, its first 100,000 candidates done
 sooner than today.  --smoke (the test suite: that it runs): 500 candidates, one
@@ -48,6 +49,9 @@ def ways(one_process=False, against=None):
         out["one process"] = (ROOT, {"PIPELINE_COMPILE_BESIDE": "0"})
     if against is not None:
         out[f"beside, {Path(against).name}"] = (Path(against).resolve(), {})
+        if one_process:
+            out[f"one process, {Path(against).name}"] = (Path(against).resolve(),
+                                                          {"PIPELINE_COMPILE_BESIDE": "0"})
     return out
 
 

@@ -138,7 +138,8 @@ def test_every_kernel_of_the_sweep_compiles_once(problem, candidates):
 
 def test_evaluate_calls_its_big_callees_through_their_addresses(problem, candidates):
     """The sweep's evaluate_lanes calls settle, flush_forces, setup_lane,
-    block_walk and (in flagged_lane, inlined into it) careful_tail, and
+    block_walk, the dwell in lanes, the force lanes' input, the partial block's
+    padding and (in flagged_lane, inlined into it) careful_tail, and
     flush_forces calls force_flush and (in force_refused, inlined into it)
     settle, only through the addresses callees() gives (so their compiles do not
     link these kernels' code and have LLVM optimise it once more:
@@ -149,7 +150,8 @@ def test_evaluate_calls_its_big_callees_through_their_addresses(problem, candida
     mod = problem.kernels
     problem.evaluate_rows(np.ascontiguousarray(candidates[:64]), parallel=False)
     at = mod.callees()
-    big = ("settle", "flush_forces", "setup_lane", "careful_tail", "block_walk", "force_flush")
+    big = ("settle", "flush_forces", "setup_lane", "careful_tail", "block_walk", "force_flush",
+           "dwell_lanes", "force_lane_in", "pad_block")
     assert at.dtype == np.int64 and at.shape == (len(big),) and (at > 0).all()
     assert [len(getattr(mod, k).signatures) for k in big] == [1] * len(big)
     for kernel in (mod.evaluate_lanes, mod.flush_forces, mod.force_refused, mod.flagged_lane):

@@ -164,13 +164,16 @@ def flush_forces(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols, settings
 
 # the function types of the kernels evaluate_lanes and flush_forces call through their
 # addresses (``callees``): settle, flush_forces, setup_lane, careful_tail, block_walk,
-# force_flush
+# force_flush, and the dwell in lanes, the force lanes' input and the partial block's padding
 SETTLE_FN = None
 FLUSH_FN = None
 SETUP_FN = None
 TAIL_FN = None
 BLOCK_WALK_FN = None
 FORCE_FLUSH_FN = None
+DWELL_LANES_FN = None
+LANE_IN_FN = None
+PAD_FN = None
 _CALLEES = []
 
 
@@ -198,21 +201,27 @@ def callee_samples():
         "careful_tail": (constants(np.ones(N_PARAMS)), a1, i64, i64, a2, a1, a1, a1, wk[0],
                          wk[2]),
         "block_walk": (a2, a2, a1, a1, a1, a1, a1),
+        "dwell_lanes": (a2, i64, i64, i64, np.zeros((1, 1, 1)), a1, i1, a1),
+        "force_lane_in": (a1, i64, a2, a1, a2, a1, a2),
+        "pad_block": (a2, a2, i64, i64),
     }
 
 
 def callees():
     """The addresses of ``settle``, ``flush_forces``, ``setup_lane``,
-    ``careful_tail``, ``block_walk`` and ``force_flush`` compiled (or loaded
-    from numba's cache) for the types ``evaluate_lanes`` and ``flush_forces``
-    pass them (``callee_samples``), which call them through these
+    ``careful_tail``, ``block_walk``, ``force_flush``, ``dwell_lanes``,
+    ``force_lane_in`` and ``pad_block`` compiled (or loaded from numba's cache)
+    for the types ``evaluate_lanes`` and ``flush_forces`` pass them
+    (``callee_samples``), which call them through these
     (``pipeline.kernels.calls``): their own compiles then do not link these
     kernels' code and optimise it once more.  Each is called once per
     candidate or per block, never in a loop over positions.  Once per process;
     in numba's Python mode the kernels themselves."""
     global SETTLE_FN, FLUSH_FN, SETUP_FN, TAIL_FN, BLOCK_WALK_FN, FORCE_FLUSH_FN
+    global DWELL_LANES_FN, LANE_IN_FN, PAD_FN
     if DISABLE_JIT:
-        return (settle, flush_forces, setup_lane, careful_tail, block_walk, force_flush)
+        return (settle, flush_forces, setup_lane, careful_tail, block_walk, force_flush,
+                dwell_lanes, force_lane_in, pad_block)
     if not _CALLEES:
         s = callee_samples()
         SETTLE_FN, at_settle = first_class(settle, s["settle"])
@@ -221,8 +230,11 @@ def callees():
         SETUP_FN, at_setup = first_class(setup_lane, s["setup_lane"])
         TAIL_FN, at_tail = first_class(careful_tail, s["careful_tail"])
         BLOCK_WALK_FN, at_walk = first_class(block_walk, s["block_walk"])
+        DWELL_LANES_FN, at_dwell = first_class(dwell_lanes, s["dwell_lanes"])
+        LANE_IN_FN, at_lane_in = first_class(force_lane_in, s["force_lane_in"])
+        PAD_FN, at_pad = first_class(pad_block, s["pad_block"])
         _CALLEES[:] = [np.array([at_settle, at_flush, at_setup, at_tail, at_walk,
-                                 at_force_flush], np.int64)]
+                                 at_force_flush, at_dwell, at_lane_in, at_pad], np.int64)]
     return _CALLEES[0]
 
 
@@ -246,6 +258,9 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
     settle_at, flush_at = function_at(called[0], SETTLE_FN), function_at(called[1], FLUSH_FN)
     setup_at, tail_at = function_at(called[2], SETUP_FN), function_at(called[3], TAIL_FN)
     block_walk_at = function_at(called[4], BLOCK_WALK_FN)
+    dwell_at, lane_in_at = function_at(called[6], DWELL_LANES_FN), function_at(called[7],
+                                                                                LANE_IN_FN)
+    pad_at = function_at(called[8], PAD_FN)
     npos = phis.shape[0]
     w = int(settings[SET_DWELL_W])
     close = phi_close if math.isfinite(phi_close) else phis[0]
@@ -276,9 +291,9 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
                                       loads, col, trail, qmax, qmin, 0.0, np.int64(-1), 0.0,
                                       0.0, wk, fw, ww, corr, metrics[i])
         if filled == LANES or (i == hi and filled > 0):
-            pad_block(S, theta, filled, npos)
+            pad_at(S, theta, np.int64(filled), npos)
             block_walk_at(S, theta, cph, sph, phis, tols, settings)
-            dwell_lanes(theta, npos, w, W5.shape[2], W5, err, start_k, full)  # (lanes: run time)
+            dwell_at(theta, npos, w, W5.shape[2], W5, err, start_k, full)  # (lanes: run time)
             for l in range(filled):
                 # the lane vouches for its candidate unless it flagged itself: where it
                 # vouched, the force stage in the force lanes (LANE_METRICS)
@@ -304,7 +319,7 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
                     status[idx[l]] = st
                     continue
                 lane_trail(theta, l, npos, trail)     # (a vouched lane's, for the force lanes)
-                force_lane_in(pars[idx[l]], np.int64(forced), trail, FS, FT, phis, crank_tab)
+                lane_in_at(pars[idx[l]], np.int64(forced), trail, FS, FT, phis, crank_tab)
                 fidx[forced] = idx[l]
                 forced += 1
                 if forced == LANES:
