@@ -102,10 +102,10 @@ def library_bytecode():
     (PYTHONDONTWRITEBYTECODE, as in some sandboxes) and the libraries were
     installed without theirs (``pip install --no-compile``, as the README's test
     command installs them: pip's compiling of every file of every library took
-    about 55 s of the install, importing what the suite uses takes about a third of
-    that, on two cores here): otherwise every worker and every process a test starts
+    55-60 s of a two-minute install here, importing what the suite uses takes
+    14-15 s on two cores): otherwise every worker and every process a test starts
     would compile the libraries' sources again.  Bytecode that is there already is
-    only read."""
+    only read, and where SciPy's and Plotly's are there this does nothing."""
     import subprocess
     if not sys.dont_write_bytecode or all(_has_bytecode(name) for name in ("scipy", "plotly")):
         return

@@ -247,6 +247,17 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                           np.ascontiguousarray(loads), status, metrics, callees())
 
 
+@njit(inline='always', **JIT)
+def callee_functions(called):
+    """The kernels ``evaluate_lanes`` calls through their addresses (``callees()``),
+    as function values: settle, flush_forces, setup_lane, careful_tail, block_walk,
+    the dwell in lanes, the force lanes' input and the partial block's padding."""
+    return (function_at(called[0], SETTLE_FN), function_at(called[1], FLUSH_FN),
+            function_at(called[2], SETUP_FN), function_at(called[3], TAIL_FN),
+            function_at(called[4], BLOCK_WALK_FN), function_at(called[6], DWELL_LANES_FN),
+            function_at(called[7], LANE_IN_FN), function_at(called[8], PAD_FN))
+
+
 @njit(**JIT_ALLOC)
 def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metrics,
                    called):
@@ -255,12 +266,8 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
     every lane the lanes cannot vouch for the careful path; those vouched for that
     reach the force stage gather in a block (fidx) for the force lanes.  Serial
     (the caller runs ranges on threads).  ``called``: ``callees()``."""
-    settle_at, flush_at = function_at(called[0], SETTLE_FN), function_at(called[1], FLUSH_FN)
-    setup_at, tail_at = function_at(called[2], SETUP_FN), function_at(called[3], TAIL_FN)
-    block_walk_at = function_at(called[4], BLOCK_WALK_FN)
-    dwell_at, lane_in_at = function_at(called[6], DWELL_LANES_FN), function_at(called[7],
-                                                                                LANE_IN_FN)
-    pad_at = function_at(called[8], PAD_FN)
+    (settle_at, flush_at, setup_at, tail_at, block_walk_at, dwell_at, lane_in_at,
+     pad_at) = callee_functions(called)
     npos = phis.shape[0]
     w = int(settings[SET_DWELL_W])
     close = phi_close if math.isfinite(phi_close) else phis[0]
