@@ -92,6 +92,13 @@ def lane_trail(theta, l, npos, trail):
 
 
 @njit(inline='always', **JIT)
+def lane_angles(theta, l, npos, col):
+    """Lane ``l``'s rocker angles at every position into ``col``."""
+    for k in range(npos):
+        col[k] = theta[k, l]
+
+
+@njit(inline='always', **JIT)
 def flagged_lane(par, S, theta, l, phis, tols, w, trail, col, qmax, qmin, out, wk, ww,
                  tail_at):
     """Lane ``l`` flagged itself (its candidate ``par``, metrics row ``out``): the
@@ -111,8 +118,7 @@ def flagged_lane(par, S, theta, l, phis, tols, w, trail, col, qmax, qmin, out, w
         return OK, np.int64(0), math.nan, np.int64(-1), math.nan, math.nan
     no_metrics(out)
     lane_trail(theta, l, npos, trail)
-    for k in range(npos):     # (the lane's angles: the window splices)
-        col[k] = theta[k, l]
+    lane_angles(theta, l, npos, col)     # (the window splices them)
     st, spliced, margin = tail_at(constants(par), phis, k0, k1, trail, col, tols, out, wk, ww)
     if st != OK or not spliced:
         return st, np.int64(0), math.nan, np.int64(-1), math.nan, math.nan
@@ -247,27 +253,18 @@ def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metri
                           np.ascontiguousarray(loads), status, metrics, callees())
 
 
-@njit(inline='always', **JIT)
-def callee_functions(called):
-    """The kernels ``evaluate_lanes`` calls through their addresses (``callees()``),
-    as function values: settle, flush_forces, setup_lane, careful_tail, block_walk,
-    the dwell in lanes, the force lanes' input and the partial block's padding."""
-    return (function_at(called[0], SETTLE_FN), function_at(called[1], FLUSH_FN),
-            function_at(called[2], SETUP_FN), function_at(called[3], TAIL_FN),
-            function_at(called[4], BLOCK_WALK_FN), function_at(called[6], DWELL_LANES_FN),
-            function_at(called[7], LANE_IN_FN), function_at(called[8], PAD_FN))
-
-
 @njit(**JIT_ALLOC)
 def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metrics,
                    called):
-    """The sweep's stages for rows lo .. hi - 1 of ``pars``: candidates that
-    assemble at phis[0] fill a block of lanes walked in lock-step, the others and
-    every lane the lanes cannot vouch for the careful path; those vouched for that
-    reach the force stage gather in a block (fidx) for the force lanes.  Serial
-    (the caller runs ranges on threads).  ``called``: ``callees()``."""
-    (settle_at, flush_at, setup_at, tail_at, block_walk_at, dwell_at, lane_in_at,
-     pad_at) = callee_functions(called)
+    """The sweep's stages for rows lo .. hi - 1 of ``pars``: candidates that assemble at
+    phis[0] fill a block of lanes walked in lock-step, the others and every lane the lanes
+    cannot vouch for the careful path; those vouched for that reach the force stage gather
+    in a block (fidx) for the force lanes.  Serial (the caller runs ranges on threads)."""
+    settle_at, flush_at = function_at(called[0], SETTLE_FN), function_at(called[1], FLUSH_FN)
+    setup_at, tail_at = function_at(called[2], SETUP_FN), function_at(called[3], TAIL_FN)
+    block_walk_at, pad_at = function_at(called[4], BLOCK_WALK_FN), function_at(called[8], PAD_FN)
+    dwell_at, lane_in_at = (function_at(called[6], DWELL_LANES_FN),
+                            function_at(called[7], LANE_IN_FN))
     npos = phis.shape[0]
     w = int(settings[SET_DWELL_W])
     close = phi_close if math.isfinite(phi_close) else phis[0]
@@ -314,9 +311,8 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
                     if st != OK:
                         status[idx[l]] = st
                         continue
-                elif want_law:     # the lane's rocker angles
-                    for k in range(npos):
-                        col[k] = theta[k, l]
+                elif want_law:
+                    lane_angles(theta, l, npos, col)
                 if how == 1 and not flagged:     # (settle's force stage reads its solutions)
                     lane_trail(theta, l, npos, trail)
                 st = settle_at(pars[idx[l]], how, phis, phi_close, tols, settings, loads,
