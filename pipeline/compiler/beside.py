@@ -73,6 +73,7 @@ def compile_standalone(mod) -> None:
         compile_("force_lane_in", par, np.int64(0), a2, a1, a2, a1, a2)
     # (by now the run has usually compiled position, advance and the watch: numba's cache)
     compile_("setup_lane")
+    mod.tail_callees()      # (careful_tail calls advance and the watch through their addresses)
     compile_("careful_tail")
 
 

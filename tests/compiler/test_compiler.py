@@ -141,24 +141,28 @@ def test_evaluate_calls_its_big_callees_through_their_addresses(problem, candida
     block_walk, the dwell in lanes, the force lanes' input, the partial block's
     padding and (in flagged_lane, inlined into it) careful_tail, and
     flush_forces calls force_flush and (in force_refused, inlined into it)
-    settle, only through the addresses callees() gives (so their compiles do not
-    link these kernels' code and have LLVM optimise it once more:
-    tests/kernels/test_calls.py holds that a call through an address links
-    nothing), each kernel compiled once, for the types they pass it."""
+    settle, and careful_tail calls advance and the watch (in careful_step and
+    splice_window, inlined into it), only through the addresses callees() gives
+    (so their compiles do not link these kernels' code and have LLVM optimise it
+    once more: tests/kernels/test_calls.py holds that a call through an address
+    links nothing), each kernel compiled once, for the types they pass it."""
     import ast
     import inspect
     mod = problem.kernels
     problem.evaluate_rows(np.ascontiguousarray(candidates[:64]), parallel=False)
     at = mod.callees()
     big = ("settle", "flush_forces", "setup_lane", "careful_tail", "block_walk", "force_flush",
-           "dwell_lanes", "force_lane_in", "pad_block")
+           "dwell_lanes", "force_lane_in", "pad_block", "advance", "watch")
+    assert big.index("advance") == mod.AT_ADVANCE
     assert at.dtype == np.int64 and at.shape == (len(big),) and (at > 0).all()
     assert [len(getattr(mod, k).signatures) for k in big] == [1] * len(big)
-    for kernel in (mod.evaluate_lanes, mod.flush_forces, mod.force_refused, mod.flagged_lane):
+    through = (mod.evaluate_lanes, mod.flush_forces, mod.careful_tail)
+    for kernel in through + (mod.force_refused, mod.flagged_lane, mod.careful_step,
+                             mod.splice_window):
         tree = ast.parse(inspect.getsource(kernel.py_func))
         called = {n.func.id for n in ast.walk(tree)
                   if isinstance(n, ast.Call) and isinstance(n.func, ast.Name)}
-        assert ("function_at" in called) == (kernel in (mod.evaluate_lanes, mod.flush_forces))
+        assert ("function_at" in called) == (kernel in through)
         assert not called & set(big), (kernel, called)
 
 

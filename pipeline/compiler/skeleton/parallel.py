@@ -19,9 +19,9 @@ from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLI
                          N_INPUTS, LANES, N_LANE_ROWS, THETA_COLS, THETA_IN, TRAIL_COLS,
                          MARGIN_COL, N_PARAMS,
                          R_margin, R_flag, R_first_flag, R_last_flag, setup_lane,
-                         block_walk, lanes_apply, constants, N_WATCH)
+                         block_walk, lanes_apply, constants, N_WATCH, advance, WATCH_G)
 from ._mechanism import (HAS_LANE_FORCES, N_FROWS, FT_COLS, N_RCOLS, force_lane_in)
-from ...kernels.walk import walk_angle, watch_work
+from ...kernels.walk import walk_angle, watch, watch_work
 from .sweep_stages import careful_tail, no_metrics, settle, LANE_METRICS, NEEDS_FORCES
 from .lane_forces import lane_forces_apply, force_flush, force_refused
 
@@ -100,7 +100,7 @@ def lane_angles(theta, l, npos, col):
 
 @njit(inline='always', **JIT)
 def flagged_lane(par, S, theta, l, phis, tols, w, trail, col, qmax, qmin, out, wk, ww,
-                 tail_at):
+                 tail_at, called):
     """Lane ``l`` flagged itself (its candidate ``par``, metrics row ``out``): the
     careful walk from two positions before its first flag to three past its
     last (``careful_tail``, called through its address ``tail_at``), to the
@@ -110,7 +110,8 @@ def flagged_lane(par, S, theta, l, phis, tols, w, trail, col, qmax, qmin, out, w
     or, where the tail met no failure and spliced its careful window into the
     lane's rocker angles ``col`` and solutions ``trail``, 1 (the lane's metrics,
     the scalar force stage from those solutions: the window is where the lane's
-    own forms were ill-conditioned)."""
+    own forms were ill-conditioned).  ``called``: ``callees()``, the tail's own
+    callees' addresses among them."""
     npos = phis.shape[0]
     k0 = np.int64(S[R_first_flag, l]) - 2
     k1 = min(np.int64(S[R_last_flag, l]) + 3, npos)
@@ -119,7 +120,8 @@ def flagged_lane(par, S, theta, l, phis, tols, w, trail, col, qmax, qmin, out, w
     no_metrics(out)
     lane_trail(theta, l, npos, trail)
     lane_angles(theta, l, npos, col)     # (the window splices them)
-    st, spliced, margin = tail_at(constants(par), phis, k0, k1, trail, col, tols, out, wk, ww)
+    st, spliced, margin = tail_at(constants(par), phis, k0, k1, trail, col, tols, out, wk, ww,
+                                  called)
     if st != OK or not spliced:
         return st, np.int64(0), math.nan, np.int64(-1), math.nan, math.nan
     # the lane's numbers outside the window, the careful walk's inside
@@ -171,6 +173,7 @@ def flush_forces(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols, settings
 # the function types of the kernels evaluate_lanes and flush_forces call through their
 # addresses (``callees``): settle, flush_forces, setup_lane, careful_tail, block_walk,
 # force_flush, and the dwell in lanes, the force lanes' input and the partial block's padding
+# (careful_tail's own, advance and the watch: sweep_stages' ADVANCE_FN, WATCH_FN)
 SETTLE_FN = None
 FLUSH_FN = None
 SETUP_FN = None
@@ -197,15 +200,19 @@ def callee_samples():
     loads = np.zeros((n, 1, 3))
     status = np.zeros(n, np.int8)       # (the run's: pipeline.runs.problem)
     pos, d1, d2, margins, state, _ = wk[0]
+    K = constants(np.ones(N_PARAMS))
+    watch_g = WATCH_G.copy()
+    watch_g.flags.writeable = False     # (a global array: numba's constant, read-only)
     return {
+        "advance": (K, f64, f64, i64, a1, state, pos, d1, d2, margins, np.bool_(False)),
+        "watch": (K, watch_g, i64, f64, a1, state, pos, d1, d2, margins, wk[2]),
         "settle": (a1, i64, a1, f64, a1, a1, loads, a1, a2, i1, i1, f64, i64, f64, f64, *wk,
                    a1, a1),
         "force_flush": (i1, i64, a1, a2, a2, a1, a1, a1, loads, status, a2),
         "flush_forces": (a2, i1, i64, a1, a2, a2, a1, f64, a1, a1, loads, a1, a2, i1, i1, *wk,
                          a1, status, a2, i1),
         "setup_lane": (a2, i64, i64, a1, f64, a1, a2, a2, pos, d1, d2, margins, state),
-        "careful_tail": (constants(np.ones(N_PARAMS)), a1, i64, i64, a2, a1, a1, a1, wk[0],
-                         wk[2]),
+        "careful_tail": (K, a1, i64, i64, a2, a1, a1, a1, wk[0], wk[2], i1),
         "block_walk": (a2, a2, a1, a1, a1, a1, a1),
         "dwell_lanes": (a2, i64, i64, i64, np.zeros((1, 1, 1)), a1, i1, a1),
         "force_lane_in": (a1, i64, a2, a1, a2, a1, a2),
@@ -213,10 +220,23 @@ def callee_samples():
     }
 
 
+def tail_callees():
+    """The addresses of ``advance`` and ``watch`` compiled (or loaded from numba's
+    cache) for the types ``careful_tail`` passes them; their function types into
+    ADVANCE_FN and WATCH_FN, which ``careful_tail``'s compile reads (``callees``,
+    and the process beside before it compiles ``careful_tail``)."""
+    global ADVANCE_FN, WATCH_FN
+    s = callee_samples()
+    ADVANCE_FN, at_advance = first_class(advance, s["advance"])
+    WATCH_FN, at_watch = first_class(watch, s["watch"])
+    return at_advance, at_watch
+
+
 def callees():
     """The addresses of ``settle``, ``flush_forces``, ``setup_lane``,
     ``careful_tail``, ``block_walk``, ``force_flush``, ``dwell_lanes``,
-    ``force_lane_in`` and ``pad_block`` compiled (or loaded from numba's cache)
+    ``force_lane_in``, ``pad_block``, and ``advance`` and ``watch``, which
+    ``careful_tail`` calls (at AT_ADVANCE), compiled (or loaded from numba's cache)
     for the types ``evaluate_lanes`` and ``flush_forces`` pass them
     (``callee_samples``), which call them through these
     (``pipeline.kernels.calls``): their own compiles then do not link these
@@ -227,9 +247,10 @@ def callees():
     global DWELL_LANES_FN, LANE_IN_FN, PAD_FN
     if DISABLE_JIT:
         return (settle, flush_forces, setup_lane, careful_tail, block_walk, force_flush,
-                dwell_lanes, force_lane_in, pad_block)
+                dwell_lanes, force_lane_in, pad_block, advance, watch)
     if not _CALLEES:
         s = callee_samples()
+        at_advance, at_watch = tail_callees()
         SETTLE_FN, at_settle = first_class(settle, s["settle"])
         FORCE_FLUSH_FN, at_force_flush = first_class(force_flush, s["force_flush"])
         FLUSH_FN, at_flush = first_class(flush_forces, s["flush_forces"])
@@ -240,7 +261,8 @@ def callees():
         LANE_IN_FN, at_lane_in = first_class(force_lane_in, s["force_lane_in"])
         PAD_FN, at_pad = first_class(pad_block, s["pad_block"])
         _CALLEES[:] = [np.array([at_settle, at_flush, at_setup, at_tail, at_walk,
-                                 at_force_flush, at_dwell, at_lane_in, at_pad], np.int64)]
+                                 at_force_flush, at_dwell, at_lane_in, at_pad, at_advance,
+                                 at_watch], np.int64)]
     return _CALLEES[0]
 
 
@@ -307,7 +329,7 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
                 if flagged:     # the careful tail: its failure, or its window spliced
                     st, how, err_l, start_l, full_l, margin_l = flagged_lane(
                         pars[idx[l]], S, theta, l, phis, tols, w, trail, col, qmax, qmin,
-                        metrics[idx[l]], wk, ww, tail_at)
+                        metrics[idx[l]], wk, ww, tail_at, called)
                     if st != OK:
                         status[idx[l]] = st
                         continue

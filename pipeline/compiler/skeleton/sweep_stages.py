@@ -9,6 +9,7 @@ The text below the marker line is pasted into the generated module
 for linters and readers, the names the generated module gives it."""
 
 from .header import (math, np, njit, JIT, JIT_ALLOC, JIT_INNER, OK, BRANCH_JUMP, S_ITERS,
+                     function_at,
                      S_MARGIN, closes, copy2, work, force_work, dwell_error, law_error,
                      relative_angle, M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, M_PEAK_R,
                      M_PEAK_JOINT, M_PEAK_PHI, M_PEAK_MBAL, M_FAIL_PHI, M_NEWTON_MEAN,
@@ -39,6 +40,11 @@ LANE_FORCES = 3
 NEEDS_FORCES = -2
 CAREFUL_METRICS = -3
 CAREFUL_FORCES = -4
+# the function types of the mechanism's kernels careful_tail calls through their
+# addresses (``callees``, the ones after AT_ADVANCE): advance and the watch
+ADVANCE_FN = None
+WATCH_FN = None
+AT_ADVANCE = 9
 
 @njit(inline='always', **JIT)
 def no_metrics(out):
@@ -68,18 +74,18 @@ def failed(K, k, phi_prev, phi, st, tols, out, wk, ww):
 
 
 @njit(inline='always', **JIT)
-def careful_step(K, k, phi_prev, phi, tols, out, wk, ww):
+def careful_step(K, k, phi_prev, phi, tols, out, wk, ww, adv, wat):
     """Position ``k`` of a careful walk at ``phi``, from the last one at
-    phi_prev: the step (a failure on it located, ``failed``), then the watch
-    between the positions.  Returns OK or the failure met (its angle and group
-    in out[M_FAIL_PHI], out[M_FAIL_GROUP])."""
+    phi_prev: the step (``adv``: advance; a failure on it located, ``failed``),
+    then the watch between the positions (``wat``).  Returns OK or the failure
+    met (its angle and group in out[M_FAIL_PHI], out[M_FAIL_GROUP])."""
     pos, d1, d2, margins, state, _ = wk
     found = ww[7]
-    st = advance(K, phi_prev, phi, np.int64(0), tols, state, pos, d1, d2, margins,
-                 np.bool_(False))
+    st = adv(K, phi_prev, phi, np.int64(0), tols, state, pos, d1, d2, margins,
+             np.bool_(False))
     if st != OK:
         return failed(K, k, phi_prev, phi, st, tols, out, wk, ww)
-    st = watch(K, WATCH_G, k, phi, tols, state, pos, d1, d2, margins, ww)
+    st = wat(K, WATCH_G, k, phi, tols, state, pos, d1, d2, margins, ww)
     if st != OK:
         out[M_FAIL_PHI] = found[1]
         out[M_FAIL_GROUP] = found[2]
@@ -142,7 +148,7 @@ def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww):
 # its own function, compiled from the start in the process beside the run
 # (pipeline.compiler.beside), which then loads it from numba's cache
 @njit(**JIT_INNER)
-def careful_tail(K, phis, k0, k1, trail, col, tols, out, wk, ww):
+def careful_tail(K, phis, k0, k1, trail, col, tols, out, wk, ww, called):
     """The careful walk of a lane that flagged itself, where the lane could not
     vouch: the first window, then positions ``k0`` .. k1 - 1 (3 < k0 < n, k1 <= n):
     from where the lane still vouched for its revolution to past the last
@@ -168,14 +174,17 @@ def careful_tail(K, phis, k0, k1, trail, col, tols, out, wk, ww):
     angles in ``col`` (the lane's on entry) and the class III solutions in
     ``trail``; the window's margin is its positions' smallest.  Otherwise
     (False) the caller walks the whole revolution (careful_positions, which also
-    checks that it closes)."""
+    checks that it closes).  It calls advance and the watch through their
+    addresses (``called``: ``callees()``), so its compile does not link their code."""
+    adv = function_at(called[AT_ADVANCE], ADVANCE_FN)
+    wat = function_at(called[AT_ADVANCE + 1], WATCH_FN)
     pos, d1, d2, margins, state, _ = wk
     n = phis.shape[0]
     phi_prev = walk_start(K, phis[0], state)
     x0 = 0.0
     y0 = 0.0
     for k in range(4):     # the careful walk's own first steps: the same numbers
-        st = careful_step(K, k, phi_prev, phis[k], tols, out, wk, ww)
+        st = careful_step(K, k, phi_prev, phis[k], tols, out, wk, ww, adv, wat)
         if st != OK:
             return st, False, math.nan
         if k == 0:      # (the watch looks at nothing before position 3: pos is k's)
@@ -184,23 +193,23 @@ def careful_tail(K, phis, k0, k1, trail, col, tols, out, wk, ww):
         phi_prev = phis[k]
     start_from_trail(state, trail, k0)
     # the lane's solutions at k0 confirmed by a solve there (a step of zero)
-    if advance(K, phis[k0], phis[k0], np.int64(0), tols, state, pos, d1, d2, margins,
-               np.bool_(False)) != OK:
+    if adv(K, phis[k0], phis[k0], np.int64(0), tols, state, pos, d1, d2, margins,
+           np.bool_(False)) != OK:
         return OK, False, math.nan
     # (its history)
-    watch(K, WATCH_G, np.int64(0), phis[k0], tols, state, pos, d1, d2, margins, ww)
+    wat(K, WATCH_G, np.int64(0), phis[k0], tols, state, pos, d1, d2, margins, ww)
     for k in range(k0 + 1, k1):
-        st = careful_step(K, k - k0, phis[k - 1], phis[k], tols, out, wk, ww)
+        st = careful_step(K, k - k0, phis[k - 1], phis[k], tols, out, wk, ww, adv, wat)
         if st != OK:
             return st, False, math.nan
     # one position past the window, where the lane vouches again: its watch certifies
     # the last window the lane certified with a flagged position's margin; where it
     # fails there (not reported: the whole walk decides) the lane is not spliced
-    if k1 >= n or advance(K, phis[k1 - 1], phis[k1], np.int64(0), tols, state, pos, d1, d2,
-                          margins, np.bool_(False)) != OK or watch(
+    if k1 >= n or adv(K, phis[k1 - 1], phis[k1], np.int64(0), tols, state, pos, d1, d2,
+                      margins, np.bool_(False)) != OK or wat(
             K, WATCH_G, k1 - k0, phis[k1], tols, state, pos, d1, d2, margins, ww) != OK:
         return OK, False, math.nan
-    margin = splice_window(K, phis, k0, k1, x0, y0, trail, col, tols, wk, ww)
+    margin = splice_window(K, phis, k0, k1, x0, y0, trail, col, tols, wk, ww, adv)
     return OK, margin >= 0.0, margin
 
 
@@ -214,7 +223,7 @@ def start_from_trail(state, trail, k):
 
 
 @njit(inline='always', **JIT)
-def splice_window(K, phis, k0, k1, x0, y0, trail, col, tols, wk, ww):
+def splice_window(K, phis, k0, k1, x0, y0, trail, col, tols, wk, ww, adv):
     """The numbers of a spliced lane's window (``careful_tail``, which found no
     failure there): positions k0 .. k1 walked again from the lane's solutions
     at k0, each solved to near rounding (Newton's closure LOCATE_NEWTON_TOL, as
@@ -232,8 +241,8 @@ def splice_window(K, phis, k0, k1, x0, y0, trail, col, tols, wk, ww):
     start_from_trail(state, trail, k0)
     margin = math.inf
     for k in range(k0, k1 + 1):
-        if advance(K, phis[max(k - 1, k0)], phis[k], np.int64(0), ltols, state, pos, d1, d2,
-                   margins, np.bool_(False)) != OK:
+        if adv(K, phis[max(k - 1, k0)], phis[k], np.int64(0), ltols, state, pos, d1, d2,
+               margins, np.bool_(False)) != OK:
             return math.nan
         margin = window_row(k, k1, x0, y0, trail, col, tols, pos, state, margin)
         if not margin >= 0.0:
