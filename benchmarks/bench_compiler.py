@@ -282,6 +282,7 @@ def _walk_rate(stage, pars, rep):
     pos, d1, d2, m, state, _ = work(k.N_POINTS, k.N_GROUPS, k.N_TRIADS)
     phis = np.asarray(stage.phis)
     close = stage.phi_close if math.isfinite(stage.phi_close) else phis[0]
+    called = k.callees()        # (the addresses of the kernels they call)
     for b in range(len(pars) // L):
         S = np.empty((k.N_LANE_ROWS, L))
         # the walk's rows: the positions, the closing one and two past it (as the
@@ -289,14 +290,14 @@ def _walk_rate(stage, pars, rep):
         th = np.empty((npos + 3, L * k.THETA_COLS))
         for lane in range(L):
             k.setup_lane(pars, b * L + lane, lane, stage.phis, close, stage.tols, S, th, pos, d1,
-                         d2, m, state)
+                         d2, m, state, called)
         blocks.append((S, th))
     ext = np.concatenate([phis, close + (phis[:3] - phis[0])])
     c, s = np.cos(ext), np.sin(ext)
 
     def run():
         for S, th in blocks:
-            k.block_walk(S, th, c, s, stage.phis, stage.tols, stage.settings)
+            k.block_walk(S, th, c, s, stage.phis, stage.tols, stage.settings, called)
     return _rate(run, len(blocks) * L, npos, rep)
 
 

@@ -179,7 +179,7 @@ def _blocks(pb, n_blocks):
         lane = 0
         while lane < mod.LANES:
             if mod.setup_lane(pars, i, np.int64(lane), phis, close, tols, S, theta, pos, d1,
-                              d2, margins, state) == 0:
+                              d2, margins, state, mod.callees()) == 0:
                 lane += 1
             i += 1
         blocks.append((S, theta))

@@ -67,13 +67,14 @@ def compile_standalone(mod) -> None:
     c = np.cos(np.arange(float(npos)))
     mod.walk(s.reshape(-1), lanes, theta, c, c, 2, 1, 1e-12, 0.1, 0.05, 1e-3, 1e-7, 1e-6)
     compile_metrics()
+    mod.lane_callees()      # (block_walk and force_flush call them through their addresses)
     compile_("block_walk")
     if forces:
         compile_("force_flush")
         compile_("force_lane_in", par, np.int64(0), a2, a1, a2, a1, a2)
     # (by now the run has usually compiled position, advance and the watch: numba's cache)
+    mod.tail_callees()      # (setup_lane and careful_tail call advance and the watch so)
     compile_("setup_lane")
-    mod.tail_callees()      # (careful_tail calls advance and the watch through their addresses)
     compile_("careful_tail")
 
 

@@ -121,9 +121,9 @@ def _setup_lane(consts, inputs, triads, watched):
     body = ["K = constants(pars[i])"] + _split(unpack) + [f"S[R_{c}, l] = {c}" for c in consts]
     for e in inputs:
         body += e.law_steps()
-    body += ["st = advance(K, walk_start(K, phis[0], state), phis[0], np.int64(1), tols, "
-             "state, pos,",
-             "             d1, d2, margins, np.bool_(False))",
+    body += ["adv = function_at(called[AT_ADVANCE], ADVANCE_FN)   # (its address: callees)",
+             "st = adv(K, walk_start(K, phis[0], state), phis[0], np.int64(1), tols, state, pos,",
+             "         d1, d2, margins, np.bool_(False))",
              "ok = st == OK"]
     for e in triads:
         body += e.setup_lines()
@@ -137,12 +137,14 @@ def _setup_lane(consts, inputs, triads, watched):
         "# (pipeline.compiler.beside), which then loads it from numba's cache;",
         "# with a Python wrapper: the lane tests and the benchmark call it",
         "@njit(**JIT)",
-        "def setup_lane(pars, i, l, phis, close, tols, S, theta, pos, d1, d2, margins, state):",
+        "def setup_lane(pars, i, l, phis, close, tols, S, theta, pos, d1, d2, margins, state,",
+        "               called):",
         '    """Candidate ``i`` into lane ``l``: its constants, its inputs\' laws at every',
         "    step of the walk (``close``: phi_close, or phis[0] where the revolution",
         "    need not close), and the careful solve at phis[0] (order 1: the first",
         "    increment of the class III angles comes from their analogs).  Returns",
-        '    OK, the status of a failure there, or -1."""'] + ["    " + x for x in body] + [
+        "    OK, the status of a failure there, or -1.  ``called``: ``callees()``, advance's",
+        '    address among them."""'] + ["    " + x for x in body] + [
         "    # OK (0): in the lane; a failure at phis[0] is the careful path's own first",
         "    # step, reported as it is; -1: assembled, but the lane cannot start (careful)",
         "    return (0 if ok else -1) if st == OK else st", "", ""]
@@ -315,9 +317,11 @@ def _block_walk():
     return [
         "# its own function: compiled beside the run, as setup_lane",
         "@njit(**JIT)",
-        "def block_walk(S, theta, cph_tab, sph_tab, phis, tols, settings):",
+        "def block_walk(S, theta, cph_tab, sph_tab, phis, tols, settings, called):",
         '    """The lock-step walk of a full block (every lane set up), then the closing',
-        '    checks; S[R_flag, l] != 0 marks a lane the careful path must redo."""',
+        "    checks; S[R_flag, l] != 0 marks a lane the careful path must redo.  The walk",
+        '    through its address (``called``: ``callees()``)."""',
+        "    walk_at = function_at(called[AT_WALK], WALK_FN)",
         "    npos = phis.shape[0]",
         "    margin_safe = settings[SET_MARGIN_SAFE]",
         "    tol = tols[T_NEWTON_TOL]",
@@ -326,9 +330,9 @@ def _block_walk():
         "    close = tols[T_CLOSE]",
         "    # the lock-step walk: positions 1 .. n - 1, the closing position and two past it",
         "    # (the watch's windows wrap round the close)",
-        "    walk(S.reshape(N_LANE_ROWS * LANES), S.shape[1], theta, cph_tab, sph_tab, "
+        "    walk_at(S.reshape(N_LANE_ROWS * LANES), S.shape[1], theta, cph_tab, sph_tab, "
         "npos + 3, npos,",
-        "         tol, jump, step_change, margin_safe, close, tols[T_WATCH])",
+        "            tol, jump, step_change, margin_safe, close, tols[T_WATCH])",
         "    # the lane's least margin from its column, position by position as the walk",
         "    # met them, in a loop of its own over two rows of S in turn: the running value",
         "    # written back where the walk read it was a masked store (microcoded on AMD's",

@@ -141,8 +141,9 @@ def test_evaluate_calls_its_big_callees_through_their_addresses(problem, candida
     block_walk, the dwell in lanes, the force lanes' input, the partial block's
     padding and (in flagged_lane, inlined into it) careful_tail, and
     flush_forces calls force_flush and (in force_refused, inlined into it)
-    settle, and careful_tail calls advance and the watch (in careful_step and
-    splice_window, inlined into it), only through the addresses callees() gives
+    settle, careful_tail calls advance and the watch (in careful_step and
+    splice_window, inlined into it), setup_lane advance, block_walk the lane walk
+    and force_flush the force lanes, only through the addresses callees() gives
     (so their compiles do not link these kernels' code and have LLVM optimise it
     once more: tests/kernels/test_calls.py holds that a call through an address
     links nothing), each kernel compiled once, for the types they pass it."""
@@ -152,11 +153,14 @@ def test_evaluate_calls_its_big_callees_through_their_addresses(problem, candida
     problem.evaluate_rows(np.ascontiguousarray(candidates[:64]), parallel=False)
     at = mod.callees()
     big = ("settle", "flush_forces", "setup_lane", "careful_tail", "block_walk", "force_flush",
-           "dwell_lanes", "force_lane_in", "pad_block", "advance", "watch")
-    assert big.index("advance") == mod.AT_ADVANCE
+           "dwell_lanes", "force_lane_in", "pad_block", "advance", "watch", "walk",
+           "force_lanes")
+    assert (big.index("advance"), big.index("walk"), big.index("force_lanes")) == (
+        mod.AT_ADVANCE, mod.AT_WALK, mod.AT_FORCE_LANES)
     assert at.dtype == np.int64 and at.shape == (len(big),) and (at > 0).all()
     assert [len(getattr(mod, k).signatures) for k in big] == [1] * len(big)
-    through = (mod.evaluate_lanes, mod.flush_forces, mod.careful_tail)
+    through = (mod.evaluate_lanes, mod.flush_forces, mod.careful_tail, mod.setup_lane,
+               mod.block_walk, mod.force_flush)
     for kernel in through + (mod.force_refused, mod.flagged_lane, mod.careful_step,
                              mod.splice_window):
         tree = ast.parse(inspect.getsource(kernel.py_func))

@@ -76,14 +76,14 @@ def lane_flags(problem, pars):
     for i in range(len(pars) + 1):
         if i < len(pars) and k.setup_lane(pars, i, len(rows), problem.phis, close,
                                           problem.tols, S, theta, pos, d1, d2, m,
-                                          state) == kc.OK:
+                                          state, k.callees()) == kc.OK:
             rows.append(i)
         if len(rows) == L or (i == len(pars) and rows):
             for lane in range(len(rows), L):     # (a partial block: copies of lane 0)
                 S[:, lane] = S[:, 0]
                 theta[:, lane::L] = theta[:, 0::L]
             k.block_walk(S, theta, np.cos(ext), np.sin(ext), problem.phis, problem.tols,
-                         problem.settings())
+                         problem.settings(), k.callees())
             flags[rows] = S[k.R_flag, :len(rows)] != 0.0
             if rows[-1] - rows[0] == L - 1:
                 walked += L

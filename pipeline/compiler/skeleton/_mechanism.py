@@ -24,6 +24,8 @@ constants = position = start = transmission = None     # generate
 advance = None              # generate: skeleton advance_closed or advance_newton
 forces_at = None            # forces
 setup_lane = block_walk = lanes_apply = None    # lanes (or skeleton no_lanes)
+HAS_LANES = False           # lanes: every kinematic group has a lane form
+walk = None                 # lanes: the lock-step walk (none without them)
 
 # the force lanes' constants and kernels (lane_forces, or skeleton no_lane_forces)
 HAS_LANE_FORCES = False

@@ -12,10 +12,11 @@ from .header import (math, np, njit, JIT, JIT_INNER, OK, M_FORCES_DONE, M_PEAK_A
                      M_PEAK_EPS, M_MIN_TRANS, SET_WANT_FORCES, SET_WANT_PEAKS,
                      SET_WANT_TRANSMISSION, SET_WANT_EQUILIBRIUM, SET_WANT_SHAKING,
                      SET_SCALAR_FORCES, SET_OMEGA1, SET_EPS1, SET_WORK_POINT,
-                     T_NEWTON_TOL, T_SINGULAR, fold_cd, may_reach)
+                     T_NEWTON_TOL, T_SINGULAR, fold_cd, may_reach, function_at)
 from ._mechanism import (N_JOINTS, LANES, N_FROWS, FT_COLS, ACC_COL, N_TRANS, TR_COL, F_pm,
-                         F_pe, F_bad, force_lanes)
-from .sweep_stages import LANE_FORCES, reaction_peak, force_peaks_out
+                         F_pe, F_bad)
+from .sweep_stages import (LANE_FORCES, reaction_peak, force_peaks_out, AT_FORCE_LANES,
+                           FORCE_LANES_FN)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 @njit(**JIT)
@@ -33,11 +34,13 @@ def lane_forces_apply(settings):
 # its own function, which calls nothing of settle's: the process beside the run
 # compiles it from the start (pipeline.compiler.beside)
 @njit(**JIT_INNER)
-def force_flush(fidx, filled, FS, FT, RB, phis, tols, settings, loads, status, metrics):
+def force_flush(fidx, filled, FS, FT, RB, phis, tols, settings, loads, status, metrics,
+                called):
     """The force lanes of candidates fidx[:filled] (the rest of the block a copy
     of lane 0), then each candidate's force metrics into its row from the
     lanes; a candidate whose lane could not vouch for it (FS's F_bad) is left
-    to the scalar force stage (``force_refused``)."""
+    to the scalar force stage (``force_refused``).  The force lanes through their
+    address (``called``: ``callees()``)."""
     npos = phis.shape[0]
     for l in range(filled, LANES):
         for r in range(N_FROWS):
@@ -45,9 +48,9 @@ def force_flush(fidx, filled, FS, FT, RB, phis, tols, settings, loads, status, m
         for k in range(npos):
             for q in range(FT_COLS):
                 FT[k, q * LANES + l] = FT[k, q * LANES]
-    force_lanes(FS, FT, RB, fidx.shape[0], npos, tols[T_NEWTON_TOL], tols[T_SINGULAR],
-                settings[SET_OMEGA1], settings[SET_EPS1], loads,
-                np.int64(settings[SET_WORK_POINT]))
+    function_at(called[AT_FORCE_LANES], FORCE_LANES_FN)(
+        FS, FT, RB, fidx.shape[0], npos, tols[T_NEWTON_TOL], tols[T_SINGULAR],
+        settings[SET_OMEGA1], settings[SET_EPS1], loads, np.int64(settings[SET_WORK_POINT]))
     want_p = settings[SET_WANT_PEAKS] != 0.0
     want_t = settings[SET_WANT_TRANSMISSION] != 0.0
     for l in range(filled):

@@ -28,7 +28,8 @@ def force_lane_in(par, l, trail, FS, FT, phis, crank_tab):
 
 
 @njit(**JIT)
-def force_flush(fidx, filled, FS, FT, RB, phis, tols, settings, loads, status, metrics):
+def force_flush(fidx, filled, FS, FT, RB, phis, tols, settings, loads, status, metrics,
+                called):
     return
 
 

@@ -10,13 +10,14 @@ from .header import (njit, JIT, JIT_INNER)
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 @njit(**JIT)
-def setup_lane(pars, i, l, phis, close, tols, S, theta, pos, d1, d2, margins, state):
+def setup_lane(pars, i, l, phis, close, tols, S, theta, pos, d1, d2, margins, state,
+               called):
     """{why}: every candidate takes the careful path."""
     return -1
 
 
 @njit(**JIT)
-def block_walk(S, theta, cph_tab, sph_tab, phis, tols, settings):
+def block_walk(S, theta, cph_tab, sph_tab, phis, tols, settings, called):
     return
 
 

@@ -19,8 +19,10 @@ from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLI
                          N_INPUTS, LANES, N_LANE_ROWS, THETA_COLS, THETA_IN, TRAIL_COLS,
                          MARGIN_COL, N_PARAMS,
                          R_margin, R_flag, R_first_flag, R_last_flag, setup_lane,
-                         block_walk, lanes_apply, constants, N_WATCH, advance, WATCH_G)
-from ._mechanism import (HAS_LANE_FORCES, N_FROWS, FT_COLS, N_RCOLS, force_lane_in)
+                         block_walk, lanes_apply, constants, N_WATCH, advance, WATCH_G,
+                         HAS_LANES, walk)
+from ._mechanism import (HAS_LANE_FORCES, N_FROWS, FT_COLS, N_RCOLS, force_lane_in,
+                         force_lanes)
 from ...kernels.walk import walk_angle, watch, watch_work
 from .sweep_stages import careful_tail, no_metrics, settle, LANE_METRICS, NEEDS_FORCES
 from .lane_forces import lane_forces_apply, force_flush, force_refused
@@ -164,7 +166,7 @@ def flush_forces(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols, settings
     argument, one compiled version; ``called``: ``callees()``, force_flush's and
     settle's addresses among them)."""
     function_at(called[5], FORCE_FLUSH_FN)(fidx, forced, FS, FT, RB, phis, tols, settings,
-                                           loads, status, metrics)
+                                           loads, status, metrics, called)
     force_refused(pars, fidx, forced, FS, FT, phis, phi_close, tols, settings, loads, col,
                   trail, qmax, qmin, wk, fw, ww, corr, status, metrics,
                   function_at(called[0], SETTLE_FN))
@@ -173,7 +175,7 @@ def flush_forces(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols, settings
 # the function types of the kernels evaluate_lanes and flush_forces call through their
 # addresses (``callees``): settle, flush_forces, setup_lane, careful_tail, block_walk,
 # force_flush, and the dwell in lanes, the force lanes' input and the partial block's padding
-# (careful_tail's own, advance and the watch: sweep_stages' ADVANCE_FN, WATCH_FN)
+# (and theirs: sweep_stages' ADVANCE_FN, WATCH_FN, WALK_FN, FORCE_LANES_FN)
 SETTLE_FN = None
 FLUSH_FN = None
 SETUP_FN = None
@@ -208,23 +210,41 @@ def callee_samples():
         "watch": (K, watch_g, i64, f64, a1, state, pos, d1, d2, margins, wk[2]),
         "settle": (a1, i64, a1, f64, a1, a1, loads, a1, a2, i1, i1, f64, i64, f64, f64, *wk,
                    a1, a1),
-        "force_flush": (i1, i64, a1, a2, a2, a1, a1, a1, loads, status, a2),
+        "force_flush": (i1, i64, a1, a2, a2, a1, a1, a1, loads, status, a2, i1),
         "flush_forces": (a2, i1, i64, a1, a2, a2, a1, f64, a1, a1, loads, a1, a2, i1, i1, *wk,
                          a1, status, a2, i1),
-        "setup_lane": (a2, i64, i64, a1, f64, a1, a2, a2, pos, d1, d2, margins, state),
+        "setup_lane": (a2, i64, i64, a1, f64, a1, a2, a2, pos, d1, d2, margins, state, i1),
         "careful_tail": (K, a1, i64, i64, a2, a1, a1, a1, wk[0], wk[2], i1),
-        "block_walk": (a2, a2, a1, a1, a1, a1, a1),
+        "block_walk": (a2, a2, a1, a1, a1, a1, a1, i1),
+        "walk": (a1, i64, a2, a1, a1, i64, i64, f64, f64, f64, f64, f64, f64),
+        "force_lanes": (a1, a2, a2, i64, i64, f64, f64, f64, f64, loads, i64),
         "dwell_lanes": (a2, i64, i64, i64, np.zeros((1, 1, 1)), a1, i1, a1),
         "force_lane_in": (a1, i64, a2, a1, a2, a1, a2),
         "pad_block": (a2, a2, i64, i64),
     }
 
 
+def lane_callees():
+    """The addresses of the lane walk (``walk``) and the force lanes
+    (``force_lanes``) compiled (or loaded from numba's cache) for the types
+    ``block_walk`` and ``force_flush`` pass them (0 where the module has none);
+    their function types into WALK_FN and FORCE_LANES_FN, which those compiles
+    read (``callees``, and the process beside before it compiles them)."""
+    global WALK_FN, FORCE_LANES_FN
+    s = callee_samples()
+    at_walk = at_force_lanes = 0
+    if HAS_LANES:
+        WALK_FN, at_walk = first_class(walk, s["walk"])
+    if HAS_LANE_FORCES:
+        FORCE_LANES_FN, at_force_lanes = first_class(force_lanes, s["force_lanes"])
+    return at_walk, at_force_lanes
+
+
 def tail_callees():
     """The addresses of ``advance`` and ``watch`` compiled (or loaded from numba's
-    cache) for the types ``careful_tail`` passes them; their function types into
-    ADVANCE_FN and WATCH_FN, which ``careful_tail``'s compile reads (``callees``,
-    and the process beside before it compiles ``careful_tail``)."""
+    cache) for the types ``setup_lane`` and ``careful_tail`` pass them; their
+    function types into ADVANCE_FN and WATCH_FN, which those compiles read
+    (``callees``, and the process beside before it compiles them)."""
     global ADVANCE_FN, WATCH_FN
     s = callee_samples()
     ADVANCE_FN, at_advance = first_class(advance, s["advance"])
@@ -235,8 +255,9 @@ def tail_callees():
 def callees():
     """The addresses of ``settle``, ``flush_forces``, ``setup_lane``,
     ``careful_tail``, ``block_walk``, ``force_flush``, ``dwell_lanes``,
-    ``force_lane_in``, ``pad_block``, and ``advance`` and ``watch``, which
-    ``careful_tail`` calls (at AT_ADVANCE), compiled (or loaded from numba's cache)
+    ``force_lane_in``, ``pad_block``, and the ones they call: ``advance`` and
+    ``watch`` (at AT_ADVANCE), ``walk`` (AT_WALK) and ``force_lanes``
+    (AT_FORCE_LANES), compiled (or loaded from numba's cache)
     for the types ``evaluate_lanes`` and ``flush_forces`` pass them
     (``callee_samples``), which call them through these
     (``pipeline.kernels.calls``): their own compiles then do not link these
@@ -247,10 +268,12 @@ def callees():
     global DWELL_LANES_FN, LANE_IN_FN, PAD_FN
     if DISABLE_JIT:
         return (settle, flush_forces, setup_lane, careful_tail, block_walk, force_flush,
-                dwell_lanes, force_lane_in, pad_block, advance, watch)
+                dwell_lanes, force_lane_in, pad_block, advance, watch,
+                walk if HAS_LANES else None, force_lanes if HAS_LANE_FORCES else None)
     if not _CALLEES:
         s = callee_samples()
         at_advance, at_watch = tail_callees()
+        at_lane_walk, at_force_lanes = lane_callees()
         SETTLE_FN, at_settle = first_class(settle, s["settle"])
         FORCE_FLUSH_FN, at_force_flush = first_class(force_flush, s["force_flush"])
         FLUSH_FN, at_flush = first_class(flush_forces, s["flush_forces"])
@@ -262,7 +285,7 @@ def callees():
         PAD_FN, at_pad = first_class(pad_block, s["pad_block"])
         _CALLEES[:] = [np.array([at_settle, at_flush, at_setup, at_tail, at_walk,
                                  at_force_flush, at_dwell, at_lane_in, at_pad, at_advance,
-                                 at_watch], np.int64)]
+                                 at_watch, at_lane_walk, at_force_lanes], np.int64)]
     return _CALLEES[0]
 
 
@@ -306,7 +329,7 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
             code = -1
             if fast:     # (np.int64(...): no literal argument, one compiled version)
                 code = setup_at(pars, i, np.int64(filled), phis, close, tols, S, theta, pos,
-                                d1, d2, margins, state)
+                                d1, d2, margins, state, called)
             if code == OK:
                 idx[filled] = i
                 filled += 1
@@ -318,7 +341,7 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
                                       0.0, wk, fw, ww, corr, metrics[i])
         if filled == LANES or (i == hi and filled > 0):
             pad_at(S, theta, np.int64(filled), npos)
-            block_walk_at(S, theta, cph, sph, phis, tols, settings)
+            block_walk_at(S, theta, cph, sph, phis, tols, settings, called)
             dwell_at(theta, npos, w, W5.shape[2], W5, err, start_k, full)  # (lanes: run time)
             for l in range(filled):
                 # the lane vouches for its candidate unless it flagged itself: where it

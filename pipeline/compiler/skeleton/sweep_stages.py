@@ -40,11 +40,16 @@ LANE_FORCES = 3
 NEEDS_FORCES = -2
 CAREFUL_METRICS = -3
 CAREFUL_FORCES = -4
-# the function types of the mechanism's kernels careful_tail calls through their
-# addresses (``callees``, the ones after AT_ADVANCE): advance and the watch
+# the function types of the kernels that careful_tail, setup_lane, block_walk and
+# force_flush call through their addresses (``callees``: advance at AT_ADVANCE, the
+# watch after it, the lane walk at AT_WALK, the force lanes at AT_FORCE_LANES)
 ADVANCE_FN = None
 WATCH_FN = None
+WALK_FN = None
+FORCE_LANES_FN = None
 AT_ADVANCE = 9
+AT_WALK = 11
+AT_FORCE_LANES = 12
 
 @njit(inline='always', **JIT)
 def no_metrics(out):
