@@ -172,6 +172,7 @@ def _blocks(pb, n_blocks):
     ang = np.array([phis[k] if k < npos else close + (phis[k - npos] - phis[0])
                     for k in range(npos + 3)])
     pos, d1, d2, margins, state, _ = mod.work(mod.N_POINTS, mod.N_GROUPS, mod.N_TRIADS)
+    called = mod.callees()      # (the addresses of the kernels setup_lane calls)
     blocks, i = [], 0
     while len(blocks) < n_blocks:
         S = np.empty((mod.N_LANE_ROWS, mod.LANES))
@@ -179,7 +180,7 @@ def _blocks(pb, n_blocks):
         lane = 0
         while lane < mod.LANES:
             if mod.setup_lane(pars, i, np.int64(lane), phis, close, tols, S, theta, pos, d1,
-                              d2, margins, state, mod.callees()) == 0:
+                              d2, margins, state, called) == 0:
                 lane += 1
             i += 1
         blocks.append((S, theta))
