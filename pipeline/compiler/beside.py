@@ -2,10 +2,10 @@
 the run that compiles the rest.
 
 numba compiles one function at a time in a process, and a new sweep
-mechanism's run compiles the careful stages (``settle``) first and reaches
+mechanism's run compiles the careful stages (``settle_cpu``) first and reaches
 the lane walk (``walk``), the force lanes (``force_lanes``) and the kernels
 around them only after them, 15 s into a 30 s compile.  Those call nothing of
-``settle``'s, so a second process (a second core) compiles them from the
+``settle_cpu``'s, so a second process (a second core) compiles them from the
 start, with the argument types ``evaluate_lanes`` gives them, into numba's
 cache; the run then loads them from there instead of compiling them
 (``pipeline.compiler.kernels_for`` starts this where a new module has force
@@ -34,14 +34,15 @@ import numpy as np
 def compile_standalone(mod) -> None:
     """Compile (or load) the kernels of the generated sweep module ``mod`` that
     ``evaluate_lanes`` and ``flush_forces`` call, for the argument types they
-    give them, while the run compiles ``settle`` (the careful walk, the watch,
-    the force stage) and then those two: first the ones that call nothing the
-    run compiles (the force lanes, the lane walk, the library's metrics:
+    give them, while the run compiles the careful walk's kernels (advance, the
+    watch, locate), the force stage and ``settle_cpu``, and then those two:
+    first the ones that call nothing the run compiles (the force lanes, the lane
+    walk, the library's metrics:
     ``compile_metrics``; the kernels round the force lanes), then, once the run
-    has compiled ``position``, ``advance`` and the watch (numba's cache),
-    ``setup_lane`` and the careful tail, which the run reaches last.  Not the force
-    stage: ``settle`` reaches it before this process could have it, and a run
-    that finds a kernel missing compiles it itself.  ``walk`` and
+    has compiled ``position``, ``advance``, the watch and ``locate`` (numba's
+    cache), ``setup_lane`` and the careful tail, which the run reaches last.  Not
+    the force stage: the run reaches it before this process could have it, and a
+    run that finds a kernel missing compiles it itself.  ``walk`` and
     ``force_lanes`` by running them on a few positions of dummy data, the others
     (no Python wrapper) by ``compile`` with the types of such data."""
     from numba import typeof
@@ -73,13 +74,13 @@ def compile_standalone(mod) -> None:
         compile_("force_flush")
         compile_("force_lane_in", par, np.int64(0), a2, a1, a2, a1, a2)
     # (by now the run has usually compiled position, advance and the watch: numba's cache)
-    mod.tail_callees()      # (setup_lane and careful_tail call advance and the watch so)
+    mod.tail_callees()      # (setup_lane and careful_tail call advance, the watch, locate so)
     compile_("setup_lane")
     compile_("careful_tail")
 
 
 def compile_metrics() -> None:
-    """Compile (or load) the library's metric kernels that ``settle`` and
+    """Compile (or load) the library's metric kernels that ``settle_cpu`` and
     ``evaluate`` call, for the argument types they give them (the law's column
     is a literal constant there): the dwell error, in lanes and alone, and the
     law error.  They call nothing of the mechanism's, so the process beside has

@@ -122,7 +122,7 @@ def test_every_kernel_of_the_sweep_compiles_once(problem, candidates):
                 | compiled.get(d, set()))
     generated = {name: getattr(mod, name) for name in (
         "setup_lane", "block_walk", "force_lane_in", "careful_tail", "force_stage", "walk",
-        "force_lanes", "force_flush", "settle", "flush_forces", "evaluate_lanes", "watch",
+        "force_lanes", "force_flush", "settle_cpu", "flush_forces", "evaluate_lanes", "watch",
         "locate", "refine")}
     library = {"start_triad": continuation.start_triad, "_stalls": triad._stalls,
                "_nan_joints": triad._nan_joints}
@@ -137,13 +137,14 @@ def test_every_kernel_of_the_sweep_compiles_once(problem, candidates):
 
 
 def test_evaluate_calls_its_big_callees_through_their_addresses(problem, candidates):
-    """The sweep's evaluate_lanes calls settle, flush_forces, setup_lane,
+    """The sweep's evaluate_lanes calls settle_cpu, flush_forces, setup_lane,
     block_walk, the dwell in lanes, the force lanes' input, the partial block's
     padding and (in flagged_lane, inlined into it) careful_tail, and
     flush_forces calls force_flush and (in force_refused, inlined into it)
-    settle, careful_tail calls advance and the watch (in careful_step and
-    splice_window, inlined into it), setup_lane advance, block_walk the lane walk
-    and force_flush the force lanes, only through the addresses callees() gives
+    settle_cpu, careful_tail calls advance, the watch and locate (in careful_step,
+    failed and splice_window, inlined into it), settle_cpu those and the force
+    stage (in settle_with and what it inlines), setup_lane advance, block_walk the
+    lane walk and force_flush the force lanes, only through the addresses callees() gives
     (so their compiles do not link these kernels' code and have LLVM optimise it
     once more: tests/kernels/test_calls.py holds that a call through an address
     links nothing), each kernel compiled once, for the types they pass it."""
@@ -152,17 +153,19 @@ def test_evaluate_calls_its_big_callees_through_their_addresses(problem, candida
     mod = problem.kernels
     problem.evaluate_rows(np.ascontiguousarray(candidates[:64]), parallel=False)
     at = mod.callees()
-    big = ("settle", "flush_forces", "setup_lane", "careful_tail", "block_walk", "force_flush",
-           "dwell_lanes", "force_lane_in", "pad_block", "advance", "watch", "walk",
-           "force_lanes")
-    assert (big.index("advance"), big.index("walk"), big.index("force_lanes")) == (
-        mod.AT_ADVANCE, mod.AT_WALK, mod.AT_FORCE_LANES)
+    big = ("settle_cpu", "flush_forces", "setup_lane", "careful_tail", "block_walk",
+           "force_flush", "dwell_lanes", "force_lane_in", "pad_block", "advance", "watch",
+           "walk", "force_lanes", "locate", "force_stage")
+    assert (big.index("advance"), big.index("walk"), big.index("force_lanes"),
+            big.index("locate"), big.index("force_stage")) == (
+        mod.AT_ADVANCE, mod.AT_WALK, mod.AT_FORCE_LANES, mod.AT_LOCATE, mod.AT_FORCE_STAGE)
     assert at.dtype == np.int64 and at.shape == (len(big),) and (at > 0).all()
     assert [len(getattr(mod, k).signatures) for k in big] == [1] * len(big)
     through = (mod.evaluate_lanes, mod.flush_forces, mod.careful_tail, mod.setup_lane,
-               mod.block_walk, mod.force_flush)
+               mod.block_walk, mod.force_flush, mod.settle_cpu, mod.careful_alone)
     for kernel in through + (mod.force_refused, mod.flagged_lane, mod.careful_step,
-                             mod.splice_window):
+                             mod.splice_window, mod.failed, mod.settle_with,
+                             mod.lane_or_careful_metrics, mod.careful_positions):
         tree = ast.parse(inspect.getsource(kernel.py_func))
         called = {n.func.id for n in ast.walk(tree)
                   if isinstance(n, ast.Call) and isinstance(n.func, ast.Name)}
@@ -605,11 +608,11 @@ def refusing(FS, FT, RB, n_lanes, *a):
     for l in range(0, n_lanes, 2):
         FS[m.F_bad * m.LANES + l] = 1.0
 m.force_lanes = refusing
-settle = m.settle
+settle = m.settle_cpu
 def counted(par, how, *a):
     calls["fallback"] += int(how == m.LANE_FORCES)
     return settle(par, how, *a)
-m.settle = counted
+m.settle_cpu = counted
 scalar = pb.settings().copy()
 scalar[ks.SET_SCALAR_FORCES] = 1.0
 n = pars.shape[0]

@@ -104,11 +104,12 @@ def force_flush(fidx, filled, FS, FT, RB, phis, tols, settings, loads, status, m
 # inline='always': one call site (flush_forces)
 @njit(inline='always', **JIT)
 def force_refused(pars, fidx, filled, FS, FT, phis, phi_close, tols, settings, loads, col,
-                  trail, qmax, qmin, wk, fw, ww, corr, status, metrics, settle_at):
-    """The scalar force stage (``settle`` with LANE_FORCES, called as
-    ``settle_at``: through its address) of the candidates fidx[:filled] of a
-    flushed block whose lane could not vouch for them, from the lane walk's
-    class III solutions (FT's first columns)."""
+                  trail, qmax, qmin, wk, fw, ww, corr, status, metrics, settle_at,
+                  called):
+    """The scalar force stage (``settle_cpu`` with LANE_FORCES, called as
+    ``settle_at``: through its address, with ``called``) of the candidates
+    fidx[:filled] of a flushed block whose lane could not vouch for them, from
+    the lane walk's class III solutions (FT's first columns)."""
     npos = phis.shape[0]
     for l in range(filled):
         if FS[F_bad * LANES + l] != 0.0:
@@ -118,4 +119,4 @@ def force_refused(pars, fidx, filled, FS, FT, phis, phi_close, tols, settings, l
                     trail[k, q] = FT[k, q * LANES + l]
             status[i] = settle_at(pars[i], np.int64(LANE_FORCES), phis, phi_close, tols,
                                   settings, loads, col, trail, qmax, qmin, 0.0, np.int64(-1),
-                                  0.0, 0.0, wk, fw, ww, corr, metrics[i])
+                                  0.0, 0.0, wk, fw, ww, corr, metrics[i], called)

@@ -35,5 +35,6 @@ def force_flush(fidx, filled, FS, FT, RB, phis, tols, settings, loads, status, m
 
 @njit(**JIT)
 def force_refused(pars, fidx, filled, FS, FT, phis, phi_close, tols, settings, loads, col,
-                  trail, qmax, qmin, wk, fw, ww, corr, status, metrics, settle_at):
+                  trail, qmax, qmin, wk, fw, ww, corr, status, metrics, settle_at,
+                  called):
     return

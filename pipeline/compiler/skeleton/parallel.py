@@ -23,8 +23,9 @@ from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLI
                          HAS_LANES, walk)
 from ._mechanism import (HAS_LANE_FORCES, N_FROWS, FT_COLS, N_RCOLS, force_lane_in,
                          force_lanes)
-from ...kernels.walk import walk_angle, watch, watch_work
-from .sweep_stages import careful_tail, no_metrics, settle, LANE_METRICS, NEEDS_FORCES
+from ...kernels.walk import walk_angle, watch, watch_work, locate
+from .sweep_stages import (careful_tail, no_metrics, settle_cpu, force_stage, LANE_METRICS,
+                           NEEDS_FORCES)
 from .lane_forces import lane_forces_apply, force_flush, force_refused
 
 # ---- the skeleton: from here on, pasted into the generated module ----
@@ -164,18 +165,19 @@ def flush_forces(pars, fidx, forced, FS, FT, RB, phis, phi_close, tols, settings
     """The force lanes' block of ``forced`` candidates solved together, then those
     it refused by the scalar force stage (``forced``: np.int64, no literal
     argument, one compiled version; ``called``: ``callees()``, force_flush's and
-    settle's addresses among them)."""
+    settle_cpu's addresses among them)."""
     function_at(called[5], FORCE_FLUSH_FN)(fidx, forced, FS, FT, RB, phis, tols, settings,
                                            loads, status, metrics, called)
     force_refused(pars, fidx, forced, FS, FT, phis, phi_close, tols, settings, loads, col,
                   trail, qmax, qmin, wk, fw, ww, corr, status, metrics,
-                  function_at(called[0], SETTLE_FN))
+                  function_at(called[0], SETTLE_FN), called)
 
 
 # the function types of the kernels evaluate_lanes and flush_forces call through their
-# addresses (``callees``): settle, flush_forces, setup_lane, careful_tail, block_walk,
+# addresses (``callees``): settle_cpu, flush_forces, setup_lane, careful_tail, block_walk,
 # force_flush, and the dwell in lanes, the force lanes' input and the partial block's padding
-# (and theirs: sweep_stages' ADVANCE_FN, WATCH_FN, WALK_FN, FORCE_LANES_FN)
+# (and theirs: sweep_stages' ADVANCE_FN, WATCH_FN, WALK_FN, FORCE_LANES_FN, LOCATE_FN,
+# FORCE_STAGE_FN)
 SETTLE_FN = None
 FLUSH_FN = None
 SETUP_FN = None
@@ -208,8 +210,11 @@ def callee_samples():
     return {
         "advance": (K, f64, f64, i64, a1, state, pos, d1, d2, margins, np.bool_(False)),
         "watch": (K, watch_g, i64, f64, a1, state, pos, d1, d2, margins, wk[2]),
-        "settle": (a1, i64, a1, f64, a1, a1, loads, a1, a2, i1, i1, f64, i64, f64, f64, *wk,
-                   a1, a1),
+        "settle_cpu": (a1, i64, a1, f64, a1, a1, loads, a1, a2, i1, i1, f64, i64, f64, f64,
+                       *wk, a1, a1, i1),
+        "locate": (K, watch_g, f64, f64, i64, f64, wk[2][2][0], a1, state, pos, d1, d2,
+                   margins, wk[2]),
+        "force_stage": (a1, K, a1, a1, a1, loads, a1, a2, np.bool_(False), wk[0], wk[1]),
         "force_flush": (i1, i64, a1, a2, a2, a1, a1, a1, loads, status, a2, i1),
         "flush_forces": (a2, i1, i64, a1, a2, a2, a1, f64, a1, a1, loads, a1, a2, i1, i1, *wk,
                          a1, status, a2, i1),
@@ -241,23 +246,26 @@ def lane_callees():
 
 
 def tail_callees():
-    """The addresses of ``advance`` and ``watch`` compiled (or loaded from numba's
-    cache) for the types ``setup_lane`` and ``careful_tail`` pass them; their
-    function types into ADVANCE_FN and WATCH_FN, which those compiles read
-    (``callees``, and the process beside before it compiles them)."""
-    global ADVANCE_FN, WATCH_FN
+    """The addresses of ``advance``, ``watch`` and ``locate`` compiled (or loaded
+    from numba's cache) for the types ``setup_lane``, ``careful_tail`` and
+    ``settle_cpu`` pass them; their function types into ADVANCE_FN, WATCH_FN and
+    LOCATE_FN, which those compiles read (``callees``, and the process beside
+    before it compiles them)."""
+    global ADVANCE_FN, WATCH_FN, LOCATE_FN
     s = callee_samples()
     ADVANCE_FN, at_advance = first_class(advance, s["advance"])
     WATCH_FN, at_watch = first_class(watch, s["watch"])
-    return at_advance, at_watch
+    LOCATE_FN, at_locate = first_class(locate, s["locate"])
+    return at_advance, at_watch, at_locate
 
 
 def callees():
-    """The addresses of ``settle``, ``flush_forces``, ``setup_lane``,
+    """The addresses of ``settle_cpu``, ``flush_forces``, ``setup_lane``,
     ``careful_tail``, ``block_walk``, ``force_flush``, ``dwell_lanes``,
     ``force_lane_in``, ``pad_block``, and the ones they call: ``advance`` and
-    ``watch`` (at AT_ADVANCE), ``walk`` (AT_WALK) and ``force_lanes``
-    (AT_FORCE_LANES), compiled (or loaded from numba's cache)
+    ``watch`` (at AT_ADVANCE), ``walk`` (AT_WALK), ``force_lanes``
+    (AT_FORCE_LANES), ``locate`` (AT_LOCATE) and ``force_stage``
+    (AT_FORCE_STAGE), compiled (or loaded from numba's cache)
     for the types ``evaluate_lanes`` and ``flush_forces`` pass them
     (``callee_samples``), which call them through these
     (``pipeline.kernels.calls``): their own compiles then do not link these
@@ -265,16 +273,18 @@ def callees():
     candidate or per block, never in a loop over positions.  Once per process;
     in numba's Python mode the kernels themselves."""
     global SETTLE_FN, FLUSH_FN, SETUP_FN, TAIL_FN, BLOCK_WALK_FN, FORCE_FLUSH_FN
-    global DWELL_LANES_FN, LANE_IN_FN, PAD_FN
+    global DWELL_LANES_FN, LANE_IN_FN, PAD_FN, FORCE_STAGE_FN
     if DISABLE_JIT:
-        return (settle, flush_forces, setup_lane, careful_tail, block_walk, force_flush,
+        return (settle_cpu, flush_forces, setup_lane, careful_tail, block_walk, force_flush,
                 dwell_lanes, force_lane_in, pad_block, advance, watch,
-                walk if HAS_LANES else None, force_lanes if HAS_LANE_FORCES else None)
+                walk if HAS_LANES else None, force_lanes if HAS_LANE_FORCES else None, locate,
+                force_stage)
     if not _CALLEES:
         s = callee_samples()
-        at_advance, at_watch = tail_callees()
+        at_advance, at_watch, at_locate = tail_callees()
         at_lane_walk, at_force_lanes = lane_callees()
-        SETTLE_FN, at_settle = first_class(settle, s["settle"])
+        FORCE_STAGE_FN, at_force_stage = first_class(force_stage, s["force_stage"])
+        SETTLE_FN, at_settle = first_class(settle_cpu, s["settle_cpu"])
         FORCE_FLUSH_FN, at_force_flush = first_class(force_flush, s["force_flush"])
         FLUSH_FN, at_flush = first_class(flush_forces, s["flush_forces"])
         SETUP_FN, at_setup = first_class(setup_lane, s["setup_lane"])
@@ -285,8 +295,32 @@ def callees():
         PAD_FN, at_pad = first_class(pad_block, s["pad_block"])
         _CALLEES[:] = [np.array([at_settle, at_flush, at_setup, at_tail, at_walk,
                                  at_force_flush, at_dwell, at_lane_in, at_pad, at_advance,
-                                 at_watch, at_lane_walk, at_force_lanes], np.int64)]
+                                 at_watch, at_lane_walk, at_force_lanes, at_locate,
+                                 at_force_stage], np.int64)]
     return _CALLEES[0]
+
+
+@njit(**JIT_ALLOC)
+def careful_alone(par, phis, phi_close, tols, settings, loads, theta, trail, qmax, qmin, out,
+                  called):
+    """``evaluate_careful``'s compiled part: ``settle_cpu`` through its address
+    on the careful path, its work arrays allocated here."""
+    return function_at(called[0], SETTLE_FN)(
+        par, np.int64(-1), phis, phi_close, tols, settings, loads, theta, trail, qmax, qmin,
+        0.0, np.int64(-1), 0.0, 0.0, work(N_POINTS, N_GROUPS, N_TRIADS),
+        force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS), watch_work(N_WATCH, N_TRIADS),
+        np.empty(phis.shape[0]), out, called)
+
+
+def evaluate_careful(par, phis, phi_close, tols, settings, loads, theta, trail, qmax, qmin,
+                     out):
+    """The sweep's stages for one candidate on the careful path; writes
+    ``out`` (N_METRICS) and returns its status.  theta, trail, qmax, qmin:
+    work arrays (n, (n + 1, 4 N_TRIADS), and n + w + 1 integers twice).
+    One candidate alone (tests, tools); ``evaluate`` calls ``settle_cpu`` so
+    too, the GPU's kernel ``settle``."""
+    return careful_alone(par, phis, phi_close, tols, settings, loads, theta, trail, qmax, qmin,
+                         out, callees())
 
 
 def evaluate(pars, lo, hi, phis, phi_close, tols, settings, loads, status, metrics):
@@ -338,7 +372,7 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
             else:
                 status[i] = settle_at(pars[i], np.int64(-1), phis, phi_close, tols, settings,
                                       loads, col, trail, qmax, qmin, 0.0, np.int64(-1), 0.0,
-                                      0.0, wk, fw, ww, corr, metrics[i])
+                                      0.0, wk, fw, ww, corr, metrics[i], called)
         if filled == LANES or (i == hi and filled > 0):
             pad_at(S, theta, np.int64(filled), npos)
             block_walk_at(S, theta, cph, sph, phis, tols, settings, called)
@@ -362,7 +396,7 @@ def evaluate_lanes(pars, lo, hi, phis, phi_close, tols, settings, loads, status,
                     lane_trail(theta, l, npos, trail)
                 st = settle_at(pars[idx[l]], how, phis, phi_close, tols, settings, loads,
                                col, trail, qmax, qmin, err_l, start_l, full_l, margin_l, wk, fw,
-                               ww, corr, metrics[idx[l]])
+                               ww, corr, metrics[idx[l]], called)
                 if st != NEEDS_FORCES:
                     status[idx[l]] = st
                     continue

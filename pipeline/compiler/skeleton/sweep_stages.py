@@ -8,9 +8,9 @@ The text below the marker line is pasted into the generated module
 (``pipeline.compiler.generate``, after ``careful``); the imports above it declare,
 for linters and readers, the names the generated module gives it."""
 
-from .header import (math, np, njit, JIT, JIT_ALLOC, JIT_INNER, OK, BRANCH_JUMP, S_ITERS,
+from .header import (math, np, njit, JIT, JIT_INNER, OK, BRANCH_JUMP, S_ITERS,
                      function_at,
-                     S_MARGIN, closes, copy2, work, force_work, dwell_error, law_error,
+                     S_MARGIN, closes, copy2, dwell_error, law_error,
                      relative_angle, M_STROKE, M_DWELL, M_DWELL_START, M_MARGIN, M_PEAK_R,
                      M_PEAK_JOINT, M_PEAK_PHI, M_PEAK_MBAL, M_FAIL_PHI, M_NEWTON_MEAN,
                      M_FORCES_DONE, M_FAIL_GROUP, M_PEAK_ACC, M_PEAK_EPS, M_MIN_TRANS, M_LAW_RMS,
@@ -21,13 +21,11 @@ from .header import (math, np, njit, JIT, JIT_ALLOC, JIT_INNER, OK, BRANCH_JUMP,
 from .header import M_EQUILIBRIUM, equilibrium_residual
 from .header import S_HANDED, S_CA, S_SA, S_CB, S_SB, S_A, S_B, T_CLOSE, start_triad
 from .header import M_SHAKING_F, M_SHAKING_M, shaking, may_reach
-from ._mechanism import (N_POINTS, N_GROUPS, N_TRIADS, N_BODIES, N_JOINTS, N_SLIDES,
-                         N_INPUTS, constants, position, advance, forces_at, transmission,
-                         ROCKER_PIVOT, ROCKER_POINT, NEWTON_STEPS, N_WATCH, WATCH_G,
-                         LANE_STEP_MAX)
+from ._mechanism import (N_GROUPS, N_TRIADS, N_JOINTS, constants, position, advance,
+                         forces_at, transmission, ROCKER_PIVOT, ROCKER_POINT, NEWTON_STEPS,
+                         WATCH_G, LANE_STEP_MAX)
 from ._mechanism import BODY_COM, BODY_TURN, BODY_MASS_OFF, CRANK_PIVOT
-from ...kernels.walk import (walk_angle, walk_start, walk_steps, locate, watch, watch_work,
-                              near_rounding)
+from ...kernels.walk import walk_angle, walk_start, walk_steps, locate, watch, near_rounding
 
 # ---- the skeleton: from here on, pasted into the generated module ----
 # settle's ``vouched`` beyond the lane's 1 (and the careful path's <= 0): a lane's
@@ -40,16 +38,21 @@ LANE_FORCES = 3
 NEEDS_FORCES = -2
 CAREFUL_METRICS = -3
 CAREFUL_FORCES = -4
-# the function types of the kernels that careful_tail, setup_lane, block_walk and
-# force_flush call through their addresses (``callees``: advance at AT_ADVANCE, the
-# watch after it, the lane walk at AT_WALK, the force lanes at AT_FORCE_LANES)
+# the function types of the kernels that settle_cpu, careful_tail, setup_lane, block_walk
+# and force_flush call through their addresses (``callees``: advance at AT_ADVANCE, the
+# watch after it, the lane walk at AT_WALK, the force lanes at AT_FORCE_LANES, locate at
+# AT_LOCATE, the force stage at AT_FORCE_STAGE)
 ADVANCE_FN = None
 WATCH_FN = None
 WALK_FN = None
 FORCE_LANES_FN = None
+LOCATE_FN = None
+FORCE_STAGE_FN = None
 AT_ADVANCE = 9
 AT_WALK = 11
 AT_FORCE_LANES = 12
+AT_LOCATE = 13
+AT_FORCE_STAGE = 14
 
 @njit(inline='always', **JIT)
 def no_metrics(out):
@@ -60,15 +63,15 @@ def no_metrics(out):
 
 
 @njit(inline='always', **JIT)
-def failed(K, k, phi_prev, phi, st, tols, out, wk, ww):
+def failed(K, k, phi_prev, phi, st, tols, out, wk, ww, loc):
     """Position ``k`` of a careful walk failed (status ``st``) on the step from
-    phi_prev to phi: the failure located between them (at the walk's first
-    position, phi itself), its angle and group into out[M_FAIL_PHI],
+    phi_prev to phi: the failure located between them (``loc``: locate; at the
+    walk's first position, phi itself), its angle and group into out[M_FAIL_PHI],
     out[M_FAIL_GROUP]; returns its status."""
     pos, d1, d2, margins, state, _ = wk
     found = ww[7]
     if k > 0:    # located between the last good position and this one
-        st = locate(K, WATCH_G, phi_prev, phi, st, margins[N_GROUPS], ww[2][(k - 1) & 3], tols,
+        st = loc(K, WATCH_G, phi_prev, phi, st, margins[N_GROUPS], ww[2][(k - 1) & 3], tols,
                     state, pos, d1, d2, margins, ww)
     else:
         found[1] = phi
@@ -79,17 +82,17 @@ def failed(K, k, phi_prev, phi, st, tols, out, wk, ww):
 
 
 @njit(inline='always', **JIT)
-def careful_step(K, k, phi_prev, phi, tols, out, wk, ww, adv, wat):
+def careful_step(K, k, phi_prev, phi, tols, out, wk, ww, adv, wat, loc):
     """Position ``k`` of a careful walk at ``phi``, from the last one at
-    phi_prev: the step (``adv``: advance; a failure on it located, ``failed``),
-    then the watch between the positions (``wat``).  Returns OK or the failure
+    phi_prev: the step (``adv``: advance; a failure on it located, ``failed``
+    with ``loc``), then the watch between the positions (``wat``).  Returns OK or the failure
     met (its angle and group in out[M_FAIL_PHI], out[M_FAIL_GROUP])."""
     pos, d1, d2, margins, state, _ = wk
     found = ww[7]
     st = adv(K, phi_prev, phi, np.int64(0), tols, state, pos, d1, d2, margins,
              np.bool_(False))
     if st != OK:
-        return failed(K, k, phi_prev, phi, st, tols, out, wk, ww)
+        return failed(K, k, phi_prev, phi, st, tols, out, wk, ww, loc)
     st = wat(K, WATCH_G, k, phi, tols, state, pos, d1, d2, margins, ww)
     if st != OK:
         out[M_FAIL_PHI] = found[1]
@@ -100,7 +103,7 @@ def careful_step(K, k, phi_prev, phi, tols, out, wk, ww, adv, wat):
 # inline='always': one call site in the sweep; as its own function numba would
 # build and link a library of everything it calls once more (compile time)
 @njit(inline='always', **JIT)
-def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww):
+def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww, adv, wat, loc):
     """Stage 1 of the sweep for one candidate on the careful path: assembly
     over the revolution (triangle, Newton, branch, closure) and between its
     positions (the watch), the rocker angles ``theta`` from the first
@@ -111,7 +114,7 @@ def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww):
     decides its steps near a fold from another history (``careful_tail``, which
     only looks for a lane's failure, locates it the same to the location
     figures).  wk, ww: the walk's and the watch's work arrays (work,
-    watch_work)."""
+    watch_work); adv, wat, loc: advance, the watch and locate (``settle_with``)."""
     n = phis.shape[0]
     pos, d1, d2, margins, state, start_state = wk
     found = ww[7]
@@ -122,10 +125,10 @@ def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww):
     y0 = 0.0
     for k in range(walk_steps(phis, phi_close)):
         phi = walk_angle(phis, k, phi_close)   # k >= n: the closing position and past it
-        st = advance(K, phi_prev, phi, np.int64(0), tols, state, pos, d1, d2, margins,
-                     np.bool_(False))
+        st = adv(K, phi_prev, phi, np.int64(0), tols, state, pos, d1, d2, margins,
+                 np.bool_(False))
         if st != OK:
-            return failed(K, k, phi_prev, phi, st, tols, out, wk, ww), margin, iters
+            return failed(K, k, phi_prev, phi, st, tols, out, wk, ww, loc), margin, iters
         phi_prev = phi
         if k == n and N_TRIADS > 0 and not closes(state, start_state, tols):
             out[M_FAIL_PHI] = phi_close
@@ -142,7 +145,7 @@ def careful_positions(K, phis, phi_close, tols, theta, out, wk, ww):
                 margin = min(margin, state[j, S_MARGIN])
                 iters += state[j, S_ITERS]
             theta[k] = relative_angle(x0, y0, rx, ry)
-        st = watch(K, WATCH_G, k, phi, tols, state, pos, d1, d2, margins, ww)
+        st = wat(K, WATCH_G, k, phi, tols, state, pos, d1, d2, margins, ww)
         if st != OK:
             out[M_FAIL_PHI] = found[1]
             out[M_FAIL_GROUP] = found[2]
@@ -179,17 +182,18 @@ def careful_tail(K, phis, k0, k1, trail, col, tols, out, wk, ww, called):
     angles in ``col`` (the lane's on entry) and the class III solutions in
     ``trail``; the window's margin is its positions' smallest.  Otherwise
     (False) the caller walks the whole revolution (careful_positions, which also
-    checks that it closes).  It calls advance and the watch through their
+    checks that it closes).  It calls advance, the watch and locate through their
     addresses (``called``: ``callees()``), so its compile does not link their code."""
     adv = function_at(called[AT_ADVANCE], ADVANCE_FN)
     wat = function_at(called[AT_ADVANCE + 1], WATCH_FN)
+    loc = function_at(called[AT_LOCATE], LOCATE_FN)
     pos, d1, d2, margins, state, _ = wk
     n = phis.shape[0]
     phi_prev = walk_start(K, phis[0], state)
     x0 = 0.0
     y0 = 0.0
     for k in range(4):     # the careful walk's own first steps: the same numbers
-        st = careful_step(K, k, phi_prev, phis[k], tols, out, wk, ww, adv, wat)
+        st = careful_step(K, k, phi_prev, phis[k], tols, out, wk, ww, adv, wat, loc)
         if st != OK:
             return st, False, math.nan
         if k == 0:      # (the watch looks at nothing before position 3: pos is k's)
@@ -204,7 +208,8 @@ def careful_tail(K, phis, k0, k1, trail, col, tols, out, wk, ww, called):
     # (its history)
     wat(K, WATCH_G, np.int64(0), phis[k0], tols, state, pos, d1, d2, margins, ww)
     for k in range(k0 + 1, k1):
-        st = careful_step(K, k - k0, phis[k - 1], phis[k], tols, out, wk, ww, adv, wat)
+        st = careful_step(K, k - k0, phis[k - 1], phis[k], tols, out, wk, ww, adv, wat,
+                          loc)
         if st != OK:
             return st, False, math.nan
     # one position past the window, where the lane vouches again: its watch certifies
@@ -285,21 +290,6 @@ def window_row(k, k1, x0, y0, trail, col, tols, pos, state, margin):
     return margin
 
 
-@njit(**JIT_ALLOC)
-def evaluate_careful(par, phis, phi_close, tols, settings, loads, theta, trail, qmax, qmin,
-                     out):
-    """The sweep's stages for one candidate on the careful path; writes
-    ``out`` (N_METRICS) and returns its status.  theta, trail, qmax, qmin:
-    work arrays (n, (n + 1, 4 N_TRIADS), and n + w + 1 integers twice).
-    One candidate alone (tests, tools); ``evaluate`` calls ``settle``."""
-    return settle(par, np.int64(-1), phis, phi_close, tols, settings, loads, theta,
-                  trail, qmax, qmin, 0.0, np.int64(-1), 0.0, 0.0,
-                  work(N_POINTS, N_GROUPS, N_TRIADS),
-                  force_work(N_BODIES, N_JOINTS, N_SLIDES + N_INPUTS),
-                  watch_work(N_WATCH, N_TRIADS),
-                  np.empty(phis.shape[0]), out)
-
-
 @njit(**JIT)   # the GPU kernel calls it (under numba's simulator: from Python)
 def settle(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qmax, qmin,
            err, start_k, full, margin, wk, fw, ww, corr, out):
@@ -314,11 +304,41 @@ def settle(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qma
     ``vouched`` LANE_METRICS: a lane's, returning NEEDS_FORCES instead of
     running the force stage (the force lanes run it); LANE_FORCES: a lane's
     force stage alone, its other metrics already in ``out``.  CAREFUL_METRICS
-    and CAREFUL_FORCES: the same two halves of the careful path (-1)."""
+    and CAREFUL_FORCES: the same two halves of the careful path (-1).
+    It calls advance, the watch, locate and the force stage directly: the GPU's
+    kernel compiles it (numba.cuda calls no function through an address); the
+    CPU's sweep calls ``settle_cpu``, the same with those four through their
+    addresses."""
+    return settle_with(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qmax,
+                       qmin, err, start_k, full, margin, wk, fw, ww, corr, out, advance, watch,
+                       locate, force_stage)
+
+
+# the CPU's: its own function, called through its address (``callees``)
+@njit(**JIT_INNER)
+def settle_cpu(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qmax, qmin,
+               err, start_k, full, margin, wk, fw, ww, corr, out, called):
+    """``settle``, its advance, watch, locate and force stage called through their
+    addresses (``called``: ``callees()``): its compile links none of their code,
+    which ``settle``'s had LLVM optimise and emit once more."""
+    return settle_with(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qmax,
+                       qmin, err, start_k, full, margin, wk, fw, ww, corr, out,
+                       function_at(called[AT_ADVANCE], ADVANCE_FN),
+                       function_at(called[AT_ADVANCE + 1], WATCH_FN),
+                       function_at(called[AT_LOCATE], LOCATE_FN),
+                       function_at(called[AT_FORCE_STAGE], FORCE_STAGE_FN))
+
+
+@njit(inline='always', **JIT)
+def settle_with(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qmax, qmin,
+                err, start_k, full, margin, wk, fw, ww, corr, out, adv, wat, loc, fst):
+    """``settle`` with ``adv``, ``wat``, ``loc`` and ``fst`` as its advance, watch,
+    locate and force stage (the functions, or function values at their addresses)."""
     K = constants(par)
     if vouched != LANE_FORCES and vouched != CAREFUL_FORCES:
         st = lane_or_careful_metrics(K, vouched, phis, phi_close, tols, settings, col, qmax,
-                                     qmin, err, start_k, full, margin, wk, ww, corr, out)
+                                     qmin, err, start_k, full, margin, wk, ww, corr, out, adv,
+                                     wat, loc)
         if st != NEEDS_FORCES or vouched == LANE_METRICS or vouched == CAREFUL_METRICS:
             return st
     st = OK
@@ -326,7 +346,7 @@ def settle(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qma
         # with the lane path's solutions first; if a direct solve refuses, the
         # careful walk (one call site: numba inlines per call site)
         trail_ok = vouched > 0 and attempt == 0
-        st = force_stage(par, K, phis, tols, settings, loads, out, trail, trail_ok, wk, fw)
+        st = fst(par, K, phis, tols, settings, loads, out, trail, trail_ok, wk, fw)
         if st == OK or not trail_ok:
             break
     return st
@@ -334,14 +354,15 @@ def settle(par, vouched, phis, phi_close, tols, settings, loads, col, trail, qma
 
 @njit(inline='always', **JIT)
 def lane_or_careful_metrics(K, vouched, phis, phi_close, tols, settings, col, qmax, qmin, err,
-                            start_k, full, margin, wk, ww, corr, out):
+                            start_k, full, margin, wk, ww, corr, out, adv, wat, loc):
     """``settle``'s metrics before the force stage: its status, or NEEDS_FORCES
     where the force stage applies (the stroke and margin within the gates)."""
     no_metrics(out)
     n = phis.shape[0]
     iters = float(NEWTON_STEPS * N_TRIADS * n)
     if vouched <= 0:
-        st, margin, iters = careful_positions(K, phis, phi_close, tols, col, out, wk, ww)
+        st, margin, iters = careful_positions(K, phis, phi_close, tols, col, out, wk, ww, adv,
+                                              wat, loc)
         if st != OK:
             return st
         err, start_k, full = dwell_error(col, int(settings[SET_DWELL_W]), qmax, qmin)
