@@ -38,6 +38,8 @@ SMOKE = {
     "bench_new_sweep.py": (["--smoke", "-o", "{tmp}"], "new_sweep.md"),
     "bench_profile.py": (["--smoke", "-o", "{tmp}"], "profile.md"),
     "bench_plan_lanes.py": (["--smoke", "-o", "{tmp}"], "plan_lanes.md"),
+    # (its kernels compiled only where numba-cuda, NVVM and ptxas are: not in CI)
+    "gpu_ptx.py": (["--smoke", "-o", "{tmp}"], "gpu_ptx.md"),
 }
 
 

@@ -171,6 +171,19 @@ def choose(device: str) -> str:
 
 
 # ----------------------------------------------------------------- the sweep on a GPU
+def thread_work(problem) -> list:
+    """One thread's work arrays of the CUDA kernels of ``problem``'s sweep, as the
+    CPU path allocates them: ``evaluate``'s own four, then continuation.work,
+    forces.force_work and the module's watch_work (the kernels' WORK_NAMES)."""
+    from ..kernels.continuation import work
+    from ..kernels.forces import force_work
+    m, n, w = problem.kernels, len(problem.phis), problem.dwell_w
+    return [np.empty(n), np.empty(n + w + 1, np.int64), np.empty(n + w + 1, np.int64),
+            np.empty(n), *work(m.N_POINTS, m.N_GROUPS, m.N_TRIADS),
+            *force_work(m.N_BODIES, m.N_JOINTS, m.N_SLIDES + m.N_INPUTS),
+            *m.watch_work(m.N_WATCH, m.N_TRIADS)]
+
+
 class GpuSweep:
     """The stages of a sweep problem (``pipeline.runs.sweep.SweepProblem``) on the GPU."""
 
@@ -197,15 +210,8 @@ class GpuSweep:
 
     def _work_arrays(self):
         """One set of per-thread work arrays (rows: threads of a batch), each
-        shaped like the one the CPU path allocates: ``evaluate``'s own four,
-        then continuation.work, forces.force_work and the module's watch_work."""
-        from ..kernels.continuation import work
-        from ..kernels.forces import force_work
-        m, n, w = self.cpu, len(self.problem.phis), self.problem.dwell_w
-        like = [np.empty(n), np.empty(n + w + 1, np.int64), np.empty(n + w + 1, np.int64),
-                np.empty(n), *work(m.N_POINTS, m.N_GROUPS, m.N_TRIADS),
-                *force_work(m.N_BODIES, m.N_JOINTS, m.N_SLIDES + m.N_INPUTS),
-                *m.watch_work(m.N_WATCH, m.N_TRIADS)]
+        shaped like the one the CPU path allocates (``thread_work``)."""
+        like = thread_work(self.problem)
         if len(like) != len(self.mod.WORK_NAMES):
             raise RuntimeError(f"{self.mod.SOURCE_PATH}: the kernel takes "
                                f"{len(self.mod.WORK_NAMES)} work arrays, the CPU path "
