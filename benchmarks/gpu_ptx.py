@@ -93,7 +93,17 @@ def argument_types(problem, mod, split):
     from numba import typeof, types
 
     from pipeline.kernels import sweep as ks
-    from pipeline.runs.gpu import thread_work
+    try:
+        from pipeline.runs.gpu import thread_work
+    except ImportError:     # (a checkout from before it: GpuSweep._work_arrays's own list)
+        def thread_work(p):
+            from pipeline.kernels.continuation import work
+            from pipeline.kernels.forces import force_work
+            m, n, w = p.kernels, len(p.phis), p.dwell_w
+            return [np.empty(n), np.empty(n + w + 1, np.int64), np.empty(n + w + 1, np.int64),
+                    np.empty(n), *work(m.N_POINTS, m.N_GROUPS, m.N_TRIADS),
+                    *force_work(m.N_BODIES, m.N_JOINTS, m.N_SLIDES + m.N_INPUTS),
+                    *m.watch_work(m.N_WATCH, m.N_TRIADS)]
     rows = 4
     like = thread_work(problem)
     assert len(like) == len(mod.WORK_NAMES), (len(like), mod.WORK_NAMES)

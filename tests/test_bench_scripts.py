@@ -94,3 +94,32 @@ def test_the_gpu_session_script_refuses_an_unknown_option(tmp_path):
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
     assert "unknown option --fast" in r.stderr
+
+
+def test_gpu_ptx_tells_code_from_numbering():
+    """benchmarks/gpu_ptx.py --against: two kernels' PTX are "the same" where only
+    the numbers numba gives its modules, functions, constant-memory symbols and
+    environments differ (and the environments' declaration order), never where
+    one instruction or constant does."""
+    import runpy
+    same_code = runpy.run_path(str(BENCHMARKS / "gpu_ptx.py"))["same_code"]
+    a = "\n".join([
+        ".common .global .align 8 .u64 _ZN08NumbaEnv34pipeline_mech_0123456789abcdef0123"
+        "5watchB3v12B56abcE;",
+        ".common .global .align 8 .u64 _ZN08NumbaEnv8pipeline7kernels7metrics5dwellB3v7B5xE;",
+        ".const .align 8 .b8 _cudapy_cmem$97[16] = {8, 0, 0, 0, 0, 0, 0, 0, 9};",
+        "\tmov.u64 \t%rd17, _cudapy_cmem$97;",
+        "\tadd.f64 \t%fd3, %fd1, %fd2;",
+        "\tcall.uni _ZN34pipeline_mech_0123456789abcdef01235settleB3v68B56abcE, (param0);"])
+    b = "\n".join([
+        ".common .global .align 8 .u64 _ZN08NumbaEnv8pipeline7kernels7metrics5dwellB3v9B5xE;",
+        ".common .global .align 8 .u64 _ZN08NumbaEnv34pipeline_mech_fedcba98765432100123"
+        "5watchB3v14B56abcE;",
+        ".const .align 8 .b8 _cudapy_cmem$101[16] = {8, 0, 0, 0, 0, 0, 0, 0, 9};",
+        "\tmov.u64 \t%rd17, _cudapy_cmem$101;",
+        "\tadd.f64 \t%fd3, %fd1, %fd2;",
+        "\tcall.uni _ZN34pipeline_mech_fedcba98765432100123" "5settleB3v70B56abcE, (param0);"])
+    assert same_code(a, b)
+    assert not same_code(a, b.replace("add.f64", "sub.f64"))
+    assert not same_code(a, b.replace("8, 0, 0, 0, 0, 0, 0, 0, 9}", "8, 0, 0, 0, 0, 0, 0, 0, 7}"))
+    assert not same_code(a, b.replace("5watch", "5watcH"))
