@@ -1,8 +1,8 @@
 """The sweep's careful stages of a generated module: one candidate's revolution
-on the careful path (``careful_positions``), its metrics (``settle``,
-``evaluate_careful``) and the force stage.  They depend on the output rocker,
-so a sweep's module defines them and imports everything else from the
-mechanism's own module (``pipeline.compiler.generate``).
+on the careful path (``careful_positions``), its metrics (``settle_with``: the
+GPU's ``settle`` and the CPU's ``settle_cpu``) and the force stage.  They depend
+on the output rocker, so a sweep's module defines them and imports everything
+else from the mechanism's own module (``pipeline.compiler.generate``).
 
 The text below the marker line is pasted into the generated module
 (``pipeline.compiler.generate``, after ``careful``); the imports above it declare,
