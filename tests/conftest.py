@@ -159,25 +159,16 @@ def compile_cache(config, base):
 
 def pytest_collection_modifyitems(config, items):
     """The test files that read the session's sweep (``synthesis_sweep``), but the
-    first, moved out of the first half of the files, to its end, in their order.
-    pytest-xdist hands out whole files in the order collected (``--dist loadfile
-    --no-loadscope-reorder``), one to each worker first: the first reader's worker
-    runs the sweep, compiling the main job's generated module (about two minutes
-    of one core in a cold cache), and a worker given another reader then waited
-    for it on the fixture's lock, its core idle.  The files that do not read the
-    sweep keep their order (every worker collects the same order: xdist checks)."""
+    first, out of the first half of the files (``support.suite_order``: a worker
+    given one at the start waited on the sweep's lock, its core idle).  Every
+    worker collects the same order (xdist checks)."""
+    from support.suite_order import files_in_order
     files = {}
     for item in items:
         files.setdefault(item.nodeid.split("::")[0], []).append(item)
-    names = list(files)
-    readers = [n for n in names if any("synthesis_sweep" in i.fixturenames for i in files[n])]
-    early = set(readers[1:]) & set(names[:len(names) // 2])
-    if not early:
-        return
-    rest = [n for n in names if n not in early]
-    at = rest.index(names[len(names) // 2])      # (not early: early is in the first half)
-    order = rest[:at] + [n for n in names if n in early] + rest[at:]
-    items[:] = [item for name in order for item in files[name]]
+    readers = {name for name, its in files.items()
+               if any("synthesis_sweep" in i.fixturenames for i in its)}
+    items[:] = [item for name in files_in_order(list(files), readers) for item in files[name]]
 
 
 @pytest.fixture(scope="session")
