@@ -32,7 +32,6 @@ from pipeline.runs.sweep import build_problem, run_sweep
 from pipeline.results.sweep_file import SweepFile
 
 ROOT = Path(__file__).resolve().parents[2]
-N = 600
 
 
 def cli(*args, env=None, cwd=None):
@@ -54,18 +53,13 @@ def synthesis(studies):
     return load_study(studies / "ov7_synthesis.toml")
 
 
-@pytest.fixture(scope="module")
-def earlier(synthesis, tmp_path_factory):
-    """A finished sweep: the earlier result every replacement must keep."""
-    out = tmp_path_factory.mktemp("earlier") / "s.h5"
-    run_sweep(synthesis, out, candidates=N, chunk_size=200, progress=False)
-    return out
-
-
 @pytest.fixture
-def sweep(earlier, tmp_path):
+def sweep(synthesis_sweep, tmp_path):
+    """A copy of a finished sweep (the session's): the earlier result every
+    replacement must keep.  (A sweep of this module's own compiled the main job's
+    module again beside the session's sweep in a cold cache.)"""
     dst = tmp_path / "s.h5"
-    shutil.copy(earlier, dst)
+    shutil.copy(synthesis_sweep, dst)
     return dst
 
 
