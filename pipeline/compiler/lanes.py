@@ -86,7 +86,9 @@ def _lane_constants(plan, names, rocker, width, fast, rows, n_triads, n_inputs):
            "(a spliced lane's: evaluate)",
            f"N_LANE_ROWS = {len(rows)}",
            "# rows of the lane array S[row, lane]"]
-    return src + [f"R_{r} = {i}" for i, r in enumerate(rows)] + [""]
+    return (src + [f"R_{r} = {i}" for i, r in enumerate(rows)]
+            + ["# where each row starts in the walk's flat S (R_row * LANES)"]
+            + [f"W_{r} = {i * width}" for i, r in enumerate(rows)] + [""])
 
 
 def lane_kernel(plan, names, ems, rocker, width, watch=True):
@@ -177,8 +179,10 @@ def _setup_rocker_lines(triads):
 def _flat(line):
     """A line of the walk, which sees S flat, rows LANES apart (a constant stride:
     rows provably apart, so no run-time overlap checks), while the lane count
-    stays a run-time value (a constant trip count is unrolled, and stays scalar)."""
-    return re.sub(r"S\[(R_\w+), l\]", r"S[\1 * LANES + l]", line)
+    stays a run-time value (a constant trip count is unrolled, and stays scalar).
+    A row's start is a constant of its own (W_row, not R_row * LANES): the same
+    machine code, and numba types and lowers two operations fewer per access."""
+    return re.sub(r"S\[R_(\w+), l\]", r"S[W_\1 + l]", line)
 
 
 def _walk(plan, names, kin, triads, watched, rocker_xy, width):
