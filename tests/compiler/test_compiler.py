@@ -72,6 +72,14 @@ def test_source_is_readable_and_names_its_groups(synthesis):
     # no libm call in the lock-step walk
     walk = src[src.index("def walk("):src.index("def setup_lane(")]
     assert "math." in walk and not re.search(r"math\.(cos|sin|atan2|acos|atan|exp|log)\(", walk)
+    # its lane table's rows start at constants of their own (two operations fewer an access
+    # for numba to type and lower), each the row times LANES
+    assert "S[W_fix0_x + l]" in walk and not re.search(r"S\[\w+ \* LANES", walk)
+    rows = dict(re.findall(r"^R_(\w+) = (\d+)$", src, re.M))
+    starts = dict(re.findall(r"^W_(\w+) = (\d+)$", src, re.M))
+    lanes = int(re.search(r"^LANES = (\d+)$", src, re.M)[1])
+    assert rows and {r: int(i) * lanes for r, i in rows.items()} == \
+        {r: int(i) for r, i in starts.items()}
     assert "exec(" not in src and "eval(" not in src
 
 
