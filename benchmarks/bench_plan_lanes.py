@@ -89,6 +89,8 @@ def split_source(mod_name, src, copied=True):
     (N_CHUNKS, BASES, IN_ROWS, OUT_ROWS, N_HANDED) as constants.  Not ``copied``: each
     kernel reads and writes the handed values at their own rows of the scratch, fixed
     when the module is written (no run-time indices: the cost of the split alone)."""
+    # the walk reads row r at its start W_r (= R_r * LANES); written back as R_r * LANES
+    src = re.sub(r"\bS\[W_(\w+) \+ ", r"S[R_\1 * LANES + ", src)
     chunks, tail = _pieces(src)
     rows = {m.group(1): int(m.group(2)) for m in re.finditer(r"^(R_\w+) = (\d+)", src, re.M)}
     rw = [_reads_writes(c) for c in chunks]
