@@ -162,13 +162,10 @@ def pytest_collection_modifyitems(config, items):
     first, out of the first half of the files (``support.suite_order``: a worker
     given one at the start waited on the sweep's lock, its core idle).  Every
     worker collects the same order (xdist checks)."""
-    from support.suite_order import files_in_order
-    files = {}
-    for item in items:
-        files.setdefault(item.nodeid.split("::")[0], []).append(item)
-    readers = {name for name, its in files.items()
-               if any("synthesis_sweep" in i.fixturenames for i in its)}
-    items[:] = [item for name in files_in_order(list(files), readers) for item in files[name]]
+    from support.suite_order import by_file, files_in_order, sweep_readers
+    files = by_file(items)
+    order = files_in_order(list(files), set(sweep_readers(files)))
+    items[:] = [item for name in order for item in files[name]]
 
 
 @pytest.fixture(scope="session")

@@ -1,7 +1,7 @@
 """The suite's files in an order where no worker starts by waiting on the
 session's sweep (``support.suite_order``, ``tests/conftest.py``)."""
 
-from support.suite_order import files_in_order
+from support.suite_order import by_file, files_in_order, sweep_readers
 
 
 def test_readers_of_the_first_half_but_the_first_go_behind_its_other_files():
@@ -16,11 +16,9 @@ def test_this_session_s_second_file_does_not_read_the_session_sweep(request):
     """The order this session runs in (every worker collects it): the first file
     that reads the sweep is the first to ask for it, and the first half's other
     files come before any other reader."""
-    files = {}
-    for item in request.session.items:
-        files.setdefault(item.nodeid.split("::")[0], []).append(item)
+    files = by_file(request.session.items)
     names = list(files)
-    readers = [n for n in names if any("synthesis_sweep" in i.fixturenames for i in files[n])]
+    readers = sweep_readers(files)
     if len(readers) < 2:
         return              # (a part of the suite run alone)
     first = names.index(readers[0])

@@ -13,6 +13,20 @@ files: a worker then starts on those (about half the suite's work in the order
 collected: more than the sweep's compile)."""
 
 
+def by_file(items):
+    """The collected test items by file, in the order collected: {file: [items]}."""
+    files = {}
+    for item in items:
+        files.setdefault(item.nodeid.split("::")[0], []).append(item)
+    return files
+
+
+def sweep_readers(files):
+    """The files of ``by_file`` with a test that reads the session's sweep, in order."""
+    return [name for name, its in files.items()
+            if any("synthesis_sweep" in i.fixturenames for i in its)]
+
+
 def files_in_order(names, readers):
     """``names`` (the files as collected) with the files of the first half that
     are in ``readers``, but the first of ``readers``, moved behind the first
